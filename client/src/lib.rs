@@ -1,0 +1,6 @@
+//! The `restauro` command line as a library, so that tests run exactly what the binary runs.
+
+pub mod atomic;
+pub mod cli;
+pub mod color;
+pub mod demo;

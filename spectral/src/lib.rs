@@ -1,0 +1,42 @@
+//! restauro-spectral: the colour science of restauro, after Rossi, Marini & Rizzi (2004).
+//!
+//! Pure maths, no I/O beyond parsing text it is handed:
+//!
+//! | module | what |
+//! |---|---|
+//! | [`grid`] | the wavelength grid, 380–780 nm in 5 nm steps (81 bands) |
+//! | [`spectrum`] | [`Spectrum`], a fixed `[f32; 81]` with band-by-band arithmetic |
+//! | [`tabulated`] | measured spectra of any spacing and their resampling onto the grid |
+//! | [`csv`] | the `wavelength_nm,value` spectrum file reader |
+//! | [`library`] | the shipped measured stone spectra, by file stem |
+//! | [`cie`] | the CIE tables: colour-matching functions, V(λ), illuminants, daylight basis |
+//! | [`illuminant`] | named illuminants, CIE daylight of any CCT |
+//! | [`planck`] | Planck's law and illuminant A |
+//! | [`colorimetry`] | spectrum → XYZ, absolute (K_m = 683 lm/W) and relative (Y = 100) |
+//! | [`lab`] | CIELAB |
+//! | [`ciede2000`] | the CIEDE2000 colour difference |
+//! | [`adaptation`] | chromatic adaptation: von Kries, Bradford, CAT02 |
+//! | [`rgb_space`] | display RGB spaces from primaries: sRGB, Display P3, Rec. 2020, Adobe RGB |
+//! | [`photometry`] | the paper's Eq. 2 and Eq. 8, and distant sources in lux |
+
+pub mod adaptation;
+pub mod cie;
+pub mod ciede2000;
+pub mod colorimetry;
+pub mod csv;
+pub mod error;
+pub mod grid;
+pub mod illuminant;
+pub mod lab;
+pub mod library;
+pub mod photometry;
+pub mod planck;
+pub mod rgb_space;
+pub mod spectrum;
+pub mod tabulated;
+
+pub use colorimetry::{Chromaticity, Observer, Xyz};
+pub use error::{Error, Result};
+pub use illuminant::Illuminant;
+pub use lab::Lab;
+pub use spectrum::Spectrum;

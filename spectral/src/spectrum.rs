@@ -1,0 +1,225 @@
+//! `Spectrum`: a quantity sampled on the 81-band grid ([`crate::grid`]).
+//!
+//! A fixed `[f32; 81]` array so that spectra live on the stack, cost no allocation per ray, and
+//! the element-wise loops below are plain counted loops the compiler vectorises. The same type
+//! carries reflectances, relative spectral power distributions, irradiance and radiance; the
+//! unit is the caller's and belongs in the variable's name.
+
+use crate::grid::{BANDS, STEP_NM, wavelength_nm};
+use std::ops::{Add, AddAssign, Div, DivAssign, Index, IndexMut, Mul, MulAssign, Sub, SubAssign};
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(32))]
+pub struct Spectrum(pub [f32; BANDS]);
+
+impl Default for Spectrum {
+    fn default() -> Self {
+        Self::ZERO
+    }
+}
+
+impl Spectrum {
+    pub const ZERO: Spectrum = Spectrum([0.0; BANDS]);
+    pub const ONE: Spectrum = Spectrum([1.0; BANDS]);
+
+    /// The same value in every band.
+    #[inline]
+    pub const fn splat(value: f32) -> Self {
+        Self([value; BANDS])
+    }
+
+    /// Band `i` set to `f(wavelength_nm(i))`.
+    pub fn from_fn_nm(mut f: impl FnMut(f64) -> f64) -> Self {
+        Self(std::array::from_fn(|i| f(wavelength_nm(i)) as f32))
+    }
+
+    /// The value at a wavelength on or between grid points, by linear interpolation; `None`
+    /// outside 380–780 nm.
+    pub fn at_nm(&self, wavelength_nm: f64) -> Option<f64> {
+        let k = (wavelength_nm - crate::grid::LAMBDA_MIN_NM) / STEP_NM;
+        if !(0.0..=(BANDS - 1) as f64).contains(&k) {
+            return None;
+        }
+        let i = (k.floor() as usize).min(BANDS - 2);
+        let t = k - i as f64;
+        Some(f64::from(self.0[i]) * (1.0 - t) + f64::from(self.0[i + 1]) * t)
+    }
+
+    /// Apply `f` to every band.
+    #[inline]
+    pub fn map(&self, mut f: impl FnMut(f32) -> f32) -> Self {
+        let mut out = *self;
+        for v in &mut out.0 {
+            *v = f(*v);
+        }
+        out
+    }
+
+    /// The largest band value.
+    pub fn max_value(&self) -> f32 {
+        self.0.iter().copied().fold(f32::NEG_INFINITY, f32::max)
+    }
+
+    /// The smallest band value.
+    pub fn min_value(&self) -> f32 {
+        self.0.iter().copied().fold(f32::INFINITY, f32::min)
+    }
+
+    /// True when every band is finite (no NaN, no infinity).
+    pub fn is_finite(&self) -> bool {
+        self.0.iter().all(|v| v.is_finite())
+    }
+
+    /// True when every band is zero.
+    pub fn is_black(&self) -> bool {
+        self.0.iter().all(|&v| v == 0.0)
+    }
+
+    /// The band-by-band product summed in f64: Σ a(λ)·b(λ). Multiply by Δλ for an integral.
+    pub fn dot(&self, other: &Spectrum) -> f64 {
+        self.0.iter().zip(&other.0).map(|(&a, &b)| f64::from(a) * f64::from(b)).sum()
+    }
+
+    /// Σ a(λ)·b(λ)·c(λ) in f64, the shape of every colorimetric integral (source × object ×
+    /// colour-matching function).
+    pub fn dot3(&self, b: &Spectrum, c: &Spectrum) -> f64 {
+        (0..BANDS).map(|i| f64::from(self.0[i]) * f64::from(b.0[i]) * f64::from(c.0[i])).sum()
+    }
+
+    /// The rectangle-rule integral Σ a(λ)·Δλ over the grid (CIE 15:2004 §7.1 summation).
+    pub fn integral(&self) -> f64 {
+        self.0.iter().map(|&v| f64::from(v)).sum::<f64>() * STEP_NM
+    }
+
+    /// The linear mixture `(1 − t)·self + t·other`: the areal mixing of two surfaces in the
+    /// proportions 1 − t and t.
+    pub fn lerp(&self, other: &Spectrum, t: f32) -> Spectrum {
+        let mut out = *self;
+        for (o, &b) in out.0.iter_mut().zip(&other.0) {
+            *o += t * (b - *o);
+        }
+        out
+    }
+}
+
+impl Index<usize> for Spectrum {
+    type Output = f32;
+    #[inline]
+    fn index(&self, i: usize) -> &f32 {
+        &self.0[i]
+    }
+}
+
+impl IndexMut<usize> for Spectrum {
+    #[inline]
+    fn index_mut(&mut self, i: usize) -> &mut f32 {
+        &mut self.0[i]
+    }
+}
+
+/// Element-wise operators between spectra, and between a spectrum and a scalar. Each is a
+/// counted loop over the fixed array, which the compiler unrolls and vectorises.
+macro_rules! elementwise {
+    ($tr:ident, $f:ident, $tra:ident, $fa:ident, $op:tt) => {
+        impl $tra for Spectrum {
+            #[inline]
+            fn $fa(&mut self, rhs: Spectrum) {
+                for i in 0..BANDS {
+                    self.0[i] $op rhs.0[i];
+                }
+            }
+        }
+        impl $tra<f32> for Spectrum {
+            #[inline]
+            fn $fa(&mut self, rhs: f32) {
+                for v in &mut self.0 {
+                    *v $op rhs;
+                }
+            }
+        }
+        impl $tr for Spectrum {
+            type Output = Spectrum;
+            #[inline]
+            fn $f(mut self, rhs: Spectrum) -> Spectrum {
+                self $op rhs;
+                self
+            }
+        }
+        impl $tr<f32> for Spectrum {
+            type Output = Spectrum;
+            #[inline]
+            fn $f(mut self, rhs: f32) -> Spectrum {
+                self $op rhs;
+                self
+            }
+        }
+    };
+}
+
+elementwise!(Add, add, AddAssign, add_assign, +=);
+elementwise!(Sub, sub, SubAssign, sub_assign, -=);
+elementwise!(Mul, mul, MulAssign, mul_assign, *=);
+elementwise!(Div, div, DivAssign, div_assign, /=);
+
+impl Mul<Spectrum> for f32 {
+    type Output = Spectrum;
+    #[inline]
+    fn mul(self, rhs: Spectrum) -> Spectrum {
+        rhs * self
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn arithmetic_is_band_by_band() {
+        let a = Spectrum::from_fn_nm(|l| l);
+        let b = Spectrum::splat(2.0);
+        assert_eq!((a * b)[10], 2.0 * 430.0);
+        assert_eq!((a + b)[0], 382.0);
+        assert_eq!((a - b)[80], 778.0);
+        assert_eq!((a / 2.0)[1], 192.5);
+        assert_eq!((2.0 * a)[1], 770.0);
+        let mut c = a;
+        c *= b;
+        c -= a;
+        assert_eq!(c, a);
+    }
+
+    #[test]
+    fn integral_and_dot_are_rectangle_sums() {
+        assert_eq!(Spectrum::ONE.integral(), 81.0 * 5.0);
+        let a = Spectrum::splat(2.0);
+        assert_eq!(a.dot(&Spectrum::splat(3.0)), 6.0 * 81.0);
+        assert_eq!(a.dot3(&a, &a), 8.0 * 81.0);
+    }
+
+    #[test]
+    fn interpolation_between_bands() {
+        let a = Spectrum::from_fn_nm(|l| l);
+        assert!((a.at_nm(382.5).unwrap() - 382.5).abs() < 1e-4);
+        assert!((a.at_nm(780.0).unwrap() - 780.0).abs() < 1e-4);
+        assert_eq!(a.at_nm(379.0), None);
+        assert_eq!(a.at_nm(781.0), None);
+    }
+
+    #[test]
+    fn lerp_mixes_areally() {
+        let white = Spectrum::ONE;
+        let black = Spectrum::ZERO;
+        assert_eq!(white.lerp(&black, 0.25), Spectrum::splat(0.75));
+    }
+
+    #[test]
+    fn finiteness_and_extremes() {
+        let mut a = Spectrum::from_fn_nm(|l| l);
+        assert!(a.is_finite());
+        assert_eq!(a.max_value(), 780.0);
+        assert_eq!(a.min_value(), 380.0);
+        a[3] = f32::NAN;
+        assert!(!a.is_finite());
+        assert!(Spectrum::ZERO.is_black());
+    }
+}

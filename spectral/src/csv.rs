@@ -62,6 +62,9 @@ pub fn parse(text: &str, file: &str, quantity: Quantity) -> Result<SpectrumFile>
     let mut header_allowed = true;
     let mut clamped: Option<(usize, f64, usize)> = None; // (count, most negative, first line)
 
+    // Spreadsheet exports often begin with a UTF-8 byte-order mark; without this the first data
+    // line would not parse as a number and be taken for a header.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     for (index, raw) in text.lines().enumerate() {
         let line = index + 1;
         let err = |problem| Error::spectrum(file, Some(line), problem);
@@ -211,6 +214,12 @@ mod tests {
         assert_eq!(f.data.wavelengths_nm, vec![380.0, 500.0, 780.0]);
         assert_eq!(f.data.values, vec![0.1, 0.2, 0.3]);
         assert!(f.notes.is_empty());
+    }
+
+    #[test]
+    fn a_byte_order_mark_does_not_hide_the_first_line() {
+        let f = parse("\u{feff}380,0.1\n780,0.3\n", "t.csv", Quantity::Reflectance).unwrap();
+        assert_eq!(f.data.wavelengths_nm, vec![380.0, 780.0]);
     }
 
     #[test]

@@ -26,6 +26,73 @@ pub enum Command {
     /// Write the demo: today the colorimetric part of the paper's stone experiment (travertine and
     /// pudding stone, as found and cleaned, under CIE A, B, C and D65).
     Demo(DemoArgs),
+    /// What a person standing there sees: the Marini–Rizzi Retinex of an XYZ or RGB OpenEXR
+    /// image, written as a PNG (and optionally an EXR).
+    Retinex(RetinexArgs),
+    /// Show an XYZ or RGB OpenEXR image on a display: exposure, gamut mapping, encoding to PNG.
+    Display(DisplayArgs),
+    /// Measure speed and print it as JSON.
+    Bench(BenchArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct RetinexArgs {
+    /// The input: an OpenEXR file with X, Y, Z or R, G, B channels (linear).
+    pub input: PathBuf,
+    /// The PNG to write.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// N: the least number of path samples per pixel.
+    #[arg(long, default_value_t = 20)]
+    pub paths: u32,
+    /// L: steps per path (default: eight image diagonals).
+    #[arg(long)]
+    pub length: Option<u32>,
+    /// Log-ratio threshold below which a step is ignored (smooth illumination gradients).
+    #[arg(long, default_value_t = 0.01)]
+    pub threshold: f32,
+    /// The seed of the random paths; the same seed gives the same image.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// The channels: lms (Hunt–Pointer–Estévez cones, the paper's l, m, s), lms-cat02,
+    /// lms-bradford, rgb (linear sRGB), rgb-p3 or rgb-rec2020.
+    #[arg(long, default_value = "lms")]
+    pub space: restauro_spectral::appearance::ChannelSpace,
+    /// The reference white: paper (the brightest area, as the paper), percentile[:P] (values
+    /// above the P-th percentile, 99 by default, count as white), or emitters (pixels the
+    /// file's `emitter` channel marks are excluded).
+    #[arg(long, default_value = "paper")]
+    pub white: String,
+    /// Also write the result as OpenEXR (XYZ relative to a D65 white, Y = 1).
+    #[arg(long)]
+    pub exr: Option<PathBuf>,
+    #[command(flatten)]
+    pub display: DisplayTarget,
+}
+
+#[derive(Debug, Args)]
+pub struct DisplayArgs {
+    /// The input: an OpenEXR file with X, Y, Z or R, G, B channels (linear).
+    pub input: PathBuf,
+    /// The PNG to write.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// auto[:KEY] (the log-average luminance at KEY of white, 0.18 by default),
+    /// absolute:<cd/m²> (that luminance is white), or relative (Y = 1 is white).
+    #[arg(long, default_value = "auto")]
+    pub exposure: String,
+    #[command(flatten)]
+    pub display: DisplayTarget,
+}
+
+#[derive(Debug, Args)]
+pub struct DisplayTarget {
+    /// The display colour space of the PNG: srgb, p3, rec2020 or adobe-rgb.
+    #[arg(long = "display", default_value = "srgb")]
+    pub display_space: restauro_spectral::rgb_space::RgbSpace,
+    /// Bits per channel of the PNG: 8 or 16.
+    #[arg(long, default_value_t = 8, value_parser = clap::builder::ValueParser::new(parse_bits))]
+    pub bits: u8,
 }
 
 #[derive(Debug, Args)]
@@ -115,5 +182,47 @@ impl AdaptArg {
             AdaptArg::VonKries => Some(ConeSpace::VonKries),
             AdaptArg::None => None,
         }
+    }
+}
+
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// What to measure.
+    #[arg(value_enum)]
+    pub target: BenchTarget,
+    /// Image width in pixels.
+    #[arg(long, default_value_t = 1920)]
+    pub width: usize,
+    /// Image height in pixels.
+    #[arg(long, default_value_t = 1080)]
+    pub height: usize,
+    /// Retinex: samples per pixel.
+    #[arg(long, default_value_t = 20)]
+    pub paths: u32,
+    /// How many times to run; the best time is reported with all of them.
+    #[arg(long, default_value_t = 3)]
+    pub repeats: u32,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum BenchTarget {
+    /// The Brownian-path Retinex on a synthetic Mondrian.
+    Retinex,
+}
+
+fn parse_bits(s: &str) -> Result<u8, String> {
+    match s {
+        "8" => Ok(8),
+        "16" => Ok(16),
+        _ => Err(format!("`{s}` bits per channel: use 8 or 16")),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_command_line_is_consistent() {
+        use clap::CommandFactory;
+        super::Cli::command().debug_assert();
     }
 }

@@ -10,10 +10,10 @@
 //! proxy, ρ_found = (1 − f)·ρ_clean + f·ρ_soot with f = [`SOOT_FRACTION`]. It is labelled derived
 //! wherever it appears.
 
-use crate::atomic;
 use crate::cli::{AdaptArg, DemoArgs};
 use crate::color::{Colour, Origin, Resolved, Viewing};
-use anyhow::Result;
+use anyhow::{Context, Result};
+use restauro_coordinator::atomic_file;
 use restauro_spectral::adaptation::{ConeSpace, adapt};
 use restauro_spectral::ciede2000::ciede2000;
 use restauro_spectral::colorimetry::relative_xyz;
@@ -136,8 +136,10 @@ pub fn run(args: &DemoArgs) -> Result<String> {
     let markdown = markdown(&report);
     let md_path = args.out.join("stones.md");
     let json_path = args.out.join("stones.json");
-    atomic::write(&md_path, markdown.as_bytes())?;
-    atomic::write(&json_path, (serde_json::to_string_pretty(&report)? + "\n").as_bytes())?;
+    atomic_file::write(&md_path, markdown.as_bytes())
+        .with_context(|| format!("cannot write {}", md_path.display()))?;
+    atomic_file::write(&json_path, (serde_json::to_string_pretty(&report)? + "\n").as_bytes())
+        .with_context(|| format!("cannot write {}", json_path.display()))?;
     Ok(format!("{markdown}\nwrote {}\nwrote {}\n", md_path.display(), json_path.display()))
 }
 

@@ -8,6 +8,9 @@ fn main() -> ExitCode {
     let result = match &cli.command {
         Command::Color(args) => restauro::color::run(args),
         Command::Demo(args) => restauro::demo::run(args),
+        Command::Retinex(args) => restauro::retinex::run(args),
+        Command::Display(args) => restauro::retinex::run_display(args),
+        Command::Bench(args) => restauro::bench::run(args),
     };
     match result.and_then(|text| Ok(std::io::stdout().lock().write_all(text.as_bytes())?)) {
         Ok(()) => ExitCode::SUCCESS,

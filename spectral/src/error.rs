@@ -120,6 +120,10 @@ pub enum Error {
     )]
     UnknownSpectrum { name: String, suggestions: Vec<String> },
 
+    /// An image that cannot be processed.
+    #[error("image: {problem}")]
+    Image { problem: String },
+
     /// A number outside the range where a formula holds.
     #[error("{quantity} = {value} is out of range: {expected}")]
     OutOfRange { quantity: &'static str, value: f64, expected: &'static str },

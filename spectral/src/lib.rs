@@ -18,19 +18,27 @@
 //! | [`adaptation`] | chromatic adaptation: von Kries, Bradford, CAT02 |
 //! | [`rgb_space`] | display RGB spaces from primaries: sRGB, Display P3, Rec. 2020, Adobe RGB |
 //! | [`photometry`] | the paper's Eq. 2 and Eq. 8, and distant sources in lux |
+//! | [`keyed_random`] | random numbers that are pure functions of a key |
+//! | [`retinex`] | the Marini–Rizzi Brownian-path Retinex |
+//! | [`appearance`] | the Retinex in cone (LMS) or RGB space, from XYZ to what an observer sees |
+//! | [`display`] | XYZ to display code values: exposure, gamut mapping, encoding |
 
 pub mod adaptation;
+pub mod appearance;
 pub mod cie;
 pub mod ciede2000;
 pub mod colorimetry;
 pub mod csv;
+pub mod display;
 pub mod error;
 pub mod grid;
 pub mod illuminant;
+pub mod keyed_random;
 pub mod lab;
 pub mod library;
 pub mod photometry;
 pub mod planck;
+pub mod retinex;
 pub mod rgb_space;
 pub mod spectrum;
 pub mod tabulated;

@@ -1,0 +1,98 @@
+//! `restauro bench`: measured speed, printed as JSON. Tests never assert wall-clock times; this
+//! is where the figures in the issues' notes come from.
+
+use crate::cli::{BenchArgs, BenchTarget};
+use anyhow::Result;
+use restauro_spectral::keyed_random::KeyedRng;
+use restauro_spectral::retinex::{RetinexParams, retinex};
+use serde::Serialize;
+use std::time::Instant;
+
+#[derive(Serialize)]
+struct RetinexBench {
+    benchmark: &'static str,
+    width: usize,
+    height: usize,
+    threads: usize,
+    paths: u32,
+    length: u32,
+    threshold: f32,
+    repeats: u32,
+    /// Wall-clock seconds of each run.
+    seconds: Vec<f64>,
+    best_seconds: f64,
+    megapixels_per_second: f64,
+    /// Path steps (pixel visits) per second in the best run, phase 1 and phase 2 together.
+    million_steps_per_second: f64,
+    shared_paths: u64,
+    top_up_paths: u64,
+    min_samples: u32,
+    max_samples: u32,
+}
+
+/// A deterministic test card: rectangles of random colours over a smooth illumination gradient,
+/// like the Mondrians Land used.
+pub fn mondrian(width: usize, height: usize, seed: u64) -> Vec<[f32; 3]> {
+    let mut img = vec![[0.0f32; 3]; width * height];
+    let mut rng = KeyedRng::from_parts(&[seed, 0x6d6f6e64]);
+    for _ in 0..200 {
+        let (x0, y0) = (rng.below(width as u32) as usize, rng.below(height as u32) as usize);
+        let (dx, dy) =
+            (1 + rng.below(width as u32 / 4) as usize, 1 + rng.below(height as u32 / 4) as usize);
+        let colour =
+            [0.05 + 0.9 * rng.next_f32(), 0.05 + 0.9 * rng.next_f32(), 0.05 + 0.9 * rng.next_f32()];
+        for y in y0..(y0 + dy).min(height) {
+            for x in x0..(x0 + dx).min(width) {
+                img[y * width + x] = colour;
+            }
+        }
+    }
+    for (i, px) in img.iter_mut().enumerate() {
+        let (x, y) = ((i % width) as f32 / width as f32, (i / width) as f32 / height as f32);
+        let shade = 0.4 + 0.6 * (1.0 - 0.5 * (x * x + y));
+        for v in px.iter_mut() {
+            *v = (*v).max(0.02) * shade * 100.0;
+        }
+    }
+    img
+}
+
+pub fn run(args: &BenchArgs) -> Result<String> {
+    match args.target {
+        BenchTarget::Retinex => {
+            let (w, h) = (args.width, args.height);
+            let img = mondrian(w, h, 1);
+            let params = RetinexParams { paths: args.paths, ..Default::default() };
+            let mut seconds = Vec::new();
+            let mut stats = None;
+            for _ in 0..args.repeats.max(1) {
+                let t = Instant::now();
+                let (_, s) = retinex(&img, w, h, &params, &|_, _| {})?;
+                seconds.push(t.elapsed().as_secs_f64());
+                stats = Some(s);
+            }
+            let stats = stats.expect("at least one run");
+            let best = seconds.iter().copied().fold(f64::INFINITY, f64::min);
+            let steps = stats.steps;
+            let report = RetinexBench {
+                benchmark: "retinex",
+                width: w,
+                height: h,
+                threads: rayon::current_num_threads(),
+                paths: params.paths,
+                length: stats.length,
+                threshold: params.threshold,
+                repeats: args.repeats.max(1),
+                best_seconds: best,
+                megapixels_per_second: (w * h) as f64 / best / 1e6,
+                million_steps_per_second: steps as f64 / best / 1e6,
+                seconds,
+                shared_paths: stats.shared_paths,
+                top_up_paths: stats.top_up_paths,
+                min_samples: stats.min_samples,
+                max_samples: stats.max_samples,
+            };
+            Ok(serde_json::to_string_pretty(&report)? + "\n")
+        }
+    }
+}

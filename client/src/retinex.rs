@@ -1,0 +1,176 @@
+//! `restauro retinex` and `restauro display`: from an XYZ (or RGB) OpenEXR image to what a
+//! person standing there sees, and to a display.
+
+use crate::cli::{DisplayArgs, DisplayTarget, RetinexArgs};
+use anyhow::{Context, Result, bail};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use restauro_coordinator::image_files::{
+    MAX_PIXELS, PngPixels, XyzImage, read_exr, write_png, write_xyz_exr,
+};
+use restauro_spectral::appearance::retinex_xyz;
+use restauro_spectral::display::{DisplayParams, Exposure, encode, to_u8, to_u16};
+use restauro_spectral::retinex::{RetinexParams, WhiteReference};
+use std::fmt::Write as _;
+use std::path::Path;
+use std::time::Instant;
+
+/// Images with at least this many pixels get a progress bar.
+const PROGRESS_FROM_PIXELS: usize = 1 << 20;
+
+/// `--white paper | percentile[:P] | emitters`.
+pub fn parse_white(text: &str, image: &XyzImage, input: &Path) -> Result<WhiteReference> {
+    let lower = text.to_ascii_lowercase();
+    match lower.as_str() {
+        "paper" => Ok(WhiteReference::Paper),
+        "percentile" => Ok(WhiteReference::Percentile(99.0)),
+        "emitters" => match &image.emitter {
+            Some(mask) => Ok(WhiteReference::ExcludeEmitters(mask.clone())),
+            None => bail!(
+                "{}: --white emitters needs an `emitter` channel marking the light sources, and \
+                 this file has none; use --white percentile instead",
+                input.display()
+            ),
+        },
+        _ => match lower.strip_prefix("percentile:").map(str::parse::<f64>) {
+            Some(Ok(p)) => Ok(WhiteReference::Percentile(p)),
+            _ => bail!("--white `{text}`: use paper, percentile, percentile:<50–100> or emitters"),
+        },
+    }
+}
+
+/// `--exposure auto[:KEY] | absolute:<cd/m²> | relative`.
+pub fn parse_exposure(text: &str) -> Result<Exposure> {
+    let lower = text.to_ascii_lowercase();
+    let number = |s: &str, what: &str| -> Result<f64> {
+        match s.parse::<f64>() {
+            Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+            _ => bail!("--exposure `{text}`: {what} must be a number > 0"),
+        }
+    };
+    match lower.as_str() {
+        "auto" => Ok(Exposure::Automatic { key: 0.18 }),
+        "relative" => Ok(Exposure::Relative),
+        _ => {
+            if let Some(k) = lower.strip_prefix("auto:") {
+                Ok(Exposure::Automatic { key: number(k, "the key")? })
+            } else if let Some(l) = lower.strip_prefix("absolute:") {
+                Ok(Exposure::Absolute { white_cd_m2: number(l, "the white luminance (cd/m²)")? })
+            } else {
+                bail!("--exposure `{text}`: use auto, auto:<key>, absolute:<cd/m²> or relative")
+            }
+        }
+    }
+}
+
+fn write_display_png(
+    path: &Path,
+    width: usize,
+    height: usize,
+    xyz: &[[f32; 3]],
+    target: &DisplayTarget,
+    exposure: Exposure,
+) -> Result<()> {
+    let encoded = encode(xyz, &DisplayParams { space: target.display_space, exposure });
+    let pixels = if target.bits == 16 {
+        PngPixels::Sixteen(to_u16(&encoded))
+    } else {
+        PngPixels::Eight(to_u8(&encoded))
+    };
+    write_png(path, width, height, &pixels, target.display_space)?;
+    Ok(())
+}
+
+pub fn run(args: &RetinexArgs) -> Result<String> {
+    let image = read_exr(&args.input, MAX_PIXELS)?;
+    let params = RetinexParams {
+        paths: args.paths,
+        length: args.length,
+        threshold: args.threshold,
+        seed: args.seed,
+        white: parse_white(&args.white, &image, &args.input)?,
+    };
+    let bar = if image.pixels.len() >= PROGRESS_FROM_PIXELS {
+        let bar = ProgressBar::with_draw_target(Some(0), ProgressDrawTarget::stderr());
+        bar.set_style(
+            ProgressStyle::with_template("retinex {bar:40} {percent}% paths, eta {eta}")
+                .context("progress bar template")?,
+        );
+        bar
+    } else {
+        ProgressBar::hidden()
+    };
+    let started = Instant::now();
+    let (out, stats) = retinex_xyz(
+        &image.pixels,
+        image.width,
+        image.height,
+        &params,
+        args.space,
+        &|done, total| {
+            bar.set_length(total);
+            bar.set_position(done);
+        },
+    )
+    .with_context(|| format!("{}", args.input.display()))?;
+    bar.finish_and_clear();
+    let seconds = started.elapsed().as_secs_f64();
+
+    write_display_png(
+        &args.out,
+        image.width,
+        image.height,
+        &out,
+        &args.display,
+        Exposure::Relative,
+    )?;
+    let mut text = String::new();
+    let _ = writeln!(
+        text,
+        "retinex of {} ({}×{}) in {seconds:.2} s: {} samples per pixel at least ({} at most), \
+         paths of {} steps, channels {}",
+        args.input.display(),
+        image.width,
+        image.height,
+        stats.min_samples,
+        stats.max_samples,
+        stats.length,
+        args.space
+    );
+    let _ = writeln!(text, "wrote {}", args.out.display());
+    if let Some(exr) = &args.exr {
+        let settings = format!(
+            "paths={} length={} threshold={} seed={} space={} white={}",
+            params.paths, stats.length, params.threshold, params.seed, args.space, args.white
+        );
+        let result = XyzImage {
+            width: image.width,
+            height: image.height,
+            pixels: out,
+            emitter: image.emitter,
+        };
+        write_xyz_exr(
+            exr,
+            &result,
+            &[
+                ("restauroRetinex", settings.as_str()),
+                ("restauroXyzScale", "relative: Y = 1 is the reference white, D65"),
+            ],
+        )?;
+        let _ = writeln!(text, "wrote {}", exr.display());
+    }
+    Ok(text)
+}
+
+pub fn run_display(args: &DisplayArgs) -> Result<String> {
+    let exposure = parse_exposure(&args.exposure)?;
+    let image = read_exr(&args.input, MAX_PIXELS)?;
+    write_display_png(
+        &args.out,
+        image.width,
+        image.height,
+        &image.pixels,
+        &args.display,
+        exposure,
+    )?;
+    Ok(format!("wrote {}\n", args.out.display()))
+}

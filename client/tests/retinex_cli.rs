@@ -1,0 +1,193 @@
+//! `restauro retinex` and `restauro display` as a user runs them, on EXR files written for the
+//! test.
+
+use restauro::bench::mondrian;
+use restauro_coordinator::image_files::{MAX_PIXELS, XyzImage, read_exr, write_exr, write_xyz_exr};
+use restauro_spectral::appearance::{ChannelSpace, d65_white};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn restauro(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_restauro")).args(args).output().expect("run restauro")
+}
+
+fn ok(args: &[&str]) -> String {
+    let out = restauro(args);
+    assert!(out.status.success(), "{args:?} failed: {}", String::from_utf8_lossy(&out.stderr));
+    String::from_utf8(out.stdout).unwrap()
+}
+
+fn refused(args: &[&str]) -> String {
+    let out = restauro(args);
+    assert_eq!(out.status.code(), Some(1), "{args:?} should fail");
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert!(err.starts_with("error: ") && !err.contains("panicked"), "{err}");
+    err
+}
+
+fn png_info(path: &Path) -> (u32, u32, png::BitDepth, Vec<u8>) {
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let frame = reader.next_frame(&mut buf).unwrap();
+    (frame.width, frame.height, frame.bit_depth, buf)
+}
+
+/// A 96×64 test card in absolute XYZ (cd/m²), and its path.
+fn card(dir: &Path) -> PathBuf {
+    let (w, h) = (96, 64);
+    let pixels = mondrian(w, h, 3);
+    let path = dir.join("card.exr");
+    write_xyz_exr(&path, &XyzImage { width: w, height: h, pixels, emitter: None }, &[]).unwrap();
+    path
+}
+
+#[test]
+fn retinex_writes_png_and_exr_deterministically() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = card(dir.path());
+    let (png_a, png_b, exr) =
+        (dir.path().join("a.png"), dir.path().join("b.png"), dir.path().join("r.exr"));
+    let args = |out: &Path| {
+        vec![
+            "retinex".to_owned(),
+            input.display().to_string(),
+            "--out".to_owned(),
+            out.display().to_string(),
+            "--paths".to_owned(),
+            "8".to_owned(),
+            "--seed".to_owned(),
+            "5".to_owned(),
+        ]
+    };
+    let mut first = args(&png_a);
+    first.extend(["--exr".to_owned(), exr.display().to_string()]);
+    let text = ok(&first.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(text.contains("8 samples per pixel at least"), "{text}");
+    assert!(text.contains(&format!("wrote {}", png_a.display())), "{text}");
+    ok(&args(&png_b).iter().map(String::as_str).collect::<Vec<_>>());
+    assert_eq!(
+        std::fs::read(&png_a).unwrap(),
+        std::fs::read(&png_b).unwrap(),
+        "same seed, same image"
+    );
+    let (w, h, depth, _) = png_info(&png_a);
+    assert_eq!((w, h, depth), (96, 64, png::BitDepth::Eight));
+    // The EXR holds XYZ relative to a D65 white: no cone channel has a lightness above 1, and
+    // the brightest areas are near 1 (not exactly: the card's light is shaded, and a path that
+    // climbs a gradient in steps below the threshold does not reset).
+    let result = read_exr(&exr, MAX_PIXELS).unwrap();
+    let space = ChannelSpace::default();
+    let white = d65_white();
+    let white_lms = space.from_xyz(&[[white.x as f32, white.y as f32, white.z as f32]])[0];
+    let lms = space.from_xyz(&result.pixels);
+    for c in 0..3 {
+        let max = lms.iter().map(|p| p[c] / white_lms[c]).fold(0.0f32, f32::max);
+        assert!(max <= 1.0 + 1e-4 && max > 0.95, "channel {c}: {max}");
+    }
+}
+
+#[test]
+fn display_modes_and_sixteen_bits() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = card(dir.path());
+    let inp = input.to_str().unwrap();
+    let out = dir.path().join("d.png");
+    let o = out.to_str().unwrap();
+    ok(&["display", inp, "--out", o, "--exposure", "auto", "--bits", "16", "--display", "p3"]);
+    let (w, h, depth, _) = png_info(&out);
+    assert_eq!((w, h, depth), (96, 64, png::BitDepth::Sixteen));
+    // A very high white luminance makes the image nearly black; a tiny one makes it white.
+    ok(&["display", inp, "--out", o, "--exposure", "absolute:1e9"]);
+    assert!(png_info(&out).3.iter().all(|&v| v <= 1));
+    ok(&["display", inp, "--out", o, "--exposure", "absolute:1e-6"]);
+    assert!(png_info(&out).3.iter().all(|&v| v == 255));
+}
+
+#[test]
+fn an_rgb_exr_with_emitters_and_the_white_options() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (40usize, 30usize);
+    // A grey scene with a white card and a lamp a hundred times brighter.
+    let mut img = XyzImage {
+        width: w,
+        height: h,
+        pixels: vec![[50.0; 3]; w * h],
+        emitter: Some(vec![false; w * h]),
+    };
+    for y in 0..6 {
+        for x in 0..6 {
+            img.pixels[y * w + x] = [100.0; 3];
+            img.pixels[y * w + x + 30] = [10_000.0; 3];
+            img.emitter.as_mut().unwrap()[y * w + x + 30] = true;
+        }
+    }
+    let input = dir.path().join("lamp.exr");
+    write_xyz_exr(&input, &img, &[]).unwrap();
+    let inp = input.to_str().unwrap();
+    let mid = |white: &str| {
+        let exr = dir.path().join(format!("{}.exr", white.replace(':', "_")));
+        let png = dir.path().join("x.png");
+        ok(&[
+            "retinex",
+            inp,
+            "--out",
+            png.to_str().unwrap(),
+            "--exr",
+            exr.to_str().unwrap(),
+            "--white",
+            white,
+        ]);
+        read_exr(&exr, MAX_PIXELS).unwrap().pixels[15 * w + 20][1]
+    };
+    assert!(mid("paper") < 0.1, "the lamp is the white");
+    assert!((mid("emitters") - 0.5).abs() < 0.05, "the card is the white");
+    assert!(mid("percentile:80") > 0.9, "above the 80th percentile is white");
+    // A file without the emitter channel cannot exclude emitters.
+    let plain = dir.path().join("plain.exr");
+    write_exr(
+        &plain,
+        2,
+        2,
+        vec![("R".into(), vec![1.0; 4]), ("G".into(), vec![1.0; 4]), ("B".into(), vec![2.0; 4])],
+        &[],
+    )
+    .unwrap();
+    let png = dir.path().join("p.png");
+    let err = refused(&[
+        "retinex",
+        plain.to_str().unwrap(),
+        "--out",
+        png.to_str().unwrap(),
+        "--white",
+        "emitters",
+    ]);
+    assert!(err.contains("needs an `emitter` channel"), "{err}");
+    // An RGB file works.
+    ok(&["retinex", plain.to_str().unwrap(), "--out", png.to_str().unwrap()]);
+}
+
+#[test]
+fn bad_input_is_refused_with_a_clear_message() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = card(dir.path());
+    let inp = input.to_str().unwrap();
+    let png = dir.path().join("o.png");
+    let o = png.to_str().unwrap();
+    let not_exr = dir.path().join("photo.exr");
+    std::fs::write(&not_exr, "JFIF").unwrap();
+    let err = refused(&["retinex", not_exr.to_str().unwrap(), "--out", o]);
+    assert!(err.contains(&format!("{}: not a readable OpenEXR file", not_exr.display())), "{err}");
+    let err = refused(&["retinex", inp, "--out", o, "--paths", "0"]);
+    assert!(err.contains("Retinex paths = 0 is out of range: 1 to 4096"), "{err}");
+    let err = refused(&["retinex", inp, "--out", o, "--white", "brightest"]);
+    assert!(err.contains("use paper, percentile"), "{err}");
+    let err = refused(&["retinex", inp, "--out", o, "--white", "percentile:20"]);
+    assert!(err.contains("a percentile from 50 to 100"), "{err}");
+    let err = refused(&["display", inp, "--out", o, "--exposure", "absolute:-3"]);
+    assert!(err.contains("must be a number > 0"), "{err}");
+    let missing = dir.path().join("missing.exr");
+    let err = refused(&["display", missing.to_str().unwrap(), "--out", o]);
+    assert!(err.contains("missing.exr"), "{err}");
+    assert!(!png.exists(), "nothing written on failure");
+}

@@ -1,0 +1,389 @@
+//! Image files in and out: OpenEXR (any XYZ or RGB image in; X, Y, Z with RGB preview and
+//! optional spectral layers out) and PNG (8 or 16 bits, tagged with its colour space). Every
+//! file is written whole or not at all ([`crate::atomic_file`]).
+
+use crate::atomic_file;
+use exr::prelude::*;
+use restauro_spectral::colorimetry::Chromaticity;
+use restauro_spectral::rgb_space::RgbSpace;
+use std::io;
+use std::path::{Path, PathBuf};
+
+/// Images larger than this are refused before their pixels are read (16384 × 16384).
+pub const MAX_PIXELS: usize = 1 << 28;
+
+#[derive(Debug, thiserror::Error)]
+pub enum ImageFileError {
+    #[error("{}: {source}", path.display())]
+    Io { path: PathBuf, source: io::Error },
+    #[error("{}: not a readable OpenEXR file: {source}", path.display())]
+    Exr { path: PathBuf, source: exr::error::Error },
+    #[error(
+        "{}: no colour channels; restauro reads X, Y, Z or R, G, B, and this file has {}",
+        path.display(),
+        if channels.is_empty() { "none".to_owned() } else { channels.join(", ") }
+    )]
+    NoColourChannels { path: PathBuf, channels: Vec<String> },
+    #[error(
+        "{}: {width}×{height} is larger than the limit of {max} pixels; crop or downscale it",
+        path.display()
+    )]
+    TooLarge { path: PathBuf, width: usize, height: usize, max: usize },
+    #[error(
+        "{}: channel {channel} at pixel ({x}, {y}) is {value}; colour values must be finite",
+        path.display()
+    )]
+    NotFinite { path: PathBuf, channel: String, x: usize, y: usize, value: f32 },
+    #[error("{}: cannot write the PNG: {source}", path.display())]
+    Png { path: PathBuf, source: png::EncodingError },
+}
+
+type Result<T> = std::result::Result<T, ImageFileError>;
+
+/// A linear image as CIE XYZ (any scale: absolute cd/m² from the renderer, relative otherwise).
+#[derive(Clone, Debug, PartialEq)]
+pub struct XyzImage {
+    pub width: usize,
+    pub height: usize,
+    /// Row-major.
+    pub pixels: Vec<[f32; 3]>,
+    /// Pixels marked as light sources (a channel named `emitter`, nonzero for emitters).
+    pub emitter: Option<Vec<bool>>,
+}
+
+/// Read an OpenEXR file as XYZ. Channels X, Y, Z are taken as they are; otherwise R, G, B are
+/// converted with the file's `chromaticities` attribute (Rec. 709 primaries and D65, the
+/// OpenEXR default, when it has none).
+pub fn read_exr(path: &Path, max_pixels: usize) -> Result<XyzImage> {
+    let exr_err = |source| ImageFileError::Exr { path: path.to_owned(), source };
+    // The header first, so that an enormous image is refused before it is allocated.
+    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(exr_err)?;
+    if let Some(header) = meta.headers.first() {
+        let (width, height) = (header.layer_size.width(), header.layer_size.height());
+        if width.checked_mul(height).is_none_or(|n| n > max_pixels) {
+            return Err(ImageFileError::TooLarge {
+                path: path.to_owned(),
+                width,
+                height,
+                max: max_pixels,
+            });
+        }
+    }
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(path)
+        .map_err(exr_err)?;
+    let (width, height) = (image.layer_data.size.width(), image.layer_data.size.height());
+    let channels = &image.layer_data.channel_data.list;
+    let names: Vec<String> = channels.iter().map(|c| c.name.to_string()).collect();
+    let find = |name: &str| names.iter().position(|n| n == name);
+    let values = |i: usize| -> Result<Vec<f32>> {
+        let v: Vec<f32> = channels[i].sample_data.values_as_f32().collect();
+        if let Some(bad) = v.iter().position(|x| !x.is_finite()) {
+            return Err(ImageFileError::NotFinite {
+                path: path.to_owned(),
+                channel: names[i].clone(),
+                x: bad % width,
+                y: bad / width,
+                value: v[bad],
+            });
+        }
+        Ok(v)
+    };
+    let (planes, to_xyz) = if let (Some(x), Some(y), Some(z)) = (find("X"), find("Y"), find("Z")) {
+        ([values(x)?, values(y)?, values(z)?], None)
+    } else if let (Some(r), Some(g), Some(b)) = (find("R"), find("G"), find("B")) {
+        let c = image.attributes.chromaticities;
+        let m = match c {
+            Some(c) => {
+                let xy =
+                    |v: exr::math::Vec2<f32>| Chromaticity::new(f64::from(v.0), f64::from(v.1));
+                rgb_to_xyz_matrix([xy(c.red), xy(c.green), xy(c.blue)], xy(c.white))
+            }
+            None => RgbSpace::Srgb.rgb_to_xyz().transpose().to_cols_array_2d(),
+        };
+        ([values(r)?, values(g)?, values(b)?], Some(m))
+    } else {
+        return Err(ImageFileError::NoColourChannels { path: path.to_owned(), channels: names });
+    };
+    let pixels = (0..width * height)
+        .map(|i| {
+            let p = [planes[0][i], planes[1][i], planes[2][i]];
+            match &to_xyz {
+                None => p,
+                Some(m) => std::array::from_fn(|r| {
+                    (m[r][0] * f64::from(p[0])
+                        + m[r][1] * f64::from(p[1])
+                        + m[r][2] * f64::from(p[2])) as f32
+                }),
+            }
+        })
+        .collect();
+    let emitter = find("emitter")
+        .map(|i| channels[i].sample_data.values_as_f32().map(|v| v != 0.0).collect());
+    Ok(XyzImage { width, height, pixels, emitter })
+}
+
+/// The RGB → XYZ matrix (rows) of arbitrary primaries and white, as restauro's display spaces
+/// compute theirs (SMPTE RP 177).
+fn rgb_to_xyz_matrix(primaries: [Chromaticity; 3], white: Chromaticity) -> [[f64; 3]; 3] {
+    use glam::{DMat3, DVec3};
+    let col = |c: Chromaticity| {
+        let v = c.to_xyz(1.0);
+        DVec3::new(v.x, v.y, v.z)
+    };
+    let m = DMat3::from_cols(col(primaries[0]), col(primaries[1]), col(primaries[2]));
+    let w = col(white);
+    let s = m.inverse() * w;
+    DMat3::from_cols(m.x_axis * s.x, m.y_axis * s.y, m.z_axis * s.z).transpose().to_cols_array_2d()
+}
+
+/// Write an OpenEXR file of named f32 channels (each row-major, `width` × `height`) with string
+/// attributes, losslessly compressed.
+pub fn write_exr(
+    path: &Path,
+    width: usize,
+    height: usize,
+    channels: Vec<(String, Vec<f32>)>,
+    attributes: &[(&str, &str)],
+) -> Result<()> {
+    let list: Vec<AnyChannel<FlatSamples>> = channels
+        .into_iter()
+        .map(|(name, values)| AnyChannel::new(name.as_str(), FlatSamples::F32(values)))
+        .collect();
+    let mut attrs = LayerAttributes::default();
+    for (k, v) in attributes {
+        attrs.other.insert(Text::from(*k), AttributeValue::Text(Text::from(*v)));
+    }
+    let layer = Layer::new(
+        (width, height),
+        attrs,
+        Encoding::SMALL_LOSSLESS,
+        AnyChannels::sort(SmallVec::from_vec(list)),
+    );
+    let image = Image::from_layer(layer);
+    atomic_file::write_with(path, |w| {
+        let mut buffer = io::Cursor::new(Vec::new());
+        image.write().to_buffered(&mut buffer).map_err(io::Error::other)?;
+        io::Write::write_all(w, buffer.get_ref())
+    })
+    .map_err(|source| ImageFileError::Io { path: path.to_owned(), source })
+}
+
+/// Write an XYZ image as OpenEXR: channels X, Y, Z and linear sRGB-primaries R, G, B preview
+/// channels (so ordinary viewers show it), plus the `emitter` mask when there is one.
+pub fn write_xyz_exr(path: &Path, image: &XyzImage, attributes: &[(&str, &str)]) -> Result<()> {
+    let plane = |f: &dyn Fn(&[f32; 3]) -> f32| image.pixels.iter().map(f).collect::<Vec<f32>>();
+    let m = RgbSpace::Srgb.xyz_to_rgb().transpose().to_cols_array_2d();
+    let rgb = |r: usize| {
+        plane(&|p| {
+            (m[r][0] * f64::from(p[0]) + m[r][1] * f64::from(p[1]) + m[r][2] * f64::from(p[2]))
+                as f32
+        })
+    };
+    let mut channels = vec![
+        ("X".to_owned(), plane(&|p| p[0])),
+        ("Y".to_owned(), plane(&|p| p[1])),
+        ("Z".to_owned(), plane(&|p| p[2])),
+        ("R".to_owned(), rgb(0)),
+        ("G".to_owned(), rgb(1)),
+        ("B".to_owned(), rgb(2)),
+    ];
+    if let Some(mask) = &image.emitter {
+        channels
+            .push(("emitter".to_owned(), mask.iter().map(|&e| f32::from(u8::from(e))).collect()));
+    }
+    write_exr(path, image.width, image.height, channels, attributes)
+}
+
+/// Code values for a PNG.
+pub enum PngPixels {
+    Eight(Vec<u8>),
+    Sixteen(Vec<u16>),
+}
+
+/// Write an RGB PNG in the given display space: sRGB is marked with an sRGB chunk; the other
+/// spaces with their primaries (cHRM) and transfer exponent (gAMA).
+pub fn write_png(
+    path: &Path,
+    width: usize,
+    height: usize,
+    pixels: &PngPixels,
+    space: RgbSpace,
+) -> Result<()> {
+    let png_err = |source| ImageFileError::Png { path: path.to_owned(), source };
+    let mut bytes = Vec::new();
+    {
+        let mut encoder = png::Encoder::new(&mut bytes, width as u32, height as u32);
+        encoder.set_color(png::ColorType::Rgb);
+        match space {
+            RgbSpace::Srgb => encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual),
+            other => {
+                let [r, g, b] = other.primaries().map(|c| (c.x as f32, c.y as f32));
+                let w = other.white().chromaticity().expect("white has a chromaticity");
+                encoder.set_source_chromaticities(png::SourceChromaticities::new(
+                    (w.x as f32, w.y as f32),
+                    r,
+                    g,
+                    b,
+                ));
+                let gamma = match other.transfer() {
+                    restauro_spectral::rgb_space::Transfer::Srgb => 1.0 / 2.2,
+                    restauro_spectral::rgb_space::Transfer::Gamma(g) => 1.0 / g,
+                };
+                encoder.set_source_gamma(png::ScaledFloat::new(gamma as f32));
+            }
+        }
+        let data: Vec<u8> = match pixels {
+            PngPixels::Eight(v) => {
+                encoder.set_depth(png::BitDepth::Eight);
+                v.clone()
+            }
+            PngPixels::Sixteen(v) => {
+                encoder.set_depth(png::BitDepth::Sixteen);
+                v.iter().flat_map(|x| x.to_be_bytes()).collect()
+            }
+        };
+        let mut writer = encoder.write_header().map_err(png_err)?;
+        writer.write_image_data(&data).map_err(png_err)?;
+        writer.finish().map_err(png_err)?;
+    }
+    atomic_file::write(path, &bytes)
+        .map_err(|source| ImageFileError::Io { path: path.to_owned(), source })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scratch(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("restauro-img-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    #[test]
+    fn xyz_exr_round_trips() {
+        let dir = scratch("rt");
+        let image = XyzImage {
+            width: 3,
+            height: 2,
+            pixels: vec![
+                [0.1, 0.2, 0.3],
+                [1.0, 2.0, 3.0],
+                [0.0; 3],
+                [5.0, 5.0, 5.0],
+                [0.5, 0.25, 0.125],
+                [9.0, 8.0, 7.0],
+            ],
+            emitter: Some(vec![false, false, false, true, false, false]),
+        };
+        let path = dir.join("a.exr");
+        write_xyz_exr(&path, &image, &[("restauroNote", "test")]).unwrap();
+        assert_eq!(read_exr(&path, MAX_PIXELS).unwrap(), image);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn rgb_exr_is_converted_with_rec709_primaries() {
+        let dir = scratch("rgb");
+        let path = dir.join("rgb.exr");
+        let ch = |n: &str, v: f32| (n.to_owned(), vec![v; 4]);
+        write_exr(&path, 2, 2, vec![ch("R", 1.0), ch("G", 1.0), ch("B", 1.0)], &[]).unwrap();
+        let img = read_exr(&path, MAX_PIXELS).unwrap();
+        // R = G = B = 1 is the D65 white.
+        let p = img.pixels[0];
+        assert!(
+            (p[0] - 0.9505).abs() < 1e-3
+                && (p[1] - 1.0).abs() < 1e-5
+                && (p[2] - 1.089).abs() < 1e-3,
+            "{p:?}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn bad_exr_files_are_refused_with_their_name() {
+        let dir = scratch("bad");
+        let text = dir.join("text.exr");
+        std::fs::write(&text, "not an exr").unwrap();
+        let err = read_exr(&text, MAX_PIXELS).unwrap_err().to_string();
+        assert!(
+            err.starts_with(&format!("{}: not a readable OpenEXR file", text.display())),
+            "{err}"
+        );
+
+        let alpha = dir.join("alpha.exr");
+        write_exr(&alpha, 2, 2, vec![("A".into(), vec![1.0; 4])], &[]).unwrap();
+        let err = read_exr(&alpha, MAX_PIXELS).unwrap_err().to_string();
+        assert!(
+            err.contains(
+                "no colour channels; restauro reads X, Y, Z or R, G, B, and this file has A"
+            ),
+            "{err}"
+        );
+
+        let nan = dir.join("nan.exr");
+        let mut y = vec![1.0; 4];
+        y[3] = f32::NAN;
+        write_exr(
+            &nan,
+            2,
+            2,
+            vec![("X".into(), vec![1.0; 4]), ("Y".into(), y), ("Z".into(), vec![1.0; 4])],
+            &[],
+        )
+        .unwrap();
+        let err = read_exr(&nan, MAX_PIXELS).unwrap_err().to_string();
+        assert!(err.contains("channel Y at pixel (1, 1) is NaN"), "{err}");
+
+        let big = dir.join("big.exr");
+        write_exr(&big, 4, 3, vec![("Y".into(), vec![1.0; 12])], &[]).unwrap();
+        let err = read_exr(&big, 10).unwrap_err().to_string();
+        assert!(
+            err.contains("4×3 is larger than the limit of 10 pixels; crop or downscale it"),
+            "{err}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn png_files_decode_with_their_depth_and_colour_space() {
+        let dir = scratch("png");
+        for (name, pixels, space) in [
+            ("a8.png", PngPixels::Eight(vec![255, 0, 10, 1, 2, 3]), RgbSpace::Srgb),
+            ("a16.png", PngPixels::Sixteen(vec![65535, 0, 1000, 1, 2, 3]), RgbSpace::DisplayP3),
+        ] {
+            let path = dir.join(name);
+            write_png(&path, 2, 1, &pixels, space).unwrap();
+            let decoder =
+                png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&path).unwrap()));
+            let mut reader = decoder.read_info().unwrap();
+            let info = reader.info().clone();
+            assert_eq!((info.width, info.height), (2, 1));
+            let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+            reader.next_frame(&mut buf).unwrap();
+            match pixels {
+                PngPixels::Eight(v) => {
+                    assert_eq!(info.bit_depth, png::BitDepth::Eight);
+                    assert!(info.srgb.is_some());
+                    assert_eq!(buf, v);
+                }
+                PngPixels::Sixteen(v) => {
+                    assert_eq!(info.bit_depth, png::BitDepth::Sixteen);
+                    let c = info.chromaticities().unwrap();
+                    assert!((c.red.0.into_value() - 0.68).abs() < 1e-4);
+                    let back: Vec<u16> =
+                        buf.chunks(2).map(|b| u16::from_be_bytes([b[0], b[1]])).collect();
+                    assert_eq!(back, v);
+                }
+            }
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

@@ -31,8 +31,60 @@ pub enum Command {
     Retinex(RetinexArgs),
     /// Show an XYZ or RGB OpenEXR image on a display: exposure, gamut mapping, encoding to PNG.
     Display(DisplayArgs),
+    /// Scenes: generate the Aosta theatre, check a scene, bundle it.
+    #[command(subcommand)]
+    Scene(SceneCommand),
     /// Measure speed and print it as JSON.
     Bench(BenchArgs),
+}
+
+#[derive(Debug, Subcommand)]
+pub enum SceneCommand {
+    /// Write the south facade of the Roman theatre of Aosta as a complete, renderable scene.
+    Aosta {
+        /// The folder to write `aosta.toml` and `meshes/facade.obj` into.
+        #[arg(long, default_value = "out/aosta")]
+        out: PathBuf,
+        #[arg(long, default_value_t = 1280)]
+        width: u32,
+        #[arg(long, default_value_t = 720)]
+        height: u32,
+        /// The seed of the block pattern.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
+    /// Validate a scene file and everything it refers to, and summarise it.
+    Check {
+        scene: PathBuf,
+        #[command(flatten)]
+        limits: LimitArgs,
+    },
+    /// Bundle a scene with its files by content hash, and print the bundle's identity.
+    Bundle {
+        scene: PathBuf,
+        #[command(flatten)]
+        limits: LimitArgs,
+    },
+}
+
+/// The limits that protect the machine from a scene.
+#[derive(Debug, Args)]
+pub struct LimitArgs {
+    /// The most triangles a scene may have.
+    #[arg(long, default_value_t = 50_000_000)]
+    pub max_triangles: u64,
+    /// The most pixels an image may have.
+    #[arg(long, default_value_t = 16_384 * 16_384)]
+    pub max_pixels: u64,
+    /// The largest file a scene may refer to, in MiB.
+    #[arg(long, default_value_t = 2048)]
+    pub max_file_mb: u64,
+    /// The most samples per pixel.
+    #[arg(long, default_value_t = 65_536)]
+    pub max_spp: u32,
+    /// The most bounces of a path.
+    #[arg(long, default_value_t = 64)]
+    pub max_depth: u32,
 }
 
 #[derive(Debug, Args)]

@@ -5,3 +5,4 @@ pub mod cli;
 pub mod color;
 pub mod demo;
 pub mod retinex;
+pub mod scene_cmd;

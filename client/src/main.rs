@@ -10,6 +10,7 @@ fn main() -> ExitCode {
         Command::Demo(args) => restauro::demo::run(args),
         Command::Retinex(args) => restauro::retinex::run(args),
         Command::Display(args) => restauro::retinex::run_display(args),
+        Command::Scene(command) => restauro::scene_cmd::run(command),
         Command::Bench(args) => restauro::bench::run(args),
     };
     match result.and_then(|text| Ok(std::io::stdout().lock().write_all(text.as_bytes())?)) {

@@ -1,0 +1,56 @@
+//! `restauro scene aosta | check | bundle` as a user runs them.
+
+use std::process::{Command, Output};
+
+fn restauro(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_restauro")).args(args).output().expect("run restauro")
+}
+
+#[test]
+fn aosta_writes_a_scene_that_checks_and_bundles() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("aosta");
+    let o = out.to_str().unwrap();
+    let run = restauro(&["scene", "aosta", "--out", o, "--width", "320", "--height", "180"]);
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let text = String::from_utf8(run.stdout).unwrap();
+    assert!(text.contains("aosta.toml: valid"), "{text}");
+    assert!(text.contains("sun: 100000 lux, azimuth"), "{text}");
+    assert!(text.contains("variants: as-found, cleaned"), "{text}");
+    let scene = out.join("aosta.toml");
+    let s = scene.to_str().unwrap();
+    let check = restauro(&["scene", "check", s]);
+    assert!(check.status.success());
+    assert!(String::from_utf8_lossy(&check.stdout).contains("triangles in 1 objects"));
+    // The bundle's identity is the same from the same files, and names the mesh by its hash.
+    let id = |args: &[&str]| {
+        let b = restauro(args);
+        assert!(b.status.success(), "{}", String::from_utf8_lossy(&b.stderr));
+        String::from_utf8(b.stdout).unwrap()
+    };
+    let first = id(&["scene", "bundle", s]);
+    assert_eq!(first, id(&["scene", "bundle", s]));
+    let mesh = std::fs::read(out.join("meshes/facade.obj")).unwrap();
+    assert!(first.contains(&blake3::hash(&mesh).to_hex().to_string()), "{first}");
+    // A limit set on the command line is enforced and named.
+    let limited = restauro(&["scene", "check", s, "--max-triangles", "1000"]);
+    assert_eq!(limited.status.code(), Some(1));
+    let err = String::from_utf8(limited.stderr).unwrap();
+    assert!(
+        err.contains(
+            "over the limit of 1000; simplify the meshes, or raise the limit with --max-triangles"
+        ),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_bad_scene_is_refused_with_its_place() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("s.toml");
+    std::fs::write(&scene, "format = 1\n[camera]\nwidth = 10\nheight = 10\nfocal = 3\n").unwrap();
+    let run = restauro(&["scene", "check", scene.to_str().unwrap()]);
+    assert_eq!(run.status.code(), Some(1));
+    let err = String::from_utf8(run.stderr).unwrap();
+    assert!(err.contains("s.toml:5:1: unknown field `focal`"), "{err}");
+}

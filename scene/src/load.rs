@@ -1,0 +1,962 @@
+//! From a scene file to a validated scene: every number checked to be finite and in range, every
+//! name resolved (with the nearest names suggested when one is not), every file read through
+//! [`Assets`] (so inside the scene's folder), meshes imported and placed in the world, lights
+//! resolved (the sun's position computed), and the limits that protect the machine enforced.
+//! Nothing renders until all of it has passed.
+
+use crate::assets::{Assets, FolderAssets, extension};
+use crate::error::{Result, SceneError};
+use crate::mesh::Mesh;
+use crate::photometric::{self, Photometry};
+use crate::scene_file::{self, Light, MaterialModel, SceneFile, SpectrumSource, SunPreset, UpAxis};
+use crate::sun::{Site, SunPosition, direction_to_sun, sun_position};
+use crate::{gltf_mesh, obj, ply, vrml};
+use glam::{DMat3, DMat4, DVec3};
+use restauro_spectral::csv::{Quantity, load as load_csv};
+use restauro_spectral::tabulated::Coverage;
+use restauro_spectral::{Illuminant, Spectrum, library};
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+
+/// What a scene may ask of the machine. Each refusal says which limit and how to raise it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Limits {
+    pub max_pixels: u64,
+    pub max_triangles: u64,
+    pub max_samples_per_pixel: u32,
+    pub max_depth: u32,
+    pub max_file_bytes: u64,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Self {
+            max_pixels: 16_384 * 16_384,
+            max_triangles: 50_000_000,
+            max_samples_per_pixel: 65_536,
+            max_depth: 64,
+            max_file_bytes: 2 << 30,
+        }
+    }
+}
+
+/// The camera in world coordinates.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ResolvedCamera {
+    pub position: [f64; 3],
+    pub target: [f64; 3],
+    pub up: [f64; 3],
+    pub vertical_fov_deg: f64,
+    pub width: u32,
+    pub height: u32,
+}
+
+/// An object's mesh in world coordinates and what each of its parts is made of.
+#[derive(Clone, Debug)]
+pub struct LoadedObject {
+    pub name: String,
+    pub mesh: Mesh,
+    /// For each mesh group, the scene material.
+    pub group_materials: Vec<String>,
+    /// For each mesh group, whether another object replaces it (level of detail).
+    pub hidden_groups: Vec<bool>,
+}
+
+/// A light with everything resolved.
+#[derive(Clone, Debug)]
+pub enum ResolvedLight {
+    Point {
+        position: [f64; 3],
+        intensity_cd: f64,
+        spectrum: String,
+        photometry: Option<Photometry>,
+        aim: Option<[f64; 3]>,
+    },
+    Spot {
+        position: [f64; 3],
+        intensity_cd: f64,
+        spectrum: String,
+        aim: [f64; 3],
+        cone_deg: f64,
+        falloff_deg: f64,
+        photometry: Option<Photometry>,
+    },
+    Sun {
+        /// Unit vector towards the sun (+X east, +Y north, +Z up).
+        direction: [f64; 3],
+        azimuth_deg: f64,
+        elevation_deg: f64,
+        illuminance_lux: f64,
+        spectrum: String,
+    },
+}
+
+/// A scene that has passed every check.
+#[derive(Clone, Debug)]
+pub struct LoadedScene {
+    pub file: SceneFile,
+    pub camera: ResolvedCamera,
+    /// Every named spectrum on the grid.
+    pub spectra: BTreeMap<String, Spectrum>,
+    pub objects: Vec<LoadedObject>,
+    pub lights: Vec<ResolvedLight>,
+    /// Things done to the data that the user should know (extrapolation, dropped triangles,
+    /// materials without a state a variant asks for).
+    pub notes: Vec<String>,
+}
+
+impl LoadedScene {
+    pub fn triangle_count(&self) -> usize {
+        self.objects.iter().map(|o| o.mesh.triangles.len()).sum()
+    }
+
+    /// The state (`base`, `degraded` or `cleaned`) that `variant` gives part `group` of
+    /// `object`: the most specific entry wins.
+    pub fn state_of<'a>(&'a self, variant: &str, object: &str, group: &str) -> Option<&'a str> {
+        let v = self.file.variants.get(variant)?;
+        let key = format!("{object}/{group}");
+        Some(v.states.get(&key).or_else(|| v.states.get(object)).unwrap_or(&v.state).as_str())
+    }
+}
+
+/// Parse the text of a scene file. TOML errors carry their line and column.
+pub fn parse_scene(text: &str, path: &Path) -> Result<SceneFile> {
+    let file: SceneFile = toml::from_str(text).map_err(|e| {
+        let (line, column) = e
+            .span()
+            .map(|s| {
+                let before = &text[..s.start.min(text.len())];
+                let line = before.matches('\n').count() + 1;
+                let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+                (line, column)
+            })
+            .unwrap_or((0, 0));
+        SceneError::syntax(path, line, column, e.message().to_owned())
+    })?;
+    if file.format != scene_file::FORMAT {
+        return Err(SceneError::invalid(
+            path,
+            "format",
+            format!(
+                "format = {}, but this restauro reads format {}",
+                file.format,
+                scene_file::FORMAT
+            ),
+        ));
+    }
+    Ok(file)
+}
+
+/// Load and check the scene file at `path`.
+pub fn load_scene(path: &Path, limits: &Limits) -> Result<LoadedScene> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|source| SceneError::Io { path: path.to_owned(), source })?;
+    let file = parse_scene(&text, path)?;
+    let assets = FolderAssets::new(path, limits.max_file_bytes)?;
+    load(file, &assets, limits)
+}
+
+/// "unknown X `name` (did you mean …?); the scene defines …".
+fn unknown<'a>(kind: &str, name: &str, known: impl Iterator<Item = &'a str>) -> String {
+    let known: Vec<&str> = known.collect();
+    let mut close: Vec<(f64, &str)> = known
+        .iter()
+        .map(|k| (strsim::jaro_winkler(k, name), *k))
+        .filter(|(s, _)| *s > 0.75)
+        .collect();
+    close.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let hint = match close.first() {
+        Some((_, k)) => format!(" (did you mean `{k}`?)"),
+        None => String::new(),
+    };
+    let list = if known.is_empty() {
+        "none".to_owned()
+    } else {
+        known.iter().take(12).map(|k| format!("`{k}`")).collect::<Vec<_>>().join(", ")
+    };
+    format!("unknown {kind} `{name}`{hint}; the scene defines {list}")
+}
+
+fn finite3(v: [f64; 3]) -> bool {
+    v.iter().all(|x| x.is_finite())
+}
+
+struct Ctx<'a> {
+    path: PathBuf,
+    file: &'a SceneFile,
+    assets: &'a dyn Assets,
+    notes: Vec<String>,
+    spectra: BTreeMap<String, Spectrum>,
+    /// The largest value of each resolved spectrum (reflectances must not exceed 1).
+    spectrum_max: BTreeMap<String, f32>,
+}
+
+impl Ctx<'_> {
+    fn invalid(&self, place: impl Into<String>, problem: impl Into<String>) -> SceneError {
+        SceneError::invalid(&self.path, place, problem)
+    }
+
+    /// Resolve a named spectrum (and what it mixes), detecting cycles.
+    fn spectrum(
+        &mut self,
+        name: &str,
+        place: &str,
+        visiting: &mut Vec<String>,
+    ) -> Result<Spectrum> {
+        if let Some(s) = self.spectra.get(name) {
+            return Ok(*s);
+        }
+        let source = self
+            .file
+            .spectra
+            .get(name)
+            .ok_or_else(|| {
+                self.invalid(
+                    place,
+                    unknown("spectrum", name, self.file.spectra.keys().map(String::as_str)),
+                )
+            })?
+            .clone();
+        if visiting.iter().any(|v| v == name) {
+            return Err(self.invalid(
+                format!("spectra.{name}"),
+                format!("the mixture refers to itself ({} → {name})", visiting.join(" → ")),
+            ));
+        }
+        visiting.push(name.to_owned());
+        let spectrum_place = format!("spectra.{name}");
+        let s = match &source {
+            SpectrumSource::Library(stem) => {
+                let loaded = library::load_reflectance(stem)
+                    .map_err(|e| self.invalid(&spectrum_place, e.to_string()))?;
+                self.notes.extend(
+                    loaded.notes.iter().map(|n| format!("spectrum `{name}` ({stem}): {n}")),
+                );
+                loaded.spectrum
+            }
+            SpectrumSource::File { file, extrapolate } => {
+                let bytes = self.assets.read(file, &spectrum_place)?;
+                let text = String::from_utf8(bytes).map_err(|_| {
+                    self.invalid(&spectrum_place, format!("`{file}` is not UTF-8 text"))
+                })?;
+                let coverage = if *extrapolate { Coverage::HoldEnds } else { Coverage::Require };
+                let loaded = load_csv(&text, file, Quantity::RelativePower, coverage)
+                    .map_err(|e| self.invalid(&spectrum_place, e.to_string()))?;
+                self.notes.extend(
+                    loaded.notes.iter().map(|n| format!("spectrum `{name}` ({file}): {n}")),
+                );
+                loaded.spectrum
+            }
+            SpectrumSource::Illuminant { illuminant } => illuminant
+                .parse::<Illuminant>()
+                .and_then(|i| i.spd())
+                .map_err(|e| self.invalid(&spectrum_place, e.to_string()))?,
+            SpectrumSource::Mix { mix } => {
+                if mix.is_empty() {
+                    return Err(self.invalid(
+                        &spectrum_place,
+                        "an empty mixture; list the spectra and their weights",
+                    ));
+                }
+                let total: f64 = mix.iter().map(|p| p.weight).sum();
+                if mix.iter().any(|p| !(p.weight.is_finite() && p.weight >= 0.0))
+                    || (total - 1.0).abs() > 1e-6
+                {
+                    return Err(self.invalid(
+                        &spectrum_place,
+                        format!("mixture weights must be ≥ 0 and sum to 1 (they sum to {total})"),
+                    ));
+                }
+                let mut out = Spectrum::ZERO;
+                for part in mix {
+                    let s = self.spectrum(&part.spectrum, &spectrum_place, visiting)?;
+                    out += s * part.weight as f32;
+                }
+                out
+            }
+        };
+        visiting.pop();
+        self.spectra.insert(name.to_owned(), s);
+        self.spectrum_max.insert(name.to_owned(), s.max_value());
+        Ok(s)
+    }
+
+    /// A spectrum used as a reflectance: at most 1.
+    fn reflectance(&mut self, name: &str, place: &str) -> Result<()> {
+        self.spectrum(name, place, &mut Vec::new())?;
+        let max = self.spectrum_max[name];
+        if max > 1.0 {
+            return Err(self.invalid(
+                place,
+                format!(
+                    "spectrum `{name}` reaches {max} but is used as a reflectance, which cannot \
+                     exceed 1; give reflectance as a fraction 0..1"
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// A spectrum used as a light: it must emit at 555 nm (Eq. 2 normalises there).
+    fn emission(&mut self, name: &str, place: &str) -> Result<()> {
+        let s = self.spectrum(name, place, &mut Vec::new())?;
+        restauro_spectral::photometry::LuminousSpectrum::new(&s, name)
+            .map_err(|e| self.invalid(place, e.to_string()))?;
+        Ok(())
+    }
+}
+
+/// Check a material's optical numbers.
+fn check_surface(
+    ctx: &mut Ctx,
+    place: &str,
+    model: MaterialModel,
+    reflectance: Option<&str>,
+    roughness: Option<f64>,
+    specular: Option<f64>,
+    ior: Option<f64>,
+) -> Result<()> {
+    if let Some(r) = reflectance {
+        ctx.reflectance(r, &format!("{place}.reflectance"))?;
+    }
+    match model {
+        MaterialModel::Lambert => {
+            if roughness.is_some() || specular.is_some() || ior.is_some() {
+                return Err(ctx.invalid(place, "a lambert material has no roughness, specular or ior; use model = \"cook-torrance\""));
+            }
+        }
+        MaterialModel::CookTorrance => {
+            if let Some(m) = roughness
+                && !(m.is_finite() && m > 0.0 && m <= 1.0)
+            {
+                return Err(ctx.invalid(
+                    format!("{place}.roughness"),
+                    format!("{m} is out of range; the Beckmann roughness m is in (0, 1]"),
+                ));
+            }
+            if specular.is_some() && ior.is_some() {
+                return Err(ctx.invalid(place, "give either specular (F0) or ior, not both"));
+            }
+            if let Some(f0) = specular
+                && !(f0.is_finite() && (0.0..=1.0).contains(&f0))
+            {
+                return Err(ctx.invalid(
+                    format!("{place}.specular"),
+                    format!("{f0} is out of range; F0 is a reflectance 0..1"),
+                ));
+            }
+            if let Some(n) = ior
+                && !(n.is_finite() && (1.0..=5.0).contains(&n))
+            {
+                return Err(ctx.invalid(
+                    format!("{place}.ior"),
+                    format!("{n} is out of range; an index of refraction is 1 to 5"),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Import a mesh by its reference's extension; also returns VRML viewpoints.
+fn import_mesh(
+    ctx: &Ctx,
+    reference: &str,
+    place: &str,
+) -> Result<(Mesh, Vec<vrml::Viewpoint>, UpAxis)> {
+    let bytes = ctx.assets.read(reference, place)?;
+    let name = PathBuf::from(reference);
+    let text = || {
+        String::from_utf8(bytes.clone())
+            .map_err(|_| ctx.invalid(place, format!("`{reference}` is not UTF-8 text")))
+    };
+    Ok(match extension(reference).as_str() {
+        "obj" => (obj::parse(&text()?, &name)?, Vec::new(), UpAxis::Z),
+        "ply" => (ply::parse(&bytes, &name)?, Vec::new(), UpAxis::Z),
+        "gltf" | "glb" => (gltf_mesh::parse(&bytes, &name)?, Vec::new(), UpAxis::Y),
+        "wrl" => {
+            let scene = vrml::parse(&text()?, &name)?;
+            (scene.mesh, scene.viewpoints, UpAxis::Y)
+        }
+        other => {
+            return Err(ctx.invalid(
+                place,
+                format!("`{reference}`: `.{other}` is not a mesh format restauro reads; use .obj, .gltf, .glb, .ply or .wrl"),
+            ));
+        }
+    })
+}
+
+/// The object's placement: the file's up axis turned to +Z, then scale, rotation (X, Y, Z)
+/// and translation.
+fn object_matrix(object: &scene_file::Object, file_up: UpAxis) -> DMat4 {
+    let up = match object.up_axis.unwrap_or(file_up) {
+        // Y-up to Z-up: +Y becomes +Z, +Z becomes −Y (a +90° turn about X).
+        UpAxis::Y => DMat4::from_rotation_x(std::f64::consts::FRAC_PI_2),
+        UpAxis::Z => DMat4::IDENTITY,
+    };
+    let t = &object.transform;
+    let scale = match &t.scale {
+        Some(scene_file::Scale::Uniform(s)) => DVec3::splat(*s),
+        Some(scene_file::Scale::PerAxis(s)) => DVec3::from_array(*s),
+        None => DVec3::ONE,
+    };
+    let r = t.rotate_deg.unwrap_or([0.0; 3]).map(f64::to_radians);
+    let rotation =
+        DMat4::from_rotation_z(r[2]) * DMat4::from_rotation_y(r[1]) * DMat4::from_rotation_x(r[0]);
+    DMat4::from_translation(DVec3::from_array(t.translate.unwrap_or([0.0; 3])))
+        * rotation
+        * DMat4::from_scale(scale)
+        * up
+}
+
+/// Check the imported mesh: finite vertices, valid indices, something to render; degenerate
+/// triangles (zero area, common in scans) are dropped and counted.
+fn check_mesh(ctx: &mut Ctx, mesh: &mut Mesh, place: &str, reference: &str) -> Result<()> {
+    if let Some(i) = mesh.positions.iter().position(|p| p.iter().any(|v| !v.is_finite())) {
+        return Err(ctx.invalid(
+            place,
+            format!("`{reference}`: vertex {i} is {:?}, not a finite position", mesh.positions[i]),
+        ));
+    }
+    let n = mesh.positions.len() as u32;
+    if let Some(t) = mesh.triangles.iter().position(|t| t.iter().any(|&i| i >= n)) {
+        return Err(ctx.invalid(
+            place,
+            format!("`{reference}`: triangle {t} refers to a vertex beyond the {n} there are"),
+        ));
+    }
+    let before = mesh.triangles.len();
+    let keep: Vec<bool> = mesh
+        .triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| DVec3::from_array(mesh.positions[i as usize].map(f64::from)));
+            (b - a).cross(c - a).length_squared() > 0.0
+        })
+        .collect();
+    let mut k = keep.iter();
+    mesh.triangles.retain(|_| *k.next().unwrap_or(&true));
+    let mut k = keep.iter();
+    mesh.triangle_group.retain(|_| *k.next().unwrap_or(&true));
+    let dropped = before - mesh.triangles.len();
+    if mesh.triangles.is_empty() {
+        return Err(ctx.invalid(
+            place,
+            format!("`{reference}` has no triangles with an area; nothing to render"),
+        ));
+    }
+    if dropped > 0 {
+        ctx.notes.push(format!(
+            "{place}: {dropped} degenerate (zero-area) triangles of `{reference}` dropped"
+        ));
+    }
+    Ok(())
+}
+
+fn transform_mesh(mesh: &mut Mesh, m: DMat4) {
+    for p in &mut mesh.positions {
+        *p = m.transform_point3(DVec3::from_array(p.map(f64::from))).as_vec3().to_array();
+    }
+    let normal_matrix = DMat3::from_mat4(m).inverse().transpose();
+    if let Some(normals) = &mut mesh.normals {
+        for n in normals.iter_mut() {
+            *n = (normal_matrix * DVec3::from_array(n.map(f64::from)))
+                .normalize_or_zero()
+                .as_vec3()
+                .to_array();
+        }
+    }
+    // A mirroring placement turns the winding around; keep front faces counter-clockwise.
+    if m.determinant() < 0.0 {
+        for t in &mut mesh.triangles {
+            t.swap(1, 2);
+        }
+    }
+}
+
+fn photometry(ctx: &Ctx, reference: &Option<String>, place: &str) -> Result<Option<Photometry>> {
+    let Some(reference) = reference else { return Ok(None) };
+    let bytes = ctx.assets.read(reference, place)?;
+    let text = String::from_utf8_lossy(&bytes);
+    let name = PathBuf::from(reference);
+    Ok(Some(match extension(reference).as_str() {
+        "ies" => photometric::parse_ies(&text, &name)?,
+        "ldt" => photometric::parse_ldt(&text, &name)?,
+        other => {
+            return Err(ctx.invalid(place, format!("`{reference}`: `.{other}` is not a photometric format; use .ies (LM-63) or .ldt (EULUMDAT)")));
+        }
+    }))
+}
+
+/// Validate and resolve a parsed scene, reading its files through `assets`.
+pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<LoadedScene> {
+    let mut ctx = Ctx {
+        path: assets.scene_path().to_owned(),
+        file: &file,
+        assets,
+        notes: Vec::new(),
+        spectra: BTreeMap::new(),
+        spectrum_max: BTreeMap::new(),
+    };
+    let limit = |what: &str, value: u64, limit: u64, fix: &str| SceneError::Limit {
+        path: assets.scene_path().to_owned(),
+        what: what.to_owned(),
+        value,
+        limit,
+        fix: fix.to_owned(),
+    };
+
+    // Render settings.
+    let r = &file.render;
+    if r.samples_per_pixel == 0 || r.samples_per_pixel > limits.max_samples_per_pixel {
+        return Err(limit(
+            "render.samples_per_pixel",
+            u64::from(r.samples_per_pixel),
+            u64::from(limits.max_samples_per_pixel),
+            "use 1 or more, or raise the limit with --max-spp",
+        ));
+    }
+    if r.max_depth == 0 || r.max_depth > limits.max_depth {
+        return Err(limit(
+            "render.max_depth",
+            u64::from(r.max_depth),
+            u64::from(limits.max_depth),
+            "use 1 or more bounces, or raise the limit with --max-depth",
+        ));
+    }
+
+    // Spectra: every one must resolve, used or not, so mistakes surface now.
+    for name in file.spectra.keys() {
+        ctx.spectrum(name, &format!("spectra.{name}"), &mut Vec::new())?;
+    }
+
+    // Materials and their states.
+    for (name, m) in &file.materials {
+        let place = format!("materials.{name}");
+        check_surface(
+            &mut ctx,
+            &place,
+            m.model,
+            Some(&m.reflectance),
+            m.roughness,
+            m.specular,
+            m.ior,
+        )?;
+        for (state, o) in [("degraded", &m.degraded), ("cleaned", &m.cleaned)] {
+            if let Some(o) = o {
+                let p = format!("{place}.{state}");
+                check_surface(
+                    &mut ctx,
+                    &p,
+                    m.model,
+                    o.reflectance.as_deref(),
+                    o.roughness,
+                    o.specular,
+                    o.ior,
+                )?;
+            }
+        }
+    }
+
+    // Objects.
+    let mut objects: Vec<LoadedObject> = Vec::new();
+    let mut viewpoints: BTreeMap<String, (Vec<vrml::Viewpoint>, DMat4)> = BTreeMap::new();
+    let mut names = BTreeSet::new();
+    let mut triangles: u64 = 0;
+    for (i, o) in file.objects.iter().enumerate() {
+        let place = format!("objects[{i}] ({})", o.name);
+        if !names.insert(o.name.clone()) {
+            return Err(ctx.invalid(
+                &place,
+                format!("the name `{}` is used by two objects; names must be unique", o.name),
+            ));
+        }
+        let t = &o.transform;
+        let bad_vec =
+            t.translate.is_some_and(|v| !finite3(v)) || t.rotate_deg.is_some_and(|v| !finite3(v));
+        let bad_scale = match &t.scale {
+            Some(scene_file::Scale::Uniform(s)) => !(s.is_finite() && *s != 0.0),
+            Some(scene_file::Scale::PerAxis(s)) => !s.iter().all(|v| v.is_finite() && *v != 0.0),
+            None => false,
+        };
+        if bad_vec || bad_scale {
+            return Err(ctx.invalid(
+                format!("{place}.transform"),
+                "every number must be finite, and a scale not 0",
+            ));
+        }
+        let (mut mesh, vps, file_up) = import_mesh(&ctx, &o.mesh, &format!("{place}.mesh"))?;
+        check_mesh(&mut ctx, &mut mesh, &place, &o.mesh)?;
+        triangles += mesh.triangles.len() as u64;
+        if triangles > limits.max_triangles {
+            return Err(limit(
+                "the number of triangles",
+                triangles,
+                limits.max_triangles,
+                "simplify the meshes, or raise the limit with --max-triangles",
+            ));
+        }
+        let matrix = object_matrix(o, file_up);
+        transform_mesh(&mut mesh, matrix);
+        viewpoints.insert(o.name.clone(), (vps, matrix));
+        // Bind each part to a scene material.
+        for key in o.materials.keys() {
+            if !mesh.groups.iter().any(|g| &g.name == key) {
+                return Err(ctx.invalid(
+                    format!("{place}.materials"),
+                    unknown("mesh part", key, mesh.groups.iter().map(|g| g.name.as_str()))
+                        .replace("the scene defines", &format!("`{}` has", o.mesh)),
+                ));
+            }
+        }
+        let mut group_materials = Vec::new();
+        for g in &mesh.groups {
+            let material = o.materials.get(&g.name).or(o.material.as_ref()).ok_or_else(|| {
+                ctx.invalid(&place, format!("part `{}` of `{}` has no material: bind it in `materials` or give `material`", g.name, o.mesh))
+            })?;
+            if !file.materials.contains_key(material) {
+                return Err(ctx.invalid(
+                    &place,
+                    unknown("material", material, file.materials.keys().map(String::as_str)),
+                ));
+            }
+            group_materials.push(material.clone());
+        }
+        let hidden_groups = vec![false; mesh.groups.len()];
+        objects.push(LoadedObject { name: o.name.clone(), mesh, group_materials, hidden_groups });
+    }
+    // Level of detail: hide the parts that detailed objects replace.
+    for (i, o) in file.objects.iter().enumerate() {
+        let Some(rep) = &o.replaces else { continue };
+        let place = format!("objects[{i}] ({}).replaces", o.name);
+        if rep.object == o.name {
+            return Err(ctx.invalid(&place, "an object cannot replace itself"));
+        }
+        let target = objects.iter_mut().find(|t| t.name == rep.object).ok_or_else(|| {
+            SceneError::invalid(
+                &ctx.path,
+                &place,
+                unknown("object", &rep.object, file.objects.iter().map(|o| o.name.as_str())),
+            )
+        })?;
+        for g in &rep.groups {
+            let k = target.mesh.groups.iter().position(|x| &x.name == g).ok_or_else(|| {
+                SceneError::invalid(
+                    &ctx.path,
+                    &place,
+                    unknown("mesh part", g, target.mesh.groups.iter().map(|x| x.name.as_str())),
+                )
+            })?;
+            target.hidden_groups[k] = true;
+        }
+    }
+
+    // Camera.
+    let c = &file.camera;
+    if c.width == 0 || c.height == 0 {
+        return Err(ctx.invalid("camera", "width and height must be at least 1 pixel"));
+    }
+    let pixels = u64::from(c.width) * u64::from(c.height);
+    if pixels > limits.max_pixels {
+        return Err(limit(
+            "the image size (pixels)",
+            pixels,
+            limits.max_pixels,
+            "render smaller, or raise the limit with --max-pixels",
+        ));
+    }
+    let camera = match &c.viewpoint {
+        Some(vp) => {
+            let (list, matrix) = viewpoints.get(&vp.object).ok_or_else(|| {
+                ctx.invalid(
+                    "camera.viewpoint",
+                    unknown("object", &vp.object, file.objects.iter().map(|o| o.name.as_str())),
+                )
+            })?;
+            let v = list.get(vp.index).ok_or_else(|| {
+                ctx.invalid(
+                    "camera.viewpoint",
+                    format!(
+                        "object `{}` has {} viewpoints; index {} does not exist",
+                        vp.object,
+                        list.len(),
+                        vp.index
+                    ),
+                )
+            })?;
+            // VRML views along −Z with +Y up, turned by the viewpoint's orientation.
+            let (axis, angle) = v.orientation;
+            let rot = DMat3::from_axis_angle(
+                DVec3::from_array(axis.map(f64::from)).normalize_or(DVec3::Y),
+                f64::from(angle),
+            );
+            let pos = DVec3::from_array(v.position.map(f64::from));
+            let look = rot * DVec3::NEG_Z;
+            let up = rot * DVec3::Y;
+            let to_world = |p: DVec3| matrix.transform_point3(p);
+            let position = to_world(pos);
+            ResolvedCamera {
+                position: position.to_array(),
+                target: to_world(pos + look).to_array(),
+                up: matrix.transform_vector3(up).normalize_or(DVec3::Z).to_array(),
+                vertical_fov_deg: f64::from(v.field_of_view).to_degrees(),
+                width: c.width,
+                height: c.height,
+            }
+        }
+        None => {
+            let (Some(position), Some(target)) = (c.position, c.target) else {
+                return Err(ctx.invalid("camera", "give position and target, or a viewpoint"));
+            };
+            ResolvedCamera {
+                position,
+                target,
+                up: c.up,
+                vertical_fov_deg: c.vertical_fov_deg,
+                width: c.width,
+                height: c.height,
+            }
+        }
+    };
+    let (p, t, u) = (
+        DVec3::from_array(camera.position),
+        DVec3::from_array(camera.target),
+        DVec3::from_array(camera.up),
+    );
+    if !(finite3(camera.position) && finite3(camera.target) && finite3(camera.up)) {
+        return Err(ctx.invalid("camera", "position, target and up must be finite"));
+    }
+    if (t - p).length() < 1e-9 {
+        return Err(ctx.invalid("camera", "the target is where the camera is; move one of them"));
+    }
+    if (t - p).normalize().cross(u.normalize_or_zero()).length() < 1e-6 {
+        return Err(ctx.invalid(
+            "camera.up",
+            "up is parallel to the viewing direction; use another up, e.g. [0, 0, 1]",
+        ));
+    }
+    if !(camera.vertical_fov_deg.is_finite()
+        && camera.vertical_fov_deg > 0.0
+        && camera.vertical_fov_deg < 180.0)
+    {
+        return Err(ctx.invalid(
+            "camera.vertical_fov_deg",
+            format!(
+                "{} is out of range; use an angle between 0 and 180 degrees",
+                camera.vertical_fov_deg
+            ),
+        ));
+    }
+
+    // Lights.
+    if file.lights.is_empty() {
+        return Err(ctx.invalid("lights", "the scene has no light; add a sun or a luminaire"));
+    }
+    let mut lights = Vec::new();
+    for (i, l) in file.lights.iter().enumerate() {
+        let place = format!("lights[{i}]");
+        let resolved = match l {
+            Light::Point { position, intensity_cd, spectrum, ies, aim } => {
+                check_luminaire(&ctx, &place, *position, *intensity_cd, *aim)?;
+                ctx.emission(spectrum, &format!("{place}.spectrum"))?;
+                let photometry = photometry(&ctx, ies, &format!("{place}.ies"))?;
+                ResolvedLight::Point {
+                    position: *position,
+                    intensity_cd: *intensity_cd,
+                    spectrum: spectrum.clone(),
+                    photometry,
+                    aim: *aim,
+                }
+            }
+            Light::Spot { position, intensity_cd, spectrum, aim, cone_deg, falloff_deg, ies } => {
+                check_luminaire(&ctx, &place, *position, *intensity_cd, Some(*aim))?;
+                if !(cone_deg.is_finite()
+                    && *cone_deg > 0.0
+                    && falloff_deg.is_finite()
+                    && *falloff_deg >= 0.0
+                    && cone_deg + falloff_deg <= 180.0)
+                {
+                    return Err(ctx.invalid(
+                        &place,
+                        "cone_deg must be > 0 and falloff_deg ≥ 0, their sum at most 180",
+                    ));
+                }
+                ctx.emission(spectrum, &format!("{place}.spectrum"))?;
+                let photometry = photometry(&ctx, ies, &format!("{place}.ies"))?;
+                ResolvedLight::Spot {
+                    position: *position,
+                    intensity_cd: *intensity_cd,
+                    spectrum: spectrum.clone(),
+                    aim: *aim,
+                    cone_deg: *cone_deg,
+                    falloff_deg: *falloff_deg,
+                    photometry,
+                }
+            }
+            Light::Sun { illuminance_lux, preset, azimuth_deg, elevation_deg, site, spectrum } => {
+                ctx.emission(spectrum, &format!("{place}.spectrum"))?;
+                let lux = match (illuminance_lux, preset) {
+                    (Some(_), Some(_)) => {
+                        return Err(
+                            ctx.invalid(&place, "give illuminance_lux or a preset, not both")
+                        );
+                    }
+                    (Some(e), None) => *e,
+                    (None, Some(SunPreset::Sun)) => 100_000.0,
+                    (None, Some(SunPreset::Cloudy)) => 10_000.0,
+                    (None, Some(SunPreset::FullMoon)) => 0.2,
+                    (None, None) => return Err(ctx.invalid(
+                        &place,
+                        "give illuminance_lux, or preset = \"sun\", \"cloudy\" or \"full-moon\"",
+                    )),
+                };
+                if !(lux.is_finite() && lux >= 0.0) {
+                    return Err(ctx.invalid(
+                        format!("{place}.illuminance_lux"),
+                        format!("{lux} is not a finite illuminance ≥ 0 lux"),
+                    ));
+                }
+                let position = match (azimuth_deg, elevation_deg, site) {
+                    (Some(_), _, Some(_)) | (_, Some(_), Some(_)) => {
+                        return Err(ctx.invalid(
+                            &place,
+                            "give azimuth/elevation or a site and date-time, not both",
+                        ));
+                    }
+                    (None, None, Some(s)) => {
+                        let site = Site::new(s.latitude_deg, s.longitude_deg, s.height_m);
+                        sun_position(site, &s.datetime, None)
+                            .map_err(|e| ctx.invalid(format!("{place}.site"), e))?
+                    }
+                    (az, el, None) => {
+                        // The paper's sun preset stands 50° above the horizon; due south
+                        // unless an azimuth is given.
+                        let el = el.or((*preset == Some(SunPreset::Sun)).then_some(50.0));
+                        let az = az.or(el.map(|_| 180.0));
+                        match (az, el) {
+                            (Some(az), Some(el)) if az.is_finite() && el.is_finite() && (-90.0..=90.0).contains(&el) => SunPosition { azimuth_deg: az, elevation_deg: el },
+                            (Some(_), Some(el)) => return Err(ctx.invalid(format!("{place}.elevation_deg"), format!("{el} is out of range; use −90 to 90 degrees"))),
+                            _ => return Err(ctx.invalid(&place, "give azimuth_deg and elevation_deg, or a site with latitude, longitude and date-time")),
+                        }
+                    }
+                };
+                if position.elevation_deg <= 0.0 {
+                    return Err(ctx.invalid(
+                        &place,
+                        format!(
+                            "the sun is below the horizon (elevation {:.2}°, azimuth {:.2}°); choose a daytime date-time or a positive elevation",
+                            position.elevation_deg, position.azimuth_deg
+                        ),
+                    ));
+                }
+                ResolvedLight::Sun {
+                    direction: direction_to_sun(position),
+                    azimuth_deg: position.azimuth_deg,
+                    elevation_deg: position.elevation_deg,
+                    illuminance_lux: lux,
+                    spectrum: spectrum.clone(),
+                }
+            }
+        };
+        lights.push(resolved);
+    }
+
+    // Variants.
+    let states = ["base", "degraded", "cleaned"];
+    for (name, v) in &file.variants {
+        let place = format!("variants.{name}");
+        let check_state = |s: &str| -> Result<()> {
+            if states.contains(&s) {
+                Ok(())
+            } else {
+                Err(SceneError::invalid(
+                    &ctx.path,
+                    &place,
+                    format!("unknown state `{s}`; use base, degraded or cleaned"),
+                ))
+            }
+        };
+        check_state(&v.state)?;
+        for (key, state) in &v.states {
+            check_state(state)?;
+            let (object, group) = match key.split_once('/') {
+                Some((o, g)) => (o, Some(g)),
+                None => (key.as_str(), None),
+            };
+            let o = objects.iter().find(|o| o.name == object).ok_or_else(|| {
+                SceneError::invalid(
+                    &ctx.path,
+                    &place,
+                    unknown("object", object, objects.iter().map(|o| o.name.as_str())),
+                )
+            })?;
+            if let Some(g) = group
+                && !o.mesh.groups.iter().any(|x| x.name == g)
+            {
+                return Err(SceneError::invalid(
+                    &ctx.path,
+                    &place,
+                    unknown("mesh part", g, o.mesh.groups.iter().map(|x| x.name.as_str())),
+                ));
+            }
+        }
+        // Materials asked for a state they do not have keep their base state; say so.
+        let mut lacking = BTreeSet::new();
+        for o in &objects {
+            for (g, material) in o.mesh.groups.iter().zip(&o.group_materials) {
+                let state = v
+                    .states
+                    .get(&format!("{}/{}", o.name, g.name))
+                    .or_else(|| v.states.get(&o.name))
+                    .unwrap_or(&v.state);
+                let m = &file.materials[material];
+                let has = match state.as_str() {
+                    "degraded" => m.degraded.is_some(),
+                    "cleaned" => m.cleaned.is_some(),
+                    _ => true,
+                };
+                if !has {
+                    lacking.insert(format!("{material} ({state})"));
+                }
+            }
+        }
+        if !lacking.is_empty() {
+            ctx.notes.push(format!(
+                "{place}: these materials have no such state and keep their base one: {}",
+                lacking.into_iter().collect::<Vec<_>>().join(", ")
+            ));
+        }
+    }
+
+    let Ctx { notes, spectra, .. } = ctx;
+    Ok(LoadedScene { camera, spectra, objects, lights, notes, file })
+}
+
+fn check_luminaire(
+    ctx: &Ctx,
+    place: &str,
+    position: [f64; 3],
+    intensity_cd: f64,
+    aim: Option<[f64; 3]>,
+) -> Result<()> {
+    if !finite3(position) {
+        return Err(ctx.invalid(format!("{place}.position"), "must be finite"));
+    }
+    if !(intensity_cd.is_finite() && intensity_cd >= 0.0) {
+        return Err(ctx.invalid(
+            format!("{place}.intensity_cd"),
+            format!("{intensity_cd} is not a luminous intensity; give candela ≥ 0"),
+        ));
+    }
+    if let Some(a) = aim {
+        if !finite3(a) {
+            return Err(ctx.invalid(format!("{place}.aim"), "must be finite"));
+        }
+        if (DVec3::from_array(a) - DVec3::from_array(position)).length() < 1e-9 {
+            return Err(ctx
+                .invalid(format!("{place}.aim"), "the aim point is the luminaire's own position"));
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,160 @@
+//! Stanford PLY meshes, ASCII and binary, read with ply-rs: the `vertex` element's x, y, z and
+//! the `face` element's `vertex_indices` (or `vertex_index`) lists. Polygons are split into
+//! fans. PLY has no materials, so the whole mesh is one part, named after the file.
+
+use crate::error::{Result, SceneError};
+use crate::mesh::{Group, Mesh};
+use ply_rs::parser::Parser;
+use ply_rs::ply::{DefaultElement, Property};
+use std::path::Path;
+
+fn number(p: &Property) -> Option<f64> {
+    Some(match p {
+        Property::Char(v) => f64::from(*v),
+        Property::UChar(v) => f64::from(*v),
+        Property::Short(v) => f64::from(*v),
+        Property::UShort(v) => f64::from(*v),
+        Property::Int(v) => f64::from(*v),
+        Property::UInt(v) => f64::from(*v),
+        Property::Float(v) => f64::from(*v),
+        Property::Double(v) => *v,
+        _ => return None,
+    })
+}
+
+fn list(p: &Property) -> Option<Vec<i64>> {
+    Some(match p {
+        Property::ListChar(v) => v.iter().map(|&x| i64::from(x)).collect(),
+        Property::ListUChar(v) => v.iter().map(|&x| i64::from(x)).collect(),
+        Property::ListShort(v) => v.iter().map(|&x| i64::from(x)).collect(),
+        Property::ListUShort(v) => v.iter().map(|&x| i64::from(x)).collect(),
+        Property::ListInt(v) => v.iter().map(|&x| i64::from(x)).collect(),
+        Property::ListUInt(v) => v.iter().map(|&x| i64::from(x)).collect(),
+        _ => return None,
+    })
+}
+
+/// Read PLY bytes. `path` names the file in messages and, by its stem, the mesh's one part.
+pub fn parse(bytes: &[u8], path: &Path) -> Result<Mesh> {
+    let parser = Parser::<DefaultElement>::new();
+    let mut reader = bytes;
+    // ply-rs reports truncated and malformed files as errors; the unwind guard keeps a defect
+    // in it from taking the program down on hostile input.
+    let ply = std::panic::catch_unwind(move || parser.read_ply(&mut reader))
+        .map_err(|_| {
+            SceneError::invalid(path, "PLY", "the file is malformed (the reader gave up)")
+        })?
+        .map_err(|e| {
+            SceneError::invalid(path, "PLY", format!("{e}; the file may be truncated or not PLY"))
+        })?;
+    let vertices = ply.payload.get("vertex").ok_or_else(|| {
+        SceneError::invalid(
+            path,
+            "header",
+            "no `vertex` element; a PLY mesh needs vertices with x, y, z",
+        )
+    })?;
+    let faces = ply.payload.get("face").ok_or_else(|| {
+        SceneError::invalid(
+            path,
+            "header",
+            "no `face` element; restauro needs faces, not a point cloud",
+        )
+    })?;
+    let mut mesh = Mesh::default();
+    for (i, v) in vertices.iter().enumerate() {
+        let coord = |k: &str| -> Result<f32> {
+            v.get(k).and_then(number).map(|x| x as f32).ok_or_else(|| {
+                SceneError::invalid(
+                    path,
+                    format!("vertex {i}"),
+                    format!("no numeric `{k}` property"),
+                )
+            })
+        };
+        mesh.positions.push([coord("x")?, coord("y")?, coord("z")?]);
+    }
+    let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("ply").to_owned();
+    let group = mesh.group_index(Group::named(stem));
+    let n = mesh.positions.len() as i64;
+    for (i, f) in faces.iter().enumerate() {
+        let indices =
+            f.get("vertex_indices").or_else(|| f.get("vertex_index")).and_then(list).ok_or_else(
+                || SceneError::invalid(path, format!("face {i}"), "no `vertex_indices` list"),
+            )?;
+        if indices.len() < 3 {
+            return Err(SceneError::invalid(
+                path,
+                format!("face {i}"),
+                format!("a polygon with {} vertices; it needs at least 3", indices.len()),
+            ));
+        }
+        if let Some(bad) = indices.iter().find(|&&k| !(0..n).contains(&k)) {
+            return Err(SceneError::invalid(
+                path,
+                format!("face {i}"),
+                format!(
+                    "vertex index {bad} is out of range: the file has {n} vertices (0 to {})",
+                    n - 1
+                ),
+            ));
+        }
+        for k in 1..indices.len() - 1 {
+            mesh.triangles.push([indices[0] as u32, indices[k] as u32, indices[k + 1] as u32]);
+            mesh.triangle_group.push(group);
+        }
+    }
+    Ok(mesh)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const ASCII: &str = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n2 0 0\n2 3 0\n0 3 1\n4 0 1 2 3\n";
+
+    fn binary() -> Vec<u8> {
+        let mut b = b"ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar uint vertex_indices\nend_header\n".to_vec();
+        for v in [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 5.0]] {
+            for c in v {
+                b.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+        b.push(3);
+        for i in [0u32, 1, 2] {
+            b.extend_from_slice(&i.to_le_bytes());
+        }
+        b
+    }
+
+    #[test]
+    fn reads_ascii_and_binary() {
+        let mesh = parse(ASCII.as_bytes(), Path::new("scan.ply")).unwrap();
+        assert_eq!(mesh.triangles, vec![[0, 1, 2], [0, 2, 3]]);
+        assert_eq!(mesh.groups[0].name, "scan");
+        assert_eq!(mesh.bounds().unwrap().max, [2.0, 3.0, 1.0]);
+        let mesh = parse(&binary(), Path::new("b.ply")).unwrap();
+        assert_eq!(mesh.triangles.len(), 1);
+        assert_eq!(mesh.bounds().unwrap().max, [1.0, 1.0, 5.0]);
+    }
+
+    #[test]
+    fn truncated_and_bad_files_are_refused() {
+        let full = binary();
+        for cut in [full.len() - 1, full.len() - 5, full.len() - 20, 40] {
+            let err = parse(&full[..cut], Path::new("cut.ply")).unwrap_err().to_string();
+            assert!(err.starts_with("cut.ply: "), "{err}");
+        }
+        let err = parse(ASCII.replace("4 0 1 2 3", "4 0 1 2 7").as_bytes(), Path::new("i.ply"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("face 0: vertex index 7 is out of range: the file has 4 vertices"),
+            "{err}"
+        );
+        let err = parse(ASCII.replace("4 0 1 2 3", "2 0 1").as_bytes(), Path::new("p.ply"))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("a polygon with 2 vertices"), "{err}");
+    }
+}

@@ -1,0 +1,365 @@
+//! The scene file: TOML, read with serde, unknown fields refused, with a `format` version.
+//!
+//! World frame: +X east, +Y north, +Z up, metres. Angles in degrees. Every file path is
+//! relative to the scene file and must stay inside its folder.
+//!
+//! ```toml
+//! format = 1
+//!
+//! [camera]
+//! position = [0.0, -40.0, 1.7]
+//! target = [0.0, 0.0, 8.0]
+//! vertical_fov_deg = 45.0
+//! width = 1280
+//! height = 720
+//!
+//! [render]
+//! integrator = "path"          # or "whitted"
+//! samples_per_pixel = 16
+//! max_depth = 5
+//! seed = 1
+//!
+//! [spectra]
+//! travertine = "travertine_tufa_solid__eco_ward73"   # a shipped spectrum
+//! lamp = { file = "spectra/lamp.csv" }               # a CSV file
+//! daylight = { illuminant = "D65" }                  # a CIE illuminant
+//!
+//! [materials.stone]
+//! model = "lambert"
+//! reflectance = "travertine"
+//! degraded = { reflectance = "travertine_soiled" }
+//!
+//! [[objects]]
+//! name = "facade"
+//! mesh = "meshes/facade.obj"
+//! material = "stone"
+//!
+//! [[lights]]
+//! kind = "sun"
+//! preset = "sun"                # 100 000 lux, 50° above the horizon
+//! spectrum = "daylight"
+//!
+//! [variants.as-found]
+//! state = "degraded"
+//! ```
+
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// The scene file format this build reads.
+pub const FORMAT: u32 = 1;
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    /// The version of this schema; must be [`FORMAT`].
+    pub format: u32,
+    pub camera: Camera,
+    #[serde(default)]
+    pub render: Render,
+    /// Spectra by name, for materials and lights.
+    #[serde(default)]
+    pub spectra: BTreeMap<String, SpectrumSource>,
+    #[serde(default)]
+    pub materials: BTreeMap<String, Material>,
+    #[serde(default)]
+    pub objects: Vec<Object>,
+    #[serde(default)]
+    pub lights: Vec<Light>,
+    /// Restoration hypotheses by name.
+    #[serde(default)]
+    pub variants: BTreeMap<String, Variant>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Camera {
+    /// Where the eye is (m). With `viewpoint`, taken from the mesh instead.
+    #[serde(default)]
+    pub position: Option<[f64; 3]>,
+    /// The point looked at (m).
+    #[serde(default)]
+    pub target: Option<[f64; 3]>,
+    #[serde(default = "default_up")]
+    pub up: [f64; 3],
+    /// The vertical field of view, degrees.
+    #[serde(default = "default_fov")]
+    pub vertical_fov_deg: f64,
+    pub width: u32,
+    pub height: u32,
+    /// Use a VRML97 Viewpoint of an object's mesh as the camera.
+    #[serde(default)]
+    pub viewpoint: Option<ViewpointRef>,
+}
+
+fn default_up() -> [f64; 3] {
+    [0.0, 0.0, 1.0]
+}
+
+fn default_fov() -> f64 {
+    45.0
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ViewpointRef {
+    /// The object whose mesh (a `.wrl`) holds the viewpoint.
+    pub object: String,
+    /// Which viewpoint, in file order.
+    #[serde(default)]
+    pub index: usize,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Integrator {
+    /// Direct light with shadows plus specular reflection: the paper's method.
+    Whitted,
+    /// Unidirectional path tracing with next-event estimation.
+    Path,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Render {
+    #[serde(default = "default_integrator")]
+    pub integrator: Integrator,
+    #[serde(default = "default_spp")]
+    pub samples_per_pixel: u32,
+    #[serde(default = "default_depth")]
+    pub max_depth: u32,
+    #[serde(default)]
+    pub seed: u64,
+}
+
+fn default_integrator() -> Integrator {
+    Integrator::Path
+}
+fn default_spp() -> u32 {
+    16
+}
+fn default_depth() -> u32 {
+    5
+}
+
+impl Default for Render {
+    fn default() -> Self {
+        Self {
+            integrator: default_integrator(),
+            samples_per_pixel: default_spp(),
+            max_depth: default_depth(),
+            seed: 0,
+        }
+    }
+}
+
+/// Where a spectrum comes from.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum SpectrumSource {
+    /// A shipped spectrum by file stem (`restauro color --list`).
+    Library(String),
+    File {
+        file: String,
+        /// Hold the end values where the file stops short of 380 or 780 nm (reported).
+        #[serde(default)]
+        extrapolate: bool,
+    },
+    Illuminant {
+        /// A CIE name: A, B, C, D50 … D75, E, F1–F12, daylight:<K>, blackbody:<K>.
+        illuminant: String,
+    },
+    /// An areal mixture of named spectra, weights summing to 1: e.g. a stone and soot.
+    Mix { mix: Vec<MixPart> },
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MixPart {
+    pub spectrum: String,
+    pub weight: f64,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MaterialModel {
+    Lambert,
+    CookTorrance,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Material {
+    pub model: MaterialModel,
+    /// The spectral hemispherical reflectance ρ(λ), by spectrum name.
+    pub reflectance: String,
+    /// Cook–Torrance: Beckmann roughness m (rms slope), 0 < m ≤ 1.
+    #[serde(default)]
+    pub roughness: Option<f64>,
+    /// Cook–Torrance: the specular reflectance at normal incidence F0 (0–1), or …
+    #[serde(default)]
+    pub specular: Option<f64>,
+    /// … the index of refraction n, from which F0 = ((n − 1)/(n + 1))².
+    #[serde(default)]
+    pub ior: Option<f64>,
+    /// The surface as found (soiled, weathered).
+    #[serde(default)]
+    pub degraded: Option<SurfaceOverride>,
+    /// The surface after cleaning.
+    #[serde(default)]
+    pub cleaned: Option<SurfaceOverride>,
+}
+
+/// A state of a material: the fields it changes.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SurfaceOverride {
+    #[serde(default)]
+    pub reflectance: Option<String>,
+    #[serde(default)]
+    pub roughness: Option<f64>,
+    #[serde(default)]
+    pub specular: Option<f64>,
+    #[serde(default)]
+    pub ior: Option<f64>,
+}
+
+#[derive(Clone, Debug, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Transform {
+    #[serde(default)]
+    pub translate: Option<[f64; 3]>,
+    /// Rotations about X, then Y, then Z (degrees).
+    #[serde(default)]
+    pub rotate_deg: Option<[f64; 3]>,
+    /// A uniform scale, or one per axis.
+    #[serde(default)]
+    pub scale: Option<Scale>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Scale {
+    Uniform(f64),
+    PerAxis([f64; 3]),
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum UpAxis {
+    Y,
+    Z,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Object {
+    pub name: String,
+    /// A mesh file: `.obj`, `.gltf`/`.glb`, `.ply` or `.wrl`.
+    pub mesh: String,
+    /// The material of every part not named in `materials`.
+    #[serde(default)]
+    pub material: Option<String>,
+    /// The mesh's own group or material names → scene materials.
+    #[serde(default)]
+    pub materials: BTreeMap<String, String>,
+    #[serde(default)]
+    pub transform: Transform,
+    /// The file's up axis; glTF is Y-up by its specification, other formats are read as Z-up
+    /// unless this says otherwise.
+    #[serde(default)]
+    pub up_axis: Option<UpAxis>,
+    /// Level of detail: this object replaces these parts of another object.
+    #[serde(default)]
+    pub replaces: Option<Replaces>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Replaces {
+    pub object: String,
+    /// The other object's mesh groups that are hidden.
+    pub groups: Vec<String>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SunPreset {
+    /// 100 000 lux, 50° above the horizon.
+    Sun,
+    /// 10 000 lux, an overcast day.
+    Cloudy,
+    /// 0.2 lux, the full moon.
+    FullMoon,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SiteTime {
+    pub latitude_deg: f64,
+    pub longitude_deg: f64,
+    #[serde(default)]
+    pub height_m: f64,
+    /// RFC 3339 with a UTC offset, e.g. `2026-07-15T16:30:00+02:00`.
+    pub datetime: String,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
+pub enum Light {
+    /// A luminaire radiating from a point: total luminous intensity in candela, optionally
+    /// shaped by an IES or EULUMDAT file (then `intensity_cd` scales the file's peak).
+    Point {
+        position: [f64; 3],
+        intensity_cd: f64,
+        spectrum: String,
+        #[serde(default)]
+        ies: Option<String>,
+        /// The point the luminaire's nadir (photometric γ = 0) aims at.
+        #[serde(default)]
+        aim: Option<[f64; 3]>,
+    },
+    /// A point luminaire with a cone: full intensity inside `cone_deg`, falling to zero at
+    /// `cone_deg + falloff_deg` (half-angles).
+    Spot {
+        position: [f64; 3],
+        intensity_cd: f64,
+        spectrum: String,
+        aim: [f64; 3],
+        cone_deg: f64,
+        #[serde(default)]
+        falloff_deg: f64,
+        #[serde(default)]
+        ies: Option<String>,
+    },
+    /// A distant source given by its illuminance on a surface normal to it.
+    Sun {
+        #[serde(default)]
+        illuminance_lux: Option<f64>,
+        #[serde(default)]
+        preset: Option<SunPreset>,
+        #[serde(default)]
+        azimuth_deg: Option<f64>,
+        #[serde(default)]
+        elevation_deg: Option<f64>,
+        #[serde(default)]
+        site: Option<SiteTime>,
+        spectrum: String,
+    },
+}
+
+/// A restoration hypothesis: which state each object (or each part of an object) is in.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Variant {
+    /// The state of everything not named below: `base`, `degraded` or `cleaned`.
+    #[serde(default = "default_state")]
+    pub state: String,
+    /// Per object name, or per `object/group`, the state.
+    #[serde(default)]
+    pub states: BTreeMap<String, String>,
+}
+
+fn default_state() -> String {
+    "base".to_owned()
+}

@@ -1,0 +1,335 @@
+//! Scene files as a restorer writes them: every mesh format through a scene, every class of bad
+//! input refused with its place and fix, bundles that are stable and self-sufficient.
+
+use restauro_scene::bundle::bundle_scene;
+use restauro_scene::load::{Limits, LoadedScene, ResolvedLight, load_scene};
+use std::path::{Path, PathBuf};
+
+/// A scene folder in a temporary directory.
+struct Folder {
+    dir: tempfile::TempDir,
+}
+
+impl Folder {
+    fn new() -> Self {
+        Self { dir: tempfile::tempdir().unwrap() }
+    }
+
+    fn write(&self, name: &str, text: impl AsRef<[u8]>) -> PathBuf {
+        let path = self.dir.path().join(name);
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(&path, text).unwrap();
+        path
+    }
+}
+
+const QUAD_OBJ: &str =
+    "v -1 0 0\nv 1 0 0\nv 1 0 2\nv -1 0 2\nusemtl stone\nf 1 2 3 4\nusemtl joint\nf 1 2 3\n";
+
+fn scene_toml(objects: &str, extra: &str) -> String {
+    format!(
+        r#"format = 1
+[camera]
+position = [0.0, -10.0, 1.0]
+target = [0.0, 0.0, 1.0]
+width = 64
+height = 48
+
+[spectra]
+travertine = "travertine_tufa_solid__eco_ward73"
+soot = "carbon_black_soot_proxy__usgs_GDS68"
+dirty = {{ mix = [{{ spectrum = "travertine", weight = 0.7 }}, {{ spectrum = "soot", weight = 0.3 }}] }}
+sunlight = {{ illuminant = "D65" }}
+
+[materials.stone]
+model = "lambert"
+reflectance = "travertine"
+degraded = {{ reflectance = "dirty" }}
+
+[materials.glaze]
+model = "cook-torrance"
+reflectance = "travertine"
+roughness = 0.2
+ior = 1.5
+
+{objects}
+
+[[lights]]
+kind = "sun"
+illuminance_lux = 100000.0
+azimuth_deg = 180.0
+elevation_deg = 50.0
+spectrum = "sunlight"
+
+[variants.as-found]
+state = "degraded"
+
+{extra}
+"#
+    )
+}
+
+const OBJ_OBJECT: &str = r#"[[objects]]
+name = "wall"
+mesh = "meshes/wall.obj"
+materials = { stone = "stone", joint = "glaze" }
+"#;
+
+fn load(folder: &Folder, toml: &str) -> Result<LoadedScene, String> {
+    let path = folder.write("scene.toml", toml);
+    load_scene(&path, &Limits::default()).map_err(|e| e.to_string())
+}
+
+fn refused(folder: &Folder, toml: &str) -> String {
+    load(folder, toml).expect_err("the scene should be refused")
+}
+
+#[test]
+fn a_scene_with_an_obj_loads_with_its_parts_and_lights() {
+    let f = Folder::new();
+    f.write("meshes/wall.obj", QUAD_OBJ);
+    let scene = load(&f, &scene_toml(OBJ_OBJECT, "")).unwrap();
+    assert_eq!(scene.triangle_count(), 3);
+    let wall = &scene.objects[0];
+    let parts: Vec<(&str, &str)> = wall
+        .mesh
+        .groups
+        .iter()
+        .map(|g| g.name.as_str())
+        .zip(wall.group_materials.iter().map(String::as_str))
+        .collect();
+    assert_eq!(parts, [("stone", "stone"), ("joint", "glaze")]);
+    // The mixture: 0.7 travertine + 0.3 soot, band by band.
+    let (t, s, d) = (scene.spectra["travertine"], scene.spectra["soot"], scene.spectra["dirty"]);
+    assert!((d[40] - (0.7 * t[40] + 0.3 * s[40])).abs() < 1e-6);
+    match &scene.lights[0] {
+        ResolvedLight::Sun { direction, illuminance_lux, .. } => {
+            assert_eq!(*illuminance_lux, 100_000.0);
+            assert!(
+                (direction[1] + 50f64.to_radians().cos()).abs() < 1e-12,
+                "south: {direction:?}"
+            );
+        }
+        other => panic!("{other:?}"),
+    }
+    assert_eq!(scene.state_of("as-found", "wall", "stone"), Some("degraded"));
+    // The glaze has no degraded state: the scene says so.
+    assert!(scene.notes.iter().any(|n| n.contains("glaze (degraded)")), "{:?}", scene.notes);
+    // The travertine starts at 400 nm: its extrapolation is reported.
+    assert!(scene.notes.iter().any(|n| n.contains("380–395 nm extrapolated")), "{:?}", scene.notes);
+}
+
+#[test]
+fn every_mesh_format_loads_through_a_scene() {
+    let f = Folder::new();
+    f.write("meshes/a.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 0 1\n3 0 1 2\n");
+    f.write(
+        "meshes/b.wrl",
+        "#VRML V2.0 utf8\nTransform { translation 5 0 0 children [ DEF B Shape { geometry IndexedFaceSet { coord Coordinate { point [0 0 0, 1 0 0, 0 1 0] } coordIndex [0 1 2 -1] } } ] }\n",
+    );
+    let objects = r#"
+[[objects]]
+name = "scan"
+mesh = "meshes/a.ply"
+material = "stone"
+transform = { translate = [0.0, 0.0, 2.0], scale = 2.0 }
+
+[[objects]]
+name = "survey"
+mesh = "meshes/b.wrl"
+material = "stone"
+"#;
+    let scene = load(&f, &scene_toml(objects, "")).unwrap();
+    let scan = scene.objects[0].mesh.bounds().unwrap();
+    assert_eq!((scan.min, scan.max), ([0.0, 0.0, 2.0], [2.0, 0.0, 4.0]));
+    // VRML is Y-up: its +Y becomes +Z.
+    let survey = scene.objects[1].mesh.bounds().unwrap();
+    let near = |a: [f32; 3], b: [f32; 3]| a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-6);
+    assert!(near(survey.min, [5.0, 0.0, 0.0]) && near(survey.max, [6.0, 0.0, 1.0]), "{survey:?}");
+}
+
+#[test]
+fn files_outside_the_folder_and_the_scene_itself_are_refused() {
+    let f = Folder::new();
+    let outside = tempfile::tempdir().unwrap();
+    std::fs::write(outside.path().join("wall.obj"), QUAD_OBJ).unwrap();
+    let escape =
+        OBJ_OBJECT.replace("meshes/wall.obj", &format!("{}/wall.obj", outside.path().display()));
+    let err = refused(&f, &scene_toml(&escape, ""));
+    assert!(
+        err.contains("objects[0] (wall).mesh") && err.contains("leaves the scene's folder"),
+        "{err}"
+    );
+    let dotdot = OBJ_OBJECT.replace("meshes/wall.obj", "../wall.obj");
+    std::fs::write(f.dir.path().parent().unwrap().join("wall.obj"), QUAD_OBJ).ok();
+    let err = refused(&f, &scene_toml(&dotdot, ""));
+    assert!(err.contains("leaves the scene's folder") || err.contains("cannot be opened"), "{err}");
+    let itself = OBJ_OBJECT.replace("meshes/wall.obj", "scene.toml");
+    let err = refused(&f, &scene_toml(&itself, ""));
+    assert!(err.contains("is the scene file itself"), "{err}");
+    let missing = refused(&f, &scene_toml(OBJ_OBJECT, ""));
+    assert!(missing.contains("`meshes/wall.obj` cannot be opened"), "{missing}");
+}
+
+#[test]
+fn each_class_of_bad_scene_is_refused_with_place_and_fix() {
+    let f = Folder::new();
+    f.write("meshes/wall.obj", QUAD_OBJ);
+    let good = scene_toml(OBJ_OBJECT, "");
+    let cases: Vec<(String, &str)> = vec![
+        (good.replace("width = 64", "width = 64\nlens = 35"), "unknown field `lens`"),
+        (good.replace("format = 1", "format = 9"), "format = 9, but this restauro reads format 1"),
+        (good.replace("width = 64", "width = \"wide\""), "invalid type"),
+        (
+            good.replace("stone = \"stone\", joint", "stone = \"ston\", joint"),
+            "unknown material `ston` (did you mean `stone`?)",
+        ),
+        (
+            good.replace("joint = \"glaze\"", "joints = \"glaze\""),
+            "unknown mesh part `joints` (did you mean `joint`?)",
+        ),
+        (
+            good.replace("roughness = 0.2", "roughness = -0.2"),
+            "materials.glaze.roughness: -0.2 is out of range",
+        ),
+        (
+            good.replace("illuminance_lux = 100000.0", "illuminance_lux = -5.0"),
+            "is not a finite illuminance ≥ 0 lux",
+        ),
+        (
+            good.replace("elevation_deg = 50.0", "elevation_deg = -10.0"),
+            "the sun is below the horizon",
+        ),
+        (
+            good.replace("reflectance = \"dirty\"", "reflectance = \"sunlight\""),
+            "is used as a reflectance, which cannot exceed 1",
+        ),
+        (good.replace("weight = 0.3", "weight = 0.5"), "mixture weights must be ≥ 0 and sum to 1"),
+        (
+            good.replace("spectrum = \"soot\", weight = 0.3", "spectrum = \"dirty\", weight = 0.3"),
+            "the mixture refers to itself",
+        ),
+        (
+            good.replace("target = [0.0, 0.0, 1.0]", "target = [0.0, -10.0, 1.0]"),
+            "the target is where the camera is",
+        ),
+        (good.replace("state = \"degraded\"", "state = \"restored\""), "unknown state `restored`"),
+        (
+            scene_toml(OBJ_OBJECT, "[render]\nsamples_per_pixel = 0"),
+            "render.samples_per_pixel is 0",
+        ),
+    ];
+    for (toml, expect) in cases {
+        let err = refused(&f, &toml);
+        assert!(err.contains(expect), "expected «{expect}» in: {err}");
+        assert!(err.contains("scene.toml"), "the message names the file: {err}");
+    }
+    // TOML syntax errors carry their line and column.
+    let err = refused(&f, &good.replace("height = 48", "height = = 48"));
+    assert!(err.contains("scene.toml:6:10:"), "{err}");
+}
+
+#[test]
+fn bad_meshes_are_refused_through_the_scene() {
+    let f = Folder::new();
+    let toml = scene_toml(OBJ_OBJECT, "");
+    for (obj, expect) in [
+        (
+            "v 0 0 0\nv 1 0 0\nv 0 0 1\nusemtl stone\nf 1 2 5\n",
+            "line 5: vertex index 5 is out of range",
+        ),
+        ("v 0 0 0\nv 1 0 0\nusemtl stone\nf 1 2\n", "a face with 2 vertices"),
+        ("v 0 0 0\nv 1 0 0\nv 2 0 0\nusemtl stone\nf 1 2 3\n", "has no triangles with an area"),
+        ("v 0 0 nan\nv 1 0 0\nv 0 0 1\nusemtl stone\nf 1 2 3\n", "vertex 0 is"),
+        ("# nothing\n", "has no triangles"),
+    ] {
+        f.write("meshes/wall.obj", obj);
+        let err = refused(
+            &f,
+            &toml.replace(
+                "materials = { stone = \"stone\", joint = \"glaze\" }",
+                "material = \"stone\"",
+            ),
+        );
+        assert!(err.contains(expect), "expected «{expect}» in: {err}");
+    }
+    f.write("meshes/wall.stl", "solid x");
+    let err = refused(&f, &toml.replace("wall.obj", "wall.stl"));
+    assert!(err.contains("`.stl` is not a mesh format restauro reads"), "{err}");
+}
+
+#[test]
+fn limits_say_which_limit_and_how_to_raise_it() {
+    let f = Folder::new();
+    f.write("meshes/wall.obj", QUAD_OBJ);
+    let path = f.write("scene.toml", scene_toml(OBJ_OBJECT, ""));
+    let limits = Limits { max_triangles: 2, ..Limits::default() };
+    let err = load_scene(&path, &limits).unwrap_err().to_string();
+    assert!(err.contains("the number of triangles is 3, over the limit of 2; simplify the meshes, or raise the limit with --max-triangles"), "{err}");
+    let limits = Limits { max_pixels: 1000, ..Limits::default() };
+    let err = load_scene(&path, &limits).unwrap_err().to_string();
+    assert!(err.contains("the image size (pixels) is 3072, over the limit of 1000"), "{err}");
+    let limits = Limits { max_file_bytes: 10, ..Limits::default() };
+    let err = load_scene(&path, &limits).unwrap_err().to_string();
+    assert!(err.contains("the file size (bytes)") && err.contains("--max-file-mb"), "{err}");
+}
+
+#[test]
+fn bundles_are_stable_self_sufficient_and_name_files_by_content() {
+    let a = Folder::new();
+    a.write("meshes/wall.obj", QUAD_OBJ);
+    let path_a = a.write("scene.toml", scene_toml(OBJ_OBJECT, ""));
+    let bundle = bundle_scene(&path_a, &Limits::default()).unwrap();
+    assert_eq!(bundle.files.len(), 1);
+    let hash = blake3::hash(QUAD_OBJ.as_bytes()).to_hex().to_string();
+    assert_eq!(bundle.scene.objects[0].mesh, format!("blake3:{hash}.obj"));
+    // Bundling again gives the same identity.
+    assert_eq!(bundle_scene(&path_a, &Limits::default()).unwrap().id(), bundle.id());
+    // The same scene elsewhere, with other file names, comments and layout: the same identity.
+    let b = Folder::new();
+    b.write("geometry/muro.obj", QUAD_OBJ);
+    let moved = scene_toml(&OBJ_OBJECT.replace("meshes/wall.obj", "geometry/muro.obj"), "")
+        .replace("format = 1", "# copied\nformat   =   1");
+    let path_b = b.write("other-name.toml", moved);
+    assert_eq!(bundle_scene(&path_b, &Limits::default()).unwrap().id(), bundle.id());
+    // A different mesh is a different scene.
+    b.write("geometry/muro.obj", QUAD_OBJ.replace("v 1 0 2", "v 1 0 3"));
+    assert_ne!(bundle_scene(&path_b, &Limits::default()).unwrap().id(), bundle.id());
+    // The bundle alone is enough to load the scene, as a worker does.
+    let from_bundle = bundle.load(&Limits::default()).unwrap();
+    let from_folder = load_scene(&path_a, &Limits::default()).unwrap();
+    assert_eq!(from_bundle.objects[0].mesh, from_folder.objects[0].mesh);
+    // Rebuilt from its canonical form and files, checked; a corrupted file is caught.
+    let rebuilt =
+        restauro_scene::bundle::Bundle::from_parts(&bundle.canonical_json(), bundle.files.clone())
+            .unwrap();
+    assert_eq!(rebuilt.id(), bundle.id());
+    let mut corrupt = bundle.files.clone();
+    corrupt.get_mut(&hash).unwrap().push(b'\n');
+    let err = restauro_scene::bundle::Bundle::from_parts(&bundle.canonical_json(), corrupt)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("the bundle is corrupt"), "{err}");
+}
+
+#[test]
+fn the_aosta_scene_validates() {
+    let f = Folder::new();
+    let generated = restauro_scene::aosta::generate(320, 180, 1);
+    f.write("meshes/facade.obj", &generated.facade_obj);
+    let path = f.write("aosta.toml", &generated.scene_toml);
+    let scene = load_scene(Path::new(&path), &Limits::default()).unwrap();
+    assert_eq!(scene.triangle_count(), generated.triangles);
+    // The summer-afternoon sun over the theatre is up and in the south-west.
+    match &scene.lights[0] {
+        ResolvedLight::Sun { azimuth_deg, elevation_deg, .. } => {
+            assert!(
+                (180.0..270.0).contains(azimuth_deg) && *elevation_deg > 30.0,
+                "{azimuth_deg} {elevation_deg}"
+            );
+        }
+        other => panic!("{other:?}"),
+    }
+    assert_eq!(scene.state_of("as-found", "facade", "travertine"), Some("degraded"));
+    assert_eq!(scene.state_of("cleaned", "facade", "puddinga"), Some("cleaned"));
+}

@@ -1,34 +1,15 @@
 //! `restauro color` and `restauro demo` as a user runs them: the real binary in a child process.
 
+mod common;
+use common::*;
+
 use restauro_spectral::ciede2000::ciede2000;
 use restauro_spectral::{Lab, library};
 use serde_json::Value;
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn restauro(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_restauro")).args(args).output().expect("run restauro")
-}
-
-fn ok(args: &[&str]) -> String {
-    let out = restauro(args);
-    assert!(out.status.success(), "{args:?} failed: {}", String::from_utf8_lossy(&out.stderr));
-    String::from_utf8(out.stdout).unwrap()
-}
 
 fn json(args: &[&str]) -> Value {
     serde_json::from_str(&ok(args)).expect("valid JSON")
-}
-
-/// The error a user sees: exit status 1, nothing on stdout, one `error:` line on stderr.
-fn refused(args: &[&str]) -> String {
-    let out = restauro(args);
-    assert_eq!(out.status.code(), Some(1), "{args:?} should fail");
-    assert!(out.stdout.is_empty());
-    let err = String::from_utf8(out.stderr).unwrap();
-    assert!(err.starts_with("error: "), "{err}");
-    assert!(!err.contains("panicked"), "{err}");
-    err
 }
 
 fn lab(v: &Value) -> Lab {

@@ -1,29 +1,13 @@
 //! `restauro retinex` and `restauro display` as a user runs them, on EXR files written for the
 //! test.
 
+mod common;
+use common::*;
+
 use restauro::bench::mondrian;
 use restauro_coordinator::image_files::{MAX_PIXELS, XyzImage, read_exr, write_exr, write_xyz_exr};
 use restauro_spectral::appearance::{ChannelSpace, d65_white};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn restauro(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_restauro")).args(args).output().expect("run restauro")
-}
-
-fn ok(args: &[&str]) -> String {
-    let out = restauro(args);
-    assert!(out.status.success(), "{args:?} failed: {}", String::from_utf8_lossy(&out.stderr));
-    String::from_utf8(out.stdout).unwrap()
-}
-
-fn refused(args: &[&str]) -> String {
-    let out = restauro(args);
-    assert_eq!(out.status.code(), Some(1), "{args:?} should fail");
-    let err = String::from_utf8(out.stderr).unwrap();
-    assert!(err.starts_with("error: ") && !err.contains("panicked"), "{err}");
-    err
-}
 
 fn png_info(path: &Path) -> (u32, u32, png::BitDepth, Vec<u8>) {
     let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));

@@ -1,10 +1,7 @@
 //! `restauro scene aosta | check | bundle` as a user runs them.
 
-use std::process::{Command, Output};
-
-fn restauro(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_restauro")).args(args).output().expect("run restauro")
-}
+mod common;
+use common::*;
 
 #[test]
 fn aosta_writes_a_scene_that_checks_and_bundles() {

@@ -26,6 +26,8 @@ pub enum Command {
     /// Write the demo: today the colorimetric part of the paper's stone experiment (travertine and
     /// pudding stone, as found and cleaned, under CIE A, B, C and D65).
     Demo(DemoArgs),
+    /// Render a scene in this process: absolute XYZ (and spectral radiance) to OpenEXR, and a PNG.
+    Render(RenderArgs),
     /// What a person standing there sees: the Marini–Rizzi Retinex of an XYZ or RGB OpenEXR
     /// image, written as a PNG (and optionally an EXR).
     Retinex(RetinexArgs),
@@ -85,6 +87,47 @@ pub struct LimitArgs {
     /// The most bounces of a path.
     #[arg(long, default_value_t = 64)]
     pub max_depth: u32,
+}
+
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// The scene file.
+    pub scene: PathBuf,
+    /// The folder for the results.
+    #[arg(long, default_value = "out")]
+    pub out: PathBuf,
+    /// The restoration hypothesis (a variant of the scene).
+    #[arg(long)]
+    pub variant: Option<String>,
+    /// Override the scene's integrator.
+    #[arg(long, value_enum)]
+    pub integrator: Option<IntegratorArg>,
+    /// Override the scene's samples per pixel.
+    #[arg(long)]
+    pub spp: Option<u32>,
+    /// Override the image width (pixels).
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Override the image height (pixels).
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Also write the 81-band spectral radiance into the EXR.
+    #[arg(long)]
+    pub spectral: bool,
+    /// Tile size in pixels.
+    #[arg(long, default_value_t = 64)]
+    pub tile: u32,
+    /// The PNG's exposure: auto[:KEY], absolute:<cd/m²> or relative.
+    #[arg(long, default_value = "auto")]
+    pub exposure: String,
+    #[command(flatten)]
+    pub limits: LimitArgs,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum IntegratorArg {
+    Whitted,
+    Path,
 }
 
 #[derive(Debug, Args)]

@@ -4,5 +4,6 @@ pub mod bench;
 pub mod cli;
 pub mod color;
 pub mod demo;
+pub mod render;
 pub mod retinex;
 pub mod scene_cmd;

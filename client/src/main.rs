@@ -8,6 +8,7 @@ fn main() -> ExitCode {
     let result = match &cli.command {
         Command::Color(args) => restauro::color::run(args),
         Command::Demo(args) => restauro::demo::run(args),
+        Command::Render(args) => restauro::render::run(args),
         Command::Retinex(args) => restauro::retinex::run(args),
         Command::Display(args) => restauro::retinex::run_display(args),
         Command::Scene(command) => restauro::scene_cmd::run(command),

@@ -51,3 +51,43 @@ fn a_bad_scene_is_refused_with_its_place() {
     let err = String::from_utf8(run.stderr).unwrap();
     assert!(err.contains("s.toml:5:1: unknown field `focal`"), "{err}");
 }
+
+#[test]
+fn render_writes_exr_with_spectral_layers_and_png() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("aosta");
+    ok(&["scene", "aosta", "--out", out.to_str().unwrap(), "--width", "48", "--height", "27"]);
+    let scene = out.join("aosta.toml");
+    let s = scene.to_str().unwrap();
+    let results = dir.path().join("results");
+    let r = results.to_str().unwrap();
+    let text = ok(&[
+        "render",
+        s,
+        "--out",
+        r,
+        "--variant",
+        "cleaned",
+        "--spp",
+        "1",
+        "--spectral",
+        "--tile",
+        "16",
+    ]);
+    assert!(text.contains("wrote") && text.contains("aosta-cleaned.exr"), "{text}");
+    let image =
+        restauro_coordinator::image_files::read_exr(&results.join("aosta-cleaned.exr"), 1 << 20)
+            .unwrap();
+    assert_eq!((image.width, image.height), (48, 27));
+    assert!(image.pixels.iter().any(|p| p[1] > 100.0), "the sunlit facade is bright");
+    let png = std::fs::read(results.join("aosta-cleaned.png")).unwrap();
+    assert_eq!(&png[1..4], b"PNG");
+    // Refusals name what is wrong.
+    let err = refused(&["render", s, "--out", r, "--variant", "polished"]);
+    assert!(
+        err.contains("unknown variant `polished`; the scene defines as-found, cleaned"),
+        "{err}"
+    );
+    let err = refused(&["render", s, "--out", r, "--spp", "0"]);
+    assert!(err.contains("--spp 0: use 1 to"), "{err}");
+}

@@ -177,6 +177,15 @@ pub fn write_exr(
 /// Write an XYZ image as OpenEXR: channels X, Y, Z and linear sRGB-primaries R, G, B preview
 /// channels (so ordinary viewers show it), plus the `emitter` mask when there is one.
 pub fn write_xyz_exr(path: &Path, image: &XyzImage, attributes: &[(&str, &str)]) -> Result<()> {
+    write_xyz_exr_with(path, image, Vec::new(), attributes)
+}
+
+fn write_xyz_exr_with(
+    path: &Path,
+    image: &XyzImage,
+    extra: Vec<(String, Vec<f32>)>,
+    attributes: &[(&str, &str)],
+) -> Result<()> {
     let plane = |f: &dyn Fn(&[f32; 3]) -> f32| image.pixels.iter().map(f).collect::<Vec<f32>>();
     let m = RgbSpace::Srgb.xyz_to_rgb().transpose().to_cols_array_2d();
     let rgb = |r: usize| {
@@ -197,7 +206,31 @@ pub fn write_xyz_exr(path: &Path, image: &XyzImage, attributes: &[(&str, &str)])
         channels
             .push(("emitter".to_owned(), mask.iter().map(|&e| f32::from(u8::from(e))).collect()));
     }
+    channels.extend(extra);
     write_exr(path, image.width, image.height, channels, attributes)
+}
+
+/// The channel name of one wavelength band in the spectral OpenEXR layout of Fichet,
+/// Pacanowski & Wilkie (JCGT 10(3), 2021): Stokes component 0, the wavelength with a comma as
+/// decimal separator (a point separates EXR layers), and its unit: `S0.380,000000nm`.
+pub fn spectral_channel_name(wavelength_nm: f64) -> String {
+    format!("S0.{}nm", format!("{wavelength_nm:.6}").replace('.', ","))
+}
+
+/// Write an XYZ image with its spectral radiance (W·sr⁻¹·m⁻²·nm⁻¹ per band, band-major: one
+/// `Vec` per wavelength) as one OpenEXR: X, Y, Z, RGB preview and the `S0.<λ>nm` channels, with
+/// the layout's `spectralLayoutVersion` and `emissiveUnits` attributes.
+pub fn write_spectral_exr(
+    path: &Path,
+    image: &XyzImage,
+    bands: Vec<(f64, Vec<f32>)>,
+    attributes: &[(&str, &str)],
+) -> Result<()> {
+    let mut attrs: Vec<(&str, &str)> =
+        vec![("spectralLayoutVersion", "1.0"), ("emissiveUnits", "W.m^-2.sr^-1")];
+    attrs.extend_from_slice(attributes);
+    let extra = bands.into_iter().map(|(l, v)| (spectral_channel_name(l), v)).collect();
+    write_xyz_exr_with(path, image, extra, &attrs)
 }
 
 /// Code values for a PNG.
@@ -285,6 +318,44 @@ mod tests {
         };
         let path = dir.join("a.exr");
         write_xyz_exr(&path, &image, &[("restauroNote", "test")]).unwrap();
+        assert_eq!(read_exr(&path, MAX_PIXELS).unwrap(), image);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn spectral_channels_follow_the_layout() {
+        assert_eq!(spectral_channel_name(380.0), "S0.380,000000nm");
+        assert_eq!(spectral_channel_name(557.5), "S0.557,500000nm");
+        let dir = scratch("spectral");
+        let path = dir.join("s.exr");
+        let image =
+            XyzImage { width: 1, height: 2, pixels: vec![[1.0, 2.0, 3.0]; 2], emitter: None };
+        write_spectral_exr(
+            &path,
+            &image,
+            vec![(380.0, vec![0.5, 0.25]), (385.0, vec![1.0, 2.0])],
+            &[],
+        )
+        .unwrap();
+        let read = exr::prelude::read()
+            .no_deep_data()
+            .largest_resolution_level()
+            .all_channels()
+            .first_valid_layer()
+            .all_attributes()
+            .from_file(&path)
+            .unwrap();
+        let names: Vec<String> =
+            read.layer_data.channel_data.list.iter().map(|c| c.name.to_string()).collect();
+        assert!(
+            names.contains(&"S0.380,000000nm".to_owned())
+                && names.contains(&"S0.385,000000nm".to_owned()),
+            "{names:?}"
+        );
+        let attr = |k: &str| read.layer_data.attributes.other.get(&Text::from(k)).cloned();
+        assert_eq!(attr("emissiveUnits"), Some(AttributeValue::Text(Text::from("W.m^-2.sr^-1"))));
+        assert_eq!(attr("spectralLayoutVersion"), Some(AttributeValue::Text(Text::from("1.0"))));
+        // The XYZ still reads back as it was.
         assert_eq!(read_exr(&path, MAX_PIXELS).unwrap(), image);
         std::fs::remove_dir_all(&dir).unwrap();
     }

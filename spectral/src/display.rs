@@ -30,16 +30,22 @@ pub enum Exposure {
     Relative,
 }
 
-/// The log-average luminance exp(mean ln(δ + Y)) (Reinhard et al. 2002, Eq. 1), with δ a
-/// millionth of the largest luminance so black pixels do not dominate.
+/// The log-average luminance exp(mean ln(δ + Y)) (Reinhard et al. 2002, Eq. 1) over the pixels
+/// that receive any light, with δ a millionth of the largest luminance. Pixels of luminance 0 —
+/// an empty sky in a scene without sky light, the background of a test card — are left out:
+/// they carry no exposure information and would otherwise pull the average to black.
 pub fn log_average_luminance(xyz: &[[f32; 3]]) -> f64 {
     let max = xyz.iter().map(|p| f64::from(p[1])).fold(0.0, f64::max);
     if max <= 0.0 {
         return 0.0;
     }
     let delta = max * 1e-6;
-    let sum: f64 = xyz.iter().map(|p| (delta + f64::from(p[1]).max(0.0)).ln()).sum();
-    (sum / xyz.len() as f64).exp()
+    let (sum, n) = xyz
+        .iter()
+        .map(|p| f64::from(p[1]))
+        .filter(|&y| y > 0.0)
+        .fold((0.0, 0usize), |(s, n), y| (s + (delta + y).ln(), n + 1));
+    (sum / n as f64).exp()
 }
 
 /// The factor that takes image luminance to display luminance (white = 1).
@@ -174,7 +180,8 @@ mod tests {
             let x: Xyz = d.scale(l);
             [x.x as f32, x.y as f32, x.z as f32]
         };
-        let img = vec![grey(10.0), grey(1000.0)];
+        let img = vec![grey(10.0), grey(1000.0), [0.0; 3]];
+        // The black pixel is left out.
         assert!((log_average_luminance(&img) / 100.0 - 1.0).abs() < 1e-4);
         let k = exposure_scale(&img, Exposure::Automatic { key: 0.18 });
         assert!((k * 100.0 - 0.18).abs() < 1e-5);

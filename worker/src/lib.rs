@@ -1,5 +1,12 @@
-//! restauro-worker: the spectral tracer (BVH, camera, sampler, materials, lights, integrators,
-//! tile rendering) as a library, and later the worker process that renders leased tiles.
-//!
-//! Empty until the tracer issue; the crate exists so the workspace has its final shape and the
-//! dependency direction (proto, spectral ← scene ← worker) is fixed from the start.
+//! restauro-worker: the spectral tracer as a library — scene preparation with a CWBVH
+//! ([`prepared`]), the pinhole [`camera`], keyed [`sampler`], the [`bsdf`]s, photometric
+//! [`light`]s, the Whitted and path [`integrator`]s and [`tile`] rendering — and, with the
+//! cluster, the worker process.
+
+pub mod bsdf;
+pub mod camera;
+pub mod integrator;
+pub mod light;
+pub mod prepared;
+pub mod sampler;
+pub mod tile;

@@ -1,0 +1,107 @@
+//! Light sources in photometric units, turned into the spectral irradiance they give a point
+//! (Rossi, Marini & Rizzi 2004, Eq. 8): for a luminaire of luminous intensity I_v(ω) (cd)
+//! towards the point at distance r,
+//!
+//! ```text
+//!   E⊥(λ) = I_v(ω) · S_e(λ) / (r² · Σ K(λ) S_e(λ) Δλ)     (W·m⁻²·nm⁻¹ on a surface facing it),
+//! ```
+//!
+//! and cos α is applied by the integrator; for the sun, E⊥(λ) = E_v · S_e(λ) / Σ K S_e Δλ.
+//! All lights here are delta lights (a point or a direction), sampled exactly.
+
+use glam::Vec3A;
+use restauro_scene::photometric::Photometry;
+use restauro_spectral::Spectrum;
+
+/// How a luminaire's intensity varies with direction.
+#[derive(Clone, Debug)]
+pub enum Distribution {
+    Isotropic,
+    /// A measured distribution, scaled so its peak is the luminaire's `intensity_cd`. The frame
+    /// maps world directions to the photometric frame (γ = 0 along its −Z, C = 0 along its +X).
+    Photometric {
+        photometry: Photometry,
+        to_local: [Vec3A; 3],
+        scale: f64,
+    },
+    /// Full intensity within `cos_inner` of the axis, falling smoothly to zero at `cos_outer`.
+    Cone {
+        axis: Vec3A,
+        cos_inner: f32,
+        cos_outer: f32,
+    },
+}
+
+#[derive(Clone, Debug)]
+pub enum Light {
+    /// A point luminaire: `per_cd` is S_e(λ)/Σ K S_e Δλ, the spectral radiant intensity of one
+    /// candela (W·sr⁻¹·nm⁻¹).
+    Point { position: Vec3A, intensity_cd: f32, per_cd: Spectrum, distribution: Distribution },
+    /// A distant source: `direction` towards it, `irradiance` E⊥(λ) on a surface facing it.
+    Distant { direction: Vec3A, irradiance: Spectrum },
+}
+
+/// A light's contribution at a point: the direction towards it, the distance (∞ for distant
+/// lights) and the spectral irradiance on a surface facing it.
+pub struct Incident {
+    pub direction: Vec3A,
+    pub distance: f32,
+    pub irradiance: Spectrum,
+}
+
+impl Distribution {
+    /// The factor on the luminaire's intensity towards `direction` (unit, from the luminaire).
+    pub fn factor(&self, direction: Vec3A) -> f32 {
+        match self {
+            Distribution::Isotropic => 1.0,
+            Distribution::Photometric { photometry, to_local, scale } => {
+                let d = [
+                    f64::from(to_local[0].dot(direction)),
+                    f64::from(to_local[1].dot(direction)),
+                    f64::from(to_local[2].dot(direction)),
+                ];
+                (photometry.intensity_cd(d) * scale) as f32
+            }
+            Distribution::Cone { axis, cos_inner, cos_outer } => {
+                let c = axis.dot(direction);
+                if c >= *cos_inner {
+                    1.0
+                } else if c <= *cos_outer {
+                    0.0
+                } else {
+                    // Smoothstep between the two cones.
+                    let t = (c - cos_outer) / (cos_inner - cos_outer);
+                    t * t * (3.0 - 2.0 * t)
+                }
+            }
+        }
+    }
+}
+
+impl Light {
+    #[inline]
+    pub fn incident(&self, p: Vec3A) -> Option<Incident> {
+        match self {
+            Light::Point { position, intensity_cd, per_cd, distribution } => {
+                let d = *position - p;
+                let r2 = d.length_squared();
+                if r2 <= 0.0 {
+                    return None;
+                }
+                let r = r2.sqrt();
+                let direction = d / r;
+                let intensity = intensity_cd * distribution.factor(-direction);
+                (intensity > 0.0).then(|| Incident {
+                    direction,
+                    distance: r,
+                    irradiance: *per_cd * (intensity / r2),
+                })
+            }
+            Light::Distant { direction, irradiance } => Some(Incident {
+                direction: *direction,
+                distance: f32::INFINITY,
+                irradiance: *irradiance,
+            }),
+        }
+    }
+}

@@ -1,0 +1,281 @@
+//! A scene prepared for tracing, once per job per process: every visible triangle in one CWBVH
+//! (obvhs), each triangle's material resolved for the chosen restoration hypothesis, every
+//! spectrum on the grid, every light turned into spectral terms.
+
+use crate::bsdf::Bsdf;
+use crate::camera::Camera;
+use crate::light::{Distribution, Light};
+use glam::Vec3A;
+use obvhs::BvhBuildParams;
+use obvhs::cwbvh::CwBvh;
+use obvhs::ray::{Ray, RayHit};
+use obvhs::rt_triangle::RtTriangle;
+use obvhs::triangle::Triangle;
+use restauro_scene::load::{LoadedScene, ResolvedLight};
+use restauro_scene::scene_file::{Integrator, MaterialModel};
+use restauro_spectral::Spectrum;
+use restauro_spectral::photometry::LuminousSpectrum;
+use std::collections::BTreeMap;
+use std::time::Duration;
+
+#[derive(Debug, thiserror::Error)]
+pub enum TraceError {
+    #[error("unknown variant `{name}`; the scene defines {known}")]
+    UnknownVariant { name: String, known: String },
+    #[error("{0}")]
+    Scene(String),
+}
+
+/// How to render: from the scene, possibly overridden on the command line.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Settings {
+    pub integrator: Integrator,
+    pub samples_per_pixel: u32,
+    pub max_depth: u32,
+    pub seed: u64,
+}
+
+pub struct PreparedScene {
+    pub camera: Camera,
+    pub settings: Settings,
+    bvh: CwBvh,
+    /// Triangles in BVH order.
+    triangles: Vec<RtTriangle>,
+    normals: Vec<Vec3A>,
+    material_of: Vec<u32>,
+    pub materials: Vec<Bsdf>,
+    pub lights: Vec<Light>,
+}
+
+/// A surface hit.
+pub struct Hit {
+    pub t: f32,
+    pub point: Vec3A,
+    /// The geometric normal, turned to face the incoming ray.
+    pub normal: Vec3A,
+    pub material: u32,
+}
+
+impl PreparedScene {
+    pub fn new(
+        scene: &LoadedScene,
+        variant: Option<&str>,
+        settings: Settings,
+    ) -> Result<Self, TraceError> {
+        if let Some(v) = variant
+            && !scene.file.variants.contains_key(v)
+        {
+            let known: Vec<&str> = scene.file.variants.keys().map(String::as_str).collect();
+            return Err(TraceError::UnknownVariant {
+                name: v.to_owned(),
+                known: if known.is_empty() { "none".into() } else { known.join(", ") },
+            });
+        }
+        // Materials: one BSDF per (material, state).
+        let mut index: BTreeMap<(String, String), u32> = BTreeMap::new();
+        let mut materials = Vec::new();
+        let mut tris = Vec::new();
+        let mut material_of = Vec::new();
+        for o in &scene.objects {
+            let m = &o.mesh;
+            let group_bsdf: Vec<u32> = m
+                .groups
+                .iter()
+                .zip(&o.group_materials)
+                .map(|(g, name)| {
+                    let state = variant
+                        .and_then(|v| scene.state_of(v, &o.name, &g.name))
+                        .unwrap_or("base")
+                        .to_owned();
+                    *index.entry((name.clone(), state.clone())).or_insert_with(|| {
+                        materials.push(bsdf(scene, name, &state));
+                        (materials.len() - 1) as u32
+                    })
+                })
+                .collect();
+            for (t, &g) in m.triangles.iter().zip(&m.triangle_group) {
+                if o.hidden_groups[g as usize] {
+                    continue;
+                }
+                let [a, b, c] = t.map(|i| Vec3A::from(m.positions[i as usize]));
+                tris.push(Triangle { v0: a, v1: b, v2: c });
+                material_of.push(group_bsdf[g as usize]);
+            }
+        }
+        if tris.is_empty() {
+            return Err(TraceError::Scene("nothing to render: every part is hidden".into()));
+        }
+        let bvh = obvhs::cwbvh::builder::build_cwbvh_from_tris(
+            &tris,
+            BvhBuildParams::medium_build(),
+            &mut Duration::default(),
+        );
+        // Triangles in BVH order, so a hit's slot indexes them directly.
+        let order = &bvh.primitive_indices;
+        let triangles: Vec<RtTriangle> =
+            order.iter().map(|&i| RtTriangle::from(&tris[i as usize])).collect();
+        let normals: Vec<Vec3A> = order
+            .iter()
+            .map(|&i| {
+                let t = &tris[i as usize];
+                (t.v1 - t.v0).cross(t.v2 - t.v0).normalize_or_zero()
+            })
+            .collect();
+        let material_of: Vec<u32> = order.iter().map(|&i| material_of[i as usize]).collect();
+        let lights = scene.lights.iter().map(|l| light(scene, l)).collect::<Result<Vec<_>, _>>()?;
+        Ok(Self {
+            camera: Camera::new(&scene.camera),
+            settings,
+            bvh,
+            triangles,
+            normals,
+            material_of,
+            materials,
+            lights,
+        })
+    }
+
+    /// The number of triangles traced (after hidden parts are removed).
+    pub fn triangle_count(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// The closest hit along the ray within (tmin, tmax).
+    #[inline]
+    pub fn intersect(&self, origin: Vec3A, direction: Vec3A, tmax: f32) -> Option<Hit> {
+        let ray = Ray::new(origin, direction, 0.0, tmax);
+        let mut hit = RayHit::none();
+        if !self.bvh.ray_traverse(ray, &mut hit, |r, slot| self.triangles[slot].intersect(r)) {
+            return None;
+        }
+        let slot = hit.primitive_id as usize;
+        let n = self.normals[slot];
+        let normal = if n.dot(direction) > 0.0 { -n } else { n };
+        Some(Hit {
+            t: hit.t,
+            point: origin + direction * hit.t,
+            normal,
+            material: self.material_of[slot],
+        })
+    }
+
+    /// Whether anything blocks the segment from `origin` along `direction` up to `distance`.
+    #[inline]
+    pub fn occluded(&self, origin: Vec3A, direction: Vec3A, distance: f32) -> bool {
+        let ray = Ray::new(origin, direction, 0.0, distance);
+        !self.bvh.ray_traverse_miss(ray, |r, slot| self.triangles[slot].intersect(r))
+    }
+
+    /// A closest hit by testing every triangle, for checking the BVH.
+    pub fn intersect_brute_force(&self, origin: Vec3A, direction: Vec3A) -> Option<f32> {
+        let ray = Ray::new(origin, direction, 0.0, f32::INFINITY);
+        self.triangles
+            .iter()
+            .map(|t| t.intersect(&ray))
+            .filter(|t| t.is_finite())
+            .min_by(f32::total_cmp)
+    }
+}
+
+/// The BSDF of material `name` in `state`: the state's fields over the base ones.
+fn bsdf(scene: &LoadedScene, name: &str, state: &str) -> Bsdf {
+    let m = &scene.file.materials[name];
+    let o = match state {
+        "degraded" => m.degraded.as_ref(),
+        "cleaned" => m.cleaned.as_ref(),
+        _ => None,
+    };
+    let reflectance = o.and_then(|o| o.reflectance.as_ref()).unwrap_or(&m.reflectance);
+    let rho = scene.spectra[reflectance];
+    match m.model {
+        MaterialModel::Lambert => Bsdf::Lambert { rho },
+        MaterialModel::CookTorrance => {
+            let roughness = o.and_then(|o| o.roughness).or(m.roughness).unwrap_or(0.3) as f32;
+            let specular = o.and_then(|o| o.specular).or(m.specular);
+            let ior = o.and_then(|o| o.ior).or(m.ior);
+            // F0 = ((n − 1)/(n + 1))², 0.04 (n = 1.5) when neither is given.
+            let f0 = specular.unwrap_or_else(|| {
+                let n = ior.unwrap_or(1.5);
+                ((n - 1.0) / (n + 1.0)).powi(2)
+            }) as f32;
+            Bsdf::CookTorrance { rho, f0, roughness: roughness.max(1e-3) }
+        }
+    }
+}
+
+fn luminous(scene: &LoadedScene, spectrum: &str) -> Result<Spectrum, TraceError> {
+    LuminousSpectrum::new(&scene.spectra[spectrum], spectrum)
+        .map(|l| l.per_lumen)
+        .map_err(|e| TraceError::Scene(e.to_string()))
+}
+
+/// The photometric frame of a luminaire at `position` aimed at `aim` (γ = 0 towards the aim,
+/// world down by default): rows map world directions to the frame.
+fn frame(position: [f64; 3], aim: Option<[f64; 3]>) -> [Vec3A; 3] {
+    let nadir = match aim {
+        Some(a) => {
+            (Vec3A::from(a.map(|v| v as f32)) - Vec3A::from(position.map(|v| v as f32))).normalize()
+        }
+        None => Vec3A::NEG_Z,
+    };
+    let z = -nadir;
+    // C = 0 along world +X as seen in the luminaire's plane (or +Y when aimed along X).
+    let reference = if z.x.abs() > 0.9 { Vec3A::Y } else { Vec3A::X };
+    let x = (reference - z * reference.dot(z)).normalize();
+    let y = z.cross(x);
+    [x, y, z]
+}
+
+fn light(scene: &LoadedScene, l: &ResolvedLight) -> Result<Light, TraceError> {
+    Ok(match l {
+        ResolvedLight::Point { position, intensity_cd, spectrum, photometry, aim } => {
+            Light::Point {
+                position: Vec3A::from(position.map(|v| v as f32)),
+                intensity_cd: *intensity_cd as f32,
+                per_cd: luminous(scene, spectrum)?,
+                distribution: match photometry {
+                    Some(p) => Distribution::Photometric {
+                        to_local: frame(*position, *aim),
+                        scale: 1.0 / p.peak_cd().max(1e-12),
+                        photometry: p.clone(),
+                    },
+                    None => Distribution::Isotropic,
+                },
+            }
+        }
+        ResolvedLight::Spot {
+            position,
+            intensity_cd,
+            spectrum,
+            aim,
+            cone_deg,
+            falloff_deg,
+            photometry,
+        } => {
+            let axis = (Vec3A::from(aim.map(|v| v as f32))
+                - Vec3A::from(position.map(|v| v as f32)))
+            .normalize();
+            Light::Point {
+                position: Vec3A::from(position.map(|v| v as f32)),
+                intensity_cd: *intensity_cd as f32,
+                per_cd: luminous(scene, spectrum)?,
+                distribution: match photometry {
+                    Some(p) => Distribution::Photometric {
+                        to_local: frame(*position, Some(*aim)),
+                        scale: 1.0 / p.peak_cd().max(1e-12),
+                        photometry: p.clone(),
+                    },
+                    None => Distribution::Cone {
+                        axis,
+                        cos_inner: (cone_deg.to_radians().cos()) as f32,
+                        cos_outer: ((cone_deg + falloff_deg.max(1e-3)).to_radians().cos()) as f32,
+                    },
+                },
+            }
+        }
+        ResolvedLight::Sun { direction, illuminance_lux, spectrum, .. } => Light::Distant {
+            direction: Vec3A::from(direction.map(|v| v as f32)).normalize(),
+            irradiance: luminous(scene, spectrum)? * (*illuminance_lux as f32),
+        },
+    })
+}

@@ -1,0 +1,230 @@
+//! The tracer against closed forms. Tolerances are stated with each test.
+
+use glam::Vec3A;
+use restauro_scene::load::{Limits, LoadedScene, load_scene};
+use restauro_scene::scene_file::Integrator;
+use restauro_spectral::colorimetry::{Observer, absolute_xyz};
+use restauro_spectral::keyed_random::KeyedRng;
+use restauro_worker::prepared::{PreparedScene, Settings};
+use restauro_worker::sampler::{PixelSampler, stratified};
+use restauro_worker::tile::{Rect, pixel, render_tile};
+use std::f64::consts::PI;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// A scene folder: a flat grey reflectance, a mesh, and the scene file around them.
+fn scene(dir: &Path, mesh: &str, camera: &str, lights: &str, render: &str) -> LoadedScene {
+    std::fs::write(dir.join("grey.csv"), "380,0.5\n780,0.5\n").unwrap();
+    std::fs::write(dir.join("mesh.obj"), mesh).unwrap();
+    let photometric = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../scene/tests/data/photometric/lambertian_cos_1000cd.ies"
+    );
+    std::fs::copy(photometric, dir.join("cos.ies")).unwrap();
+    let toml = format!(
+        r#"format = 1
+{camera}
+{render}
+[spectra]
+grey = {{ file = "grey.csv" }}
+daylight = {{ illuminant = "D65" }}
+lamp = {{ illuminant = "A" }}
+[materials.grey]
+model = "lambert"
+reflectance = "grey"
+[[objects]]
+name = "thing"
+mesh = "mesh.obj"
+material = "grey"
+{lights}
+"#
+    );
+    std::fs::write(dir.join("scene.toml"), toml).unwrap();
+    load_scene(&dir.join("scene.toml"), &Limits::default()).unwrap()
+}
+
+const PLANE: &str = "v -50 -50 0\nv 50 -50 0\nv 50 50 0\nv -50 50 0\nf 1 2 3 4\n";
+const LOOK_DOWN: &str = "[camera]\nposition = [0.0, 0.0, 10.0]\ntarget = [0.0, 0.0, 0.0]\nup = [0.0, 1.0, 0.0]\nvertical_fov_deg = 60.0\nwidth = 9\nheight = 9";
+
+fn settings(scene: &LoadedScene) -> Settings {
+    let r = &scene.file.render;
+    Settings {
+        integrator: r.integrator,
+        samples_per_pixel: r.samples_per_pixel,
+        max_depth: r.max_depth,
+        seed: r.seed,
+    }
+}
+
+fn luminance(l: &restauro_spectral::Spectrum) -> f64 {
+    absolute_xyz(l, Observer::Cie1931TwoDegree).y
+}
+
+/// Where the one-sample ray of pixel (x, y) meets the plane z = 0.
+fn plane_point(scene: &PreparedScene, x: u32, y: u32) -> Vec3A {
+    let mut s = PixelSampler::new(scene.settings.seed, x, y, 0);
+    let (u, v) = s.next2();
+    let (dx, dy) = stratified(0, 1, u, v);
+    let d = scene.camera.direction(x as f32 + dx, y as f32 + dy);
+    let o = scene.camera.origin;
+    o + d * (-o.z / d.z)
+}
+
+/// A Lambertian plane of reflectance ρ under a perpendicular sun of E_v lux has luminance
+/// ρ·E_v/π everywhere (relative error below 1e-4).
+#[test]
+fn lambertian_plane_under_the_sun() {
+    let dir = tempfile::tempdir().unwrap();
+    let lights = "[[lights]]\nkind = \"sun\"\nilluminance_lux = 100000.0\nazimuth_deg = 0.0\nelevation_deg = 90.0\nspectrum = \"daylight\"";
+    let render = "[render]\nintegrator = \"whitted\"\nsamples_per_pixel = 1\nmax_depth = 1";
+    let loaded = scene(dir.path(), PLANE, LOOK_DOWN, lights, render);
+    let prepared = PreparedScene::new(&loaded, None, settings(&loaded)).unwrap();
+    let expect = 0.5 * 100_000.0 / PI;
+    for (x, y) in [(4, 4), (0, 0), (8, 3)] {
+        let l = luminance(&pixel(&prepared, x, y));
+        assert!((l / expect - 1.0).abs() < 1e-4, "pixel ({x}, {y}): {l} cd/m² vs {expect}");
+    }
+}
+
+/// Below a point luminaire of I cd at height h the illuminance follows I·cos α / r² (inverse
+/// square and cosine laws): the plane's luminance is ρ/π of it — relative error below 1e-4 for
+/// an isotropic source; for an IES file tabulating I0·cos γ every 2.5°, below 2.5e-4, the
+/// error of interpolating cos γ linearly between its samples (at most Δγ²/8 = 2.4e-4).
+#[test]
+fn inverse_square_and_cosine_laws() {
+    for (light, ies) in [("", false), ("ies = \"cos.ies\"", true)] {
+        let dir = tempfile::tempdir().unwrap();
+        let lights = format!(
+            "[[lights]]\nkind = \"point\"\nposition = [0.0, 0.0, 2.0]\nintensity_cd = 1000.0\nspectrum = \"lamp\"\n{light}"
+        );
+        let render = "[render]\nintegrator = \"whitted\"\nsamples_per_pixel = 1\nmax_depth = 1";
+        let loaded = scene(dir.path(), PLANE, LOOK_DOWN, &lights, render);
+        let prepared = PreparedScene::new(&loaded, None, settings(&loaded)).unwrap();
+        for (x, y) in [(4, 4), (0, 0), (8, 2), (2, 7)] {
+            let p = plane_point(&prepared, x, y);
+            let r2 = f64::from(p.x * p.x + p.y * p.y + 4.0);
+            let cos = 2.0 / r2.sqrt();
+            let intensity = if ies { 1000.0 * cos } else { 1000.0 };
+            let expect = 0.5 / PI * intensity * cos / r2;
+            let l = luminance(&pixel(&prepared, x, y));
+            let tolerance = if ies { 2.5e-4 } else { 1e-4 };
+            assert!(
+                (l / expect - 1.0).abs() < tolerance,
+                "ies {ies}, pixel ({x}, {y}): {l} vs {expect}"
+            );
+        }
+    }
+}
+
+/// A UV sphere of radius 1 (the "furnace"), inside it an isotropic source of I cd and walls of
+/// reflectance ρ = 0.5: every bounce inside a diffuse sphere spreads uniformly, so the wall
+/// luminance is ρ·(I/R²)/(π(1 − ρ)) = I/π. The path tracer's image mean must come within 2 %
+/// (Monte Carlo noise and the facets of the sphere).
+#[test]
+fn path_tracer_converges_to_the_furnace_value() {
+    let mut obj = String::new();
+    let (nu, nv) = (96usize, 48usize);
+    for j in 0..=nv {
+        let t = PI * j as f64 / nv as f64;
+        for i in 0..nu {
+            let p = 2.0 * PI * i as f64 / nu as f64;
+            let _ = writeln!(obj, "v {} {} {}", t.sin() * p.cos(), t.sin() * p.sin(), t.cos());
+        }
+    }
+    for j in 0..nv {
+        for i in 0..nu {
+            let a = j * nu + i + 1;
+            let b = j * nu + (i + 1) % nu + 1;
+            let (c, d) = (a + nu, b + nu);
+            // Wound to face inwards.
+            let _ = writeln!(obj, "f {a} {b} {d} {c}");
+        }
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let camera = "[camera]\nposition = [0.0, 0.0, 0.0]\ntarget = [1.0, 0.3, 0.2]\nvertical_fov_deg = 90.0\nwidth = 16\nheight = 16";
+    let lights = "[[lights]]\nkind = \"point\"\nposition = [0.0, 0.0, 0.0]\nintensity_cd = 100.0\nspectrum = \"daylight\"";
+    let render =
+        "[render]\nintegrator = \"path\"\nsamples_per_pixel = 32\nmax_depth = 40\nseed = 5";
+    let loaded = scene(dir.path(), &obj, camera, lights, render);
+    let prepared = PreparedScene::new(&loaded, None, settings(&loaded)).unwrap();
+    let tile = render_tile(&prepared, Rect { x: 0, y: 0, width: 16, height: 16 }, false);
+    let mean: f64 = tile.xyz.iter().map(|p| f64::from(p[1])).sum::<f64>() / tile.xyz.len() as f64;
+    let expect = 100.0 / PI;
+    assert!((mean / expect - 1.0).abs() < 0.02, "{mean} vs {expect}");
+    // Whitted, which stops after the direct light, gives only the first bounce: ρ·E/π.
+    let whitted = PreparedScene::new(
+        &loaded,
+        None,
+        Settings { integrator: Integrator::Whitted, ..settings(&loaded) },
+    )
+    .unwrap();
+    let tile = render_tile(&whitted, Rect { x: 0, y: 0, width: 16, height: 16 }, false);
+    let mean: f64 = tile.xyz.iter().map(|p| f64::from(p[1])).sum::<f64>() / tile.xyz.len() as f64;
+    assert!((mean / (0.5 * 100.0 / PI) - 1.0).abs() < 0.02, "{mean}");
+}
+
+/// The BVH finds the same closest hits as testing every triangle, on the Aosta facade.
+#[test]
+fn bvh_hits_match_brute_force() {
+    let dir = tempfile::tempdir().unwrap();
+    let generated = restauro_scene::aosta::generate(64, 36, 3);
+    std::fs::create_dir_all(dir.path().join("meshes")).unwrap();
+    std::fs::write(dir.path().join("meshes/facade.obj"), &generated.facade_obj).unwrap();
+    std::fs::write(dir.path().join("aosta.toml"), &generated.scene_toml).unwrap();
+    let loaded = load_scene(&dir.path().join("aosta.toml"), &Limits::default()).unwrap();
+    let prepared = PreparedScene::new(&loaded, Some("as-found"), settings(&loaded)).unwrap();
+    let mut r = KeyedRng::new(9);
+    let mut hits = 0;
+    for _ in 0..300 {
+        let o =
+            Vec3A::new(r.next_f32() * 60.0 - 30.0, r.next_f32() * 30.0 - 25.0, r.next_f32() * 25.0);
+        let d = Vec3A::new(r.next_f32() - 0.5, r.next_f32() - 0.5, r.next_f32() - 0.5).normalize();
+        let bvh = prepared.intersect(o, d, f32::INFINITY).map(|h| h.t);
+        let brute = prepared.intersect_brute_force(o, d);
+        match (bvh, brute) {
+            (Some(a), Some(b)) => {
+                assert!((a - b).abs() <= 1e-4 * b.max(1.0), "{a} vs {b}");
+                hits += 1;
+            }
+            (None, None) => {}
+            other => panic!("{other:?}"),
+        }
+    }
+    assert!(hits > 100, "{hits}");
+}
+
+/// The same image, bit for bit, for tile sizes 16 and 64 and for 1 and 2 threads.
+#[test]
+fn images_are_bit_identical_across_tiles_and_threads() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = format!("{PLANE}v -1 -1 0\nv 1 -1 0\nv 1 -1 2\nv -1 -1 2\nf 5 6 7 8\n");
+    let camera =
+        "[camera]\nposition = [3.0, -6.0, 3.0]\ntarget = [0.0, 0.0, 0.5]\nwidth = 70\nheight = 40";
+    let lights = "[[lights]]\nkind = \"sun\"\nilluminance_lux = 50000.0\nazimuth_deg = 200.0\nelevation_deg = 40.0\nspectrum = \"daylight\"\n[[lights]]\nkind = \"point\"\nposition = [0.5, -3.0, 1.0]\nintensity_cd = 500.0\nspectrum = \"lamp\"";
+    let render = "[render]\nintegrator = \"path\"\nsamples_per_pixel = 4\nmax_depth = 6\nseed = 12";
+    let loaded = scene(dir.path(), &mesh, camera, lights, render);
+    let prepared = PreparedScene::new(&loaded, None, settings(&loaded)).unwrap();
+    let render_in_tiles = |size: u32| {
+        let mut image = vec![[0.0f32; 3]; 70 * 40];
+        for ty in (0..40).step_by(size as usize) {
+            for tx in (0..70).step_by(size as usize) {
+                let rect =
+                    Rect { x: tx, y: ty, width: size.min(70 - tx), height: size.min(40 - ty) };
+                let tile = render_tile(&prepared, rect, false);
+                for (i, p) in tile.xyz.iter().enumerate() {
+                    let (x, y) = (rect.x + i as u32 % rect.width, rect.y + i as u32 / rect.width);
+                    image[(y * 70 + x) as usize] = *p;
+                }
+            }
+        }
+        image
+    };
+    let pool = |t| rayon::ThreadPoolBuilder::new().num_threads(t).build().unwrap();
+    let a = pool(1).install(|| render_in_tiles(16));
+    let b = pool(2).install(|| render_in_tiles(64));
+    assert!(
+        a.iter().zip(&b).all(|(p, q)| p.map(f32::to_bits) == q.map(f32::to_bits)),
+        "images differ"
+    );
+    assert!(a.iter().any(|p| p[1] > 0.0));
+}

@@ -59,6 +59,7 @@ pub fn mondrian(width: usize, height: usize, seed: u64) -> Vec<[f32; 3]> {
 
 pub fn run(args: &BenchArgs) -> Result<String> {
     match args.target {
+        BenchTarget::Tracer => crate::bench_tracer::bench(args),
         BenchTarget::Retinex => {
             let (w, h) = (args.width, args.height);
             let img = mondrian(w, h, 1);

@@ -297,12 +297,28 @@ pub struct BenchArgs {
     /// How many times to run; the best time is reported with all of them.
     #[arg(long, default_value_t = 3)]
     pub repeats: u32,
+    /// Tracer: the scene.
+    #[arg(long, value_enum, default_value = "aosta")]
+    pub scene: BenchScene,
+    /// Tracer: samples per pixel.
+    #[arg(long, default_value_t = 4)]
+    pub spp: u32,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum BenchTarget {
     /// The Brownian-path Retinex on a synthetic Mondrian.
     Retinex,
+    /// The tracer: the BVH alone against whole Whitted samples, and the path integrator.
+    Tracer,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum BenchScene {
+    /// The procedural Aosta facade.
+    Aosta,
+    /// About 100 000 triangles of blocks on a ground plane.
+    Blocks,
 }
 
 fn parse_bits(s: &str) -> Result<u8, String> {

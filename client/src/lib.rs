@@ -1,6 +1,7 @@
 //! The `restauro` command line as a library, so that tests run exactly what the binary runs.
 
 pub mod bench;
+pub mod bench_tracer;
 pub mod cli;
 pub mod color;
 pub mod demo;

@@ -48,9 +48,11 @@ pub fn cosine_sample(u1: f32, u2: f32) -> Vec3A {
 }
 
 impl Bsdf {
-    /// The spectral and the neutral parts of f(wo, wi): f = ρ(λ)·a + b.
+    /// The spectral and the neutral parts of f(wo, wi): f = ρ(λ)·a + b. Lights are summed with
+    /// these scalar weights and ρ(λ) applied once, instead of multiplying whole spectra per
+    /// light.
     #[inline]
-    fn parts(&self, wo: Vec3A, wi: Vec3A) -> (f32, f32) {
+    pub fn parts(&self, wo: Vec3A, wi: Vec3A) -> (f32, f32) {
         let (co, ci) = (wo.z, wi.z);
         if co <= 0.0 || ci <= 0.0 {
             return (0.0, 0.0);
@@ -69,7 +71,7 @@ impl Bsdf {
         }
     }
 
-    fn rho(&self) -> &Spectrum {
+    pub fn rho(&self) -> &Spectrum {
         match self {
             Bsdf::Lambert { rho } | Bsdf::CookTorrance { rho, .. } => rho,
         }

@@ -49,15 +49,25 @@ impl Frame {
 
 /// Rays leave a surface from a point lifted off it, against self-intersection in f32.
 #[inline]
-fn lift(hit: &Hit) -> Vec3A {
+pub fn lift(hit: &Hit) -> Vec3A {
     let scale = 1.0 + hit.point.abs().max_element();
     hit.point + hit.normal * (2e-5 * scale)
 }
 
-/// Direct light at a hit: Σ f(wo, wi) · E⊥(λ) · cos θi over the visible sources.
+/// Direct light at a hit: Σ f(wo, wi) · E⊥(λ) · cos θi over the visible sources. With
+/// f = ρ(λ)·a + b, the sum is ρ(λ)·Σ a·cos·E⊥ + Σ b·cos·E⊥: the light spectra are summed with
+/// scalar weights and ρ applied once.
 #[inline]
-fn direct(scene: &PreparedScene, hit: &Hit, frame: &Frame, wo_local: Vec3A) -> Spectrum {
-    let mut sum = Spectrum::ZERO;
+fn direct(
+    scene: &PreparedScene,
+    hit: &Hit,
+    frame: &Frame,
+    wo_local: Vec3A,
+    rays: &mut u64,
+) -> Spectrum {
+    let mut diffuse = Spectrum::ZERO;
+    let mut neutral = Spectrum::ZERO;
+    let (mut any_diffuse, mut any_neutral) = (false, false);
     let origin = lift(hit);
     let bsdf = &scene.materials[hit.material as usize];
     for light in &scene.lights {
@@ -66,37 +76,58 @@ fn direct(scene: &PreparedScene, hit: &Hit, frame: &Frame, wo_local: Vec3A) -> S
         if cos <= 0.0 {
             continue;
         }
-        let wi = frame.to_local(inc.direction);
-        let f = bsdf.eval(wo_local, wi);
-        if f.is_black() {
+        let (a, b) = bsdf.parts(wo_local, frame.to_local(inc.direction));
+        if a <= 0.0 && b <= 0.0 {
             continue;
         }
         let reach =
             if inc.distance.is_finite() { inc.distance * (1.0 - 1e-4) } else { f32::INFINITY };
+        *rays += 1;
         if scene.occluded(origin, inc.direction, reach) {
             continue;
         }
-        sum += f * inc.irradiance * cos;
+        if a > 0.0 {
+            diffuse += inc.irradiance * (a * cos);
+            any_diffuse = true;
+        }
+        if b > 0.0 {
+            neutral += inc.irradiance * (b * cos);
+            any_neutral = true;
+        }
     }
-    sum
+    match (any_diffuse, any_neutral) {
+        (false, false) => Spectrum::ZERO,
+        (true, false) => *bsdf.rho() * diffuse,
+        (false, true) => neutral,
+        (true, true) => *bsdf.rho() * diffuse + neutral,
+    }
 }
 
-/// The spectral radiance (W·sr⁻¹·m⁻²·nm⁻¹) arriving at the camera along the ray.
+/// The spectral radiance (W·sr⁻¹·m⁻²·nm⁻¹) arriving at the camera along the ray; `rays`
+/// counts the rays traced (closest-hit and shadow), for the benchmarks.
 pub fn radiance(
     scene: &PreparedScene,
     origin: Vec3A,
     direction: Vec3A,
     sampler: &mut PixelSampler,
+    rays: &mut u64,
 ) -> Spectrum {
     let mut result = Spectrum::ZERO;
     let mut throughput = Spectrum::ONE;
     let (mut origin, mut direction) = (origin, direction);
     let max_depth = scene.settings.max_depth.max(1);
     for depth in 0..max_depth {
+        *rays += 1;
         let Some(hit) = scene.intersect(origin, direction, f32::INFINITY) else { break };
         let frame = Frame::new(hit.normal);
         let wo = frame.to_local(-direction);
-        result += throughput * direct(scene, &hit, &frame, wo);
+        let light = direct(scene, &hit, &frame, wo, rays);
+        // The camera ray carries a throughput of one: skip the multiplication there.
+        if depth == 0 {
+            result += light;
+        } else {
+            result += throughput * light;
+        }
         if depth + 1 == max_depth {
             break;
         }

@@ -2,7 +2,7 @@
 //! of the stream keyed by (seed, x, y, sample). A tile therefore renders bit-identically
 //! whichever worker renders it, whatever the tile size or the number of threads.
 
-use restauro_spectral::keyed_random::KeyedRng;
+use restauro_spectral::keyed_random::{KeyedRng, mix64};
 
 /// The random stream of one sample of one pixel.
 pub struct PixelSampler {
@@ -11,7 +11,12 @@ pub struct PixelSampler {
 
 impl PixelSampler {
     pub fn new(seed: u64, x: u32, y: u32, sample: u32) -> Self {
-        Self { rng: KeyedRng::from_parts(&[seed, u64::from(x), u64::from(y), u64::from(sample)]) }
+        // (x, y) fills one 64-bit word exactly, so three mixes key every (seed, pixel, sample)
+        // apart; this runs once per camera sample.
+        let pixel = (u64::from(x) << 32) | u64::from(y);
+        let key = mix64(mix64(seed ^ 0x5851_f42d_4c95_7f2d) ^ pixel)
+            ^ u64::from(sample).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+        Self { rng: KeyedRng::new(mix64(key)) }
     }
 
     /// The next dimension, uniform in [0, 1).

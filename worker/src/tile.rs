@@ -25,10 +25,17 @@ pub struct TileResult {
     pub xyz: Vec<[f32; 3]>,
     /// The spectral radiance of each pixel, when asked for.
     pub spectral: Option<Vec<Spectrum>>,
+    /// The rays traced for the tile.
+    pub rays: u64,
 }
 
 /// The mean spectral radiance of pixel (x, y).
 pub fn pixel(scene: &PreparedScene, x: u32, y: u32) -> Spectrum {
+    pixel_counted(scene, x, y, &mut 0)
+}
+
+/// [`pixel`], counting the rays traced.
+pub fn pixel_counted(scene: &PreparedScene, x: u32, y: u32, rays: &mut u64) -> Spectrum {
     let spp = scene.settings.samples_per_pixel.max(1);
     let mut sum = Spectrum::ZERO;
     for s in 0..spp {
@@ -36,20 +43,28 @@ pub fn pixel(scene: &PreparedScene, x: u32, y: u32) -> Spectrum {
         let (u, v) = sampler.next2();
         let (dx, dy) = stratified(s, spp, u, v);
         let direction = scene.camera.direction(x as f32 + dx, y as f32 + dy);
-        sum += radiance(scene, scene.camera.origin, direction, &mut sampler);
+        sum += radiance(scene, scene.camera.origin, direction, &mut sampler, rays);
     }
     sum * (1.0 / spp as f32)
 }
 
 pub fn render_tile(scene: &PreparedScene, rect: Rect, spectral: bool) -> TileResult {
-    let rows: Vec<Vec<Spectrum>> = (rect.y..rect.y + rect.height)
+    let rows: Vec<(Vec<Spectrum>, u64)> = (rect.y..rect.y + rect.height)
         .into_par_iter()
-        .map(|y| (rect.x..rect.x + rect.width).map(|x| pixel(scene, x, y)).collect())
+        .map(|y| {
+            let mut rays = 0;
+            let row = (rect.x..rect.x + rect.width)
+                .map(|x| pixel_counted(scene, x, y, &mut rays))
+                .collect();
+            (row, rays)
+        })
         .collect();
+    let rays = rows.iter().map(|(_, r)| r).sum();
+    let rows: Vec<Vec<Spectrum>> = rows.into_iter().map(|(row, _)| row).collect();
     let xyz = rows
         .iter()
         .flatten()
         .map(|l| absolute_xyz(l, Observer::Cie1931TwoDegree).to_array().map(|v| v as f32))
         .collect();
-    TileResult { rect, xyz, spectral: spectral.then(|| rows.into_iter().flatten().collect()) }
+    TileResult { rect, xyz, spectral: spectral.then(|| rows.into_iter().flatten().collect()), rays }
 }

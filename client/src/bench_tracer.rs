@@ -1,0 +1,271 @@
+//! `restauro bench tracer`: the tracer's speed against the BVH's own.
+//!
+//! The bound: exactly the rays a Whitted sample casts (depth 1: the camera ray, closest hit; one
+//! shadow ray per light, any hit), collected first and then traced through the BVH alone. The
+//! whole sample — sampling, 81-band shading, lights, film — is then timed on the same rays.
+//! CPU time is the process's user + system time from /proc (Linux), so the figures are per
+//! CPU-second whatever else the machine is doing.
+
+use crate::cli::{BenchArgs, BenchScene};
+use anyhow::{Context, Result};
+use restauro_scene::load::{Limits, LoadedScene, load_scene};
+use restauro_scene::scene_file::Integrator;
+use restauro_worker::integrator::lift;
+use restauro_worker::prepared::{PreparedScene, Settings};
+use restauro_worker::sampler::{PixelSampler, stratified};
+use restauro_worker::tile::{Rect, render_tile};
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::time::Instant;
+
+/// The process's CPU time (user + system), seconds.
+fn cpu_seconds() -> f64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    let after = stat.rsplit(')').next().unwrap_or("");
+    let fields: Vec<&str> = after.split_whitespace().collect();
+    // Fields 14 and 15 of proc_pid_stat(5) are utime and stime in clock ticks (100 per
+    // second); after the command name's closing parenthesis the fields start at number 3.
+    let ticks = |i: usize| fields.get(i).and_then(|f| f.parse::<f64>().ok()).unwrap_or(0.0);
+    (ticks(11) + ticks(12)) / 100.0
+}
+
+/// Wall and CPU seconds of `f` run on `threads` threads.
+fn timed<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> Result<(T, f64, f64)> {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
+    let (c0, t0) = (cpu_seconds(), Instant::now());
+    let out = pool.install(f);
+    Ok((out, t0.elapsed().as_secs_f64(), cpu_seconds() - c0))
+}
+
+fn blocks_obj() -> String {
+    let mut s = String::from("v -60 -60 0\nv 60 -60 0\nv 60 60 0\nv -60 60 0\nf 1 2 3 4\n");
+    let mut v = 4;
+    let mut rng = restauro_spectral::keyed_random::KeyedRng::new(7);
+    for i in 0..90 {
+        for j in 0..92 {
+            let (x, y) = (-45.0 + i as f32, -46.0 + j as f32);
+            let h = 0.5 + 3.0 * rng.next_f32();
+            let (a, b) = (0.35, 0.35);
+            let c = [
+                [x - a, y - b, 0.0],
+                [x + a, y - b, 0.0],
+                [x + a, y + b, 0.0],
+                [x - a, y + b, 0.0],
+                [x - a, y - b, h],
+                [x + a, y - b, h],
+                [x + a, y + b, h],
+                [x - a, y + b, h],
+            ];
+            for p in c {
+                let _ = writeln!(s, "v {} {} {}", p[0], p[1], p[2]);
+            }
+            for f in
+                [[1, 2, 6, 5], [2, 3, 7, 6], [3, 4, 8, 7], [4, 1, 5, 8], [5, 6, 7, 8], [4, 3, 2, 1]]
+            {
+                let _ = writeln!(s, "f {} {} {} {}", v + f[0], v + f[1], v + f[2], v + f[3]);
+            }
+            v += 8;
+        }
+    }
+    s
+}
+
+const BLOCKS_TOML: &str = r#"format = 1
+[camera]
+position = [-20.0, -70.0, 25.0]
+target = [0.0, 0.0, 0.0]
+width = 640
+height = 360
+[render]
+integrator = "path"
+samples_per_pixel = 4
+max_depth = 4
+seed = 1
+[spectra]
+stone = "limestone_oolitic_indiana_solid__eco_ward72"
+daylight = { illuminant = "D65" }
+lamp = { illuminant = "A" }
+[materials.stone]
+model = "cook-torrance"
+reflectance = "stone"
+roughness = 0.3
+ior = 1.5
+[[objects]]
+name = "blocks"
+mesh = "blocks.obj"
+material = "stone"
+[[lights]]
+kind = "sun"
+preset = "sun"
+azimuth_deg = 210.0
+spectrum = "daylight"
+[[lights]]
+kind = "point"
+position = [0.0, -10.0, 12.0]
+intensity_cd = 20000.0
+spectrum = "lamp"
+"#;
+
+fn load(
+    which: BenchScene,
+    width: usize,
+    height: usize,
+) -> Result<(LoadedScene, tempfile::TempDir)> {
+    let dir = tempfile::tempdir()?;
+    let path = match which {
+        BenchScene::Aosta => {
+            let g = restauro_scene::aosta::generate(width as u32, height as u32, 1);
+            std::fs::create_dir_all(dir.path().join("meshes"))?;
+            std::fs::write(dir.path().join("meshes/facade.obj"), g.facade_obj)?;
+            std::fs::write(dir.path().join("aosta.toml"), g.scene_toml)?;
+            dir.path().join("aosta.toml")
+        }
+        BenchScene::Blocks => {
+            std::fs::write(dir.path().join("blocks.obj"), blocks_obj())?;
+            let toml = BLOCKS_TOML
+                .replace("width = 640", &format!("width = {width}"))
+                .replace("height = 360", &format!("height = {height}"));
+            std::fs::write(dir.path().join("blocks.toml"), toml)?;
+            dir.path().join("blocks.toml")
+        }
+    };
+    let scene = load_scene(&path, &Limits::default()).context("bench scene")?;
+    Ok((scene, dir))
+}
+
+#[derive(Serialize)]
+struct Run {
+    threads: usize,
+    wall_s: f64,
+    cpu_s: f64,
+    rays: u64,
+    rays_per_cpu_s: f64,
+    samples_per_cpu_s: f64,
+}
+
+#[derive(Serialize)]
+struct TracerBench {
+    benchmark: &'static str,
+    scene: String,
+    triangles: usize,
+    lights: usize,
+    width: usize,
+    height: usize,
+    spp: u32,
+    /// The Whitted rays (camera + one shadow ray per light, depth 1) through the BVH alone.
+    bvh_only: Run,
+    whitted: Vec<Run>,
+    /// Whole Whitted samples per CPU-second over BVH-only rays per CPU-second (target ≥ 0.7).
+    whitted_over_bvh_only: f64,
+    path: Vec<Run>,
+}
+
+fn run(threads: usize, wall_s: f64, cpu_s: f64, rays: u64, samples: u64) -> Run {
+    Run {
+        threads,
+        wall_s,
+        cpu_s,
+        rays,
+        rays_per_cpu_s: rays as f64 / cpu_s,
+        samples_per_cpu_s: samples as f64 / cpu_s,
+    }
+}
+
+pub fn bench(args: &BenchArgs) -> Result<String> {
+    let (w, h) = (args.width, args.height);
+    let (scene, _dir) = load(args.scene, w, h)?;
+    let base = Settings {
+        integrator: Integrator::Whitted,
+        samples_per_pixel: args.spp,
+        max_depth: 1,
+        seed: 1,
+    };
+    let whitted = PreparedScene::new(&scene, None, base)?;
+    let samples = (w * h) as u64 * u64::from(args.spp);
+    let full = Rect { x: 0, y: 0, width: w as u32, height: h as u32 };
+
+    // The rays of every Whitted sample, collected once.
+    let mut camera = Vec::with_capacity(samples as usize);
+    for y in 0..h as u32 {
+        for x in 0..w as u32 {
+            for s in 0..args.spp {
+                let mut sampler = PixelSampler::new(base.seed, x, y, s);
+                let (u, v) = sampler.next2();
+                let (dx, dy) = stratified(s, args.spp, u, v);
+                camera.push(whitted.camera.direction(x as f32 + dx, y as f32 + dy));
+            }
+        }
+    }
+    let origin = whitted.camera.origin;
+    let mut shadow = Vec::new();
+    for d in &camera {
+        if let Some(hit) = whitted.intersect(origin, *d, f32::INFINITY) {
+            for light in &whitted.lights {
+                if let Some(inc) = light.incident(hit.point)
+                    && inc.direction.dot(hit.normal) > 0.0
+                {
+                    let reach = if inc.distance.is_finite() {
+                        inc.distance * (1.0 - 1e-4)
+                    } else {
+                        f32::INFINITY
+                    };
+                    shadow.push((lift(&hit), inc.direction, reach));
+                }
+            }
+        }
+    }
+    let bvh_rays = (camera.len() + shadow.len()) as u64;
+    let mut best_bvh: Option<Run> = None;
+    for _ in 0..args.repeats.max(1) {
+        let (found, wall, cpu) = timed(1, || {
+            let hits = camera
+                .iter()
+                .filter(|d| whitted.intersect(origin, **d, f32::INFINITY).is_some())
+                .count();
+            let blocked = shadow.iter().filter(|(o, d, r)| whitted.occluded(*o, *d, *r)).count();
+            hits + blocked
+        })?;
+        std::hint::black_box(found);
+        let r = run(1, wall, cpu, bvh_rays, samples);
+        if best_bvh.as_ref().is_none_or(|b| r.cpu_s < b.cpu_s) {
+            best_bvh = Some(r);
+        }
+    }
+    let bvh_only = best_bvh.context("no run")?;
+
+    let render_runs = |prepared: &PreparedScene| -> Result<Vec<Run>> {
+        let mut runs = Vec::new();
+        for threads in [1, 2] {
+            let mut best: Option<Run> = None;
+            for _ in 0..args.repeats.max(1) {
+                let (tile, wall, cpu) = timed(threads, || render_tile(prepared, full, false))?;
+                let r = run(threads, wall, cpu, tile.rays, samples);
+                if best.as_ref().is_none_or(|b| r.wall_s < b.wall_s) {
+                    best = Some(r);
+                }
+            }
+            runs.extend(best);
+        }
+        Ok(runs)
+    };
+    let whitted_runs = render_runs(&whitted)?;
+    let path_settings =
+        Settings { integrator: Integrator::Path, max_depth: scene.file.render.max_depth, ..base };
+    let path = PreparedScene::new(&scene, None, path_settings)?;
+    let path_runs = render_runs(&path)?;
+    let ratio = whitted_runs[0].rays_per_cpu_s / bvh_only.rays_per_cpu_s;
+    let report = TracerBench {
+        benchmark: "tracer",
+        scene: format!("{:?}", args.scene).to_lowercase(),
+        triangles: whitted.triangle_count(),
+        lights: whitted.lights.len(),
+        width: w,
+        height: h,
+        spp: args.spp,
+        bvh_only,
+        whitted: whitted_runs,
+        whitted_over_bvh_only: ratio,
+        path: path_runs,
+    };
+    Ok(serde_json::to_string_pretty(&report)? + "\n")
+}

@@ -226,6 +226,19 @@ fn frame(position: [f64; 3], aim: Option<[f64; 3]>) -> [Vec3A; 3] {
     [x, y, z]
 }
 
+/// A measured distribution, its peak scaled to the luminaire's `intensity_cd`.
+fn photometric(
+    p: &restauro_scene::photometric::Photometry,
+    position: [f64; 3],
+    aim: Option<[f64; 3]>,
+) -> Distribution {
+    Distribution::Photometric {
+        to_local: frame(position, aim),
+        scale: 1.0 / p.peak_cd().max(1e-12),
+        photometry: p.clone(),
+    }
+}
+
 fn light(scene: &LoadedScene, l: &ResolvedLight) -> Result<Light, TraceError> {
     Ok(match l {
         ResolvedLight::Point { position, intensity_cd, spectrum, photometry, aim } => {
@@ -234,11 +247,7 @@ fn light(scene: &LoadedScene, l: &ResolvedLight) -> Result<Light, TraceError> {
                 intensity_cd: *intensity_cd as f32,
                 per_cd: luminous(scene, spectrum)?,
                 distribution: match photometry {
-                    Some(p) => Distribution::Photometric {
-                        to_local: frame(*position, *aim),
-                        scale: 1.0 / p.peak_cd().max(1e-12),
-                        photometry: p.clone(),
-                    },
+                    Some(p) => photometric(p, *position, *aim),
                     None => Distribution::Isotropic,
                 },
             }
@@ -260,11 +269,7 @@ fn light(scene: &LoadedScene, l: &ResolvedLight) -> Result<Light, TraceError> {
                 intensity_cd: *intensity_cd as f32,
                 per_cd: luminous(scene, spectrum)?,
                 distribution: match photometry {
-                    Some(p) => Distribution::Photometric {
-                        to_local: frame(*position, Some(*aim)),
-                        scale: 1.0 / p.peak_cd().max(1e-12),
-                        photometry: p.clone(),
-                    },
+                    Some(p) => photometric(p, *position, Some(*aim)),
                     None => Distribution::Cone {
                         axis,
                         cos_inner: (cone_deg.to_radians().cos()) as f32,

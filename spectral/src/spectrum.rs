@@ -80,6 +80,22 @@ impl Spectrum {
         self.0.iter().zip(&other.0).map(|(&a, &b)| f64::from(a) * f64::from(b)).sum()
     }
 
+    /// Σ a(λ)·b(λ) in f32, with eight partial sums so the products and additions vectorise:
+    /// for hot loops (the film of every rendered sample), where a relative error of about 1e-6
+    /// is well below anything an image shows.
+    #[inline]
+    pub fn dot_f32(&self, other: &Spectrum) -> f32 {
+        let (a, b) = (&self.0, &other.0);
+        let mut acc = [0.0f32; 8];
+        for k in 0..BANDS / 8 {
+            for (j, slot) in acc.iter_mut().enumerate() {
+                *slot += a[8 * k + j] * b[8 * k + j];
+            }
+        }
+        let tail: f32 = (BANDS / 8 * 8..BANDS).map(|i| a[i] * b[i]).sum();
+        acc.iter().sum::<f32>() + tail
+    }
+
     /// Σ a(λ)·b(λ)·c(λ) in f64, the shape of every colorimetric integral (source × object ×
     /// colour-matching function).
     pub fn dot3(&self, b: &Spectrum, c: &Spectrum) -> f64 {
@@ -194,6 +210,14 @@ mod tests {
         let a = Spectrum::splat(2.0);
         assert_eq!(a.dot(&Spectrum::splat(3.0)), 6.0 * 81.0);
         assert_eq!(a.dot3(&a, &a), 8.0 * 81.0);
+    }
+
+    #[test]
+    fn the_fast_dot_agrees_with_the_exact_one() {
+        let a = Spectrum::from_fn_nm(|l| (l / 37.0).sin().abs());
+        let b = Spectrum::from_fn_nm(|l| 1.0 + (l / 53.0).cos());
+        let (fast, exact) = (f64::from(a.dot_f32(&b)), a.dot(&b));
+        assert!((fast / exact - 1.0).abs() < 1e-6, "{fast} vs {exact}");
     }
 
     #[test]

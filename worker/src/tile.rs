@@ -8,7 +8,21 @@ use crate::prepared::PreparedScene;
 use crate::sampler::{PixelSampler, stratified};
 use rayon::prelude::*;
 use restauro_spectral::Spectrum;
-use restauro_spectral::colorimetry::{Observer, absolute_xyz};
+use restauro_spectral::colorimetry::{K_M_LM_PER_W, Observer};
+use restauro_spectral::grid::STEP_NM;
+use std::sync::LazyLock;
+
+/// K_m · Δλ · x̄, ȳ, z̄ (CIE 1931 2°) as f32 spectra: the film's X, Y, Z are one fast dot product
+/// each (X = K_m Σ L_e(λ) x̄(λ) Δλ, paper §2.2).
+static FILM_WEIGHTS: LazyLock<[Spectrum; 3]> =
+    LazyLock::new(|| Observer::Cie1931TwoDegree.cmf().map(|c| c * (K_M_LM_PER_W * STEP_NM) as f32));
+
+/// Absolute XYZ (Y in cd/m²) of a spectral radiance.
+#[inline]
+pub fn film_xyz(radiance: &Spectrum) -> [f32; 3] {
+    let w = &*FILM_WEIGHTS;
+    [radiance.dot_f32(&w[0]), radiance.dot_f32(&w[1]), radiance.dot_f32(&w[2])]
+}
 
 /// A rectangle of pixels, from the top-left corner of the image.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -61,10 +75,6 @@ pub fn render_tile(scene: &PreparedScene, rect: Rect, spectral: bool) -> TileRes
         .collect();
     let rays = rows.iter().map(|(_, r)| r).sum();
     let rows: Vec<Vec<Spectrum>> = rows.into_iter().map(|(row, _)| row).collect();
-    let xyz = rows
-        .iter()
-        .flatten()
-        .map(|l| absolute_xyz(l, Observer::Cie1931TwoDegree).to_array().map(|v| v as f32))
-        .collect();
+    let xyz = rows.iter().flatten().map(film_xyz).collect();
     TileResult { rect, xyz, spectral: spectral.then(|| rows.into_iter().flatten().collect()), rays }
 }

@@ -113,9 +113,7 @@ impl LoadedScene {
     /// The state (`base`, `degraded` or `cleaned`) that `variant` gives part `group` of
     /// `object`: the most specific entry wins.
     pub fn state_of<'a>(&'a self, variant: &str, object: &str, group: &str) -> Option<&'a str> {
-        let v = self.file.variants.get(variant)?;
-        let key = format!("{object}/{group}");
-        Some(v.states.get(&key).or_else(|| v.states.get(object)).unwrap_or(&v.state).as_str())
+        Some(self.file.variants.get(variant)?.state_for(object, group))
     }
 }
 
@@ -905,18 +903,8 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
         let mut lacking = BTreeSet::new();
         for o in &objects {
             for (g, material) in o.mesh.groups.iter().zip(&o.group_materials) {
-                let state = v
-                    .states
-                    .get(&format!("{}/{}", o.name, g.name))
-                    .or_else(|| v.states.get(&o.name))
-                    .unwrap_or(&v.state);
-                let m = &file.materials[material];
-                let has = match state.as_str() {
-                    "degraded" => m.degraded.is_some(),
-                    "cleaned" => m.cleaned.is_some(),
-                    _ => true,
-                };
-                if !has {
+                let state = v.state_for(&o.name, &g.name);
+                if !file.materials[material].has_state(state) {
                     lacking.insert(format!("{material} ({state})"));
                 }
             }

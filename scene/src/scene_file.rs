@@ -210,6 +210,23 @@ pub struct Material {
     pub cleaned: Option<SurfaceOverride>,
 }
 
+impl Material {
+    /// The fields that `state` changes: `None` for `base`, and for a state the material does
+    /// not define (it then keeps its base surface).
+    pub fn state(&self, state: &str) -> Option<&SurfaceOverride> {
+        match state {
+            "degraded" => self.degraded.as_ref(),
+            "cleaned" => self.cleaned.as_ref(),
+            _ => None,
+        }
+    }
+
+    /// Whether the material defines `state` (`base` always exists).
+    pub fn has_state(&self, state: &str) -> bool {
+        state == "base" || self.state(state).is_some()
+    }
+}
+
 /// A state of a material: the fields it changes.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -358,6 +375,17 @@ pub struct Variant {
     /// Per object name, or per `object/group`, the state.
     #[serde(default)]
     pub states: BTreeMap<String, String>,
+}
+
+impl Variant {
+    /// The state this variant gives part `group` of `object`: an `object/group` entry first,
+    /// then the object's, then the default.
+    pub fn state_for(&self, object: &str, group: &str) -> &str {
+        self.states
+            .get(&format!("{object}/{group}"))
+            .or_else(|| self.states.get(object))
+            .unwrap_or(&self.state)
+    }
 }
 
 fn default_state() -> String {

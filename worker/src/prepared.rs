@@ -180,11 +180,7 @@ impl PreparedScene {
 /// The BSDF of material `name` in `state`: the state's fields over the base ones.
 fn bsdf(scene: &LoadedScene, name: &str, state: &str) -> Bsdf {
     let m = &scene.file.materials[name];
-    let o = match state {
-        "degraded" => m.degraded.as_ref(),
-        "cleaned" => m.cleaned.as_ref(),
-        _ => None,
-    };
+    let o = m.state(state);
     let reflectance = o.and_then(|o| o.reflectance.as_ref()).unwrap_or(&m.reflectance);
     let rho = scene.spectra[reflectance];
     match m.model {

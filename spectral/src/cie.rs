@@ -53,13 +53,26 @@ fn columns(name: &str, text: &str) -> (Vec<String>, Vec<Spectrum>) {
     (header, out)
 }
 
-fn column(name: &str, text: &str, wanted: &str) -> Spectrum {
-    let (header, data) = columns(name, text);
-    let i = header
-        .iter()
-        .position(|h| h == wanted)
-        .unwrap_or_else(|| panic!("embedded CIE table {name} has no column {wanted}"));
-    data[i]
+/// A parsed table whose columns are taken by name.
+struct Table {
+    name: &'static str,
+    header: Vec<String>,
+    data: Vec<Spectrum>,
+}
+
+impl Table {
+    fn parse(name: &'static str, text: &str) -> Self {
+        let (header, data) = columns(name, text);
+        Self { name, header, data }
+    }
+
+    fn column(&self, wanted: &str) -> Spectrum {
+        let i =
+            self.header.iter().position(|h| h == wanted).unwrap_or_else(|| {
+                panic!("embedded CIE table {} has no column {wanted}", self.name)
+            });
+        self.data[i]
+    }
 }
 
 pub(crate) struct Tables {
@@ -85,13 +98,17 @@ pub(crate) static TABLES: LazyLock<Tables> = LazyLock::new(|| {
         let (_, c) = columns(name, text);
         [c[0], c[1], c[2]]
     };
-    let illuminant = |col| column("illuminants", ILLUMINANTS, col);
-    let fluorescent = |i: usize| column("fluorescent", FLUORESCENT, &format!("F{i}"));
-    let basis = |col| column("daylight basis", DAYLIGHT_BASIS, col);
+    // Each table is parsed once and its columns taken by name.
+    let illuminants = Table::parse("illuminants", ILLUMINANTS);
+    let illuminant = |col| illuminants.column(col);
+    let fluorescents = Table::parse("fluorescent", FLUORESCENT);
+    let fluorescent = |i: usize| fluorescents.column(&format!("F{i}"));
+    let daylight_basis = Table::parse("daylight basis", DAYLIGHT_BASIS);
+    let basis = |col| daylight_basis.column(col);
     Tables {
         cmf_1931: cmf("CIE 1931 2°", CMF_1931),
         cmf_1964: cmf("CIE 1964 10°", CMF_1964),
-        photopic_v: column("V(λ)", PHOTOPIC_V, "photopic_V"),
+        photopic_v: Table::parse("V(λ)", PHOTOPIC_V).column("photopic_V"),
         a: illuminant("A"),
         b: illuminant("B"),
         c: illuminant("C"),

@@ -12,8 +12,7 @@ use restauro_scene::load::{Limits, LoadedScene, load_scene};
 use restauro_scene::scene_file::Integrator;
 use restauro_worker::integrator::lift;
 use restauro_worker::prepared::{PreparedScene, Settings};
-use restauro_worker::sampler::{PixelSampler, stratified};
-use restauro_worker::tile::{Rect, render_tile};
+use restauro_worker::tile::{Rect, camera_ray, render_tile};
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::time::Instant;
@@ -192,10 +191,7 @@ pub fn bench(args: &BenchArgs) -> Result<String> {
     for y in 0..h as u32 {
         for x in 0..w as u32 {
             for s in 0..args.spp {
-                let mut sampler = PixelSampler::new(base.seed, x, y, s);
-                let (u, v) = sampler.next2();
-                let (dx, dy) = stratified(s, args.spp, u, v);
-                camera.push(whitted.camera.direction(x as f32 + dx, y as f32 + dy));
+                camera.push(camera_ray(&whitted, x, y, s).0);
             }
         }
     }

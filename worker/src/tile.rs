@@ -6,6 +6,7 @@
 use crate::integrator::radiance;
 use crate::prepared::PreparedScene;
 use crate::sampler::{PixelSampler, stratified};
+use glam::Vec3A;
 use rayon::prelude::*;
 use restauro_spectral::Spectrum;
 use restauro_spectral::colorimetry::{K_M_LM_PER_W, Observer};
@@ -48,15 +49,23 @@ pub fn pixel(scene: &PreparedScene, x: u32, y: u32) -> Spectrum {
     pixel_counted(scene, x, y, &mut 0)
 }
 
+/// The camera ray of sample `s` of pixel (x, y): its direction (from the camera's origin) and
+/// the sampler, advanced past the two numbers that placed it in the pixel, for the rest of the
+/// sample.
+pub fn camera_ray(scene: &PreparedScene, x: u32, y: u32, s: u32) -> (Vec3A, PixelSampler) {
+    let spp = scene.settings.samples_per_pixel.max(1);
+    let mut sampler = PixelSampler::new(scene.settings.seed, x, y, s);
+    let (u, v) = sampler.next2();
+    let (dx, dy) = stratified(s, spp, u, v);
+    (scene.camera.direction(x as f32 + dx, y as f32 + dy), sampler)
+}
+
 /// [`pixel`], counting the rays traced.
 pub fn pixel_counted(scene: &PreparedScene, x: u32, y: u32, rays: &mut u64) -> Spectrum {
     let spp = scene.settings.samples_per_pixel.max(1);
     let mut sum = Spectrum::ZERO;
     for s in 0..spp {
-        let mut sampler = PixelSampler::new(scene.settings.seed, x, y, s);
-        let (u, v) = sampler.next2();
-        let (dx, dy) = stratified(s, spp, u, v);
-        let direction = scene.camera.direction(x as f32 + dx, y as f32 + dy);
+        let (direction, mut sampler) = camera_ray(scene, x, y, s);
         sum += radiance(scene, scene.camera.origin, direction, &mut sampler, rays);
     }
     sum * (1.0 / spp as f32)

@@ -6,8 +6,7 @@ use restauro_scene::scene_file::Integrator;
 use restauro_spectral::colorimetry::{Observer, absolute_xyz};
 use restauro_spectral::keyed_random::KeyedRng;
 use restauro_worker::prepared::{PreparedScene, Settings};
-use restauro_worker::sampler::{PixelSampler, stratified};
-use restauro_worker::tile::{Rect, pixel, render_tile};
+use restauro_worker::tile::{Rect, camera_ray, pixel, render_tile};
 use std::f64::consts::PI;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -62,10 +61,7 @@ fn luminance(l: &restauro_spectral::Spectrum) -> f64 {
 
 /// Where the one-sample ray of pixel (x, y) meets the plane z = 0.
 fn plane_point(scene: &PreparedScene, x: u32, y: u32) -> Vec3A {
-    let mut s = PixelSampler::new(scene.settings.seed, x, y, 0);
-    let (u, v) = s.next2();
-    let (dx, dy) = stratified(0, 1, u, v);
-    let d = scene.camera.direction(x as f32 + dx, y as f32 + dy);
+    let (d, _) = camera_ray(scene, x, y, 0);
     let o = scene.camera.origin;
     o + d * (-o.z / d.z)
 }

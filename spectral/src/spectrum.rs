@@ -107,6 +107,32 @@ impl Spectrum {
         self.0.iter().map(|&v| f64::from(v)).sum::<f64>() * STEP_NM
     }
 
+    /// `self += light · (ρ·a + b)`, band by band, in one pass: the light reflected by a surface
+    /// whose reflection is a spectral part ρ(λ)·a plus a neutral part b (the hot path of the
+    /// tracer, which would otherwise build and add three temporary spectra).
+    #[inline]
+    pub fn add_reflected(&mut self, light: &Spectrum, rho: &Spectrum, a: f32, b: f32) {
+        for ((o, &l), &r) in self.0.iter_mut().zip(&light.0).zip(&rho.0) {
+            *o += l * (r * a + b);
+        }
+    }
+
+    /// `self += weight · light · (ρ·a + b)`: [`Spectrum::add_reflected`] behind a spectral
+    /// path throughput.
+    #[inline]
+    pub fn add_reflected_weighted(
+        &mut self,
+        weight: &Spectrum,
+        light: &Spectrum,
+        rho: &Spectrum,
+        a: f32,
+        b: f32,
+    ) {
+        for (((o, &w), &l), &r) in self.0.iter_mut().zip(&weight.0).zip(&light.0).zip(&rho.0) {
+            *o += w * l * (r * a + b);
+        }
+    }
+
     /// The linear mixture `(1 − t)·self + t·other`: the areal mixing of two surfaces in the
     /// proportions 1 − t and t.
     pub fn lerp(&self, other: &Spectrum, t: f32) -> Spectrum {
@@ -227,6 +253,22 @@ mod tests {
         assert!((a.at_nm(780.0).unwrap() - 780.0).abs() < 1e-4);
         assert_eq!(a.at_nm(379.0), None);
         assert_eq!(a.at_nm(781.0), None);
+    }
+
+    #[test]
+    fn reflected_light_is_light_times_the_two_parts() {
+        let light = Spectrum::from_fn_nm(|nm| nm / 100.0);
+        let rho = Spectrum::from_fn_nm(|nm| (nm - 380.0) / 400.0);
+        let weight = Spectrum::from_fn_nm(|nm| 1.0 + nm / 1000.0);
+        let mut a = Spectrum::splat(1.0);
+        a.add_reflected(&light, &rho, 0.3, 0.02);
+        let mut b = Spectrum::splat(1.0);
+        b.add_reflected_weighted(&weight, &light, &rho, 0.3, 0.02);
+        for i in 0..BANDS {
+            let plain = light[i] * (rho[i] * 0.3 + 0.02);
+            assert!((a[i] - (1.0 + plain)).abs() < 1e-6);
+            assert!((b[i] - (1.0 + weight[i] * plain)).abs() < 1e-5);
+        }
     }
 
     #[test]

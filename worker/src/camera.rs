@@ -9,8 +9,13 @@ pub struct Camera {
     forward: Vec3A,
     right: Vec3A,
     up: Vec3A,
-    /// tan(vertical field / 2).
-    tan_half: f32,
+    /// The image plane at unit distance, as linear maps of the pixel position:
+    /// s_x = px·x_per_px − x_half, s_y = y_half − py·y_per_px (tan(fov/2) scaled by the aspect
+    /// ratio), computed once so a camera ray costs no division.
+    x_per_px: f32,
+    x_half: f32,
+    y_per_px: f32,
+    y_half: f32,
     pub width: u32,
     pub height: u32,
 }
@@ -22,15 +27,27 @@ impl Camera {
         let right = forward.cross(Vec3A::from(c.up.map(|v| v as f32))).normalize();
         let up = right.cross(forward);
         let tan_half = (c.vertical_fov_deg.to_radians() / 2.0).tan() as f32;
-        Self { origin, forward, right, up, tan_half, width: c.width, height: c.height }
+        let (w, h) = (c.width as f32, c.height as f32);
+        let x_half = tan_half * w / h;
+        Self {
+            origin,
+            forward,
+            right,
+            up,
+            x_per_px: 2.0 * x_half / w,
+            x_half,
+            y_per_px: 2.0 * tan_half / h,
+            y_half: tan_half,
+            width: c.width,
+            height: c.height,
+        }
     }
 
     /// The unit direction through the image point (px, py) in pixels from the top-left corner.
     #[inline]
     pub fn direction(&self, px: f32, py: f32) -> Vec3A {
-        let (w, h) = (self.width as f32, self.height as f32);
-        let sx = (2.0 * px / w - 1.0) * self.tan_half * w / h;
-        let sy = (1.0 - 2.0 * py / h) * self.tan_half;
+        let sx = px * self.x_per_px - self.x_half;
+        let sy = self.y_half - py * self.y_per_px;
         (self.forward + self.right * sx + self.up * sy).normalize()
     }
 }

@@ -54,20 +54,28 @@ pub fn lift(hit: &Hit) -> Vec3A {
     hit.point + hit.normal * (2e-5 * scale)
 }
 
-/// Direct light at a hit: Σ f(wo, wi) · E⊥(λ) · cos θi over the visible sources. With
-/// f = ρ(λ)·a + b, the sum is ρ(λ)·Σ a·cos·E⊥ + Σ b·cos·E⊥: the light spectra are summed with
-/// scalar weights and ρ applied once.
+/// What the light arriving at a vertex is multiplied by on its way to the camera: one at the
+/// camera's hit, a neutral factor behind Whitted's Fresnel-weighted mirror bounces, a spectrum
+/// behind diffuse or glossy bounces of the path tracer.
+#[derive(Clone, Copy)]
+enum Weight<'a> {
+    Neutral(f32),
+    Spectral(&'a Spectrum),
+}
+
+/// Adds the direct light at a hit to `out`: Σ f(wo, wi) · E⊥(λ) · cos θi over the visible
+/// sources, times `weight`. With f = ρ(λ)·a + b and E⊥ = s·S(λ), each source adds
+/// S(λ)·(ρ(λ)·a·s·cos + b·s·cos) in one pass over the bands, with no temporary spectrum.
 #[inline]
-fn direct(
+fn add_direct(
     scene: &PreparedScene,
     hit: &Hit,
     frame: &Frame,
     wo_local: Vec3A,
+    weight: Weight<'_>,
     rays: &mut u64,
-) -> Spectrum {
-    let mut diffuse = Spectrum::ZERO;
-    let mut neutral = Spectrum::ZERO;
-    let (mut any_diffuse, mut any_neutral) = (false, false);
+    out: &mut Spectrum,
+) {
     let origin = lift(hit);
     let bsdf = &scene.materials[hit.material as usize];
     for light in &scene.lights {
@@ -86,20 +94,13 @@ fn direct(
         if scene.occluded(origin, inc.direction, reach) {
             continue;
         }
-        if a > 0.0 {
-            diffuse += inc.irradiance * (a * cos);
-            any_diffuse = true;
+        let k = inc.scale * cos;
+        match weight {
+            Weight::Neutral(t) => out.add_reflected(inc.spectrum, bsdf.rho(), a * k * t, b * k * t),
+            Weight::Spectral(w) => {
+                out.add_reflected_weighted(w, inc.spectrum, bsdf.rho(), a * k, b * k)
+            }
         }
-        if b > 0.0 {
-            neutral += inc.irradiance * (b * cos);
-            any_neutral = true;
-        }
-    }
-    match (any_diffuse, any_neutral) {
-        (false, false) => Spectrum::ZERO,
-        (true, false) => *bsdf.rho() * diffuse,
-        (false, true) => neutral,
-        (true, true) => *bsdf.rho() * diffuse + neutral,
     }
 }
 
@@ -112,8 +113,24 @@ pub fn radiance(
     sampler: &mut PixelSampler,
     rays: &mut u64,
 ) -> Spectrum {
-    let mut result = Spectrum::ZERO;
-    let mut throughput = Spectrum::ONE;
+    let mut out = Spectrum::ZERO;
+    add_radiance(scene, origin, direction, sampler, rays, &mut out);
+    out
+}
+
+/// [`radiance`], added to `out`: a pixel sums its samples in place.
+pub fn add_radiance(
+    scene: &PreparedScene,
+    origin: Vec3A,
+    direction: Vec3A,
+    sampler: &mut PixelSampler,
+    rays: &mut u64,
+    out: &mut Spectrum,
+) {
+    // Whitted's bounces are neutral (Fresnel of a dielectric); the path tracer's become spectral
+    // at its first bounce.
+    let mut neutral = 1.0f32;
+    let mut spectral: Option<Spectrum> = None;
     let (mut origin, mut direction) = (origin, direction);
     let max_depth = scene.settings.max_depth.max(1);
     for depth in 0..max_depth {
@@ -121,13 +138,11 @@ pub fn radiance(
         let Some(hit) = scene.intersect(origin, direction, f32::INFINITY) else { break };
         let frame = Frame::new(hit.normal);
         let wo = frame.to_local(-direction);
-        let light = direct(scene, &hit, &frame, wo, rays);
-        // The camera ray carries a throughput of one: skip the multiplication there.
-        if depth == 0 {
-            result += light;
-        } else {
-            result += throughput * light;
-        }
+        let weight = match &spectral {
+            Some(t) => Weight::Spectral(t),
+            None => Weight::Neutral(neutral),
+        };
+        add_direct(scene, &hit, &frame, wo, weight, rays, out);
         if depth + 1 == max_depth {
             break;
         }
@@ -135,24 +150,30 @@ pub fn radiance(
         match scene.settings.integrator {
             Integrator::Whitted => {
                 let Some(f) = bsdf.mirror_reflectance(wo.z) else { break };
-                throughput *= f;
+                neutral *= f;
                 direction = frame.to_world(Vec3A::new(-wo.x, -wo.y, wo.z));
             }
             Integrator::Path => {
                 let (u, u1, u2) = (sampler.next_1d(), sampler.next_1d(), sampler.next_1d());
                 let Some((wi, pdf)) = bsdf.sample(wo, u, u1, u2) else { break };
-                throughput *= bsdf.eval(wo, wi) * (wi.z / pdf);
+                let f = bsdf.eval(wo, wi) * (wi.z / pdf);
+                let throughput = match &mut spectral {
+                    Some(t) => {
+                        *t *= f;
+                        t
+                    }
+                    None => spectral.insert(f * neutral),
+                };
                 direction = frame.to_world(wi);
                 if depth >= 2 {
                     let survive = throughput.max_value().min(0.95);
                     if sampler.next_1d() >= survive {
                         break;
                     }
-                    throughput /= survive;
+                    *throughput /= survive;
                 }
             }
         }
         origin = lift(&hit);
     }
-    result
 }

@@ -42,11 +42,20 @@ pub enum Light {
 }
 
 /// A light's contribution at a point: the direction towards it, the distance (∞ for distant
-/// lights) and the spectral irradiance on a surface facing it.
-pub struct Incident {
+/// lights) and the spectral irradiance on a surface facing it, `scale · spectrum` (kept apart so
+/// that no spectrum is built per shadow ray).
+pub struct Incident<'a> {
     pub direction: Vec3A,
     pub distance: f32,
-    pub irradiance: Spectrum,
+    pub scale: f32,
+    pub spectrum: &'a Spectrum,
+}
+
+impl Incident<'_> {
+    /// E⊥(λ), the spectral irradiance on a surface facing the light.
+    pub fn irradiance(&self) -> Spectrum {
+        *self.spectrum * self.scale
+    }
 }
 
 impl Distribution {
@@ -80,7 +89,7 @@ impl Distribution {
 
 impl Light {
     #[inline]
-    pub fn incident(&self, p: Vec3A) -> Option<Incident> {
+    pub fn incident(&self, p: Vec3A) -> Option<Incident<'_>> {
         match self {
             Light::Point { position, intensity_cd, per_cd, distribution } => {
                 let d = *position - p;
@@ -94,13 +103,15 @@ impl Light {
                 (intensity > 0.0).then(|| Incident {
                     direction,
                     distance: r,
-                    irradiance: *per_cd * (intensity / r2),
+                    scale: intensity / r2,
+                    spectrum: per_cd,
                 })
             }
             Light::Distant { direction, irradiance } => Some(Incident {
                 direction: *direction,
                 distance: f32::INFINITY,
-                irradiance: *irradiance,
+                scale: 1.0,
+                spectrum: irradiance,
             }),
         }
     }

@@ -5,6 +5,7 @@
 use crate::bsdf::Bsdf;
 use crate::camera::Camera;
 use crate::light::{Distribution, Light};
+use crate::sampler::Strata;
 use glam::Vec3A;
 use obvhs::BvhBuildParams;
 use obvhs::cwbvh::CwBvh;
@@ -38,6 +39,7 @@ pub struct Settings {
 pub struct PreparedScene {
     pub camera: Camera,
     pub settings: Settings,
+    pub strata: Strata,
     bvh: CwBvh,
     /// Triangles in BVH order.
     triangles: Vec<RtTriangle>,
@@ -125,6 +127,7 @@ impl PreparedScene {
         let lights = scene.lights.iter().map(|l| light(scene, l)).collect::<Result<Vec<_>, _>>()?;
         Ok(Self {
             camera: Camera::new(&scene.camera),
+            strata: Strata::new(settings.samples_per_pixel),
             settings,
             bvh,
             triangles,

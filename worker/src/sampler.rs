@@ -9,14 +9,28 @@ pub struct PixelSampler {
     rng: KeyedRng,
 }
 
+/// The part of a sampler's key shared by all samples of one pixel, hashed once per pixel.
+#[derive(Clone, Copy, Debug)]
+pub struct PixelKey(u64);
+
+impl PixelKey {
+    pub fn new(seed: u64, x: u32, y: u32) -> Self {
+        // (x, y) fills one 64-bit word exactly, so two mixes key every (seed, pixel) apart.
+        let pixel = (u64::from(x) << 32) | u64::from(y);
+        Self(mix64(mix64(seed ^ 0x5851_f42d_4c95_7f2d) ^ pixel))
+    }
+
+    /// The stream of sample `sample` of the pixel.
+    #[inline]
+    pub fn sampler(self, sample: u32) -> PixelSampler {
+        let key = self.0 ^ u64::from(sample).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+        PixelSampler { rng: KeyedRng::new(mix64(key)) }
+    }
+}
+
 impl PixelSampler {
     pub fn new(seed: u64, x: u32, y: u32, sample: u32) -> Self {
-        // (x, y) fills one 64-bit word exactly, so three mixes key every (seed, pixel, sample)
-        // apart; this runs once per camera sample.
-        let pixel = (u64::from(x) << 32) | u64::from(y);
-        let key = mix64(mix64(seed ^ 0x5851_f42d_4c95_7f2d) ^ pixel)
-            ^ u64::from(sample).wrapping_mul(0x9e37_79b9_7f4a_7c15);
-        Self { rng: KeyedRng::new(mix64(key)) }
+        PixelKey::new(seed, x, y).sampler(sample)
     }
 
     /// The next dimension, uniform in [0, 1).
@@ -32,12 +46,26 @@ impl PixelSampler {
     }
 }
 
-/// The position of sample `index` of `count` within a pixel: stratified on a √count × √count
-/// grid (the last row partly filled when count is not a square), jittered by (u, v).
-pub fn stratified(index: u32, count: u32, u: f32, v: f32) -> (f32, f32) {
-    let n = (count as f32).sqrt().ceil().max(1.0) as u32;
-    let (sx, sy) = (index % n, (index / n) % n);
-    ((sx as f32 + u) / n as f32, (sy as f32 + v) / n as f32)
+/// The strata of a pixel's samples: a √count × √count grid (the last row partly filled when
+/// count is not a square), each sample jittered within its cell.
+#[derive(Clone, Copy, Debug)]
+pub struct Strata {
+    side: u32,
+    cell: f32,
+}
+
+impl Strata {
+    pub fn new(count: u32) -> Self {
+        let side = (count.max(1) as f32).sqrt().ceil().max(1.0) as u32;
+        Self { side, cell: 1.0 / side as f32 }
+    }
+
+    /// The position of sample `index` within the pixel, jittered by (u, v) in [0, 1)².
+    #[inline]
+    pub fn position(&self, index: u32, u: f32, v: f32) -> (f32, f32) {
+        let (sx, sy) = (index % self.side, (index / self.side) % self.side);
+        ((sx as f32 + u) * self.cell, (sy as f32 + v) * self.cell)
+    }
 }
 
 #[cfg(test)]
@@ -61,7 +89,7 @@ mod tests {
     fn strata_cover_the_pixel() {
         let mut cells = [0u32; 16];
         for i in 0..16 {
-            let (x, y) = stratified(i, 16, 0.5, 0.5);
+            let (x, y) = Strata::new(16).position(i, 0.5, 0.5);
             cells[(y * 4.0) as usize * 4 + (x * 4.0) as usize] += 1;
         }
         assert!(cells.iter().all(|&c| c == 1), "{cells:?}");

@@ -3,9 +3,9 @@
 //! pixel's sum runs in a fixed order from samples keyed by (seed, pixel, sample), so the result
 //! is bit-identical whatever the tile size, the thread count or the worker.
 
-use crate::integrator::radiance;
+use crate::integrator::add_radiance;
 use crate::prepared::PreparedScene;
-use crate::sampler::{PixelSampler, stratified};
+use crate::sampler::{PixelKey, PixelSampler};
 use glam::Vec3A;
 use rayon::prelude::*;
 use restauro_spectral::Spectrum;
@@ -53,37 +53,71 @@ pub fn pixel(scene: &PreparedScene, x: u32, y: u32) -> Spectrum {
 /// the sampler, advanced past the two numbers that placed it in the pixel, for the rest of the
 /// sample.
 pub fn camera_ray(scene: &PreparedScene, x: u32, y: u32, s: u32) -> (Vec3A, PixelSampler) {
-    let spp = scene.settings.samples_per_pixel.max(1);
-    let mut sampler = PixelSampler::new(scene.settings.seed, x, y, s);
+    keyed_camera_ray(scene, PixelKey::new(scene.settings.seed, x, y), x, y, s)
+}
+
+#[inline]
+fn keyed_camera_ray(
+    scene: &PreparedScene,
+    key: PixelKey,
+    x: u32,
+    y: u32,
+    s: u32,
+) -> (Vec3A, PixelSampler) {
+    let mut sampler = key.sampler(s);
     let (u, v) = sampler.next2();
-    let (dx, dy) = stratified(s, spp, u, v);
+    let (dx, dy) = scene.strata.position(s, u, v);
     (scene.camera.direction(x as f32 + dx, y as f32 + dy), sampler)
+}
+
+/// The sum of the spectral radiance of pixel (x, y)'s samples.
+#[inline]
+fn pixel_sum(scene: &PreparedScene, x: u32, y: u32, rays: &mut u64) -> Spectrum {
+    let key = PixelKey::new(scene.settings.seed, x, y);
+    let mut sum = Spectrum::ZERO;
+    for s in 0..scene.settings.samples_per_pixel.max(1) {
+        let (direction, mut sampler) = keyed_camera_ray(scene, key, x, y, s);
+        add_radiance(scene, scene.camera.origin, direction, &mut sampler, rays, &mut sum);
+    }
+    sum
 }
 
 /// [`pixel`], counting the rays traced.
 pub fn pixel_counted(scene: &PreparedScene, x: u32, y: u32, rays: &mut u64) -> Spectrum {
-    let spp = scene.settings.samples_per_pixel.max(1);
-    let mut sum = Spectrum::ZERO;
-    for s in 0..spp {
-        let (direction, mut sampler) = camera_ray(scene, x, y, s);
-        sum += radiance(scene, scene.camera.origin, direction, &mut sampler, rays);
-    }
-    sum * (1.0 / spp as f32)
+    pixel_sum(scene, x, y, rays) * (1.0 / scene.settings.samples_per_pixel.max(1) as f32)
 }
 
+/// Renders `rect`: absolute XYZ per pixel, and the spectral radiance too when `spectral` is set
+/// (kept only then: a row of spectra is 81 times the size of its XYZ).
 pub fn render_tile(scene: &PreparedScene, rect: Rect, spectral: bool) -> TileResult {
-    let rows: Vec<(Vec<Spectrum>, u64)> = (rect.y..rect.y + rect.height)
+    type Row = (Vec<[f32; 3]>, Option<Vec<Spectrum>>, u64);
+    let rows: Vec<Row> = (rect.y..rect.y + rect.height)
         .into_par_iter()
         .map(|y| {
             let mut rays = 0;
-            let row = (rect.x..rect.x + rect.width)
-                .map(|x| pixel_counted(scene, x, y, &mut rays))
-                .collect();
-            (row, rays)
+            let width = rect.width as usize;
+            let mut xyz = Vec::with_capacity(width);
+            let mut spectra = spectral.then(|| Vec::with_capacity(width));
+            let mean = 1.0 / scene.settings.samples_per_pixel.max(1) as f32;
+            for x in rect.x..rect.x + rect.width {
+                // The film is linear: the XYZ of the sum, scaled, is the XYZ of the mean.
+                let sum = pixel_sum(scene, x, y, &mut rays);
+                xyz.push(film_xyz(&sum).map(|v| v * mean));
+                if let Some(s) = &mut spectra {
+                    s.push(sum * mean);
+                }
+            }
+            (xyz, spectra, rays)
         })
         .collect();
-    let rays = rows.iter().map(|(_, r)| r).sum();
-    let rows: Vec<Vec<Spectrum>> = rows.into_iter().map(|(row, _)| row).collect();
-    let xyz = rows.iter().flatten().map(film_xyz).collect();
-    TileResult { rect, xyz, spectral: spectral.then(|| rows.into_iter().flatten().collect()), rays }
+    let rays = rows.iter().map(|r| r.2).sum();
+    let mut xyz = Vec::with_capacity(rect.width as usize * rect.height as usize);
+    let mut spectra = spectral.then(|| Vec::with_capacity(xyz.capacity()));
+    for (row_xyz, row_spectra, _) in rows {
+        xyz.extend(row_xyz);
+        if let (Some(all), Some(row)) = (&mut spectra, row_spectra) {
+            all.extend(row);
+        }
+    }
+    TileResult { rect, xyz, spectral: spectra, rays }
 }

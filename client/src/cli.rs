@@ -26,8 +26,26 @@ pub enum Command {
     /// Write the demo: today the colorimetric part of the paper's stone experiment (travertine and
     /// pudding stone, as found and cleaned, under CIE A, B, C and D65).
     Demo(DemoArgs),
-    /// Render a scene in this process: absolute XYZ (and spectral radiance) to OpenEXR, and a PNG.
+    /// Render a scene through a cluster — an embedded local one (a coordinator and two workers
+    /// on loopback) unless --coordinator is given: absolute XYZ (and spectral radiance) to
+    /// OpenEXR and a PNG, each also after the Retinex.
     Render(RenderArgs),
+    /// Submit a scene to a coordinator and print the job id.
+    Submit(SubmitArgs),
+    /// Follow a job with a progress bar until it ends.
+    Watch(JobArgs),
+    /// Download a finished job's result files.
+    Fetch(FetchArgs),
+    /// Cancel a job.
+    Cancel(JobArgs),
+    /// List the coordinator's jobs.
+    Jobs(ConnectArgs),
+    /// List the workers connected to the coordinator.
+    Workers(ConnectArgs),
+    /// Run a coordinator (as `restauro-coordinator` does).
+    Coordinator(restauro_coordinator::server::CoordinatorArgs),
+    /// Run a worker (as `restauro-worker` does).
+    Worker(restauro_worker::process::WorkerArgs),
     /// What a person standing there sees: the Marini–Rizzi Retinex of an XYZ or RGB OpenEXR
     /// image, written as a PNG (and optionally an EXR).
     Retinex(RetinexArgs),
@@ -114,14 +132,77 @@ pub struct RenderArgs {
     /// Also write the 81-band spectral radiance into the EXR.
     #[arg(long)]
     pub spectral: bool,
-    /// Tile size in pixels.
-    #[arg(long, default_value_t = 64)]
-    pub tile: u32,
+    /// Tile edge in pixels (by default chosen so every worker gets several tiles).
+    #[arg(long)]
+    pub tile: Option<u32>,
     /// The PNG's exposure: auto[:KEY], absolute:<cd/m²> or relative.
     #[arg(long, default_value = "auto")]
     pub exposure: String,
+    /// Render in this process, without a cluster.
+    #[arg(long, conflicts_with = "coordinator")]
+    pub in_process: bool,
+    /// Workers of the embedded local cluster.
+    #[arg(long, default_value_t = 2)]
+    pub workers: usize,
+    #[command(flatten)]
+    pub connect: OptionalConnectArgs,
     #[command(flatten)]
     pub limits: LimitArgs,
+}
+
+/// Where the coordinator is and the client token; without a coordinator, `render` starts an
+/// embedded one.
+#[derive(Debug, Args)]
+pub struct OptionalConnectArgs {
+    /// The coordinator's URL (else RESTAURO_COORDINATOR; else an embedded local cluster).
+    #[arg(long, env = "RESTAURO_COORDINATOR")]
+    pub coordinator: Option<String>,
+    /// A file holding the client token (else RESTAURO_TOKEN).
+    #[arg(long)]
+    pub token_file: Option<PathBuf>,
+}
+
+#[derive(Debug, Args)]
+pub struct ConnectArgs {
+    /// The coordinator's URL (else RESTAURO_COORDINATOR).
+    #[arg(long, env = "RESTAURO_COORDINATOR")]
+    pub coordinator: String,
+    /// A file holding the client token (else RESTAURO_TOKEN).
+    #[arg(long)]
+    pub token_file: Option<PathBuf>,
+    /// Speak another protocol version (for testing the coordinator's refusal).
+    #[arg(long, hide = true, default_value_t = restauro_proto::PROTOCOL_VERSION)]
+    pub protocol_version: u32,
+}
+
+#[derive(Debug, Args)]
+pub struct SubmitArgs {
+    #[command(flatten)]
+    pub render: RenderArgs,
+    /// Higher priorities are served first.
+    #[arg(long, default_value_t = 0)]
+    pub priority: i32,
+    /// Wait for the job, with a progress bar, and fetch its results into --out.
+    #[arg(long)]
+    pub wait: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct JobArgs {
+    /// The job id (printed by `submit`).
+    pub job: String,
+    #[command(flatten)]
+    pub connect: ConnectArgs,
+}
+
+#[derive(Debug, Args)]
+pub struct FetchArgs {
+    pub job: String,
+    /// The folder for the files.
+    #[arg(long, default_value = "out")]
+    pub out: PathBuf,
+    #[command(flatten)]
+    pub connect: ConnectArgs,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]

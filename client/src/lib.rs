@@ -3,8 +3,10 @@
 pub mod bench;
 pub mod bench_tracer;
 pub mod cli;
+pub mod cluster;
 pub mod color;
 pub mod demo;
+pub mod jobs_cmd;
 pub mod render;
 pub mod retinex;
 pub mod scene_cmd;

@@ -9,6 +9,20 @@ fn main() -> ExitCode {
         Command::Color(args) => restauro::color::run(args),
         Command::Demo(args) => restauro::demo::run(args),
         Command::Render(args) => restauro::render::run(args),
+        Command::Submit(args) => restauro::jobs_cmd::submit(args),
+        Command::Watch(args) => restauro::jobs_cmd::watch(args),
+        Command::Fetch(args) => restauro::jobs_cmd::fetch(args),
+        Command::Cancel(args) => restauro::jobs_cmd::cancel(args),
+        Command::Jobs(args) => restauro::jobs_cmd::jobs(args),
+        Command::Workers(args) => restauro::jobs_cmd::workers(args),
+        Command::Coordinator(args) => {
+            restauro_coordinator::logging::init();
+            restauro_coordinator::server::run(args).map(|()| String::new())
+        }
+        Command::Worker(args) => {
+            restauro_coordinator::logging::init();
+            restauro_worker::process::run(args).map(|()| String::new())
+        }
         Command::Retinex(args) => restauro::retinex::run(args),
         Command::Display(args) => restauro::retinex::run_display(args),
         Command::Scene(command) => restauro::scene_cmd::run(command),

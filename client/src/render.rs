@@ -1,149 +1,205 @@
-//! `restauro render`: a scene rendered in this process (the cluster will route the same work
-//! through its workers), written as OpenEXR (absolute XYZ, RGB preview, optionally the spectral
-//! layers) and PNG.
+//! `restauro render`: a scene rendered through a cluster — an embedded local one (a coordinator
+//! and workers on loopback, real processes) unless `--coordinator` names one — or, with
+//! `--in-process`, in this process. Either way the scene and options are resolved by the same
+//! plan and the results written by the same code, so the images are bit-identical.
 
-use crate::cli::{DisplayTarget, IntegratorArg, RenderArgs};
-use crate::retinex::parse_exposure;
-use anyhow::{Context, Result, bail};
+use crate::cli::{IntegratorArg, RenderArgs};
+use crate::cluster::{self, LocalCluster};
+use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use restauro_coordinator::image_files::{
-    PngPixels, XyzImage, write_png, write_spectral_exr, write_xyz_exr,
-};
+use restauro_coordinator::framebuffer::{Framebuffer, encode_tile};
+use restauro_coordinator::results::{ResultOptions, parse_exposure, write_results};
+use restauro_proto as pb;
+use restauro_scene::bundle::{Bundle, bundle_scene};
 use restauro_scene::load::{Limits, load_scene};
+use restauro_scene::plan::{Plan, RenderOptions};
 use restauro_scene::scene_file::Integrator;
-use restauro_spectral::display::{DisplayParams, encode, to_u8};
-use restauro_spectral::grid::{BANDS, wavelength_nm};
-use restauro_spectral::rgb_space::RgbSpace;
+use restauro_spectral::retinex::RetinexParams;
 use restauro_worker::prepared::{PreparedScene, Settings};
-use restauro_worker::tile::{Rect, render_tile};
+use restauro_worker::tile::render_tile;
 use std::fmt::Write as _;
 use std::time::Instant;
 
+/// The scene-level options of the command line.
+pub fn render_options(args: &RenderArgs) -> RenderOptions {
+    RenderOptions {
+        variant: args.variant.clone(),
+        integrator: args.integrator.map(|i| match i {
+            IntegratorArg::Whitted => Integrator::Whitted,
+            IntegratorArg::Path => Integrator::Path,
+        }),
+        samples_per_pixel: args.spp,
+        width: args.width,
+        height: args.height,
+        spectral: args.spectral,
+        tile: args.tile,
+    }
+}
+
+/// The job's name: the scene file's stem, and the variant.
+pub fn job_name(args: &RenderArgs) -> String {
+    let stem = args.scene.file_stem().and_then(|s| s.to_str()).unwrap_or("render");
+    match &args.variant {
+        Some(v) => format!("{stem}-{v}"),
+        None => stem.to_owned(),
+    }
+}
+
+/// Checks the scene here (errors name the user's own files) and bundles it for a coordinator.
+pub fn checked_bundle(args: &RenderArgs) -> Result<(Bundle, Plan)> {
+    let limits: Limits = (&args.limits).into();
+    let scene = load_scene(&args.scene, &limits)?;
+    let plan = Plan::new(&scene, &render_options(args), &limits, &args.scene)?;
+    parse_exposure(&args.exposure).map_err(|e| anyhow::anyhow!("--{e}"))?;
+    let bundle = bundle_scene(&args.scene, &limits)?;
+    Ok((bundle, plan))
+}
+
+pub fn proto_options(args: &RenderArgs) -> pb::RenderOptions {
+    pb::RenderOptions {
+        variant: args.variant.clone().unwrap_or_default(),
+        integrator: match args.integrator {
+            Some(IntegratorArg::Whitted) => "whitted".into(),
+            Some(IntegratorArg::Path) => "path".into(),
+            None => String::new(),
+        },
+        samples_per_pixel: args.spp.unwrap_or(0),
+        width: args.width.unwrap_or(0),
+        height: args.height.unwrap_or(0),
+        spectral: args.spectral,
+        tile: args.tile.unwrap_or(0),
+        exposure: args.exposure.clone(),
+        retinex_paths: 0,
+        retinex_seed: 0,
+    }
+}
+
 pub fn run(args: &RenderArgs) -> Result<String> {
+    if args.in_process {
+        return run_in_process(args);
+    }
+    let (bundle, plan) = checked_bundle(args)?;
+    let started = Instant::now();
+    let (url, token, _cluster) = match &args.connect.coordinator {
+        Some(url) => {
+            let token = crate::jobs_cmd::client_token(args.connect.token_file.as_deref())?;
+            (url.clone(), token, None)
+        }
+        None => {
+            let c = LocalCluster::start(args.workers.max(1))?;
+            (c.url.clone(), c.client_token.clone(), Some(c))
+        }
+    };
+    let name = job_name(args);
+    let runtime = cluster::runtime()?;
+    let (status, files) = runtime.block_on(async {
+        let mut client = cluster::connect(&url, &token).await?;
+        cluster::upload(&mut client, &bundle).await?;
+        let submitted = client
+            .submit_job(pb::SubmitJobRequest {
+                protocol_version: pb::PROTOCOL_VERSION,
+                manifest_json: bundle.canonical_json(),
+                options: Some(proto_options(args)),
+                priority: 0,
+                name: name.clone(),
+            })
+            .await
+            .map_err(|s| cluster::refused(&format!("submitting {}", args.scene.display()), s))?
+            .into_inner();
+        let status = cluster::watch(&mut client, &submitted.job_id, true).await?;
+        if status.state != pb::JobState::Done as i32 {
+            anyhow::bail!("job {} ended without results: {}", status.job_id, status.error);
+        }
+        let files = cluster::fetch(&mut client, &status, &args.out).await?;
+        anyhow::Ok((status, files))
+    })?;
+    let mut s = String::new();
+    let where_ = if args.connect.coordinator.is_some() {
+        format!("coordinator {url}")
+    } else {
+        format!("an embedded cluster of {} workers", args.workers.max(1))
+    };
+    let _ = writeln!(
+        s,
+        "rendered {} ({}×{}, {:?}, {} spp, {} tiles) through {where_} in {:.2} s (job {})",
+        args.scene.display(),
+        plan.width,
+        plan.height,
+        plan.integrator,
+        plan.samples_per_pixel,
+        status.tiles_total,
+        started.elapsed().as_secs_f64(),
+        status.job_id
+    );
+    for f in files {
+        let _ = writeln!(s, "wrote {}", f.display());
+    }
+    Ok(s)
+}
+
+fn run_in_process(args: &RenderArgs) -> Result<String> {
     let limits: Limits = (&args.limits).into();
     let mut scene = load_scene(&args.scene, &limits)?;
-    if let Some(w) = args.width {
-        scene.camera.width = w;
-    }
-    if let Some(h) = args.height {
-        scene.camera.height = h;
-    }
-    let (w, h) = (scene.camera.width, scene.camera.height);
-    let pixels = u64::from(w) * u64::from(h);
-    if w == 0 || h == 0 || pixels > limits.max_pixels {
-        bail!(
-            "--width/--height give {w}×{h} pixels; use at least 1×1 and at most {} pixels (--max-pixels)",
-            limits.max_pixels
-        );
-    }
-    let exposure = parse_exposure(&args.exposure)?;
-    let r = &scene.file.render;
-    let settings = Settings {
-        integrator: match args.integrator {
-            Some(IntegratorArg::Whitted) => Integrator::Whitted,
-            Some(IntegratorArg::Path) => Integrator::Path,
-            None => r.integrator,
-        },
-        samples_per_pixel: args.spp.unwrap_or(r.samples_per_pixel),
-        max_depth: r.max_depth,
-        seed: r.seed,
-    };
-    if settings.samples_per_pixel == 0 || settings.samples_per_pixel > limits.max_samples_per_pixel
-    {
-        bail!(
-            "--spp {}: use 1 to {} samples per pixel (--max-spp)",
-            settings.samples_per_pixel,
-            limits.max_samples_per_pixel
-        );
-    }
-    if args.tile == 0 {
-        bail!("--tile 0: a tile needs at least one pixel");
-    }
+    let plan = Plan::new(&scene, &render_options(args), &limits, &args.scene)?;
+    plan.apply(&mut scene);
+    let exposure = parse_exposure(&args.exposure).map_err(|e| anyhow::anyhow!("--{e}"))?;
     let started = Instant::now();
-    let prepared = PreparedScene::new(&scene, args.variant.as_deref(), settings)?;
+    let prepared = PreparedScene::new(&scene, plan.variant.as_deref(), Settings::from(&plan))?;
     let prepare_s = started.elapsed().as_secs_f64();
-
-    let tiles: Vec<Rect> = (0..h)
-        .step_by(args.tile as usize)
-        .flat_map(|y| {
-            (0..w).step_by(args.tile as usize).map(move |x| Rect {
-                x,
-                y,
-                width: args.tile.min(w - x),
-                height: args.tile.min(h - y),
-            })
-        })
-        .collect();
-    let bar = ProgressBar::with_draw_target(Some(tiles.len() as u64), ProgressDrawTarget::stderr());
+    let bar =
+        ProgressBar::with_draw_target(Some(plan.tiles.len() as u64), ProgressDrawTarget::stderr());
     bar.set_style(
         ProgressStyle::with_template(
             "render {bar:40} {pos}/{len} tiles, {elapsed} elapsed, eta {eta}",
         )
         .context("progress template")?,
     );
-    let mut xyz = vec![[0.0f32; 3]; (w * h) as usize];
-    let mut spectral: Vec<Vec<f32>> =
-        if args.spectral { vec![vec![0.0; (w * h) as usize]; BANDS] } else { Vec::new() };
+    let mut frame = Framebuffer::new(plan.width, plan.height, plan.spectral);
     let render_started = Instant::now();
-    for rect in tiles {
-        let tile = render_tile(&prepared, rect, args.spectral);
-        for (i, p) in tile.xyz.iter().enumerate() {
-            let (x, y) = (rect.x + i as u32 % rect.width, rect.y + i as u32 / rect.width);
-            let at = (y * w + x) as usize;
-            xyz[at] = *p;
-            if let Some(s) = &tile.spectral {
-                for (band, plane) in spectral.iter_mut().enumerate() {
-                    plane[at] = s[i][band];
-                }
-            }
-        }
+    for (index, rect) in plan.tiles.iter().enumerate() {
+        let tile = render_tile(&prepared, *rect, plan.spectral);
+        // The same bytes a worker sends: the in-process image is the cluster's, bit for bit.
+        let data =
+            encode_tile(&tile.xyz, tile.spectral.as_ref().map(|s| s.iter().map(|p| &p.0[..])));
+        frame.place(index as u32, rect, &data)?;
         bar.inc(1);
     }
     bar.finish_and_clear();
     let render_s = render_started.elapsed().as_secs_f64();
-
-    let stem = args.scene.file_stem().and_then(|s| s.to_str()).unwrap_or("render");
-    let name = match &args.variant {
-        Some(v) => format!("{stem}-{v}"),
-        None => stem.to_owned(),
-    };
-    let exr = args.out.join(format!("{name}.exr"));
-    let png = args.out.join(format!("{name}.png"));
-    let image = XyzImage { width: w as usize, height: h as usize, pixels: xyz, emitter: None };
-    let integrator = format!("{:?}", settings.integrator).to_lowercase();
+    let mean_y = frame.xyz.iter().map(|p| f64::from(p[1])).sum::<f64>() / frame.xyz.len() as f64;
+    let name = job_name(args);
+    let integrator = format!("{:?}", plan.integrator).to_lowercase();
     let info = format!(
-        "scene={} variant={} integrator={integrator} spp={} max_depth={} seed={}",
-        args.scene.display(),
-        args.variant.as_deref().unwrap_or("base"),
-        settings.samples_per_pixel,
-        settings.max_depth,
-        settings.seed
+        "variant={} integrator={integrator} spp={} max_depth={} seed={}",
+        plan.variant.as_deref().unwrap_or("base"),
+        plan.samples_per_pixel,
+        plan.max_depth,
+        plan.seed
     );
-    let attrs = [
-        ("restauroRender", info.as_str()),
-        ("restauroXyzUnits", "absolute: Y in cd/m2 (K_m = 683 lm/W)"),
-    ];
-    if args.spectral {
-        let bands = spectral.into_iter().enumerate().map(|(i, v)| (wavelength_nm(i), v)).collect();
-        write_spectral_exr(&exr, &image, bands, &attrs)?;
-    } else {
-        write_xyz_exr(&exr, &image, &attrs)?;
-    }
-    let target = DisplayTarget { display_space: RgbSpace::Srgb, bits: 8 };
-    let encoded = encode(&image.pixels, &DisplayParams { space: target.display_space, exposure });
-    write_png(&png, image.width, image.height, &PngPixels::Eight(to_u8(&encoded)), RgbSpace::Srgb)?;
-
-    let mean_y =
-        image.pixels.iter().map(|p| f64::from(p[1])).sum::<f64>() / image.pixels.len() as f64;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating {}", args.out.display()))?;
+    let written = write_results(
+        &args.out,
+        frame,
+        &ResultOptions {
+            name: &name,
+            info: &info,
+            exposure,
+            retinex: Some(RetinexParams::default()),
+        },
+    )?;
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "rendered {} ({w}×{h}, {integrator}, {} spp, {} triangles) in {render_s:.2} s after {prepare_s:.2} s of preparation; mean luminance {mean_y:.2} cd/m²",
+        "rendered {} ({}×{}, {integrator}, {} spp, {} triangles) in {render_s:.2} s after {prepare_s:.2} s of preparation; mean luminance {mean_y:.2} cd/m²",
         args.scene.display(),
-        settings.samples_per_pixel,
+        plan.width,
+        plan.height,
+        plan.samples_per_pixel,
         prepared.triangle_count()
     );
-    let _ = writeln!(s, "wrote {}", exr.display());
-    let _ = writeln!(s, "wrote {}", png.display());
+    for f in written.files {
+        let _ = writeln!(s, "wrote {}", args.out.join(f).display());
+    }
     Ok(s)
 }

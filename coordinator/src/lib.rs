@@ -1,9 +1,15 @@
 //! restauro-coordinator: jobs, tile scheduling, leases, framebuffer assembly, the display
-//! pipeline, persistence and the gRPC/HTTP services.
-//!
-//! Today it holds what the coordinator's pipeline ends with — writing results: image files
-//! (OpenEXR and PNG) written whole or not at all. Jobs, tiles and services arrive with the
-//! cluster issue. It never links the tracer (restauro-worker).
+//! pipeline, persistence and the gRPC services. It never links the tracer (restauro-worker):
+//! it plans a job from the scene alone and assembles what workers send.
 
 pub mod atomic_file;
+pub mod auth;
+pub mod framebuffer;
 pub mod image_files;
+pub mod jobs;
+pub mod logging;
+pub mod results;
+pub mod scheduler;
+pub mod server;
+pub mod service;
+pub mod store;

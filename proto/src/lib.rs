@@ -1,9 +1,48 @@
-//! restauro's wire types.
-//!
-//! This crate will hold the `.proto` files of the client-facing and worker-facing gRPC services
-//! and the code tonic/prost generate from them, and nothing else (see `design.md`, "Crates").
-//! The services arrive with the cluster; until then the crate carries only the protocol version
-//! that every message will carry.
+//! restauro's wire types: `proto/restauro.proto` — the client-facing `Render` service and the
+//! worker-facing `Work` service — and the code tonic/prost generate from it, nothing else.
 
 /// The protocol version spoken by this build. A worker or client of another version is refused.
 pub const PROTOCOL_VERSION: u32 = 1;
+
+/// The metadata key that carries the caller's protocol version on every call.
+pub const PROTOCOL_HEADER: &str = "x-restauro-protocol";
+
+/// Files and tile data travel in chunks of this many bytes, far below gRPC's 4 MiB default
+/// message limit.
+pub const CHUNK_BYTES: usize = 1 << 20;
+
+#[allow(clippy::all, missing_docs)]
+pub mod pb {
+    tonic::include_proto!("restauro.v1");
+}
+
+pub use pb::*;
+
+/// Adds the protocol version and a bearer token to every outgoing request (clients and workers).
+#[derive(Clone)]
+pub struct Credentials {
+    authorization: tonic::metadata::MetadataValue<tonic::metadata::Ascii>,
+    version: tonic::metadata::MetadataValue<tonic::metadata::Ascii>,
+}
+
+impl Credentials {
+    /// Fails when the token holds characters a header cannot carry.
+    pub fn new(token: &str, protocol_version: u32) -> Result<Self, String> {
+        let authorization = format!("Bearer {}", token.trim())
+            .parse()
+            .map_err(|_| "the token holds characters an HTTP header cannot carry".to_owned())?;
+        let version = protocol_version.to_string().parse().expect("digits are ASCII");
+        Ok(Self { authorization, version })
+    }
+}
+
+impl tonic::service::Interceptor for Credentials {
+    fn call(
+        &mut self,
+        mut request: tonic::Request<()>,
+    ) -> Result<tonic::Request<()>, tonic::Status> {
+        request.metadata_mut().insert("authorization", self.authorization.clone());
+        request.metadata_mut().insert(PROTOCOL_HEADER, self.version.clone());
+        Ok(request)
+    }
+}

@@ -77,6 +77,12 @@ impl Bundle {
         load(self.scene.clone(), &self.assets(), limits)
     }
 
+    /// The scene of a canonical form, without its files (to learn which files it needs).
+    pub fn parse_manifest(canonical_json: &str) -> Result<SceneFile> {
+        serde_json::from_str(canonical_json)
+            .map_err(|e| SceneError::invalid(Path::new("bundle"), "canonical scene", e.to_string()))
+    }
+
     /// Rebuild a bundle from its canonical form and files (e.g. received over the network),
     /// checking that every file the scene names is present and intact.
     pub fn from_parts(canonical_json: &str, files: BTreeMap<String, Vec<u8>>) -> Result<Bundle> {

@@ -16,6 +16,7 @@ pub mod gltf_mesh;
 pub mod load;
 pub mod obj;
 pub mod photometric;
+pub mod plan;
 pub mod ply;
 pub mod scene_file;
 pub mod vrml;

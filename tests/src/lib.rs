@@ -1,4 +1,119 @@
 //! Integration tests that start restauro's real binaries (coordinator, workers, client) on
 //! loopback: bit-identity against the in-process render, fault injection, authentication.
-//! They arrive with the cluster issue; the command-line tests of `restauro color` live beside
-//! the client, in `client/tests/`.
+//!
+//! The binaries are the ones `cargo test --workspace` builds beside this crate's test
+//! executables (`target/<profile>/`); this module finds them and starts processes.
+
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+
+/// The path of one of restauro's binaries, built by `cargo test --workspace`.
+pub fn binary(name: &str) -> PathBuf {
+    let exe = std::env::current_exe().expect("the test's own path");
+    // target/<profile>/deps/<test> → target/<profile>/<name>
+    let dir = exe.parent().and_then(Path::parent).expect("a target folder");
+    let path = dir.join(name);
+    assert!(
+        path.exists(),
+        "{} is not built; run `cargo test --workspace`, which builds every binary",
+        path.display()
+    );
+    path
+}
+
+/// A coordinator process on a free loopback port.
+pub struct Coordinator {
+    pub child: Child,
+    pub url: String,
+}
+
+pub const CLIENT_TOKEN: &str = "client-token-for-tests";
+pub const WORKER_TOKEN: &str = "worker-token-for-tests";
+
+/// Token files for both roles in `dir`.
+pub fn token_files(dir: &Path) -> (PathBuf, PathBuf) {
+    let (c, w) = (dir.join("client.token"), dir.join("worker.token"));
+    std::fs::write(&c, CLIENT_TOKEN).unwrap();
+    std::fs::write(&w, WORKER_TOKEN).unwrap();
+    (c, w)
+}
+
+impl Coordinator {
+    /// Starts `restauro-coordinator` with its store in `data`, on `listen` (port 0: any).
+    pub fn start(dir: &Path, data: &Path, listen: &str, extra: &[&str]) -> Coordinator {
+        let (c, w) = token_files(dir);
+        let mut child = Command::new(binary("restauro-coordinator"))
+            .args(["--listen", listen, "--data"])
+            .arg(data)
+            .arg("--client-token-file")
+            .arg(&c)
+            .arg("--worker-token-file")
+            .arg(&w)
+            .args(extra)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::from(std::fs::File::create(dir.join("coordinator.log")).unwrap()))
+            .spawn()
+            .unwrap();
+        let mut line = String::new();
+        BufReader::new(child.stdout.take().unwrap()).read_line(&mut line).unwrap();
+        let addr = line.trim().strip_prefix("listening on ").unwrap_or_else(|| {
+            panic!(
+                "coordinator did not start: {}",
+                std::fs::read_to_string(dir.join("coordinator.log")).unwrap_or_default()
+            )
+        });
+        Coordinator { child, url: format!("http://{addr}") }
+    }
+}
+
+impl Drop for Coordinator {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// A worker process.
+pub struct Worker(pub Child);
+
+impl Worker {
+    pub fn start(dir: &Path, url: &str, name: &str, extra: &[&str]) -> Worker {
+        let (_, w) = token_files(dir);
+        Self::start_with_token(dir, url, name, &w, extra)
+    }
+
+    /// A worker presenting the token in file `token`.
+    pub fn start_with_token(
+        dir: &Path,
+        url: &str,
+        name: &str,
+        token: &Path,
+        extra: &[&str],
+    ) -> Worker {
+        let w = token;
+        let child = Command::new(binary("restauro-worker"))
+            .args(["--coordinator", url, "--threads", "1", "--name", name, "--token-file"])
+            .arg(w)
+            .arg("--cache")
+            .arg(dir.join(format!("cache-{name}")))
+            .args(extra)
+            .stdout(Stdio::null())
+            .stderr(Stdio::from(std::fs::File::create(dir.join(format!("{name}.log"))).unwrap()))
+            .spawn()
+            .unwrap();
+        Worker(child)
+    }
+}
+
+impl Drop for Worker {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// Runs the `restauro` client with `args`.
+pub fn restauro(args: &[&str]) -> Output {
+    Command::new(binary("restauro")).args(args).env_remove("RESTAURO_COORDINATOR").output().unwrap()
+}

@@ -8,5 +8,6 @@ pub mod camera;
 pub mod integrator;
 pub mod light;
 pub mod prepared;
+pub mod process;
 pub mod sampler;
 pub mod tile;

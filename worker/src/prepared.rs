@@ -13,6 +13,7 @@ use obvhs::ray::{Ray, RayHit};
 use obvhs::rt_triangle::RtTriangle;
 use obvhs::triangle::Triangle;
 use restauro_scene::load::{LoadedScene, ResolvedLight};
+use restauro_scene::plan::Plan;
 use restauro_scene::scene_file::{Integrator, MaterialModel};
 use restauro_spectral::Spectrum;
 use restauro_spectral::photometry::LuminousSpectrum;
@@ -34,6 +35,17 @@ pub struct Settings {
     pub samples_per_pixel: u32,
     pub max_depth: u32,
     pub seed: u64,
+}
+
+impl From<&Plan> for Settings {
+    fn from(plan: &Plan) -> Self {
+        Self {
+            integrator: plan.integrator,
+            samples_per_pixel: plan.samples_per_pixel,
+            max_depth: plan.max_depth,
+            seed: plan.seed,
+        }
+    }
 }
 
 pub struct PreparedScene {

@@ -25,14 +25,7 @@ pub fn film_xyz(radiance: &Spectrum) -> [f32; 3] {
     [radiance.dot_f32(&w[0]), radiance.dot_f32(&w[1]), radiance.dot_f32(&w[2])]
 }
 
-/// A rectangle of pixels, from the top-left corner of the image.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Rect {
-    pub x: u32,
-    pub y: u32,
-    pub width: u32,
-    pub height: u32,
-}
+pub use restauro_scene::plan::Rect;
 
 /// A rendered rectangle: row-major within the rectangle.
 pub struct TileResult {

@@ -1,0 +1,271 @@
+//! Talking to a coordinator as a client — upload a scene's assets, submit, watch with a progress
+//! bar, fetch the results — and starting an embedded local cluster: a coordinator and workers
+//! as real processes of this same executable, on loopback, that end with this process.
+
+use anyhow::{Context, Result, anyhow, bail};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use restauro_coordinator::atomic_file;
+use restauro_proto::pb::render_client::RenderClient;
+use restauro_proto::{self as pb, CHUNK_BYTES, Credentials, PROTOCOL_VERSION};
+use restauro_scene::bundle::Bundle;
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+use tonic::service::interceptor::InterceptedService;
+use tonic::transport::{Channel, Endpoint};
+
+pub type Client = RenderClient<InterceptedService<Channel, Credentials>>;
+
+/// A Tokio runtime for a command's network calls.
+pub fn runtime() -> Result<tokio::runtime::Runtime> {
+    tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+        .context("starting the async runtime")
+}
+
+/// Explains a refusal of the coordinator in the user's terms.
+pub fn refused(what: &str, status: tonic::Status) -> anyhow::Error {
+    let code = match status.code() {
+        tonic::Code::Unauthenticated => "unauthenticated",
+        tonic::Code::PermissionDenied => "forbidden",
+        tonic::Code::InvalidArgument => "invalid",
+        tonic::Code::NotFound => "not found",
+        tonic::Code::FailedPrecondition => "refused",
+        tonic::Code::ResourceExhausted => "over a limit",
+        tonic::Code::Unavailable => "coordinator unreachable",
+        _ => "failed",
+    };
+    anyhow!("{what}: {code}: {}", status.message())
+}
+
+pub async fn connect(url: &str, token: &str) -> Result<Client> {
+    connect_as(url, token, PROTOCOL_VERSION).await
+}
+
+pub async fn connect_as(url: &str, token: &str, protocol_version: u32) -> Result<Client> {
+    let credentials =
+        Credentials::new(token, protocol_version).map_err(|e| anyhow!("client token: {e}"))?;
+    let channel = Endpoint::from_shared(url.to_owned())
+        .with_context(|| format!("coordinator URL `{url}`"))?
+        .connect_timeout(Duration::from_secs(5))
+        .tcp_nodelay(true)
+        .connect()
+        .await
+        .with_context(|| format!("connecting to the coordinator at {url}"))?;
+    Ok(RenderClient::with_interceptor(channel, credentials).max_decoding_message_size(8 << 20))
+}
+
+/// Uploads whichever of the bundle's files the coordinator lacks.
+pub async fn upload(client: &mut Client, bundle: &Bundle) -> Result<()> {
+    let references = bundle.references();
+    let missing = client
+        .missing_assets(pb::AssetList { references })
+        .await
+        .map_err(|s| refused("checking assets", s))?
+        .into_inner()
+        .references;
+    for reference in missing {
+        let hash = reference
+            .strip_prefix("blake3:")
+            .and_then(|r| r.split_once('.'))
+            .map(|(h, _)| h)
+            .ok_or_else(|| anyhow!("bad reference {reference}"))?;
+        let data =
+            bundle.files.get(hash).ok_or_else(|| anyhow!("{reference} is not in the bundle"))?;
+        let total = data.len() as u64;
+        let mut chunks: Vec<pb::Chunk> = data
+            .chunks(CHUNK_BYTES)
+            .map(|c| pb::Chunk { name: String::new(), total_bytes: total, data: c.to_vec() })
+            .collect();
+        if chunks.is_empty() {
+            chunks.push(pb::Chunk { name: String::new(), total_bytes: 0, data: Vec::new() });
+        }
+        chunks[0].name = reference.clone();
+        client
+            .upload_asset(tokio_stream::iter(chunks))
+            .await
+            .map_err(|s| refused(&format!("uploading {reference}"), s))?;
+    }
+    Ok(())
+}
+
+fn is_final(status: &pb::JobStatus) -> bool {
+    matches!(
+        pb::JobState::try_from(status.state),
+        Ok(pb::JobState::Done | pb::JobState::Failed | pb::JobState::Cancelled)
+    )
+}
+
+/// Follows a job to its end, with a progress bar (tiles done, rate, ETA) when asked.
+pub async fn watch(client: &mut Client, job_id: &str, show: bool) -> Result<pb::JobStatus> {
+    let mut stream = client
+        .watch_job(pb::JobRef { job_id: job_id.to_owned() })
+        .await
+        .map_err(|s| refused(&format!("watching job {job_id}"), s))?
+        .into_inner();
+    let bar = if show {
+        let bar = ProgressBar::with_draw_target(Some(0), ProgressDrawTarget::stderr());
+        bar.set_style(
+            ProgressStyle::with_template(
+                "{msg:>16} {bar:40} {pos}/{len} tiles, {per_sec}, {elapsed} elapsed, eta {eta}",
+            )
+            .context("progress template")?,
+        );
+        bar
+    } else {
+        ProgressBar::hidden()
+    };
+    let mut last = None;
+    while let Some(status) =
+        stream.message().await.map_err(|s| refused(&format!("watching job {job_id}"), s))?
+    {
+        bar.set_length(u64::from(status.tiles_total));
+        bar.set_position(u64::from(status.tiles_done));
+        let state = pb::JobState::try_from(status.state).unwrap_or(pb::JobState::Unspecified);
+        bar.set_message(state.as_str_name().trim_start_matches("JOB_STATE_").to_lowercase());
+        let done = is_final(&status);
+        last = Some(status);
+        if done {
+            break;
+        }
+    }
+    bar.finish_and_clear();
+    last.ok_or_else(|| anyhow!("job {job_id}: the coordinator closed the watch without a status"))
+}
+
+/// Downloads every result file of a finished job into `out`, each written atomically.
+pub async fn fetch(
+    client: &mut Client,
+    status: &pb::JobStatus,
+    out: &Path,
+) -> Result<Vec<PathBuf>> {
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let mut written = Vec::new();
+    for name in &status.results {
+        let mut stream = client
+            .fetch_result(pb::FetchResultRequest {
+                job_id: status.job_id.clone(),
+                name: name.clone(),
+            })
+            .await
+            .map_err(|s| refused(&format!("fetching {name}"), s))?
+            .into_inner();
+        let mut data = Vec::new();
+        while let Some(chunk) =
+            stream.message().await.map_err(|s| refused(&format!("fetching {name}"), s))?
+        {
+            data.extend_from_slice(&chunk.data);
+        }
+        // Only a plain file name is accepted from the coordinator: nothing lands outside `out`.
+        if name.contains(['/', '\\']) || name.starts_with('.') {
+            bail!("the coordinator named a result `{name}`, which is not a plain file name");
+        }
+        let path = out.join(name);
+        atomic_file::write(&path, &data)?;
+        written.push(path);
+    }
+    Ok(written)
+}
+
+/// A coordinator and workers started as child processes of this executable, on loopback. They
+/// exit when this process closes their standard input — on drop, or when it dies.
+pub struct LocalCluster {
+    children: Vec<Child>,
+    pub url: String,
+    pub client_token: String,
+    _dir: tempfile::TempDir,
+}
+
+/// A fresh secret: 256 bits from the operating system's random source (UUID v4 draws them).
+fn random_token() -> String {
+    format!("{}{}", uuid::Uuid::new_v4().simple(), uuid::Uuid::new_v4().simple())
+}
+
+impl LocalCluster {
+    /// Starts a coordinator and `workers` workers sharing this machine's cores.
+    pub fn start(workers: usize) -> Result<LocalCluster> {
+        let exe = std::env::current_exe().context("finding this executable")?;
+        let dir = tempfile::Builder::new().prefix("restauro-cluster-").tempdir()?;
+        let client_token = random_token();
+        let worker_token = random_token();
+        let client_file = dir.path().join("client.token");
+        let worker_file = dir.path().join("worker.token");
+        std::fs::write(&client_file, &client_token)?;
+        std::fs::write(&worker_file, &worker_token)?;
+        let log = |name: &str| -> Result<Stdio> {
+            Ok(Stdio::from(std::fs::File::create(dir.path().join(format!("{name}.log")))?))
+        };
+        let mut coordinator = Command::new(&exe)
+            .args(["coordinator", "--listen", "127.0.0.1:0", "--exit-with-stdin", "--data"])
+            .arg(dir.path().join("data"))
+            .arg("--client-token-file")
+            .arg(&client_file)
+            .arg("--worker-token-file")
+            .arg(&worker_file)
+            .env("RUST_LOG", std::env::var("RUST_LOG").unwrap_or_else(|_| "warn".into()))
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(log("coordinator")?)
+            .spawn()
+            .context("starting the embedded coordinator")?;
+        let stdout = coordinator.stdout.take().expect("piped");
+        let mut children = vec![coordinator];
+        let mut line = String::new();
+        BufReader::new(stdout).read_line(&mut line).context("reading the coordinator's address")?;
+        let Some(addr) = line.trim().strip_prefix("listening on ") else {
+            let log =
+                std::fs::read_to_string(dir.path().join("coordinator.log")).unwrap_or_default();
+            for c in &mut children {
+                let _ = c.kill();
+            }
+            bail!("the embedded coordinator did not start: {}", log.trim());
+        };
+        let url = format!("http://{addr}");
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let threads = (cores / workers.max(1)).max(1);
+        for i in 0..workers {
+            let child = Command::new(&exe)
+                .args(["worker", "--exit-with-stdin", "--coordinator", &url, "--token-file"])
+                .arg(&worker_file)
+                .args(["--threads", &threads.to_string(), "--name", &format!("local-{}", i + 1)])
+                .arg("--cache")
+                .arg(dir.path().join(format!("cache-{i}")))
+                .env("RUST_LOG", std::env::var("RUST_LOG").unwrap_or_else(|_| "warn".into()))
+                .stdin(Stdio::piped())
+                .stdout(Stdio::null())
+                .stderr(log(&format!("worker-{}", i + 1))?)
+                .spawn()
+                .context("starting an embedded worker")?;
+            children.push(child);
+        }
+        Ok(LocalCluster { children, url, client_token, _dir: dir })
+    }
+}
+
+impl Drop for LocalCluster {
+    fn drop(&mut self) {
+        // Closing stdin asks each process to stop; workers first, then the coordinator.
+        for child in self.children.iter_mut().rev() {
+            drop(child.stdin.take());
+        }
+        let deadline = Instant::now() + Duration::from_secs(10);
+        for child in self.children.iter_mut().rev() {
+            loop {
+                match child.try_wait() {
+                    Ok(Some(_)) => break,
+                    Ok(None) if Instant::now() < deadline => {
+                        std::thread::sleep(Duration::from_millis(20))
+                    }
+                    _ => {
+                        let _ = child.kill();
+                        let _ = child.wait();
+                        break;
+                    }
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,171 @@
+//! `submit`, `watch`, `fetch`, `cancel`, `jobs`, `workers`: a client of a running coordinator.
+
+use crate::cli::{ConnectArgs, FetchArgs, JobArgs, SubmitArgs};
+use crate::cluster::{self, Client, refused};
+use crate::render::{checked_bundle, job_name, proto_options};
+use anyhow::{Context, Result, bail};
+use restauro_proto as pb;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// The client token from a file, else RESTAURO_TOKEN.
+pub fn client_token(file: Option<&Path>) -> Result<String> {
+    let token = match file {
+        Some(path) => std::fs::read_to_string(path)
+            .with_context(|| format!("reading the token file {}", path.display()))?,
+        None => std::env::var("RESTAURO_TOKEN").unwrap_or_default(),
+    };
+    let token = token.trim().to_owned();
+    if token.is_empty() {
+        bail!("no client token: give --token-file FILE or set RESTAURO_TOKEN");
+    }
+    Ok(token)
+}
+
+fn with_client<T>(c: &ConnectArgs, f: impl AsyncFnOnce(&mut Client) -> Result<T>) -> Result<T> {
+    let token = client_token(c.token_file.as_deref())?;
+    cluster::runtime()?.block_on(async {
+        let mut client = cluster::connect_as(&c.coordinator, &token, c.protocol_version).await?;
+        f(&mut client).await
+    })
+}
+
+fn state_name(state: i32) -> String {
+    pb::JobState::try_from(state)
+        .unwrap_or(pb::JobState::Unspecified)
+        .as_str_name()
+        .trim_start_matches("JOB_STATE_")
+        .to_lowercase()
+}
+
+pub fn submit(args: &SubmitArgs) -> Result<String> {
+    let r = &args.render;
+    let Some(coordinator) = &r.connect.coordinator else {
+        bail!(
+            "submit needs --coordinator URL (or RESTAURO_COORDINATOR); `restauro render` renders on an embedded cluster"
+        );
+    };
+    let connect = ConnectArgs {
+        coordinator: coordinator.clone(),
+        token_file: r.connect.token_file.clone(),
+        protocol_version: pb::PROTOCOL_VERSION,
+    };
+    let (bundle, _plan) = checked_bundle(r)?;
+    with_client(&connect, async |client| {
+        cluster::upload(client, &bundle).await?;
+        let status = client
+            .submit_job(pb::SubmitJobRequest {
+                protocol_version: pb::PROTOCOL_VERSION,
+                manifest_json: bundle.canonical_json(),
+                options: Some(proto_options(r)),
+                priority: args.priority,
+                name: job_name(r),
+            })
+            .await
+            .map_err(|s| refused(&format!("submitting {}", r.scene.display()), s))?
+            .into_inner();
+        let mut s = format!("{}\n", status.job_id);
+        if args.wait {
+            let status = cluster::watch(client, &status.job_id, true).await?;
+            if status.state != pb::JobState::Done as i32 {
+                bail!("job {} is {}: {}", status.job_id, state_name(status.state), status.error);
+            }
+            for f in cluster::fetch(client, &status, &r.out).await? {
+                let _ = writeln!(s, "wrote {}", f.display());
+            }
+        }
+        Ok(s)
+    })
+}
+
+pub fn watch(args: &JobArgs) -> Result<String> {
+    with_client(&args.connect, async |client| {
+        let status = cluster::watch(client, &args.job, true).await?;
+        Ok(format!(
+            "job {} {}{}\n",
+            status.job_id,
+            state_name(status.state),
+            if status.error.is_empty() { String::new() } else { format!(": {}", status.error) }
+        ))
+    })
+}
+
+pub fn fetch(args: &FetchArgs) -> Result<String> {
+    with_client(&args.connect, async |client| {
+        let list = client
+            .list_jobs(pb::ListJobsRequest {})
+            .await
+            .map_err(|s| refused("listing jobs", s))?
+            .into_inner();
+        let Some(status) = list.jobs.into_iter().find(|j| j.job_id == args.job) else {
+            bail!("no job {} on this coordinator", args.job);
+        };
+        let mut s = String::new();
+        for f in cluster::fetch(client, &status, &args.out).await? {
+            let _ = writeln!(s, "wrote {}", f.display());
+        }
+        Ok(s)
+    })
+}
+
+pub fn cancel(args: &JobArgs) -> Result<String> {
+    with_client(&args.connect, async |client| {
+        let status = client
+            .cancel_job(pb::JobRef { job_id: args.job.clone() })
+            .await
+            .map_err(|s| refused(&format!("cancelling {}", args.job), s))?
+            .into_inner();
+        Ok(format!("job {} {}\n", status.job_id, state_name(status.state)))
+    })
+}
+
+pub fn jobs(args: &ConnectArgs) -> Result<String> {
+    with_client(args, async |client| {
+        let list = client
+            .list_jobs(pb::ListJobsRequest {})
+            .await
+            .map_err(|s| refused("listing jobs", s))?
+            .into_inner();
+        let mut s = String::new();
+        for j in list.jobs {
+            let _ = writeln!(
+                s,
+                "{} {:<16} {:>5}/{:<5} tiles  {:>8.1} s  {}{}",
+                j.job_id,
+                state_name(j.state),
+                j.tiles_done,
+                j.tiles_total,
+                j.elapsed_s,
+                j.name,
+                if j.error.is_empty() { String::new() } else { format!(" ({})", j.error) }
+            );
+        }
+        Ok(s)
+    })
+}
+
+pub fn workers(args: &ConnectArgs) -> Result<String> {
+    with_client(args, async |client| {
+        let list = client
+            .list_workers(pb::ListWorkersRequest {})
+            .await
+            .map_err(|s| refused("listing workers", s))?
+            .into_inner();
+        let mut s = String::new();
+        for w in list.workers {
+            let _ = writeln!(
+                s,
+                "{:x} {:<24} capacity {:>2}  leases {:>2}  done {:>6}  failed {:>3}  seen {:.1} s ago  {}",
+                w.worker_id,
+                w.name,
+                w.capacity,
+                w.leases,
+                w.tiles_done,
+                w.tiles_failed,
+                w.last_seen_s,
+                w.build
+            );
+        }
+        Ok(s)
+    })
+}

@@ -1,0 +1,133 @@
+//! The image a job assembles from its tiles, and the wire form of one tile's pixels.
+//!
+//! A tile travels and is stored as little-endian f32: first X, Y, Z of every pixel (row-major
+//! within the tile), then, when the job keeps spectra, the 81 bands of every pixel.
+
+use restauro_scene::plan::Rect;
+use restauro_spectral::grid::BANDS;
+
+#[derive(Debug, thiserror::Error)]
+#[error("tile {tile} of {width}×{height} pixels: {problem}")]
+pub struct TileDataError {
+    pub tile: u32,
+    pub width: u32,
+    pub height: u32,
+    pub problem: String,
+}
+
+/// The byte sizes of a tile's two parts.
+pub fn tile_sizes(rect: &Rect, spectral: bool) -> (usize, usize) {
+    let pixels = rect.width as usize * rect.height as usize;
+    (pixels * 3 * 4, if spectral { pixels * BANDS * 4 } else { 0 })
+}
+
+/// Absolute XYZ (Y in cd/m²) of every pixel, and the spectral radiance band by band when kept.
+pub struct Framebuffer {
+    pub width: u32,
+    pub height: u32,
+    pub xyz: Vec<[f32; 3]>,
+    /// One plane per band, each `width × height`.
+    pub spectral: Option<Vec<Vec<f32>>>,
+}
+
+impl Framebuffer {
+    pub fn new(width: u32, height: u32, spectral: bool) -> Self {
+        let n = width as usize * height as usize;
+        Self {
+            width,
+            height,
+            xyz: vec![[0.0; 3]; n],
+            spectral: spectral.then(|| vec![vec![0.0; n]; BANDS]),
+        }
+    }
+
+    /// Places tile `index` at `rect` from its wire bytes, refusing data of the wrong size.
+    pub fn place(&mut self, index: u32, rect: &Rect, data: &[u8]) -> Result<(), TileDataError> {
+        let (xyz_bytes, spectral_bytes) = tile_sizes(rect, self.spectral.is_some());
+        if data.len() != xyz_bytes + spectral_bytes {
+            return Err(TileDataError {
+                tile: index,
+                width: rect.width,
+                height: rect.height,
+                problem: format!(
+                    "{} bytes of pixel data, expected {}",
+                    data.len(),
+                    xyz_bytes + spectral_bytes
+                ),
+            });
+        }
+        if rect.x + rect.width > self.width || rect.y + rect.height > self.height {
+            return Err(TileDataError {
+                tile: index,
+                width: rect.width,
+                height: rect.height,
+                problem: format!("lies outside the {}×{} image", self.width, self.height),
+            });
+        }
+        let floats = |bytes: &[u8]| -> Vec<f32> {
+            bytes.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect()
+        };
+        let xyz = floats(&data[..xyz_bytes]);
+        let spectral = floats(&data[xyz_bytes..]);
+        let w = rect.width as usize;
+        for (i, p) in xyz.chunks_exact(3).enumerate() {
+            self.xyz[at(self.width, rect, i, w)] = [p[0], p[1], p[2]];
+        }
+        if let Some(planes) = &mut self.spectral {
+            for (i, bands) in spectral.chunks_exact(BANDS).enumerate() {
+                let a = at(self.width, rect, i, w);
+                for (plane, &v) in planes.iter_mut().zip(bands) {
+                    plane[a] = v;
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The image index of pixel `i` (row-major) of a tile `w` pixels wide at `rect`.
+fn at(image_width: u32, rect: &Rect, i: usize, w: usize) -> usize {
+    (rect.y as usize + i / w) * image_width as usize + rect.x as usize + i % w
+}
+
+/// The wire bytes of a tile: XYZ, then the spectra when given (each pixel's 81 bands).
+pub fn encode_tile<'a>(
+    xyz: &[[f32; 3]],
+    spectral: Option<impl Iterator<Item = &'a [f32]>>,
+) -> Vec<u8> {
+    let mut out = Vec::with_capacity(xyz.len() * 12);
+    for v in xyz.iter().flatten() {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
+    if let Some(pixels) = spectral {
+        for bands in pixels {
+            for v in bands {
+                out.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tiles_land_where_their_rectangle_says() {
+        let mut fb = Framebuffer::new(5, 4, true);
+        let rect = Rect { x: 3, y: 1, width: 2, height: 3 };
+        let xyz: Vec<[f32; 3]> = (0..6).map(|i| [i as f32, 10.0 + i as f32, 20.0]).collect();
+        let spectra: Vec<Vec<f32>> = (0..6).map(|i| vec![i as f32 * 0.5; BANDS]).collect();
+        let data = encode_tile(&xyz, Some(spectra.iter().map(Vec::as_slice)));
+        fb.place(7, &rect, &data).unwrap();
+        // Pixel 3 of the 2-wide tile is its second row, second column: image (4, 2).
+        assert_eq!(fb.xyz[2 * 5 + 4], [3.0, 13.0, 20.0]);
+        assert_eq!(fb.spectral.as_ref().unwrap()[40][2 * 5 + 4], 1.5);
+        assert_eq!(fb.xyz[0], [0.0; 3]);
+        let err = fb.place(7, &rect, &data[..data.len() - 4]).unwrap_err();
+        assert!(err.to_string().contains("expected"), "{err}");
+        let outside = Rect { x: 4, y: 1, width: 2, height: 3 };
+        assert!(fb.place(8, &outside, &data).is_err());
+    }
+}

@@ -1,0 +1,135 @@
+//! A finished render's files: the absolute XYZ image (OpenEXR, with the spectral layers when
+//! kept) and its display PNG, and the same after the global Retinex (paper §2.5) — the image as
+//! an adapted observer sees it — as a relative-XYZ EXR and a PNG. Every file is written under a
+//! temporary name and renamed, so a reader never sees half of one.
+
+use crate::framebuffer::Framebuffer;
+use crate::image_files::{
+    ImageFileError, PngPixels, XyzImage, write_png, write_spectral_exr, write_xyz_exr,
+};
+use restauro_spectral::appearance::{ChannelSpace, retinex_xyz};
+use restauro_spectral::display::{DisplayParams, Exposure, encode, to_u8};
+use restauro_spectral::grid::wavelength_nm;
+use restauro_spectral::retinex::RetinexParams;
+use restauro_spectral::rgb_space::RgbSpace;
+use std::path::Path;
+use std::time::Instant;
+
+#[derive(Debug, thiserror::Error)]
+pub enum ResultsError {
+    #[error(transparent)]
+    File(#[from] ImageFileError),
+    #[error("retinex: {0}")]
+    Retinex(String),
+}
+
+/// What to write, beyond the pixels.
+pub struct ResultOptions<'a> {
+    /// The file stem: `<name>.exr`, `<name>.png`, `<name>-retinex.exr`, `<name>-retinex.png`.
+    pub name: &'a str,
+    /// Recorded in the EXR header (scene, variant, integrator, samples, seed).
+    pub info: &'a str,
+    pub exposure: Exposure,
+    /// `None` skips the Retinex files.
+    pub retinex: Option<RetinexParams>,
+}
+
+/// The files written (names within `dir`) and the Retinex time.
+pub struct Written {
+    pub files: Vec<String>,
+    pub retinex_s: f64,
+}
+
+/// Parses an exposure: `auto`, `auto:<key>`, `absolute:<cd/m²>` or `relative`.
+pub fn parse_exposure(text: &str) -> Result<Exposure, String> {
+    let lower = text.to_ascii_lowercase();
+    let number = |s: &str, what: &str| -> Result<f64, String> {
+        match s.parse::<f64>() {
+            Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+            _ => Err(format!("exposure `{text}`: {what} must be a number > 0")),
+        }
+    };
+    match lower.as_str() {
+        "auto" | "" => Ok(Exposure::Automatic { key: 0.18 }),
+        "relative" => Ok(Exposure::Relative),
+        _ => {
+            if let Some(k) = lower.strip_prefix("auto:") {
+                Ok(Exposure::Automatic { key: number(k, "the key")? })
+            } else if let Some(l) = lower.strip_prefix("absolute:") {
+                Ok(Exposure::Absolute { white_cd_m2: number(l, "the white luminance (cd/m²)")? })
+            } else {
+                Err(format!(
+                    "exposure `{text}`: use auto, auto:<key>, absolute:<cd/m²> or relative"
+                ))
+            }
+        }
+    }
+}
+
+fn write_display_png(
+    path: &Path,
+    image: &XyzImage,
+    exposure: Exposure,
+) -> Result<(), ResultsError> {
+    let encoded = encode(&image.pixels, &DisplayParams { space: RgbSpace::Srgb, exposure });
+    write_png(path, image.width, image.height, &PngPixels::Eight(to_u8(&encoded)), RgbSpace::Srgb)?;
+    Ok(())
+}
+
+/// Writes a finished render's files into `dir`.
+pub fn write_results(
+    dir: &Path,
+    frame: Framebuffer,
+    options: &ResultOptions<'_>,
+) -> Result<Written, ResultsError> {
+    let name = options.name;
+    let (width, height) = (frame.width as usize, frame.height as usize);
+    let image = XyzImage { width, height, pixels: frame.xyz, emitter: None };
+    let attrs = [
+        ("restauroRender", options.info),
+        ("restauroXyzUnits", "absolute: Y in cd/m2 (K_m = 683 lm/W)"),
+    ];
+    let mut files = vec![format!("{name}.exr"), format!("{name}.png")];
+    match frame.spectral {
+        Some(planes) => {
+            let bands =
+                planes.into_iter().enumerate().map(|(i, v)| (wavelength_nm(i), v)).collect();
+            write_spectral_exr(&dir.join(&files[0]), &image, bands, &attrs)?;
+        }
+        None => write_xyz_exr(&dir.join(&files[0]), &image, &attrs)?,
+    }
+    write_display_png(&dir.join(&files[1]), &image, options.exposure)?;
+
+    let mut retinex_s = 0.0;
+    if let Some(params) = &options.retinex {
+        let started = Instant::now();
+        let (perceived, stats) =
+            retinex_xyz(&image.pixels, width, height, params, ChannelSpace::default(), &|_, _| {})
+                .map_err(|e| ResultsError::Retinex(e.to_string()))?;
+        retinex_s = started.elapsed().as_secs_f64();
+        let settings = format!(
+            "paths={} length={} threshold={} seed={} space={}",
+            params.paths,
+            stats.length,
+            params.threshold,
+            params.seed,
+            ChannelSpace::default()
+        );
+        let perceived = XyzImage { width, height, pixels: perceived, emitter: None };
+        let exr = format!("{name}-retinex.exr");
+        let png = format!("{name}-retinex.png");
+        write_xyz_exr(
+            &dir.join(&exr),
+            &perceived,
+            &[
+                ("restauroRender", options.info),
+                ("restauroRetinex", settings.as_str()),
+                ("restauroXyzScale", "relative: Y = 1 is the reference white, D65"),
+            ],
+        )?;
+        write_display_png(&dir.join(&png), &perceived, Exposure::Relative)?;
+        files.push(exr);
+        files.push(png);
+    }
+    Ok(Written { files, retinex_s })
+}

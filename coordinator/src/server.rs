@@ -1,0 +1,188 @@
+//! The coordinator process: its command line, and serving both services on one address until
+//! asked to stop.
+
+use crate::auth::{Role, Tokens};
+use crate::scheduler;
+use crate::service::{Config, RenderService, Shared, WorkService};
+use anyhow::{Context, Result, bail};
+use restauro_proto::pb::render_server::RenderServer;
+use restauro_proto::pb::work_server::WorkServer;
+use restauro_scene::load::Limits;
+use std::io::Write as _;
+use std::net::SocketAddr;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+use tokio::net::TcpListener;
+use tokio_stream::wrappers::TcpListenerStream;
+use tonic::service::interceptor::InterceptedService;
+use tracing::info;
+
+/// The largest request the coordinator decodes: a chunk of an asset or a tile is 1 MiB.
+pub const MAX_MESSAGE_BYTES: usize = 4 << 20;
+
+#[derive(clap::Args, Clone, Debug)]
+pub struct CoordinatorArgs {
+    /// The address to serve on; port 0 picks a free port (printed as `listening on ADDR`).
+    #[arg(long, default_value = "127.0.0.1:7878")]
+    pub listen: SocketAddr,
+    /// The folder of the store and the results; a restart on the same folder resumes its jobs.
+    #[arg(long, default_value = "restauro-data")]
+    pub data: PathBuf,
+    /// A file holding the clients' bearer token (else RESTAURO_CLIENT_TOKEN).
+    #[arg(long)]
+    pub client_token_file: Option<PathBuf>,
+    /// A file holding the workers' bearer token (else RESTAURO_WORKER_TOKEN).
+    #[arg(long)]
+    pub worker_token_file: Option<PathBuf>,
+    /// Seconds a leased tile may take before it is given to another worker.
+    #[arg(long, default_value_t = 120.0)]
+    pub lease_timeout_s: f64,
+    /// Seconds of silence after which a worker is dropped and its tiles requeued.
+    #[arg(long, default_value_t = 10.0)]
+    pub heartbeat_timeout_s: f64,
+    /// Unfinished jobs accepted at once.
+    #[arg(long, default_value_t = 64)]
+    pub max_jobs: usize,
+    /// Skip the Retinex stage (and its files).
+    #[arg(long)]
+    pub no_retinex: bool,
+    /// The largest image accepted, in pixels.
+    #[arg(long, default_value_t = Limits::default().max_pixels)]
+    pub max_pixels: u64,
+    /// Exit when standard input closes (an embedded cluster's processes end with their parent).
+    #[arg(long, hide = true)]
+    pub exit_with_stdin: bool,
+}
+
+/// A token from a file, else from an environment variable; refuses an empty one.
+pub fn read_token(file: Option<&Path>, variable: &str, flag: &str) -> Result<String> {
+    let token = match file {
+        Some(path) => std::fs::read_to_string(path)
+            .with_context(|| format!("reading the token file {}", path.display()))?,
+        None => std::env::var(variable).unwrap_or_default(),
+    };
+    let token = token.trim().to_owned();
+    if token.is_empty() {
+        bail!("no token: give {flag} FILE or set {variable}");
+    }
+    Ok(token)
+}
+
+fn seconds(value: f64, flag: &str) -> Result<Duration> {
+    if !(value.is_finite() && value > 0.0 && value < 1e6) {
+        bail!("{flag} {value}: use a number of seconds above 0");
+    }
+    Ok(Duration::from_secs_f64(value))
+}
+
+/// Resolves when `shutdown` should begin: SIGTERM or Ctrl-C, or the end of standard input when
+/// asked.
+async fn stop_signal(exit_with_stdin: bool) {
+    let stdin_closed = async move {
+        if exit_with_stdin {
+            let mut buf = [0u8; 64];
+            let mut stdin = tokio::io::stdin();
+            use tokio::io::AsyncReadExt;
+            while matches!(stdin.read(&mut buf).await, Ok(n) if n > 0) {}
+        } else {
+            std::future::pending::<()>().await;
+        }
+    };
+    #[cfg(unix)]
+    {
+        let mut term = tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate())
+            .expect("installing a SIGTERM handler");
+        tokio::select! {
+            _ = term.recv() => {}
+            _ = tokio::signal::ctrl_c() => {}
+            _ = stdin_closed => {}
+        }
+    }
+    #[cfg(not(unix))]
+    tokio::select! {
+        _ = tokio::signal::ctrl_c() => {}
+        _ = stdin_closed => {}
+    }
+}
+
+pub fn run(args: &CoordinatorArgs) -> Result<()> {
+    let client = read_token(
+        args.client_token_file.as_deref(),
+        "RESTAURO_CLIENT_TOKEN",
+        "--client-token-file",
+    )?;
+    let worker = read_token(
+        args.worker_token_file.as_deref(),
+        "RESTAURO_WORKER_TOKEN",
+        "--worker-token-file",
+    )?;
+    if client == worker {
+        bail!("the client and worker tokens are the same; give each role its own token");
+    }
+    let config = Config {
+        data_dir: args.data.clone(),
+        tokens: Tokens::new(&client, &worker),
+        limits: Limits { max_pixels: args.max_pixels, ..Limits::default() },
+        max_jobs: args.max_jobs.max(1),
+        scheduler: scheduler::Config {
+            lease_timeout: seconds(args.lease_timeout_s, "--lease-timeout-s")?,
+            heartbeat_timeout: seconds(args.heartbeat_timeout_s, "--heartbeat-timeout-s")?,
+            ..scheduler::Config::default()
+        },
+        retinex: !args.no_retinex,
+    };
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+        .context("starting the async runtime")?;
+    runtime.block_on(serve(config, args.listen, stop_signal(args.exit_with_stdin)))
+}
+
+/// Serves until `stop` resolves.
+pub async fn serve(
+    config: Config,
+    listen: SocketAddr,
+    stop: impl Future<Output = ()> + Send + 'static,
+) -> Result<()> {
+    let tokens = config.tokens.clone();
+    let data = config.data_dir.clone();
+    let shared = tokio::task::spawn_blocking(move || Shared::open(config)).await??;
+    let listener =
+        TcpListener::bind(listen).await.with_context(|| format!("listening on {listen}"))?;
+    let addr = listener.local_addr()?;
+    info!(%addr, data = %data.display(), "coordinator listening");
+    {
+        // The embedded cluster and the tests read the address from here.
+        let mut out = std::io::stdout().lock();
+        writeln!(out, "listening on {addr}")?;
+        out.flush()?;
+    }
+    let timer = {
+        let shared = shared.clone();
+        tokio::spawn(async move {
+            let mut tick = tokio::time::interval(Duration::from_millis(200));
+            loop {
+                tick.tick().await;
+                shared.expire();
+            }
+        })
+    };
+    let render = InterceptedService::new(
+        RenderServer::new(RenderService(shared.clone()))
+            .max_decoding_message_size(MAX_MESSAGE_BYTES),
+        tokens.interceptor(Role::Client),
+    );
+    let work = InterceptedService::new(
+        WorkServer::new(WorkService(shared)).max_decoding_message_size(MAX_MESSAGE_BYTES),
+        tokens.interceptor(Role::Worker),
+    );
+    tonic::transport::Server::builder()
+        .add_service(render)
+        .add_service(work)
+        .serve_with_incoming_shutdown(TcpListenerStream::new(listener), stop)
+        .await?;
+    timer.abort();
+    info!("coordinator stopped");
+    Ok(())
+}

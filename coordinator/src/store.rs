@@ -1,0 +1,163 @@
+//! The coordinator's embedded, crash-safe store (redb: copy-on-write B-trees, a durable commit
+//! per write transaction). It keeps what a restart needs to resume without rendering a finished
+//! tile again: every job's record, every finished tile's pixels, and the uploaded scene assets.
+//!
+//! A tile is committed before the worker is told it was accepted, so an acknowledged tile is
+//! never lost; a crash between the two makes the worker's result look unacknowledged, and the
+//! tile is stored a second time with the same bytes (tiles are deterministic).
+
+use redb::{Database, ReadableDatabase, ReadableTable, TableDefinition};
+use std::path::{Path, PathBuf};
+
+/// Job id → the job's record (JSON).
+const JOBS: TableDefinition<&str, &[u8]> = TableDefinition::new("jobs");
+/// (job id, tile index) → the tile's pixel data.
+const TILES: TableDefinition<(&str, u32), &[u8]> = TableDefinition::new("tiles");
+/// Asset reference (`blake3:<hex>.<ext>`) → bytes.
+const ASSETS: TableDefinition<&str, &[u8]> = TableDefinition::new("assets");
+
+#[derive(Debug, thiserror::Error)]
+pub enum StoreError {
+    #[error("store {}: {message}", path.display())]
+    Store { path: PathBuf, message: String },
+}
+
+pub type Result<T> = std::result::Result<T, StoreError>;
+
+pub struct Store {
+    db: Database,
+    path: PathBuf,
+}
+
+impl Store {
+    /// Opens the store at `path`, creating it (and its tables) when new.
+    pub fn open(path: &Path) -> Result<Store> {
+        let fail = |e: &dyn std::fmt::Display| StoreError::Store {
+            path: path.to_owned(),
+            message: e.to_string(),
+        };
+        let db = Database::create(path).map_err(|e| fail(&e))?;
+        let store = Store { db, path: path.to_owned() };
+        let txn = store.db.begin_write().map_err(|e| fail(&e))?;
+        txn.open_table(JOBS).map_err(|e| fail(&e))?;
+        txn.open_table(TILES).map_err(|e| fail(&e))?;
+        txn.open_table(ASSETS).map_err(|e| fail(&e))?;
+        txn.commit().map_err(|e| fail(&e))?;
+        Ok(store)
+    }
+
+    fn fail(&self, e: impl std::fmt::Display) -> StoreError {
+        StoreError::Store { path: self.path.clone(), message: e.to_string() }
+    }
+
+    fn write<T>(
+        &self,
+        f: impl FnOnce(&redb::WriteTransaction) -> std::result::Result<T, redb::Error>,
+    ) -> Result<T> {
+        let txn = self.db.begin_write().map_err(|e| self.fail(e))?;
+        let value = f(&txn).map_err(|e| self.fail(e))?;
+        txn.commit().map_err(|e| self.fail(e))?;
+        Ok(value)
+    }
+
+    pub fn put_job(&self, id: &str, record: &[u8]) -> Result<()> {
+        self.write(|txn| {
+            txn.open_table(JOBS)?.insert(id, record)?;
+            Ok(())
+        })
+    }
+
+    /// Every job record, by id.
+    pub fn jobs(&self) -> Result<Vec<(String, Vec<u8>)>> {
+        let txn = self.db.begin_read().map_err(|e| self.fail(e))?;
+        let table = txn.open_table(JOBS).map_err(|e| self.fail(e))?;
+        let mut out = Vec::new();
+        for entry in table.iter().map_err(|e| self.fail(e))? {
+            let (k, v) = entry.map_err(|e| self.fail(e))?;
+            out.push((k.value().to_owned(), v.value().to_vec()));
+        }
+        Ok(out)
+    }
+
+    pub fn put_tile(&self, job: &str, tile: u32, data: &[u8]) -> Result<()> {
+        self.write(|txn| {
+            txn.open_table(TILES)?.insert((job, tile), data)?;
+            Ok(())
+        })
+    }
+
+    /// The indices of a job's finished tiles, ascending.
+    pub fn finished_tiles(&self, job: &str) -> Result<Vec<u32>> {
+        let txn = self.db.begin_read().map_err(|e| self.fail(e))?;
+        let table = txn.open_table(TILES).map_err(|e| self.fail(e))?;
+        let mut out = Vec::new();
+        for entry in table.range((job, 0)..=(job, u32::MAX)).map_err(|e| self.fail(e))? {
+            let (k, _) = entry.map_err(|e| self.fail(e))?;
+            out.push(k.value().1);
+        }
+        Ok(out)
+    }
+
+    pub fn tile(&self, job: &str, tile: u32) -> Result<Option<Vec<u8>>> {
+        let txn = self.db.begin_read().map_err(|e| self.fail(e))?;
+        let table = txn.open_table(TILES).map_err(|e| self.fail(e))?;
+        Ok(table.get((job, tile)).map_err(|e| self.fail(e))?.map(|v| v.value().to_vec()))
+    }
+
+    /// Forgets a job's tiles (its results are written; the record stays).
+    pub fn remove_tiles(&self, job: &str) -> Result<()> {
+        self.write(|txn| {
+            let mut table = txn.open_table(TILES)?;
+            table.retain_in((job, 0)..=(job, u32::MAX), |_, _| false)?;
+            Ok(())
+        })
+    }
+
+    pub fn put_asset(&self, reference: &str, data: &[u8]) -> Result<()> {
+        self.write(|txn| {
+            txn.open_table(ASSETS)?.insert(reference, data)?;
+            Ok(())
+        })
+    }
+
+    pub fn asset(&self, reference: &str) -> Result<Option<Vec<u8>>> {
+        let txn = self.db.begin_read().map_err(|e| self.fail(e))?;
+        let table = txn.open_table(ASSETS).map_err(|e| self.fail(e))?;
+        Ok(table.get(reference).map_err(|e| self.fail(e))?.map(|v| v.value().to_vec()))
+    }
+
+    pub fn has_asset(&self, reference: &str) -> Result<bool> {
+        let txn = self.db.begin_read().map_err(|e| self.fail(e))?;
+        let table = txn.open_table(ASSETS).map_err(|e| self.fail(e))?;
+        Ok(table.get(reference).map_err(|e| self.fail(e))?.is_some())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn what_is_committed_survives_reopening() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("store.redb");
+        {
+            let s = Store::open(&path).unwrap();
+            s.put_job("a", b"{\"x\":1}").unwrap();
+            s.put_tile("a", 3, &[1, 2, 3]).unwrap();
+            s.put_tile("a", 1, &[4]).unwrap();
+            s.put_tile("b", 0, &[5]).unwrap();
+            s.put_asset("blake3:00.obj", b"v 0 0 0").unwrap();
+        }
+        let s = Store::open(&path).unwrap();
+        assert_eq!(s.jobs().unwrap(), vec![("a".to_owned(), b"{\"x\":1}".to_vec())]);
+        assert_eq!(s.finished_tiles("a").unwrap(), vec![1, 3]);
+        assert_eq!(s.tile("a", 3).unwrap(), Some(vec![1, 2, 3]));
+        assert_eq!(s.tile("a", 2).unwrap(), None);
+        assert!(s.has_asset("blake3:00.obj").unwrap());
+        assert!(!s.has_asset("blake3:01.obj").unwrap());
+        s.remove_tiles("a").unwrap();
+        assert!(s.finished_tiles("a").unwrap().is_empty());
+        assert_eq!(s.finished_tiles("b").unwrap(), vec![0]);
+    }
+}

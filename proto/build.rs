@@ -1,0 +1,9 @@
+//! Compiles `proto/restauro.proto` with protox, a protobuf compiler in Rust, so a fresh machine
+//! needs no `protoc` (see ../shared/notes/api-notes.md, §1).
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let files = protox::compile(["proto/restauro.proto"], ["proto"])?;
+    tonic_prost_build::configure().build_server(true).build_client(true).compile_fds(files)?;
+    println!("cargo:rerun-if-changed=proto");
+    Ok(())
+}

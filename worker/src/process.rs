@@ -1,0 +1,496 @@
+//! The worker process: it dials the coordinator (so it works behind NAT and in Kubernetes),
+//! registers with its capacity, protocol version and build, and then pulls tile leases one at a
+//! time. Each job's scene is fetched (assets by hash, cached on disk), checked and prepared once;
+//! tiles render on a rayon pool, never on the async runtime's threads. A result is sent back in
+//! chunks and kept until the coordinator acknowledges it. SIGTERM drains: the tile in hand is
+//! finished and delivered, then the worker exits.
+//!
+//! When the coordinator goes away the worker keeps trying to reach it; a restarted coordinator
+//! does not know the worker, which then registers again.
+
+use crate::prepared::{PreparedScene, Settings};
+use crate::tile::{Rect, render_tile};
+use anyhow::{Context, Result, anyhow, bail};
+use restauro_proto::pb::work_client::WorkClient;
+use restauro_proto::{self as pb, CHUNK_BYTES, Credentials, PROTOCOL_VERSION};
+use restauro_scene::bundle::Bundle;
+use restauro_scene::load::Limits;
+use restauro_scene::plan::Plan;
+use restauro_scene::scene_file::Integrator;
+use std::collections::{BTreeMap, HashMap};
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+use tokio::sync::{oneshot, watch};
+use tonic::service::interceptor::InterceptedService;
+use tonic::transport::{Channel, Endpoint};
+use tracing::{info, warn};
+
+type Client = WorkClient<InterceptedService<Channel, Credentials>>;
+
+#[derive(clap::Args, Clone, Debug)]
+pub struct WorkerArgs {
+    /// The coordinator's URL (else RESTAURO_COORDINATOR).
+    #[arg(long, env = "RESTAURO_COORDINATOR")]
+    pub coordinator: String,
+    /// A file holding the worker token (else RESTAURO_WORKER_TOKEN).
+    #[arg(long)]
+    pub token_file: Option<PathBuf>,
+    /// Render threads; 0 uses every core.
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// The name shown in `restauro workers`; the host name by default.
+    #[arg(long)]
+    pub name: Option<String>,
+    /// Where fetched scene assets are cached, by hash.
+    #[arg(long)]
+    pub cache: Option<PathBuf>,
+    /// The protocol version to announce (for testing the coordinator's refusal).
+    #[arg(long, hide = true, default_value_t = PROTOCOL_VERSION)]
+    pub protocol_version: u32,
+    /// Append `job tile attempt` for every tile rendered to this file (for tests).
+    #[arg(long, hide = true)]
+    pub tile_log: Option<PathBuf>,
+    /// Exit when standard input closes (an embedded cluster's processes end with their parent).
+    #[arg(long, hide = true)]
+    pub exit_with_stdin: bool,
+}
+
+/// A job ready to render.
+struct ReadyJob {
+    scene: PreparedScene,
+    spectral: bool,
+}
+
+struct Worker {
+    args: WorkerArgs,
+    token: String,
+    pool: Arc<rayon::ThreadPool>,
+    cache: PathBuf,
+    jobs: HashMap<String, Arc<ReadyJob>>,
+    stop: watch::Receiver<bool>,
+}
+
+fn token(args: &WorkerArgs) -> Result<String> {
+    let token = match &args.token_file {
+        Some(path) => std::fs::read_to_string(path)
+            .with_context(|| format!("reading the token file {}", path.display()))?,
+        None => std::env::var("RESTAURO_WORKER_TOKEN").unwrap_or_default(),
+    };
+    let token = token.trim().to_owned();
+    if token.is_empty() {
+        bail!("no worker token: give --token-file FILE or set RESTAURO_WORKER_TOKEN");
+    }
+    Ok(token)
+}
+
+pub fn run(args: &WorkerArgs) -> Result<()> {
+    let token = token(args)?;
+    let threads = if args.threads == 0 { num_threads() } else { args.threads };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .thread_name(|i| format!("render-{i}"))
+        .build()
+        .context("starting the render threads")?;
+    let cache =
+        args.cache.clone().unwrap_or_else(|| std::env::temp_dir().join("restauro-worker-cache"));
+    std::fs::create_dir_all(&cache).with_context(|| format!("creating {}", cache.display()))?;
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(1)
+        .enable_all()
+        .build()
+        .context("starting the async runtime")?;
+    runtime.block_on(async {
+        let (stop_tx, stop) = watch::channel(false);
+        let exit_with_stdin = args.exit_with_stdin;
+        tokio::spawn(async move {
+            stop_signal(exit_with_stdin).await;
+            info!("stop requested: finishing the tile in hand");
+            let _ = stop_tx.send(true);
+        });
+        let mut worker = Worker {
+            args: args.clone(),
+            token,
+            pool: Arc::new(pool),
+            cache,
+            jobs: HashMap::new(),
+            stop,
+        };
+        worker.serve(threads as u32).await
+    })
+}
+
+fn num_threads() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+async fn stop_signal(exit_with_stdin: bool) {
+    let stdin_closed = async move {
+        if exit_with_stdin {
+            use tokio::io::AsyncReadExt;
+            let mut buf = [0u8; 64];
+            let mut stdin = tokio::io::stdin();
+            while matches!(stdin.read(&mut buf).await, Ok(n) if n > 0) {}
+        } else {
+            std::future::pending::<()>().await;
+        }
+    };
+    let mut term = tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate())
+        .expect("installing a SIGTERM handler");
+    tokio::select! {
+        _ = term.recv() => {}
+        _ = tokio::signal::ctrl_c() => {}
+        _ = stdin_closed => {}
+    }
+}
+
+fn is_refusal(status: &tonic::Status) -> bool {
+    matches!(
+        status.code(),
+        tonic::Code::Unauthenticated
+            | tonic::Code::PermissionDenied
+            | tonic::Code::FailedPrecondition
+            | tonic::Code::InvalidArgument
+    )
+}
+
+impl Worker {
+    fn stopping(&self) -> bool {
+        *self.stop.borrow()
+    }
+
+    async fn connect(&self) -> Result<Client> {
+        let credentials = Credentials::new(&self.token, self.args.protocol_version)
+            .map_err(|e| anyhow!("worker token: {e}"))?;
+        let endpoint = Endpoint::from_shared(self.args.coordinator.clone())
+            .with_context(|| format!("coordinator URL `{}`", self.args.coordinator))?
+            .connect_timeout(Duration::from_secs(5))
+            .tcp_nodelay(true);
+        let mut backoff = Duration::from_millis(50);
+        loop {
+            match endpoint.connect().await {
+                Ok(channel) => {
+                    return Ok(WorkClient::with_interceptor(channel, credentials)
+                        .max_decoding_message_size(8 << 20));
+                }
+                Err(e) => {
+                    if self.stopping() {
+                        bail!("stopped while connecting");
+                    }
+                    warn!(
+                        "cannot reach the coordinator at {}: {e}; retrying",
+                        self.args.coordinator
+                    );
+                    tokio::time::sleep(backoff).await;
+                    backoff = (backoff * 2).min(Duration::from_secs(1));
+                }
+            }
+        }
+    }
+
+    /// Registers, heartbeats and renders until stopped; reconnects and registers again when the
+    /// coordinator goes away or forgets this worker.
+    async fn serve(&mut self, capacity: u32) -> Result<()> {
+        let name = self.args.name.clone().unwrap_or_else(hostname);
+        'connection: loop {
+            if self.stopping() {
+                return Ok(());
+            }
+            let mut client = self.connect().await?;
+            let reply = match client
+                .register(pb::RegisterRequest {
+                    protocol_version: self.args.protocol_version,
+                    name: name.clone(),
+                    capacity,
+                    build: format!("restauro-worker {}", env!("CARGO_PKG_VERSION")),
+                })
+                .await
+            {
+                Ok(r) => r.into_inner(),
+                Err(status) if is_refusal(&status) => {
+                    bail!("the coordinator refused this worker: {}", status.message())
+                }
+                Err(status) => {
+                    warn!("registering: {}; retrying", status.message());
+                    tokio::time::sleep(Duration::from_millis(200)).await;
+                    continue;
+                }
+            };
+            let id = reply.worker_id;
+            info!(worker = id, %name, capacity, "registered");
+            let heartbeat = {
+                let mut client = client.clone();
+                let period = Duration::from_millis(u64::from(reply.heartbeat_ms.max(50)));
+                tokio::spawn(async move {
+                    let mut tick = tokio::time::interval(period);
+                    loop {
+                        tick.tick().await;
+                        match client.heartbeat(pb::HeartbeatRequest { worker_id: id }).await {
+                            Ok(r) if !r.get_ref().known => return,
+                            _ => {}
+                        }
+                    }
+                })
+            };
+            loop {
+                if self.stopping() {
+                    heartbeat.abort();
+                    info!("drained; exiting");
+                    return Ok(());
+                }
+                let pulled = client
+                    .pull_leases(pb::PullRequest { worker_id: id, max: 1, wait_ms: 1000 })
+                    .await;
+                let reply = match pulled {
+                    Ok(r) => r.into_inner(),
+                    Err(status) => {
+                        warn!("pulling leases: {}; reconnecting", status.message());
+                        heartbeat.abort();
+                        tokio::time::sleep(Duration::from_millis(100)).await;
+                        continue 'connection;
+                    }
+                };
+                if !reply.known {
+                    info!("the coordinator does not know this worker; registering again");
+                    heartbeat.abort();
+                    continue 'connection;
+                }
+                for lease in reply.leases {
+                    if let Err(e) = self.render_and_report(&mut client, id, lease).await {
+                        warn!("{e:#}");
+                    }
+                }
+            }
+        }
+    }
+
+    async fn render_and_report(
+        &mut self,
+        client: &mut Client,
+        id: u64,
+        lease: pb::Lease,
+    ) -> Result<()> {
+        let rect = lease.rect.ok_or_else(|| anyhow!("a lease without a rectangle"))?;
+        let rect = Rect { x: rect.x, y: rect.y, width: rect.width, height: rect.height };
+        let job = match self.job(client, &lease.job_id).await {
+            Ok(job) => job,
+            Err(e) => {
+                let reason = format!("{e:#}");
+                client
+                    .fail_tile(pb::FailRequest {
+                        worker_id: id,
+                        lease: Some(lease.clone()),
+                        reason,
+                    })
+                    .await?;
+                return Err(e);
+            }
+        };
+        if let Some(log) = &self.args.tile_log {
+            let line = format!("{} {} {}\n", lease.job_id, lease.tile, lease.attempt);
+            std::fs::OpenOptions::new()
+                .create(true)
+                .append(true)
+                .open(log)
+                .and_then(|mut f| f.write_all(line.as_bytes()))
+                .with_context(|| format!("appending to {}", log.display()))?;
+        }
+        let started = Instant::now();
+        let (tx, rx) = oneshot::channel();
+        {
+            let job = job.clone();
+            self.pool.spawn(move || {
+                let tile = render_tile(&job.scene, rect, job.spectral);
+                let _ = tx.send(tile);
+            });
+        }
+        let tile = rx.await.context("the render thread stopped")?;
+        let render_s = started.elapsed().as_secs_f64();
+        let mut data = Vec::with_capacity(tile.xyz.len() * 12);
+        for v in tile.xyz.iter().flatten() {
+            data.extend_from_slice(&v.to_le_bytes());
+        }
+        let xyz_bytes = data.len() as u64;
+        if let Some(spectra) = &tile.spectral {
+            for v in spectra.iter().flat_map(|s| s.0.iter()) {
+                data.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+        let header = pb::TileHeader {
+            worker_id: id,
+            lease: Some(lease.clone()),
+            rays: tile.rays,
+            render_s,
+            xyz_bytes,
+            spectral_bytes: data.len() as u64 - xyz_bytes,
+        };
+        // Kept until acknowledged: retried while the coordinator is unreachable.
+        let mut backoff = Duration::from_millis(100);
+        for attempt in 0.. {
+            let mut messages =
+                vec![pb::TileChunk { part: Some(pb::tile_chunk::Part::Header(header.clone())) }];
+            messages.extend(
+                data.chunks(CHUNK_BYTES)
+                    .map(|c| pb::TileChunk { part: Some(pb::tile_chunk::Part::Data(c.to_vec())) }),
+            );
+            match client.report_tile(tokio_stream::iter(messages)).await {
+                Ok(reply) => {
+                    if !reply.get_ref().accepted {
+                        info!(job = %lease.job_id, tile = lease.tile, "result no longer wanted (stale lease)");
+                    }
+                    return Ok(());
+                }
+                Err(status) if is_refusal(&status) => {
+                    bail!(
+                        "tile {} of job {} refused: {}",
+                        lease.tile,
+                        lease.job_id,
+                        status.message()
+                    )
+                }
+                Err(status) => {
+                    if attempt >= 50 {
+                        bail!(
+                            "giving up on tile {} of job {}: {}",
+                            lease.tile,
+                            lease.job_id,
+                            status.message()
+                        );
+                    }
+                    warn!("reporting tile {}: {}; retrying", lease.tile, status.message());
+                    tokio::time::sleep(backoff).await;
+                    backoff = (backoff * 2).min(Duration::from_secs(1));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The prepared scene of a job, fetched and prepared on first use.
+    async fn job(&mut self, client: &mut Client, job_id: &str) -> Result<Arc<ReadyJob>> {
+        if let Some(job) = self.jobs.get(job_id) {
+            return Ok(job.clone());
+        }
+        let spec = client
+            .fetch_job(pb::JobRef { job_id: job_id.to_owned() })
+            .await
+            .map_err(|s| anyhow!("fetching job {job_id}: {}", s.message()))?
+            .into_inner();
+        let skeleton: Bundle =
+            Bundle { scene: serde_json_scene(&spec.manifest_json)?, files: BTreeMap::new() };
+        let mut files = BTreeMap::new();
+        for reference in skeleton.references() {
+            let (hash, bytes) = self.asset(client, &reference).await?;
+            files.insert(hash, bytes);
+        }
+        let options = spec.options.unwrap_or_default();
+        let manifest = spec.manifest_json;
+        let pool = self.pool.clone();
+        let job_name = job_id.to_owned();
+        let ready = tokio::task::spawn_blocking(move || -> Result<ReadyJob> {
+            let bundle = Bundle::from_parts(&manifest, files)?;
+            let limits = Limits::default();
+            let mut scene = bundle.load(&limits)?;
+            let render_options = restauro_scene::plan::RenderOptions {
+                variant: nonempty(&options.variant),
+                integrator: match options.integrator.as_str() {
+                    "" => None,
+                    "whitted" => Some(Integrator::Whitted),
+                    "path" => Some(Integrator::Path),
+                    other => bail!("integrator `{other}`: use whitted or path"),
+                },
+                samples_per_pixel: nonzero(options.samples_per_pixel),
+                width: nonzero(options.width),
+                height: nonzero(options.height),
+                spectral: options.spectral,
+                tile: nonzero(options.tile),
+            };
+            let plan = Plan::new(&scene, &render_options, &limits, Path::new(&format!("job {job_name}")))?;
+            plan.apply(&mut scene);
+            let started = Instant::now();
+            let prepared = pool.install(|| {
+                PreparedScene::new(&scene, plan.variant.as_deref(), Settings::from(&plan))
+            })?;
+            info!(job = %job_name, triangles = prepared.triangle_count(), seconds = started.elapsed().as_secs_f64(), "scene prepared");
+            Ok(ReadyJob { scene: prepared, spectral: plan.spectral })
+        })
+        .await??;
+        let ready = Arc::new(ready);
+        // A worker keeps a few jobs' scenes; older ones are prepared again if they come back.
+        if self.jobs.len() >= 4 {
+            self.jobs.clear();
+        }
+        self.jobs.insert(job_id.to_owned(), ready.clone());
+        Ok(ready)
+    }
+
+    /// An asset's bytes, from the disk cache or the coordinator, checked against its hash.
+    async fn asset(&self, client: &mut Client, reference: &str) -> Result<(String, Vec<u8>)> {
+        let hash = reference
+            .strip_prefix("blake3:")
+            .and_then(|r| r.split_once('.'))
+            .map(|(h, _)| h.to_owned())
+            .filter(|h| h.len() == 64 && h.bytes().all(|b| b.is_ascii_hexdigit()))
+            .ok_or_else(|| anyhow!("asset reference `{reference}` is not blake3:<hash>.<ext>"))?;
+        let cached = self.cache.join(&hash);
+        if let Ok(bytes) = std::fs::read(&cached)
+            && blake3::hash(&bytes).to_hex().as_str() == hash
+        {
+            return Ok((hash, bytes));
+        }
+        let mut stream = client
+            .fetch_asset(pb::AssetRef { reference: reference.to_owned() })
+            .await
+            .map_err(|s| anyhow!("fetching {reference}: {}", s.message()))?
+            .into_inner();
+        let mut bytes = Vec::new();
+        while let Some(chunk) =
+            stream.message().await.map_err(|s| anyhow!("fetching {reference}: {}", s.message()))?
+        {
+            bytes.extend_from_slice(&chunk.data);
+        }
+        if blake3::hash(&bytes).to_hex().as_str() != hash {
+            bail!("asset {reference} arrived damaged (its hash differs)");
+        }
+        let temporary = self.cache.join(format!("{hash}.partial-{}", std::process::id()));
+        if std::fs::write(&temporary, &bytes)
+            .and_then(|()| std::fs::rename(&temporary, &cached))
+            .is_err()
+        {
+            warn!("could not cache {reference} in {}", self.cache.display());
+        }
+        Ok((hash, bytes))
+    }
+}
+
+fn serde_json_scene(manifest: &str) -> Result<restauro_scene::scene_file::SceneFile> {
+    Bundle::parse_manifest(manifest).map_err(|e| anyhow!("{e}"))
+}
+
+fn nonzero(v: u32) -> Option<u32> {
+    (v != 0).then_some(v)
+}
+
+fn nonempty(s: &str) -> Option<String> {
+    (!s.is_empty()).then(|| s.to_owned())
+}
+
+fn hostname() -> String {
+    std::fs::read_to_string("/proc/sys/kernel/hostname")
+        .map(|s| s.trim().to_owned())
+        .ok()
+        .filter(|s| !s.is_empty())
+        .map_or_else(
+            || format!("worker-{}", std::process::id()),
+            |h| format!("{h}-{}", std::process::id()),
+        )
+}
+
+/// Logs to standard error, filtered by `RUST_LOG` (default `info`).
+pub fn init_logging() {
+    let filter = tracing_subscriber::EnvFilter::try_from_default_env()
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info"));
+    let _ =
+        tracing_subscriber::fmt().with_env_filter(filter).with_writer(std::io::stderr).try_init();
+}

@@ -206,3 +206,107 @@ fn tokens_roles_versions_and_bad_scenes_are_refused() {
         text(&o)
     );
 }
+
+fn lines(path: &Path) -> Vec<String> {
+    std::fs::read_to_string(path).unwrap_or_default().lines().map(str::to_owned).collect()
+}
+
+#[test]
+fn a_restarted_coordinator_resumes_without_rendering_finished_tiles_again() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = d.join("aosta");
+    let o = restauro(&[
+        "scene",
+        "aosta",
+        "--out",
+        scene.to_str().unwrap(),
+        "--width",
+        "192",
+        "--height",
+        "108",
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let scene = scene.join("aosta.toml").to_str().unwrap().to_owned();
+    let data = d.join("data");
+    let mut coordinator = Coordinator::start(d, &data, "127.0.0.1:0", &[]);
+    let url = coordinator.url.clone();
+    let (logs, mut workers): (Vec<_>, Vec<_>) = (1..=2)
+        .map(|i| {
+            let log = d.join(format!("tiles-{i}.log"));
+            let w =
+                Worker::start(d, &url, &format!("w{i}"), &["--tile-log", log.to_str().unwrap()]);
+            (log, w)
+        })
+        .unzip();
+    let (client_token, _) = token_files(d);
+    let token = client_token.to_str().unwrap();
+    let args = ["--spp", "64", "--tile", "16", "--integrator", "path"];
+    let mut submit =
+        vec!["submit", scene.as_str(), "--coordinator", url.as_str(), "--token-file", token];
+    submit.extend(args);
+    let o = restauro(&submit);
+    assert!(o.status.success(), "{}", text(&o));
+    let id = String::from_utf8_lossy(&o.stdout).trim().to_owned();
+    let total = 12 * 7;
+    // Kill the coordinator (SIGKILL) once some tiles, not all, are finished.
+    let deadline = Instant::now() + Duration::from_secs(60);
+    loop {
+        let rendered: usize = logs.iter().map(|l| lines(l).len()).sum();
+        if rendered >= 12 {
+            break;
+        }
+        assert!(Instant::now() < deadline, "no progress");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    coordinator.child.kill().unwrap();
+    coordinator.child.wait().unwrap();
+    let finished = {
+        let store = restauro_coordinator::store::Store::open(&data.join("store.redb")).unwrap();
+        store.finished_tiles(&id).unwrap()
+    };
+    assert!(
+        !finished.is_empty() && finished.len() < total,
+        "{} of {total} finished at the kill",
+        finished.len()
+    );
+    let offsets: Vec<usize> = logs.iter().map(|l| lines(l).len()).collect();
+    let addr = url.strip_prefix("http://").unwrap();
+    let _coordinator = Coordinator::start(d, &data, addr, &[]);
+    let o = restauro(&["watch", &id, "--coordinator", &url, "--token-file", token]);
+    assert!(text(&o).contains("done"), "{}", text(&o));
+    let after: Vec<u32> = logs
+        .iter()
+        .zip(&offsets)
+        .flat_map(|(l, &from)| lines(l).into_iter().skip(from))
+        .filter(|line| line.starts_with(&id))
+        .map(|line| line.split(' ').nth(1).unwrap().parse().unwrap())
+        .collect();
+    for tile in &after {
+        assert!(
+            !finished.contains(tile),
+            "tile {tile} was finished before the restart and rendered again"
+        );
+    }
+    assert_eq!(after.len(), total - finished.len(), "tiles rendered after the restart");
+    let out = d.join("resumed");
+    let o = restauro(&[
+        "fetch",
+        &id,
+        "--out",
+        out.to_str().unwrap(),
+        "--coordinator",
+        &url,
+        "--token-file",
+        token,
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let local = d.join("local");
+    let mut render =
+        vec!["render", scene.as_str(), "--in-process", "--out", local.to_str().unwrap()];
+    render.extend(args);
+    let o = restauro(&render);
+    assert!(o.status.success(), "{}", text(&o));
+    assert_identical(&pixels(&out.join("aosta.exr")), &pixels(&local.join("aosta.exr")));
+    workers.clear();
+}

@@ -60,6 +60,8 @@ pub fn mondrian(width: usize, height: usize, seed: u64) -> Vec<[f32; 3]> {
 pub fn run(args: &BenchArgs) -> Result<String> {
     match args.target {
         BenchTarget::Tracer => crate::bench_tracer::bench(args),
+        BenchTarget::Cluster => crate::bench_cluster::bench(args),
+        BenchTarget::Scheduler => crate::bench_scheduler::bench(args),
         BenchTarget::Retinex => {
             let (w, h) = (args.width, args.height);
             let img = mondrian(w, h, 1);

@@ -19,7 +19,12 @@ use std::time::Instant;
 
 /// The process's CPU time (user + system), seconds.
 fn cpu_seconds() -> f64 {
-    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    process_cpu_seconds("self")
+}
+
+/// A process's CPU time (user + system), seconds, from `/proc/<pid>/stat` (Linux; 0 elsewhere).
+pub fn process_cpu_seconds(pid: &str) -> f64 {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
     let after = stat.rsplit(')').next().unwrap_or("");
     let fields: Vec<&str> = after.split_whitespace().collect();
     // Fields 14 and 15 of proc_pid_stat(5) are utime and stime in clock ticks (100 per

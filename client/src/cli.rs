@@ -144,6 +144,9 @@ pub struct RenderArgs {
     /// Workers of the embedded local cluster.
     #[arg(long, default_value_t = 2)]
     pub workers: usize,
+    /// Keep the embedded cluster's logs (RUST_LOG filters them) in this folder.
+    #[arg(long, conflicts_with = "coordinator")]
+    pub cluster_logs: Option<PathBuf>,
     #[command(flatten)]
     pub connect: OptionalConnectArgs,
     #[command(flatten)]
@@ -378,12 +381,21 @@ pub struct BenchArgs {
     /// How many times to run; the best time is reported with all of them.
     #[arg(long, default_value_t = 3)]
     pub repeats: u32,
-    /// Tracer: the scene.
+    /// Tracer: the scene (the cluster benchmark renders the Aosta facade).
     #[arg(long, value_enum, default_value = "aosta")]
     pub scene: BenchScene,
-    /// Tracer: samples per pixel.
+    /// Tracer and cluster: samples per pixel.
     #[arg(long, default_value_t = 4)]
     pub spp: u32,
+    /// Scheduler: simulated workers, each with its own connection.
+    #[arg(long, default_value_t = 300)]
+    pub workers: usize,
+    /// Scheduler: jobs submitted at once.
+    #[arg(long, default_value_t = 4)]
+    pub jobs: u32,
+    /// Scheduler: tile edge in pixels.
+    #[arg(long, default_value_t = 16)]
+    pub tile: u32,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -392,6 +404,10 @@ pub enum BenchTarget {
     Retinex,
     /// The tracer: the BVH alone against whole Whitted samples, and the path integrator.
     Tracer,
+    /// A render through an embedded cluster of two workers against the same one in-process.
+    Cluster,
+    /// The coordinator's leases and results per second over gRPC, with simulated workers.
+    Scheduler,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]

@@ -136,38 +136,43 @@ pub async fn watch(client: &mut Client, job_id: &str, show: bool) -> Result<pb::
     last.ok_or_else(|| anyhow!("job {job_id}: the coordinator closed the watch without a status"))
 }
 
-/// Downloads every result file of a finished job into `out`, each written atomically.
-pub async fn fetch(
-    client: &mut Client,
-    status: &pb::JobStatus,
-    out: &Path,
-) -> Result<Vec<PathBuf>> {
+/// Downloads every result file of a finished job into `out`, each written atomically; the
+/// files travel at once, each written as soon as it has arrived.
+pub async fn fetch(client: &Client, status: &pb::JobStatus, out: &Path) -> Result<Vec<PathBuf>> {
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    let mut written = Vec::new();
-    for name in &status.results {
-        let mut stream = client
-            .fetch_result(pb::FetchResultRequest {
-                job_id: status.job_id.clone(),
-                name: name.clone(),
-            })
-            .await
-            .map_err(|s| refused(&format!("fetching {name}"), s))?
-            .into_inner();
-        let mut data = Vec::new();
-        while let Some(chunk) =
-            stream.message().await.map_err(|s| refused(&format!("fetching {name}"), s))?
-        {
-            data.extend_from_slice(&chunk.data);
-        }
+    let mut downloads = tokio::task::JoinSet::new();
+    for (index, name) in status.results.iter().enumerate() {
         // Only a plain file name is accepted from the coordinator: nothing lands outside `out`.
-        if name.contains(['/', '\\']) || name.starts_with('.') {
+        if name.contains(['/', '\\']) || name.starts_with('.') || name.is_empty() {
             bail!("the coordinator named a result `{name}`, which is not a plain file name");
         }
-        let path = out.join(name);
-        atomic_file::write(&path, &data)?;
-        written.push(path);
+        let (mut client, name, path) = (client.clone(), name.clone(), out.join(name));
+        let job_id = status.job_id.clone();
+        downloads.spawn(async move {
+            let mut stream = client
+                .fetch_result(pb::FetchResultRequest { job_id, name: name.clone() })
+                .await
+                .map_err(|s| refused(&format!("fetching {name}"), s))?
+                .into_inner();
+            let mut data = Vec::new();
+            while let Some(chunk) =
+                stream.message().await.map_err(|s| refused(&format!("fetching {name}"), s))?
+            {
+                data.extend_from_slice(&chunk.data);
+            }
+            let written = path.clone();
+            tokio::task::spawn_blocking(move || atomic_file::write(&path, &data))
+                .await?
+                .with_context(|| format!("writing {}", written.display()))?;
+            anyhow::Ok((index, written))
+        });
     }
-    Ok(written)
+    let mut written = Vec::new();
+    while let Some(done) = downloads.join_next().await {
+        written.push(done??);
+    }
+    written.sort();
+    Ok(written.into_iter().map(|(_, path)| path).collect())
 }
 
 /// A coordinator and workers started as child processes of this executable, on loopback. They
@@ -176,6 +181,7 @@ pub struct LocalCluster {
     children: Vec<Child>,
     pub url: String,
     pub client_token: String,
+    pub worker_token: String,
     _dir: tempfile::TempDir,
 }
 
@@ -185,8 +191,18 @@ fn random_token() -> String {
 }
 
 impl LocalCluster {
-    /// Starts a coordinator and `workers` workers sharing this machine's cores.
-    pub fn start(workers: usize) -> Result<LocalCluster> {
+    /// Starts a coordinator and `workers` workers sharing this machine's cores; their logs go to
+    /// `logs` when given, else into the temporary folder that goes with the cluster.
+    pub fn start(workers: usize, logs: Option<&Path>) -> Result<LocalCluster> {
+        Self::start_with(workers, logs, &[])
+    }
+
+    /// As `start`, with more arguments for the coordinator.
+    pub fn start_with(
+        workers: usize,
+        logs: Option<&Path>,
+        coordinator_args: &[&str],
+    ) -> Result<LocalCluster> {
         let exe = std::env::current_exe().context("finding this executable")?;
         let dir = tempfile::Builder::new().prefix("restauro-cluster-").tempdir()?;
         let client_token = random_token();
@@ -195,8 +211,14 @@ impl LocalCluster {
         let worker_file = dir.path().join("worker.token");
         std::fs::write(&client_file, &client_token)?;
         std::fs::write(&worker_file, &worker_token)?;
+        let log_dir = logs.unwrap_or(dir.path()).to_owned();
+        std::fs::create_dir_all(&log_dir)
+            .with_context(|| format!("creating {}", log_dir.display()))?;
         let log = |name: &str| -> Result<Stdio> {
-            Ok(Stdio::from(std::fs::File::create(dir.path().join(format!("{name}.log")))?))
+            let path = log_dir.join(format!("{name}.log"));
+            let file = std::fs::File::create(&path)
+                .with_context(|| format!("creating {}", path.display()))?;
+            Ok(Stdio::from(file))
         };
         let mut coordinator = Command::new(&exe)
             .args(["coordinator", "--listen", "127.0.0.1:0", "--exit-with-stdin", "--data"])
@@ -205,6 +227,7 @@ impl LocalCluster {
             .arg(&client_file)
             .arg("--worker-token-file")
             .arg(&worker_file)
+            .args(coordinator_args)
             .env("RUST_LOG", std::env::var("RUST_LOG").unwrap_or_else(|_| "warn".into()))
             .stdin(Stdio::piped())
             .stdout(Stdio::piped())
@@ -216,8 +239,7 @@ impl LocalCluster {
         let mut line = String::new();
         BufReader::new(stdout).read_line(&mut line).context("reading the coordinator's address")?;
         let Some(addr) = line.trim().strip_prefix("listening on ") else {
-            let log =
-                std::fs::read_to_string(dir.path().join("coordinator.log")).unwrap_or_default();
+            let log = std::fs::read_to_string(log_dir.join("coordinator.log")).unwrap_or_default();
             for c in &mut children {
                 let _ = c.kill();
             }
@@ -241,30 +263,44 @@ impl LocalCluster {
                 .context("starting an embedded worker")?;
             children.push(child);
         }
-        Ok(LocalCluster { children, url, client_token, _dir: dir })
+        Ok(LocalCluster { children, url, client_token, worker_token, _dir: dir })
+    }
+}
+
+impl LocalCluster {
+    /// The coordinator's process id.
+    pub fn coordinator_pid(&self) -> u32 {
+        self.children[0].id()
     }
 }
 
 impl Drop for LocalCluster {
     fn drop(&mut self) {
-        // Closing stdin asks each process to stop; workers first, then the coordinator.
-        for child in self.children.iter_mut().rev() {
+        // Closing stdin asks each process to stop: the workers first (they drain and leave while
+        // the coordinator still answers), then the coordinator.
+        let deadline = Instant::now() + Duration::from_secs(10);
+        let (coordinator, workers) = self.children.split_at_mut(1);
+        for child in workers.iter_mut() {
             drop(child.stdin.take());
         }
-        let deadline = Instant::now() + Duration::from_secs(10);
-        for child in self.children.iter_mut().rev() {
-            loop {
-                match child.try_wait() {
-                    Ok(Some(_)) => break,
-                    Ok(None) if Instant::now() < deadline => {
-                        std::thread::sleep(Duration::from_millis(20))
-                    }
-                    _ => {
-                        let _ = child.kill();
-                        let _ = child.wait();
-                        break;
-                    }
-                }
+        for child in workers.iter_mut() {
+            stop_child(child, deadline);
+        }
+        drop(coordinator[0].stdin.take());
+        stop_child(&mut coordinator[0], deadline);
+    }
+}
+
+/// Waits for a child asked to stop; kills it at the deadline.
+fn stop_child(child: &mut Child, deadline: Instant) {
+    loop {
+        match child.try_wait() {
+            Ok(Some(_)) => return,
+            Ok(None) if Instant::now() < deadline => std::thread::sleep(Duration::from_millis(5)),
+            _ => {
+                let _ = child.kill();
+                let _ = child.wait();
+                return;
             }
         }
     }

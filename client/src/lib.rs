@@ -1,6 +1,8 @@
 //! The `restauro` command line as a library, so that tests run exactly what the binary runs.
 
 pub mod bench;
+pub mod bench_cluster;
+pub mod bench_scheduler;
 pub mod bench_tracer;
 pub mod cli;
 pub mod cluster;

@@ -78,18 +78,19 @@ pub fn run(args: &RenderArgs) -> Result<String> {
     if args.in_process {
         return run_in_process(args);
     }
-    let (bundle, plan) = checked_bundle(args)?;
     let started = Instant::now();
+    // An embedded cluster starts first: its processes come up while the scene is checked.
     let (url, token, _cluster) = match &args.connect.coordinator {
         Some(url) => {
             let token = crate::jobs_cmd::client_token(args.connect.token_file.as_deref())?;
             (url.clone(), token, None)
         }
         None => {
-            let c = LocalCluster::start(args.workers.max(1))?;
+            let c = LocalCluster::start(args.workers.max(1), args.cluster_logs.as_deref())?;
             (c.url.clone(), c.client_token.clone(), Some(c))
         }
     };
+    let (bundle, plan) = checked_bundle(args)?;
     let name = job_name(args);
     let runtime = cluster::runtime()?;
     let (status, files) = runtime.block_on(async {
@@ -110,7 +111,7 @@ pub fn run(args: &RenderArgs) -> Result<String> {
         if status.state != pb::JobState::Done as i32 {
             anyhow::bail!("job {} ended without results: {}", status.job_id, status.error);
         }
-        let files = cluster::fetch(&mut client, &status, &args.out).await?;
+        let files = cluster::fetch(&client, &status, &args.out).await?;
         anyhow::Ok((status, files))
     })?;
     let mut s = String::new();

@@ -82,21 +82,35 @@ pub fn summary(path: &Path, scene: &LoadedScene) -> String {
     s
 }
 
+/// Writes the procedural Aosta facade scene into `out`: `aosta.toml` and `meshes/facade.obj`.
+/// Returns both paths.
+pub fn write_aosta(
+    out: &Path,
+    width: u32,
+    height: u32,
+    seed: u64,
+) -> Result<(std::path::PathBuf, std::path::PathBuf)> {
+    let generated = restauro_scene::aosta::generate(width, height, seed);
+    let mesh = out.join("meshes/facade.obj");
+    let scene = out.join("aosta.toml");
+    atomic_file::write(&mesh, generated.facade_obj.as_bytes())
+        .with_context(|| format!("cannot write {}", mesh.display()))?;
+    atomic_file::write(&scene, generated.scene_toml.as_bytes())
+        .with_context(|| format!("cannot write {}", scene.display()))?;
+    Ok((scene, mesh))
+}
+
 pub fn run(command: &SceneCommand) -> Result<String> {
     match command {
         SceneCommand::Aosta { out, width, height, seed } => {
-            let generated = restauro_scene::aosta::generate(*width, *height, *seed);
-            let mesh = out.join("meshes/facade.obj");
-            let scene = out.join("aosta.toml");
-            atomic_file::write(&mesh, generated.facade_obj.as_bytes())
-                .with_context(|| format!("cannot write {}", mesh.display()))?;
-            atomic_file::write(&scene, generated.scene_toml.as_bytes())
-                .with_context(|| format!("cannot write {}", scene.display()))?;
+            let (scene, mesh) = write_aosta(out, *width, *height, *seed)?;
             // Check what was written as any scene is checked.
             let loaded = load_scene(&scene, &Limits::default())?;
             let mut s = summary(&scene, &loaded);
-            let _ = writeln!(s, "wrote {} ({} bytes)", scene.display(), generated.scene_toml.len());
-            let _ = writeln!(s, "wrote {} ({} bytes)", mesh.display(), generated.facade_obj.len());
+            for path in [&scene, &mesh] {
+                let bytes = std::fs::metadata(path).map_or(0, |m| m.len());
+                let _ = writeln!(s, "wrote {} ({bytes} bytes)", path.display());
+            }
             Ok(s)
         }
         SceneCommand::Check { scene, limits } => {

@@ -9,7 +9,7 @@
 //! ```
 
 use restauro_proto as pb;
-use restauro_scene::plan::{Rect, RenderOptions, tiles};
+use restauro_scene::plan::{Rect, RenderOptions, tile_count, tile_rect, tiles};
 use restauro_scene::scene_file::Integrator;
 use serde::{Deserialize, Serialize};
 
@@ -141,6 +141,15 @@ pub struct Record {
 impl Record {
     pub fn tiles(&self) -> Vec<Rect> {
         tiles(self.width, self.height, self.tile)
+    }
+
+    pub fn tile_count(&self) -> u32 {
+        tile_count(self.width, self.height, self.tile)
+    }
+
+    /// Tile `index`, without listing them all (leases and reports ask for one at a time).
+    pub fn tile(&self, index: u32) -> Option<Rect> {
+        tile_rect(self.width, self.height, self.tile, index)
     }
 
     pub fn to_bytes(&self) -> Vec<u8> {

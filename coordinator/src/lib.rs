@@ -5,6 +5,7 @@
 pub mod atomic_file;
 pub mod auth;
 pub mod framebuffer;
+pub mod group_commit;
 pub mod image_files;
 pub mod jobs;
 pub mod logging;

@@ -6,6 +6,7 @@
 
 use crate::auth::Tokens;
 use crate::framebuffer::{Framebuffer, tile_sizes};
+use crate::group_commit::TileCommits;
 use crate::jobs::{Options, Record, State};
 use crate::results::{ResultOptions, parse_exposure, write_results};
 use crate::scheduler::{self, Completion, Failure, Lease, Scheduler};
@@ -24,7 +25,7 @@ use tokio::sync::{Notify, mpsc, watch};
 use tokio_stream::wrappers::ReceiverStream;
 use tokio_stream::{Stream, StreamExt};
 use tonic::{Request, Response, Status, Streaming};
-use tracing::{info, warn};
+use tracing::{debug, info, warn};
 
 type Stream2<T> = Pin<Box<dyn Stream<Item = Result<T, Status>> + Send + 'static>>;
 
@@ -44,7 +45,9 @@ pub struct Config {
 
 pub struct Shared {
     config: Config,
-    store: Store,
+    store: Arc<Store>,
+    /// Finished tiles on their way into the store, committed in groups.
+    tile_commits: TileCommits,
     state: Mutex<State2>,
     /// Woken when tiles are queued (new job, requeue), for waiting `PullLeases` calls.
     work: Notify,
@@ -91,11 +94,14 @@ impl Shared {
         use anyhow::Context;
         std::fs::create_dir_all(config.data_dir.join("jobs"))
             .with_context(|| format!("creating {}", config.data_dir.display()))?;
-        let store = Store::open(&config.data_dir.join("store.redb"))?;
+        let store = Arc::new(Store::open(&config.data_dir.join("store.redb"))?);
+        let tile_commits =
+            TileCommits::start(store.clone()).context("starting the store's committer")?;
         let epoch =
             (now_unix_ms() & 0x7fff_ffff) << 32 | u64::from(std::process::id() & 0xffff) << 16;
         let shared = Arc::new(Shared {
             store,
+            tile_commits,
             state: Mutex::new(State2 {
                 scheduler: Scheduler::new(config.scheduler.clone()),
                 jobs: BTreeMap::new(),
@@ -114,7 +120,7 @@ impl Shared {
             let mut st = shared.lock();
             if !record.state.is_final() {
                 let done = shared.store.finished_tiles(&id)?;
-                let total = record.tiles().len() as u32;
+                let total = record.tile_count();
                 info!(job = %id, done = done.len(), total, "resuming job");
                 if matches!(record.state, State::Assembling | State::PostProcessing)
                     || done.len() as u32 == total
@@ -156,7 +162,7 @@ impl Shared {
 
     fn status(&self, st: &State2, record: &Record) -> pb::JobStatus {
         let progress = st.scheduler.progress(&record.id);
-        let total = record.tiles().len() as u32;
+        let total = record.tile_count();
         let done =
             if matches!(record.state, State::Done | State::Assembling | State::PostProcessing) {
                 total
@@ -273,6 +279,41 @@ impl Shared {
             }
             Err(reason) => self.fail_job(id, reason),
         }
+    }
+
+    /// Up to `max` new leases for worker `id` (known to the scheduler), as sent on the wire; a
+    /// queued job whose first tile goes out becomes running (stored after the lock is released).
+    fn grant(&self, mut st: MutexGuard<'_, State2>, id: u64, max: u32) -> Vec<pb::Lease> {
+        let leases = st.scheduler.lease(id, max.clamp(1, 64), Instant::now());
+        let mut out = Vec::with_capacity(leases.len());
+        let mut started = Vec::new();
+        for l in leases {
+            let Some(record) = st.jobs.get_mut(&*l.job) else { continue };
+            if record.state == State::Queued {
+                record.state = State::Running;
+                started.push(record.clone());
+            }
+            let Some(rect) = record.tile(l.tile) else { continue };
+            out.push(pb::Lease {
+                job_id: l.job.to_string(),
+                tile: l.tile,
+                attempt: l.attempt,
+                rect: Some(pb::Rect {
+                    x: rect.x,
+                    y: rect.y,
+                    width: rect.width,
+                    height: rect.height,
+                }),
+            });
+        }
+        drop(st);
+        for record in &started {
+            self.persist(record);
+        }
+        if !started.is_empty() {
+            self.bump();
+        }
+        out
     }
 
     /// Every asset a manifest names, from the store; refuses the manifest when one is missing.
@@ -605,6 +646,21 @@ impl WorkService {
     }
 }
 
+impl WorkService {
+    /// The leases a report asked for with its result.
+    fn more(&self, header: &pb::TileHeader) -> Vec<pb::Lease> {
+        if header.want == 0 {
+            return Vec::new();
+        }
+        let id = self.0.worker_id(header.worker_id);
+        let mut st = self.0.lock();
+        if id == 0 || !st.scheduler.heartbeat(id, Instant::now()) {
+            return Vec::new();
+        }
+        self.0.grant(st, id, header.want)
+    }
+}
+
 #[tonic::async_trait]
 impl pb::work_server::Work for WorkService {
     async fn register(
@@ -657,35 +713,9 @@ impl pb::work_server::Work for WorkService {
                 if id == 0 || !st.scheduler.heartbeat(id, Instant::now()) {
                     return Ok(Response::new(pb::PullReply { leases: Vec::new(), known: false }));
                 }
-                let leases = st.scheduler.lease(id, req.max.clamp(1, 64), Instant::now());
+                let leases = self.0.grant(st, id, req.max);
                 if !leases.is_empty() {
-                    let mut out = Vec::with_capacity(leases.len());
-                    let mut started = Vec::new();
-                    for l in leases {
-                        let Some(record) = st.jobs.get_mut(&*l.job) else { continue };
-                        if record.state == State::Queued {
-                            record.state = State::Running;
-                            started.push(record.clone());
-                        }
-                        let rect = record.tiles()[l.tile as usize];
-                        out.push(pb::Lease {
-                            job_id: l.job.to_string(),
-                            tile: l.tile,
-                            attempt: l.attempt,
-                            rect: Some(pb::Rect {
-                                x: rect.x,
-                                y: rect.y,
-                                width: rect.width,
-                                height: rect.height,
-                            }),
-                        });
-                    }
-                    drop(st);
-                    for r in &started {
-                        self.0.persist(r);
-                    }
-                    self.0.bump();
-                    return Ok(Response::new(pb::PullReply { leases: out, known: true }));
+                    return Ok(Response::new(pb::PullReply { leases, known: true }));
                 }
             }
             if tokio::time::timeout_at(deadline, notified).await.is_err() {
@@ -708,7 +738,7 @@ impl pb::work_server::Work for WorkService {
             let st = self.0.lock();
             match st.jobs.get(&*lease.job) {
                 Some(r) if matches!(r.state, State::Queued | State::Running) => {
-                    let Some(rect) = r.tiles().get(lease.tile as usize).copied() else {
+                    let Some(rect) = r.tile(lease.tile) else {
                         return Err(Status::invalid_argument(format!(
                             "job {} has no tile {}",
                             lease.job, lease.tile
@@ -716,7 +746,12 @@ impl pb::work_server::Work for WorkService {
                     };
                     (rect, r.options.spectral)
                 }
-                _ => return Ok(Response::new(pb::ReportReply { accepted: false })),
+                _ => {
+                    return Ok(Response::new(pb::ReportReply {
+                        accepted: false,
+                        leases: self.more(&header),
+                    }));
+                }
             }
         };
         let (xyz_bytes, spectral_bytes) = tile_sizes(&rect, spectral);
@@ -753,22 +788,22 @@ impl pb::work_server::Work for WorkService {
             )));
         }
         // Durable first, then accepted: an acknowledged tile is never rendered again.
-        let shared = self.0.clone();
-        let (job, tile) = (lease.job.clone(), lease.tile);
-        blocking(move || shared.store.put_tile(&job, tile, &data)).await?.map_err(internal)?;
+        self.0.tile_commits.put(lease.job.clone(), lease.tile, data).await.map_err(internal)?;
         let completion = self.0.lock().scheduler.complete(&lease, Instant::now());
         match completion {
             Completion::Accepted { job_finished } => {
-                info!(job = %lease.job, tile = lease.tile, worker = lease.worker, render_s = header.render_s, "tile done");
+                debug!(job = %lease.job, tile = lease.tile, worker = lease.worker, render_s = header.render_s, "tile done");
                 self.0.bump();
                 if job_finished {
                     let shared = self.0.clone();
                     let id = lease.job.to_string();
                     tokio::task::spawn_blocking(move || shared.assemble(&id));
                 }
-                Ok(Response::new(pb::ReportReply { accepted: true }))
+                Ok(Response::new(pb::ReportReply { accepted: true, leases: self.more(&header) }))
             }
-            Completion::Stale => Ok(Response::new(pb::ReportReply { accepted: false })),
+            Completion::Stale => {
+                Ok(Response::new(pb::ReportReply { accepted: false, leases: self.more(&header) }))
+            }
         }
     }
 
@@ -784,13 +819,15 @@ impl pb::work_server::Work for WorkService {
             Failure::Requeued => {
                 self.0.work.notify_waiters();
                 self.0.bump();
-                Ok(Response::new(pb::ReportReply { accepted: true }))
+                Ok(Response::new(pb::ReportReply { accepted: true, leases: Vec::new() }))
             }
             Failure::JobFailed { reason } => {
                 self.0.fail_job(&lease.job, reason);
-                Ok(Response::new(pb::ReportReply { accepted: true }))
+                Ok(Response::new(pb::ReportReply { accepted: true, leases: Vec::new() }))
             }
-            Failure::Stale => Ok(Response::new(pb::ReportReply { accepted: false })),
+            Failure::Stale => {
+                Ok(Response::new(pb::ReportReply { accepted: false, leases: Vec::new() }))
+            }
         }
     }
 
@@ -804,11 +841,19 @@ impl pb::work_server::Work for WorkService {
             let lease = self.lease_from(req.worker_id, Some(l))?;
             any |= self.0.lock().scheduler.give_back(&lease, Instant::now());
         }
+        if req.leaving {
+            let id = self.0.worker_id(req.worker_id);
+            if id != 0 {
+                let returned = self.0.lock().scheduler.remove_worker(id, Instant::now());
+                info!(worker = id, returned = returned.len(), "worker left");
+                any |= !returned.is_empty();
+            }
+        }
         if any {
             self.0.work.notify_waiters();
             self.0.bump();
         }
-        Ok(Response::new(pb::ReportReply { accepted: any }))
+        Ok(Response::new(pb::ReportReply { accepted: any, leases: Vec::new() }))
     }
 
     async fn fetch_job(

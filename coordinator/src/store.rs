@@ -16,7 +16,7 @@ const TILES: TableDefinition<(&str, u32), &[u8]> = TableDefinition::new("tiles")
 /// Asset reference (`blake3:<hex>.<ext>`) → bytes.
 const ASSETS: TableDefinition<&str, &[u8]> = TableDefinition::new("assets");
 
-#[derive(Debug, thiserror::Error)]
+#[derive(Clone, Debug, thiserror::Error)]
 pub enum StoreError {
     #[error("store {}: {message}", path.display())]
     Store { path: PathBuf, message: String },
@@ -80,8 +80,19 @@ impl Store {
     }
 
     pub fn put_tile(&self, job: &str, tile: u32, data: &[u8]) -> Result<()> {
+        self.put_tiles([(job, tile, data)])
+    }
+
+    /// Several finished tiles in one durable transaction (see `group_commit`).
+    pub fn put_tiles<'a>(
+        &self,
+        tiles: impl IntoIterator<Item = (&'a str, u32, &'a [u8])>,
+    ) -> Result<()> {
         self.write(|txn| {
-            txn.open_table(TILES)?.insert((job, tile), data)?;
+            let mut table = txn.open_table(TILES)?;
+            for (job, tile, data) in tiles {
+                table.insert((job, tile), data)?;
+            }
             Ok(())
         })
     }

@@ -55,6 +55,23 @@ pub fn auto_tile(width: u32, height: u32) -> u32 {
     edge.clamp(16, 256)
 }
 
+/// How many tiles of edge `tile` cover `width × height`.
+pub fn tile_count(width: u32, height: u32, tile: u32) -> u32 {
+    let tile = tile.max(1);
+    width.div_ceil(tile) * height.div_ceil(tile)
+}
+
+/// Tile `index` of `tiles(width, height, tile)`, computed directly.
+pub fn tile_rect(width: u32, height: u32, tile: u32, index: u32) -> Option<Rect> {
+    let edge = tile.max(1);
+    let across = width.div_ceil(edge);
+    if index >= tile_count(width, height, tile) {
+        return None;
+    }
+    let (x, y) = ((index % across) * edge, (index / across) * edge);
+    Some(Rect { x, y, width: edge.min(width - x), height: edge.min(height - y) })
+}
+
 /// The tiles of edge `tile` covering `width × height`, row-major.
 pub fn tiles(width: u32, height: u32, tile: u32) -> Vec<Rect> {
     let tile = tile.max(1);
@@ -154,6 +171,18 @@ impl Plan {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn a_tile_computed_directly_is_the_listed_one() {
+        for (w, h, t) in [(960, 540, 64), (17, 5, 16), (1, 1, 16), (256, 256, 16)] {
+            let listed = super::tiles(w, h, t);
+            assert_eq!(super::tile_count(w, h, t) as usize, listed.len());
+            for (i, r) in listed.iter().enumerate() {
+                assert_eq!(super::tile_rect(w, h, t, i as u32), Some(*r));
+            }
+            assert_eq!(super::tile_rect(w, h, t, listed.len() as u32), None);
+        }
+    }
+
     use super::*;
 
     #[test]

@@ -233,19 +233,35 @@ impl Worker {
                     }
                 })
             };
+            // Results travel back in the background, each kept until acknowledged, so the next
+            // tile starts while the coordinator commits the last one.
+            let mut reports = tokio::task::JoinSet::new();
             loop {
                 if self.stopping() {
+                    // Drain: deliver what is rendered, then leave, handing back any lease granted
+                    // to a poll that was abandoned.
+                    while reports.join_next().await.is_some() {}
+                    let leave =
+                        pb::ReturnRequest { worker_id: id, leases: Vec::new(), leaving: true };
+                    if let Err(status) = client.return_leases(leave).await {
+                        info!("leaving: {}", status.message());
+                    }
                     heartbeat.abort();
                     info!("drained; exiting");
                     return Ok(());
                 }
-                let pulled = client
-                    .pull_leases(pb::PullRequest { worker_id: id, max: 1, wait_ms: 1000 })
-                    .await;
+                let pull =
+                    client.pull_leases(pb::PullRequest { worker_id: id, max: 1, wait_ms: 1000 });
+                let mut stop = self.stop.clone();
+                let pulled = tokio::select! {
+                    pulled = pull => pulled,
+                    _ = stop.wait_for(|stopping| *stopping) => continue,
+                };
                 let reply = match pulled {
                     Ok(r) => r.into_inner(),
                     Err(status) => {
                         warn!("pulling leases: {}; reconnecting", status.message());
+                        while reports.join_next().await.is_some() {}
                         heartbeat.abort();
                         tokio::time::sleep(Duration::from_millis(100)).await;
                         continue 'connection;
@@ -253,30 +269,42 @@ impl Worker {
                 };
                 if !reply.known {
                     info!("the coordinator does not know this worker; registering again");
+                    while reports.join_next().await.is_some() {}
                     heartbeat.abort();
                     continue 'connection;
                 }
                 for lease in reply.leases {
-                    if let Err(e) = self.render_and_report(&mut client, id, lease).await {
-                        warn!("{e:#}");
+                    match self.render(&mut client, id, lease).await {
+                        Ok(Some(report)) => {
+                            while reports.len() >= MAX_REPORTS_IN_FLIGHT {
+                                reports.join_next().await;
+                            }
+                            let client = client.clone();
+                            reports.spawn(report.deliver(client));
+                        }
+                        Ok(None) => {}
+                        Err(e) => warn!("{e:#}"),
                     }
                 }
             }
         }
     }
 
-    async fn render_and_report(
+    /// Renders one leased tile; the result, ready to send. `None` when the job could not be
+    /// prepared (the tile is reported as failed).
+    async fn render(
         &mut self,
         client: &mut Client,
         id: u64,
         lease: pb::Lease,
-    ) -> Result<()> {
+    ) -> Result<Option<Report>> {
         let rect = lease.rect.ok_or_else(|| anyhow!("a lease without a rectangle"))?;
         let rect = Rect { x: rect.x, y: rect.y, width: rect.width, height: rect.height };
         let job = match self.job(client, &lease.job_id).await {
             Ok(job) => job,
             Err(e) => {
                 let reason = format!("{e:#}");
+                warn!(job = %lease.job_id, tile = lease.tile, "{reason}");
                 client
                     .fail_tile(pb::FailRequest {
                         worker_id: id,
@@ -284,7 +312,7 @@ impl Worker {
                         reason,
                     })
                     .await?;
-                return Err(e);
+                return Ok(None);
             }
         };
         if let Some(log) = &self.args.tile_log {
@@ -319,52 +347,15 @@ impl Worker {
         }
         let header = pb::TileHeader {
             worker_id: id,
-            lease: Some(lease.clone()),
+            lease: Some(lease),
             rays: tile.rays,
             render_s,
             xyz_bytes,
             spectral_bytes: data.len() as u64 - xyz_bytes,
+            // The next lease is pulled while this result travels; none is wanted with it.
+            want: 0,
         };
-        // Kept until acknowledged: retried while the coordinator is unreachable.
-        let mut backoff = Duration::from_millis(100);
-        for attempt in 0.. {
-            let mut messages =
-                vec![pb::TileChunk { part: Some(pb::tile_chunk::Part::Header(header.clone())) }];
-            messages.extend(
-                data.chunks(CHUNK_BYTES)
-                    .map(|c| pb::TileChunk { part: Some(pb::tile_chunk::Part::Data(c.to_vec())) }),
-            );
-            match client.report_tile(tokio_stream::iter(messages)).await {
-                Ok(reply) => {
-                    if !reply.get_ref().accepted {
-                        info!(job = %lease.job_id, tile = lease.tile, "result no longer wanted (stale lease)");
-                    }
-                    return Ok(());
-                }
-                Err(status) if is_refusal(&status) => {
-                    bail!(
-                        "tile {} of job {} refused: {}",
-                        lease.tile,
-                        lease.job_id,
-                        status.message()
-                    )
-                }
-                Err(status) => {
-                    if attempt >= 50 {
-                        bail!(
-                            "giving up on tile {} of job {}: {}",
-                            lease.tile,
-                            lease.job_id,
-                            status.message()
-                        );
-                    }
-                    warn!("reporting tile {}: {}; retrying", lease.tile, status.message());
-                    tokio::time::sleep(backoff).await;
-                    backoff = (backoff * 2).min(Duration::from_secs(1));
-                }
-            }
-        }
-        Ok(())
+        Ok(Some(Report { header, data }))
     }
 
     /// The prepared scene of a job, fetched and prepared on first use.
@@ -461,6 +452,55 @@ impl Worker {
             warn!("could not cache {reference} in {}", self.cache.display());
         }
         Ok((hash, bytes))
+    }
+}
+
+/// Rendered tiles sent back at once; more wait for one of these to be acknowledged.
+const MAX_REPORTS_IN_FLIGHT: usize = 4;
+
+/// A rendered tile on its way to the coordinator.
+struct Report {
+    header: pb::TileHeader,
+    data: Vec<u8>,
+}
+
+impl Report {
+    /// Sends the tile in chunks, retrying while the coordinator is unreachable: a result is
+    /// kept until it is acknowledged (or refused, or given up after many attempts).
+    async fn deliver(self, mut client: Client) {
+        let lease = self.header.lease.clone().unwrap_or_default();
+        let mut backoff = Duration::from_millis(100);
+        for attempt in 0.. {
+            let mut messages = vec![pb::TileChunk {
+                part: Some(pb::tile_chunk::Part::Header(self.header.clone())),
+            }];
+            messages.extend(
+                self.data
+                    .chunks(CHUNK_BYTES)
+                    .map(|c| pb::TileChunk { part: Some(pb::tile_chunk::Part::Data(c.to_vec())) }),
+            );
+            match client.report_tile(tokio_stream::iter(messages)).await {
+                Ok(reply) => {
+                    if !reply.get_ref().accepted {
+                        info!(job = %lease.job_id, tile = lease.tile, "result no longer wanted (stale lease)");
+                    }
+                    return;
+                }
+                Err(status) if is_refusal(&status) => {
+                    warn!(job = %lease.job_id, tile = lease.tile, "result refused: {}", status.message());
+                    return;
+                }
+                Err(status) => {
+                    if attempt >= 50 {
+                        warn!(job = %lease.job_id, tile = lease.tile, "giving up on the result: {}", status.message());
+                        return;
+                    }
+                    warn!(tile = lease.tile, "reporting: {}; retrying", status.message());
+                    tokio::time::sleep(backoff).await;
+                    backoff = (backoff * 2).min(Duration::from_secs(1));
+                }
+            }
+        }
     }
 }
 

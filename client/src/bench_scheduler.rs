@@ -1,0 +1,230 @@
+//! `restauro bench scheduler`: the coordinator's scheduling throughput over gRPC with a few
+//! hundred simulated workers.
+//!
+//! A real coordinator process (this executable, on loopback, its store on disk) receives
+//! several jobs of many small tiles; each simulated worker has its own connection and does what
+//! a worker does — register, pull one lease, report the tile (header and pixel data, streamed),
+//! pull the next — except rendering: its tiles are black. The jobs are submitted (and checked)
+//! first; the clock runs from the workers' first pull to the last acknowledged result, so every
+//! tile counted was leased, reported, checked and committed durably (in groups) by the
+//! coordinator.
+
+use crate::bench_tracer::process_cpu_seconds;
+use crate::cli::BenchArgs;
+use crate::cluster::{self, LocalCluster};
+use anyhow::{Context, Result, anyhow, bail};
+use restauro_proto::pb::work_client::WorkClient;
+use restauro_proto::{self as pb, Credentials, PROTOCOL_VERSION};
+use restauro_scene::bundle::bundle_scene;
+use restauro_scene::load::Limits;
+use serde::Serialize;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::time::{Duration, Instant};
+use tonic::transport::Endpoint;
+
+#[derive(Serialize)]
+struct SchedulerBench {
+    benchmark: &'static str,
+    simulated_workers: usize,
+    jobs: u32,
+    tiles_per_job: u32,
+    tile_pixels: u32,
+    /// Leases granted to the simulated workers.
+    leases: u64,
+    /// Results the coordinator acknowledged (durably stored).
+    results_accepted: u64,
+    seconds: f64,
+    /// Leased and acknowledged tiles per second (one lease and one result each).
+    tiles_per_second: f64,
+    /// The coordinator process's CPU seconds over the run, and per thousand tiles.
+    coordinator_cpu_seconds: f64,
+    coordinator_cpu_ms_per_1000_tiles: f64,
+    /// This process's CPU seconds (the simulated workers share the machine's cores).
+    simulated_workers_cpu_seconds: f64,
+}
+
+#[derive(Default)]
+struct Counts {
+    leases: AtomicU64,
+    accepted: AtomicU64,
+}
+
+pub fn bench(args: &BenchArgs) -> Result<String> {
+    let dir = tempfile::Builder::new().prefix("restauro-bench-scheduler-").tempdir()?;
+    let (scene, _) =
+        crate::scene_cmd::write_aosta(dir.path(), args.width as u32, args.height as u32, 1)?;
+    let bundle = bundle_scene(&scene, &Limits::default())?;
+    let cluster = LocalCluster::start_with(0, None, &["--no-retinex"])?;
+    let runtime = cluster::runtime()?;
+    let workers = args.workers.max(1);
+    let jobs = args.jobs.max(1);
+    let tile = args.tile;
+    let report = runtime.block_on(async {
+        let mut client = cluster::connect(&cluster.url, &cluster.client_token).await?;
+        cluster::upload(&mut client, &bundle).await?;
+        let counts = Arc::new(Counts::default());
+        let stop = Arc::new(AtomicBool::new(false));
+        // Every simulated worker connects and registers before the clock starts.
+        let mut registered = Vec::with_capacity(workers);
+        for i in 0..workers {
+            let (url, token) = (cluster.url.clone(), cluster.worker_token.clone());
+            registered.push(async move { register(&url, &token, i).await });
+        }
+        let registered = futures_join_all(registered).await?;
+        let mut total_tiles = 0u64;
+        let mut tiles_per_job = 0;
+        for j in 0..jobs {
+            let status = client
+                .submit_job(pb::SubmitJobRequest {
+                    protocol_version: PROTOCOL_VERSION,
+                    manifest_json: bundle.canonical_json(),
+                    options: Some(pb::RenderOptions {
+                        tile,
+                        samples_per_pixel: 1,
+                        ..Default::default()
+                    }),
+                    priority: 0,
+                    name: format!("bench-{j}"),
+                })
+                .await
+                .map_err(|s| cluster::refused("submitting a benchmark job", s))?
+                .into_inner();
+            tiles_per_job = status.tiles_total;
+            total_tiles += u64::from(status.tiles_total);
+        }
+        let cpu_before = process_cpu_seconds(&cluster.coordinator_pid().to_string());
+        let own_cpu_before = process_cpu_seconds("self");
+        let started = Instant::now();
+        let mut tasks = tokio::task::JoinSet::new();
+        for (client, id) in registered {
+            tasks.spawn(simulated_worker(client, id, counts.clone(), stop.clone()));
+        }
+        let deadline = Instant::now() + Duration::from_secs(600);
+        while counts.accepted.load(Ordering::Relaxed) < total_tiles {
+            if Instant::now() > deadline {
+                bail!("the benchmark did not finish in 10 minutes");
+            }
+            if tasks.try_join_next().is_some_and(|r| matches!(r, Ok(Err(_)) | Err(_))) {
+                bail!("a simulated worker failed");
+            }
+            tokio::time::sleep(Duration::from_millis(2)).await;
+        }
+        let seconds = started.elapsed().as_secs_f64();
+        let cpu = process_cpu_seconds(&cluster.coordinator_pid().to_string()) - cpu_before;
+        let own_cpu = process_cpu_seconds("self") - own_cpu_before;
+        stop.store(true, Ordering::Relaxed);
+        while let Some(r) = tasks.join_next().await {
+            r??;
+        }
+        let accepted = counts.accepted.load(Ordering::Relaxed);
+        anyhow::Ok(SchedulerBench {
+            benchmark: "scheduler",
+            simulated_workers: workers,
+            jobs,
+            tiles_per_job,
+            tile_pixels: tile * tile,
+            leases: counts.leases.load(Ordering::Relaxed),
+            results_accepted: accepted,
+            seconds,
+            tiles_per_second: accepted as f64 / seconds,
+            coordinator_cpu_seconds: cpu,
+            coordinator_cpu_ms_per_1000_tiles: cpu * 1e3 / (accepted.max(1) as f64 / 1e3),
+            simulated_workers_cpu_seconds: own_cpu,
+        })
+    })?;
+    drop(cluster);
+    Ok(serde_json::to_string_pretty(&report)? + "\n")
+}
+
+type Worker = WorkClient<
+    tonic::service::interceptor::InterceptedService<tonic::transport::Channel, Credentials>,
+>;
+
+async fn futures_join_all<T: Send + 'static>(
+    futures: Vec<impl std::future::Future<Output = Result<T>> + Send + 'static>,
+) -> Result<Vec<T>> {
+    let mut set = tokio::task::JoinSet::new();
+    for (i, f) in futures.into_iter().enumerate() {
+        set.spawn(async move { f.await.map(|v| (i, v)) });
+    }
+    let mut out = Vec::new();
+    while let Some(r) = set.join_next().await {
+        out.push(r??);
+    }
+    out.sort_by_key(|(i, _)| *i);
+    Ok(out.into_iter().map(|(_, v)| v).collect())
+}
+
+/// A simulated worker's own connection, registered.
+async fn register(url: &str, token: &str, index: usize) -> Result<(Worker, u64)> {
+    let channel = Endpoint::from_shared(url.to_owned())?
+        .tcp_nodelay(true)
+        .connect()
+        .await
+        .context("connecting a simulated worker")?;
+    let credentials = Credentials::new(token, PROTOCOL_VERSION).map_err(|e| anyhow!("{e}"))?;
+    let mut client = WorkClient::with_interceptor(channel, credentials);
+    let reply = client
+        .register(pb::RegisterRequest {
+            protocol_version: PROTOCOL_VERSION,
+            name: format!("simulated-{index}"),
+            capacity: 1,
+            build: "restauro bench scheduler".into(),
+        })
+        .await
+        .map_err(|s| anyhow!("registering a simulated worker: {}", s.message()))?;
+    Ok((client, reply.into_inner().worker_id))
+}
+
+/// Pulls a lease, reports a black tile of the leased size asking for the next lease with it,
+/// and so on; pulls again (waiting) only when a report brings no new lease.
+async fn simulated_worker(
+    mut client: Worker,
+    id: u64,
+    counts: Arc<Counts>,
+    stop: Arc<AtomicBool>,
+) -> Result<()> {
+    let mut queue: Vec<pb::Lease> = Vec::new();
+    while !stop.load(Ordering::Relaxed) {
+        let Some(lease) = queue.pop() else {
+            let reply = client
+                .pull_leases(pb::PullRequest { worker_id: id, max: 1, wait_ms: 50 })
+                .await
+                .map_err(|s| anyhow!("pulling: {}", s.message()))?
+                .into_inner();
+            if !reply.known {
+                bail!("the coordinator forgot a simulated worker");
+            }
+            counts.leases.fetch_add(reply.leases.len() as u64, Ordering::Relaxed);
+            queue = reply.leases;
+            continue;
+        };
+        let rect = lease.rect.unwrap_or_default();
+        let bytes = rect.width as usize * rect.height as usize * 12;
+        let header = pb::TileHeader {
+            worker_id: id,
+            lease: Some(lease),
+            rays: 0,
+            render_s: 0.0,
+            xyz_bytes: bytes as u64,
+            spectral_bytes: 0,
+            want: 1,
+        };
+        let messages = [
+            pb::TileChunk { part: Some(pb::tile_chunk::Part::Header(header)) },
+            pb::TileChunk { part: Some(pb::tile_chunk::Part::Data(vec![0; bytes])) },
+        ];
+        let reply = client
+            .report_tile(tokio_stream::iter(messages))
+            .await
+            .map_err(|s| anyhow!("reporting: {}", s.message()))?
+            .into_inner();
+        if reply.accepted {
+            counts.accepted.fetch_add(1, Ordering::Relaxed);
+        }
+        counts.leases.fetch_add(reply.leases.len() as u64, Ordering::Relaxed);
+        queue.extend(reply.leases);
+    }
+    Ok(())
+}

@@ -163,6 +163,10 @@ pub struct OptionalConnectArgs {
     /// A file holding the client token (else RESTAURO_TOKEN).
     #[arg(long)]
     pub token_file: Option<PathBuf>,
+    /// For an https:// coordinator: a PEM file of the certificate authority to trust besides
+    /// the system's (else RESTAURO_TLS_CA).
+    #[arg(long, env = "RESTAURO_TLS_CA")]
+    pub tls_ca: Option<PathBuf>,
 }
 
 #[derive(Debug, Args)]
@@ -173,6 +177,10 @@ pub struct ConnectArgs {
     /// A file holding the client token (else RESTAURO_TOKEN).
     #[arg(long)]
     pub token_file: Option<PathBuf>,
+    /// For an https:// coordinator: a PEM file of the certificate authority to trust besides
+    /// the system's (else RESTAURO_TLS_CA).
+    #[arg(long, env = "RESTAURO_TLS_CA")]
+    pub tls_ca: Option<PathBuf>,
     /// Speak another protocol version (for testing the coordinator's refusal).
     #[arg(long, hide = true, default_value_t = restauro_proto::PROTOCOL_VERSION)]
     pub protocol_version: u32,

@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 use tonic::service::interceptor::InterceptedService;
-use tonic::transport::{Channel, Endpoint};
+use tonic::transport::Channel;
 
 pub type Client = RenderClient<InterceptedService<Channel, Credentials>>;
 
@@ -41,21 +41,41 @@ pub fn refused(what: &str, status: tonic::Status) -> anyhow::Error {
     anyhow!("{what}: {code}: {}", status.message())
 }
 
+/// A client of a local (plaintext) coordinator.
 pub async fn connect(url: &str, token: &str) -> Result<Client> {
-    connect_as(url, token, PROTOCOL_VERSION).await
+    connect_as(url, token, None, PROTOCOL_VERSION).await
 }
 
-pub async fn connect_as(url: &str, token: &str, protocol_version: u32) -> Result<Client> {
+/// A client of the coordinator at `url` (`https://` for TLS, trusting `tls_ca` besides the
+/// system's authorities).
+pub async fn connect_as(
+    url: &str,
+    token: &str,
+    tls_ca: Option<&Path>,
+    protocol_version: u32,
+) -> Result<Client> {
     let credentials =
         Credentials::new(token, protocol_version).map_err(|e| anyhow!("client token: {e}"))?;
-    let channel = Endpoint::from_shared(url.to_owned())
-        .with_context(|| format!("coordinator URL `{url}`"))?
-        .connect_timeout(Duration::from_secs(5))
-        .tcp_nodelay(true)
+    let channel = restauro_proto::transport::endpoint(url, tls_ca)?
         .connect()
         .await
-        .with_context(|| format!("connecting to the coordinator at {url}"))?;
+        .map_err(|e| anyhow!("connecting to the coordinator at {url}: {}", error_chain(&e)))?;
     Ok(RenderClient::with_interceptor(channel, credentials).max_decoding_message_size(8 << 20))
+}
+
+/// An error and its sources on one line: transport errors keep the useful part (a refused
+/// connection, a certificate not trusted) in their sources.
+pub fn error_chain(e: &(dyn std::error::Error + 'static)) -> String {
+    let mut parts = vec![e.to_string()];
+    let mut source = e.source();
+    while let Some(s) = source {
+        let text = s.to_string();
+        if !parts.iter().any(|p| p.contains(&text)) {
+            parts.push(text);
+        }
+        source = s.source();
+    }
+    parts.join(": ")
 }
 
 /// Uploads whichever of the bundle's files the coordinator lacks.

@@ -25,7 +25,9 @@ pub fn client_token(file: Option<&Path>) -> Result<String> {
 fn with_client<T>(c: &ConnectArgs, f: impl AsyncFnOnce(&mut Client) -> Result<T>) -> Result<T> {
     let token = client_token(c.token_file.as_deref())?;
     cluster::runtime()?.block_on(async {
-        let mut client = cluster::connect_as(&c.coordinator, &token, c.protocol_version).await?;
+        let mut client =
+            cluster::connect_as(&c.coordinator, &token, c.tls_ca.as_deref(), c.protocol_version)
+                .await?;
         f(&mut client).await
     })
 }
@@ -48,6 +50,7 @@ pub fn submit(args: &SubmitArgs) -> Result<String> {
     let connect = ConnectArgs {
         coordinator: coordinator.clone(),
         token_file: r.connect.token_file.clone(),
+        tls_ca: r.connect.tls_ca.clone(),
         protocol_version: pb::PROTOCOL_VERSION,
     };
     let (bundle, _plan) = checked_bundle(r)?;

@@ -80,6 +80,7 @@ pub fn run(args: &RenderArgs) -> Result<String> {
     }
     let started = Instant::now();
     // An embedded cluster starts first: its processes come up while the scene is checked.
+    let tls_ca = args.connect.tls_ca.as_deref();
     let (url, token, _cluster) = match &args.connect.coordinator {
         Some(url) => {
             let token = crate::jobs_cmd::client_token(args.connect.token_file.as_deref())?;
@@ -94,7 +95,7 @@ pub fn run(args: &RenderArgs) -> Result<String> {
     let name = job_name(args);
     let runtime = cluster::runtime()?;
     let (status, files) = runtime.block_on(async {
-        let mut client = cluster::connect(&url, &token).await?;
+        let mut client = cluster::connect_as(&url, &token, tls_ca, pb::PROTOCOL_VERSION).await?;
         cluster::upload(&mut client, &bundle).await?;
         let submitted = client
             .submit_job(pb::SubmitJobRequest {

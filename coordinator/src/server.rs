@@ -49,9 +49,33 @@ pub struct CoordinatorArgs {
     /// The largest image accepted, in pixels.
     #[arg(long, default_value_t = Limits::default().max_pixels)]
     pub max_pixels: u64,
+    /// Serve TLS with this certificate chain (PEM; needs --tls-key; else RESTAURO_TLS_CERT).
+    #[arg(long, env = "RESTAURO_TLS_CERT", requires = "tls_key")]
+    pub tls_cert: Option<PathBuf>,
+    /// The private key of --tls-cert (PEM; else RESTAURO_TLS_KEY).
+    #[arg(long, env = "RESTAURO_TLS_KEY", requires = "tls_cert")]
+    pub tls_key: Option<PathBuf>,
     /// Exit when standard input closes (an embedded cluster's processes end with their parent).
     #[arg(long, hide = true)]
     pub exit_with_stdin: bool,
+}
+
+/// The server's TLS identity, read and checked before anything listens.
+fn tls_identity(args: &CoordinatorArgs) -> Result<Option<tonic::transport::Identity>> {
+    let (Some(cert), Some(key)) = (&args.tls_cert, &args.tls_key) else {
+        return Ok(None);
+    };
+    let read = |path: &Path, what: &str, marker: &str| -> Result<Vec<u8>> {
+        let pem = std::fs::read(path)
+            .with_context(|| format!("reading the TLS {what} {}", path.display()))?;
+        if !String::from_utf8_lossy(&pem).contains(marker) {
+            bail!("the TLS {what} {} is not PEM (no `{marker}` line)", path.display());
+        }
+        Ok(pem)
+    };
+    let cert = read(cert, "certificate", "-----BEGIN CERTIFICATE-----")?;
+    let key = read(key, "key", "PRIVATE KEY-----")?;
+    Ok(Some(tonic::transport::Identity::from_pem(cert, key)))
 }
 
 /// A token from a file, else from an environment variable; refuses an empty one.
@@ -136,22 +160,31 @@ pub fn run(args: &CoordinatorArgs) -> Result<()> {
         .enable_all()
         .build()
         .context("starting the async runtime")?;
-    runtime.block_on(serve(config, args.listen, stop_signal(args.exit_with_stdin)))
+    let tls = tls_identity(args)?;
+    runtime.block_on(serve(config, args.listen, tls, stop_signal(args.exit_with_stdin)))
 }
 
 /// Serves until `stop` resolves.
 pub async fn serve(
     config: Config,
     listen: SocketAddr,
+    tls: Option<tonic::transport::Identity>,
     stop: impl Future<Output = ()> + Send + 'static,
 ) -> Result<()> {
+    let has_tls = tls.is_some();
+    let mut server = tonic::transport::Server::builder();
+    if let Some(identity) = tls {
+        server = server
+            .tls_config(tonic::transport::ServerTlsConfig::new().identity(identity))
+            .context("configuring TLS")?;
+    }
     let tokens = config.tokens.clone();
     let data = config.data_dir.clone();
     let shared = tokio::task::spawn_blocking(move || Shared::open(config)).await??;
     let listener =
         TcpListener::bind(listen).await.with_context(|| format!("listening on {listen}"))?;
     let addr = listener.local_addr()?;
-    info!(%addr, data = %data.display(), "coordinator listening");
+    info!(%addr, data = %data.display(), tls = has_tls, "coordinator listening");
     {
         // The embedded cluster and the tests read the address from here.
         let mut out = std::io::stdout().lock();
@@ -177,7 +210,7 @@ pub async fn serve(
         WorkServer::new(WorkService(shared)).max_decoding_message_size(MAX_MESSAGE_BYTES),
         tokens.interceptor(Role::Worker),
     );
-    tonic::transport::Server::builder()
+    server
         .add_service(render)
         .add_service(work)
         .serve_with_incoming_shutdown(TcpListenerStream::new(listener), stop)

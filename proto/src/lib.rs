@@ -18,6 +18,8 @@ pub mod pb {
 
 pub use pb::*;
 
+pub mod transport;
+
 /// Adds the protocol version and a bearer token to every outgoing request (clients and workers).
 #[derive(Clone)]
 pub struct Credentials {

@@ -117,3 +117,26 @@ impl Drop for Worker {
 pub fn restauro(args: &[&str]) -> Output {
     Command::new(binary("restauro")).args(args).env_remove("RESTAURO_COORDINATOR").output().unwrap()
 }
+
+/// The output of a finished process, stdout and stderr together.
+pub fn text(o: &Output) -> String {
+    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
+}
+
+/// Writes the procedural Aosta scene of `width × height` pixels into `dir/aosta`; its path.
+pub fn aosta_scene(dir: &Path, width: u32, height: u32) -> String {
+    let scene = dir.join("aosta");
+    let (w, h) = (width.to_string(), height.to_string());
+    let o = restauro(&[
+        "scene",
+        "aosta",
+        "--out",
+        scene.to_str().unwrap(),
+        "--width",
+        &w,
+        "--height",
+        &h,
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    scene.join("aosta.toml").to_str().unwrap().to_owned()
+}

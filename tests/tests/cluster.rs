@@ -1,28 +1,14 @@
 //! The cluster, as real processes on loopback: a coordinator, two workers and the client.
 
 use restauro_coordinator::image_files::read_exr;
-use restauro_tests::{CLIENT_TOKEN, Coordinator, WORKER_TOKEN, Worker, restauro, token_files};
+use restauro_tests::{
+    CLIENT_TOKEN, Coordinator, WORKER_TOKEN, Worker, aosta_scene, restauro, text, token_files,
+};
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-fn text(o: &std::process::Output) -> String {
-    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
-}
-
 fn aosta(dir: &Path) -> String {
-    let scene = dir.join("aosta");
-    let o = restauro(&[
-        "scene",
-        "aosta",
-        "--out",
-        scene.to_str().unwrap(),
-        "--width",
-        "96",
-        "--height",
-        "54",
-    ]);
-    assert!(o.status.success(), "{}", text(&o));
-    scene.join("aosta.toml").to_str().unwrap().to_owned()
+    aosta_scene(dir, 96, 54)
 }
 
 fn pixels(path: &Path) -> Vec<[f32; 3]> {
@@ -215,19 +201,7 @@ fn lines(path: &Path) -> Vec<String> {
 fn a_restarted_coordinator_resumes_without_rendering_finished_tiles_again() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let scene = d.join("aosta");
-    let o = restauro(&[
-        "scene",
-        "aosta",
-        "--out",
-        scene.to_str().unwrap(),
-        "--width",
-        "192",
-        "--height",
-        "108",
-    ]);
-    assert!(o.status.success(), "{}", text(&o));
-    let scene = scene.join("aosta.toml").to_str().unwrap().to_owned();
+    let scene = aosta_scene(d, 192, 108);
     let data = d.join("data");
     let mut coordinator = Coordinator::start(d, &data, "127.0.0.1:0", &[]);
     let url = coordinator.url.clone();

@@ -24,7 +24,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 use tokio::sync::{oneshot, watch};
 use tonic::service::interceptor::InterceptedService;
-use tonic::transport::{Channel, Endpoint};
+use tonic::transport::Channel;
 use tracing::{info, warn};
 
 type Client = WorkClient<InterceptedService<Channel, Credentials>>;
@@ -37,6 +37,10 @@ pub struct WorkerArgs {
     /// A file holding the worker token (else RESTAURO_WORKER_TOKEN).
     #[arg(long)]
     pub token_file: Option<PathBuf>,
+    /// For an https:// coordinator: a PEM file of the certificate authority to trust besides
+    /// the system's (else RESTAURO_TLS_CA).
+    #[arg(long, env = "RESTAURO_TLS_CA")]
+    pub tls_ca: Option<PathBuf>,
     /// Render threads; 0 uses every core.
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
@@ -163,10 +167,10 @@ impl Worker {
     async fn connect(&self) -> Result<Client> {
         let credentials = Credentials::new(&self.token, self.args.protocol_version)
             .map_err(|e| anyhow!("worker token: {e}"))?;
-        let endpoint = Endpoint::from_shared(self.args.coordinator.clone())
-            .with_context(|| format!("coordinator URL `{}`", self.args.coordinator))?
-            .connect_timeout(Duration::from_secs(5))
-            .tcp_nodelay(true);
+        let endpoint = restauro_proto::transport::endpoint(
+            &self.args.coordinator,
+            self.args.tls_ca.as_deref(),
+        )?;
         let mut backoff = Duration::from_millis(50);
         loop {
             match endpoint.connect().await {
@@ -179,8 +183,9 @@ impl Worker {
                         bail!("stopped while connecting");
                     }
                     warn!(
-                        "cannot reach the coordinator at {}: {e}; retrying",
-                        self.args.coordinator
+                        "cannot reach the coordinator at {}: {}; retrying",
+                        self.args.coordinator,
+                        error_chain(&e)
                     );
                     tokio::time::sleep(backoff).await;
                     backoff = (backoff * 2).min(Duration::from_secs(1));
@@ -506,6 +511,17 @@ impl Report {
 
 fn serde_json_scene(manifest: &str) -> Result<restauro_scene::scene_file::SceneFile> {
     Bundle::parse_manifest(manifest).map_err(|e| anyhow!("{e}"))
+}
+
+/// An error and its sources on one line (a TLS failure hides in the sources).
+fn error_chain(e: &(dyn std::error::Error + 'static)) -> String {
+    let mut text = e.to_string();
+    let mut source = e.source();
+    while let Some(s) = source {
+        text = format!("{text}: {s}");
+        source = s.source();
+    }
+    text
 }
 
 fn nonzero(v: u32) -> Option<u32> {

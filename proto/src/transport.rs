@@ -1,0 +1,48 @@
+//! The dialling side of a connection to the coordinator, for clients and workers alike:
+//! plaintext HTTP/2 for `http://` URLs, TLS (rustls) for `https://` ones, trusting the system's
+//! certificate authorities and, when given, the authority in a PEM file (a site's own CA).
+
+use std::path::Path;
+use std::time::Duration;
+use tonic::transport::{Certificate, ClientTlsConfig, Endpoint};
+
+#[derive(Debug, thiserror::Error)]
+pub enum DialError {
+    #[error("coordinator URL `{url}`: {problem}")]
+    Url { url: String, problem: String },
+    #[error("the CA certificate {path}: {problem}")]
+    Ca { path: String, problem: String },
+}
+
+/// An endpoint for `url`, ready to connect.
+pub fn endpoint(url: &str, tls_ca: Option<&Path>) -> Result<Endpoint, DialError> {
+    let bad = |problem: String| DialError::Url { url: url.to_owned(), problem };
+    let tls = if url.starts_with("https://") {
+        true
+    } else if url.starts_with("http://") {
+        if tls_ca.is_some() {
+            return Err(bad("a CA certificate was given for a plaintext URL: use https://".into()));
+        }
+        false
+    } else {
+        return Err(bad("use http://HOST:PORT, or https://HOST:PORT for TLS".into()));
+    };
+    let mut endpoint = Endpoint::from_shared(url.to_owned())
+        .map_err(|e| bad(e.to_string()))?
+        .connect_timeout(Duration::from_secs(5))
+        .tcp_nodelay(true);
+    if tls {
+        let mut config = ClientTlsConfig::new().with_native_roots();
+        if let Some(path) = tls_ca {
+            let ca_error =
+                |problem: String| DialError::Ca { path: path.display().to_string(), problem };
+            let pem = std::fs::read(path).map_err(|e| ca_error(e.to_string()))?;
+            if !String::from_utf8_lossy(&pem).contains("-----BEGIN CERTIFICATE-----") {
+                return Err(ca_error("not a PEM certificate (no BEGIN CERTIFICATE line)".into()));
+            }
+            config = config.ca_certificate(Certificate::from_pem(pem));
+        }
+        endpoint = endpoint.tls_config(config).map_err(|e| bad(e.to_string()))?;
+    }
+    Ok(endpoint)
+}

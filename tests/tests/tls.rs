@@ -1,0 +1,87 @@
+//! TLS between real processes: a coordinator serving a certificate signed by a site's own
+//! authority, a worker and a client that trust that authority, and clients that do not.
+
+use restauro_tests::{Coordinator, Worker, aosta_scene, restauro, text, token_files};
+use std::path::Path;
+
+/// A certificate authority and a server certificate for `localhost` signed by it, as PEM files
+/// in `dir`: (ca.pem, server.pem, server.key).
+fn certificates(dir: &Path) -> (String, String, String) {
+    use rcgen::{BasicConstraints, CertificateParams, IsCa, Issuer, KeyPair};
+    let ca_key = KeyPair::generate().unwrap();
+    let mut ca_params = CertificateParams::new(Vec::<String>::new()).unwrap();
+    ca_params.is_ca = IsCa::Ca(BasicConstraints::Unconstrained);
+    let ca = ca_params.self_signed(&ca_key).unwrap();
+    let issuer = Issuer::new(ca_params, ca_key);
+    let key = KeyPair::generate().unwrap();
+    let server = CertificateParams::new(vec!["localhost".to_owned()])
+        .unwrap()
+        .signed_by(&key, &issuer)
+        .unwrap();
+    let write = |name: &str, pem: String| {
+        let path = dir.join(name);
+        std::fs::write(&path, pem).unwrap();
+        path.to_str().unwrap().to_owned()
+    };
+    (
+        write("ca.pem", ca.pem()),
+        write("server.pem", server.pem()),
+        write("server.key", key.serialize_pem()),
+    )
+}
+
+#[test]
+fn a_render_travels_over_tls_and_an_untrusting_or_plaintext_client_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (ca, cert, key) = certificates(d);
+    let scene = aosta_scene(d, 64, 36);
+    let coordinator = Coordinator::start(
+        d,
+        &d.join("data"),
+        "127.0.0.1:0",
+        &["--tls-cert", &cert, "--tls-key", &key],
+    );
+    let port = coordinator.url.rsplit(':').next().unwrap().to_owned();
+    let https = format!("https://localhost:{port}");
+    let _worker = Worker::start(d, &https, "w1", &["--tls-ca", &ca]);
+    let (client_token, _) = token_files(d);
+    let token = client_token.to_str().unwrap();
+    let out = d.join("out");
+    let o = restauro(&[
+        "submit",
+        &scene,
+        "--spp",
+        "2",
+        "--coordinator",
+        &https,
+        "--token-file",
+        token,
+        "--tls-ca",
+        &ca,
+        "--wait",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(out.join("aosta.exr").exists() && out.join("aosta.png").exists(), "{}", text(&o));
+
+    // Without the site's authority the certificate is not trusted.
+    let o = restauro(&["jobs", "--coordinator", &https, "--token-file", token]);
+    assert!(!o.status.success(), "{}", text(&o));
+    assert!(text(&o).to_lowercase().contains("certificate"), "{}", text(&o));
+    // Plaintext against the TLS port gets nowhere either.
+    let o = restauro(&["jobs", "--coordinator", &coordinator.url, "--token-file", token]);
+    assert!(!o.status.success(), "{}", text(&o));
+    // A CA file for a plaintext URL is a mistake, said so.
+    let o = restauro(&[
+        "jobs",
+        "--coordinator",
+        &coordinator.url,
+        "--token-file",
+        token,
+        "--tls-ca",
+        &ca,
+    ]);
+    assert!(text(&o).contains("use https://"), "{}", text(&o));
+}

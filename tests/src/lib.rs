@@ -34,8 +34,13 @@ pub const WORKER_TOKEN: &str = "worker-token-for-tests";
 /// Token files for both roles in `dir`.
 pub fn token_files(dir: &Path) -> (PathBuf, PathBuf) {
     let (c, w) = (dir.join("client.token"), dir.join("worker.token"));
-    std::fs::write(&c, CLIENT_TOKEN).unwrap();
-    std::fs::write(&w, WORKER_TOKEN).unwrap();
+    // Written to a temporary name and renamed: a process started a moment ago may be reading
+    // the file, and must never see it empty.
+    for (path, token) in [(&c, CLIENT_TOKEN), (&w, WORKER_TOKEN)] {
+        let temporary = path.with_extension(format!("tmp-{}", std::process::id()));
+        std::fs::write(&temporary, token).unwrap();
+        std::fs::rename(&temporary, path).unwrap();
+    }
     (c, w)
 }
 

@@ -56,26 +56,14 @@ pub async fn connect_as(
 ) -> Result<Client> {
     let credentials =
         Credentials::new(token, protocol_version).map_err(|e| anyhow!("client token: {e}"))?;
-    let channel = restauro_proto::transport::endpoint(url, tls_ca)?
-        .connect()
-        .await
-        .map_err(|e| anyhow!("connecting to the coordinator at {url}: {}", error_chain(&e)))?;
+    let channel =
+        restauro_proto::transport::endpoint(url, tls_ca)?.connect().await.map_err(|e| {
+            anyhow!(
+                "connecting to the coordinator at {url}: {}",
+                restauro_proto::transport::error_chain(&e)
+            )
+        })?;
     Ok(RenderClient::with_interceptor(channel, credentials).max_decoding_message_size(8 << 20))
-}
-
-/// An error and its sources on one line: transport errors keep the useful part (a refused
-/// connection, a certificate not trusted) in their sources.
-pub fn error_chain(e: &(dyn std::error::Error + 'static)) -> String {
-    let mut parts = vec![e.to_string()];
-    let mut source = e.source();
-    while let Some(s) = source {
-        let text = s.to_string();
-        if !parts.iter().any(|p| p.contains(&text)) {
-            parts.push(text);
-        }
-        source = s.source();
-    }
-    parts.join(": ")
 }
 
 /// Uploads whichever of the bundle's files the coordinator lacks.

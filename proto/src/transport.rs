@@ -46,3 +46,19 @@ pub fn endpoint(url: &str, tls_ca: Option<&Path>) -> Result<Endpoint, DialError>
     }
     Ok(endpoint)
 }
+
+/// An error and its sources on one line. Transport errors keep the useful part (a refused
+/// connection, a certificate not trusted) in their sources; a source already quoted by the
+/// text before it is not repeated.
+pub fn error_chain(e: &(dyn std::error::Error + 'static)) -> String {
+    let mut parts = vec![e.to_string()];
+    let mut source = e.source();
+    while let Some(s) = source {
+        let text = s.to_string();
+        if !parts.iter().any(|p| p.contains(&text)) {
+            parts.push(text);
+        }
+        source = s.source();
+    }
+    parts.join(": ")
+}

@@ -85,3 +85,39 @@ fn a_render_travels_over_tls_and_an_untrusting_or_plaintext_client_is_refused() 
     ]);
     assert!(text(&o).contains("use https://"), "{}", text(&o));
 }
+
+#[test]
+fn files_that_are_not_pem_are_refused_naming_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (client_token, worker_token) = token_files(d);
+    let junk = d.join("junk.pem");
+    std::fs::write(&junk, "not a certificate").unwrap();
+    let junk = junk.to_str().unwrap();
+    // The coordinator checks its certificate before it listens.
+    let o = std::process::Command::new(restauro_tests::binary("restauro-coordinator"))
+        .args(["--listen", "127.0.0.1:0", "--data", d.join("data").to_str().unwrap()])
+        .args(["--client-token-file", client_token.to_str().unwrap()])
+        .args(["--worker-token-file", worker_token.to_str().unwrap()])
+        .args(["--tls-cert", junk, "--tls-key", junk])
+        .output()
+        .unwrap();
+    assert!(!o.status.success(), "{}", text(&o));
+    assert!(text(&o).contains(&format!("the TLS certificate {junk} is not PEM")), "{}", text(&o));
+    // A client given a CA file that is not a certificate says which file.
+    let o = restauro(&[
+        "jobs",
+        "--coordinator",
+        "https://localhost:1",
+        "--token-file",
+        client_token.to_str().unwrap(),
+        "--tls-ca",
+        junk,
+    ]);
+    assert!(!o.status.success(), "{}", text(&o));
+    assert!(
+        text(&o).contains(&format!("the CA certificate {junk}: not a PEM certificate")),
+        "{}",
+        text(&o)
+    );
+}

@@ -185,7 +185,7 @@ impl Worker {
                     warn!(
                         "cannot reach the coordinator at {}: {}; retrying",
                         self.args.coordinator,
-                        error_chain(&e)
+                        restauro_proto::transport::error_chain(&e)
                     );
                     tokio::time::sleep(backoff).await;
                     backoff = (backoff * 2).min(Duration::from_secs(1));
@@ -511,17 +511,6 @@ impl Report {
 
 fn serde_json_scene(manifest: &str) -> Result<restauro_scene::scene_file::SceneFile> {
     Bundle::parse_manifest(manifest).map_err(|e| anyhow!("{e}"))
-}
-
-/// An error and its sources on one line (a TLS failure hides in the sources).
-fn error_chain(e: &(dyn std::error::Error + 'static)) -> String {
-    let mut text = e.to_string();
-    let mut source = e.source();
-    while let Some(s) = source {
-        text = format!("{text}: {s}");
-        source = s.source();
-    }
-    text
 }
 
 fn nonzero(v: u32) -> Option<u32> {

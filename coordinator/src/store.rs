@@ -79,10 +79,6 @@ impl Store {
         Ok(out)
     }
 
-    pub fn put_tile(&self, job: &str, tile: u32, data: &[u8]) -> Result<()> {
-        self.put_tiles([(job, tile, data)])
-    }
-
     /// Several finished tiles in one durable transaction (see `group_commit`).
     pub fn put_tiles<'a>(
         &self,
@@ -155,9 +151,8 @@ mod tests {
         {
             let s = Store::open(&path).unwrap();
             s.put_job("a", b"{\"x\":1}").unwrap();
-            s.put_tile("a", 3, &[1, 2, 3]).unwrap();
-            s.put_tile("a", 1, &[4]).unwrap();
-            s.put_tile("b", 0, &[5]).unwrap();
+            s.put_tiles([("a", 3, &[1u8, 2, 3][..])]).unwrap();
+            s.put_tiles([("a", 1, &[4u8][..]), ("b", 0, &[5u8][..])]).unwrap();
             s.put_asset("blake3:00.obj", b"v 0 0 0").unwrap();
         }
         let s = Store::open(&path).unwrap();

@@ -51,8 +51,8 @@ fn timed_render(args: &[String]) -> Result<f64> {
 
 pub fn bench(args: &BenchArgs) -> Result<String> {
     let dir = tempfile::Builder::new().prefix("restauro-bench-cluster-").tempdir()?;
-    let (scene, _) =
-        crate::scene_cmd::write_aosta(dir.path(), args.width as u32, args.height as u32, 1)?;
+    let scene =
+        crate::scene_cmd::write_aosta(dir.path(), args.width as u32, args.height as u32, 1)?.sunny;
     let workers = 2;
     let command = |in_process: bool| -> Vec<String> {
         let mut v: Vec<String> = vec![

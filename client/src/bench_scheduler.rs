@@ -52,8 +52,8 @@ struct Counts {
 
 pub fn bench(args: &BenchArgs) -> Result<String> {
     let dir = tempfile::Builder::new().prefix("restauro-bench-scheduler-").tempdir()?;
-    let (scene, _) =
-        crate::scene_cmd::write_aosta(dir.path(), args.width as u32, args.height as u32, 1)?;
+    let scene =
+        crate::scene_cmd::write_aosta(dir.path(), args.width as u32, args.height as u32, 1)?.sunny;
     let bundle = bundle_scene(&scene, &Limits::default())?;
     let cluster = LocalCluster::start_with(0, None, &["--no-retinex"])?;
     let runtime = cluster::runtime()?;

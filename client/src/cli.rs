@@ -23,8 +23,9 @@ pub enum Command {
     /// The colour of a measured material under a light: XYZ, xy, L*a*b*, RGB and hex, and with
     /// --compare the CIEDE2000 difference between two materials.
     Color(ColorArgs),
-    /// Write the demo: today the colorimetric part of the paper's stone experiment (travertine and
-    /// pudding stone, as found and cleaned, under CIE A, B, C and D65).
+    /// Render the demo on an embedded local cluster: the Aosta facade as found and cleaned under
+    /// a summer sun and an overcast sky, the paper's stone experiment (Fig. 12) under CIE A, B,
+    /// C and D65, each with and without Retinex, a CIEDE2000 map, contact sheets and a report.
     Demo(DemoArgs),
     /// Render a scene through a cluster — an embedded local one (a coordinator and two workers
     /// on loopback) unless --coordinator is given: absolute XYZ (and spectral radiance) to
@@ -62,7 +63,7 @@ pub enum Command {
 pub enum SceneCommand {
     /// Write the south facade of the Roman theatre of Aosta as a complete, renderable scene.
     Aosta {
-        /// The folder to write `aosta.toml` and `meshes/facade.obj` into.
+        /// The folder to write `aosta.toml`, `aosta-overcast.toml` and `meshes/facade.obj` into.
         #[arg(long, default_value = "out/aosta")]
         out: PathBuf,
         #[arg(long, default_value_t = 1280)]
@@ -331,6 +332,15 @@ pub struct DemoArgs {
     /// Where to write the results.
     #[arg(long, default_value = "out/demo")]
     pub out: PathBuf,
+    /// Small images and few samples: the whole demo in well under a minute.
+    #[arg(long)]
+    pub quick: bool,
+    /// Workers in the embedded cluster (they share this machine's cores).
+    #[arg(long, default_value_t = 2)]
+    pub workers: usize,
+    /// Write the cluster's logs (coordinator.log, worker-N.log) into this folder.
+    #[arg(long)]
+    pub cluster_logs: Option<PathBuf>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]

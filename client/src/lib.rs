@@ -12,3 +12,4 @@ pub mod jobs_cmd;
 pub mod render;
 pub mod retinex;
 pub mod scene_cmd;
+pub mod sheet;

@@ -156,13 +156,16 @@ fn run_in_process(args: &RenderArgs) -> Result<String> {
         )
         .context("progress template")?,
     );
-    let mut frame = Framebuffer::new(plan.width, plan.height, plan.spectral);
+    let mut frame = Framebuffer::new(plan.width, plan.height, plan.spectral, plan.sky);
     let render_started = Instant::now();
     for (index, rect) in plan.tiles.iter().enumerate() {
         let tile = render_tile(&prepared, *rect, plan.spectral);
         // The same bytes a worker sends: the in-process image is the cluster's, bit for bit.
-        let data =
-            encode_tile(&tile.xyz, tile.spectral.as_ref().map(|s| s.iter().map(|p| &p.0[..])));
+        let data = encode_tile(
+            &tile.xyz,
+            tile.sky.as_deref(),
+            tile.spectral.as_ref().map(|s| s.iter().map(|p| &p.0[..])),
+        );
         frame.place(index as u32, rect, &data)?;
         bar.inc(1);
     }

@@ -6,7 +6,7 @@ use restauro_coordinator::atomic_file;
 use restauro_scene::bundle::bundle_scene;
 use restauro_scene::load::{Limits, LoadedScene, ResolvedLight, load_scene};
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 impl From<&LimitArgs> for Limits {
     fn from(a: &LimitArgs) -> Limits {
@@ -68,6 +68,10 @@ pub fn summary(path: &Path, scene: &LoadedScene) -> String {
             ResolvedLight::Spot { position, intensity_cd, cone_deg, .. } => {
                 writeln!(s, "  spot at {position:?}: {intensity_cd} cd, cone {cone_deg}°")
             }
+            ResolvedLight::Sky { illuminance_lux, model, spectrum } => writeln!(
+                s,
+                "  sky: {illuminance_lux} lux on the horizontal, {model:?} distribution, spectrum {spectrum}"
+            ),
         };
     }
     let variants: Vec<&str> = scene.file.variants.keys().map(String::as_str).collect();
@@ -82,32 +86,45 @@ pub fn summary(path: &Path, scene: &LoadedScene) -> String {
     s
 }
 
-/// Writes the procedural Aosta facade scene into `out`: `aosta.toml` and `meshes/facade.obj`.
-/// Returns both paths.
-pub fn write_aosta(
-    out: &Path,
-    width: u32,
-    height: u32,
-    seed: u64,
-) -> Result<(std::path::PathBuf, std::path::PathBuf)> {
+/// The files of a generated Aosta scene.
+pub struct AostaFiles {
+    /// `aosta.toml`: a summer afternoon.
+    pub sunny: PathBuf,
+    /// `aosta-overcast.toml`: an overcast day.
+    pub overcast: PathBuf,
+    /// `meshes/facade.obj`, which both use.
+    pub mesh: PathBuf,
+}
+
+/// Writes the procedural Aosta facade scene into `out`: `aosta.toml` (a summer afternoon),
+/// `aosta-overcast.toml` (an overcast day) and `meshes/facade.obj`.
+pub fn write_aosta(out: &Path, width: u32, height: u32, seed: u64) -> Result<AostaFiles> {
     let generated = restauro_scene::aosta::generate(width, height, seed);
-    let mesh = out.join("meshes/facade.obj");
-    let scene = out.join("aosta.toml");
-    atomic_file::write(&mesh, generated.facade_obj.as_bytes())
-        .with_context(|| format!("cannot write {}", mesh.display()))?;
-    atomic_file::write(&scene, generated.scene_toml.as_bytes())
-        .with_context(|| format!("cannot write {}", scene.display()))?;
-    Ok((scene, mesh))
+    let files = AostaFiles {
+        sunny: out.join("aosta.toml"),
+        overcast: out.join("aosta-overcast.toml"),
+        mesh: out.join("meshes/facade.obj"),
+    };
+    for (path, text) in [
+        (&files.mesh, &generated.facade_obj),
+        (&files.sunny, &generated.scene_toml),
+        (&files.overcast, &generated.overcast_toml),
+    ] {
+        atomic_file::write(path, text.as_bytes())
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    Ok(files)
 }
 
 pub fn run(command: &SceneCommand) -> Result<String> {
     match command {
         SceneCommand::Aosta { out, width, height, seed } => {
-            let (scene, mesh) = write_aosta(out, *width, *height, *seed)?;
+            let files = write_aosta(out, *width, *height, *seed)?;
             // Check what was written as any scene is checked.
-            let loaded = load_scene(&scene, &Limits::default())?;
-            let mut s = summary(&scene, &loaded);
-            for path in [&scene, &mesh] {
+            let loaded = load_scene(&files.sunny, &Limits::default())?;
+            let mut s = summary(&files.sunny, &loaded);
+            load_scene(&files.overcast, &Limits::default())?;
+            for path in [&files.sunny, &files.overcast, &files.mesh] {
                 let bytes = std::fs::metadata(path).map_or(0, |m| m.len());
                 let _ = writeln!(s, "wrote {} ({bytes} bytes)", path.display());
             }

@@ -254,30 +254,3 @@ fn list_prints_the_library() {
     assert_eq!(text.lines().count(), library::names().count());
     assert!(text.contains("carbon_black_soot_proxy__usgs_GDS68"));
 }
-
-/// The demo writes its report, and the paper's point shows in it: under A, a D65-balanced view
-/// moves every stone far from its D65 colour, an adapted observer much less.
-#[test]
-fn demo_writes_the_stone_report() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("demo");
-    let text = ok(&["demo", "--out", out.to_str().unwrap()]);
-    assert!(text.contains(&format!("wrote {}", out.join("stones.md").display())), "{text}");
-    let md = std::fs::read_to_string(out.join("stones.md")).unwrap();
-    assert!(md.contains("| travertine | as found (derived) | A |"), "{md}");
-    let v: Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("stones.json")).unwrap()).unwrap();
-    let rows = v["rows"].as_array().unwrap();
-    assert_eq!(rows.len(), 2 * 2 * 4);
-    for row in rows.iter().filter(|r| r["illuminant"] == "A") {
-        let raw = row["delta_e00_to_d65_unadapted"].as_f64().unwrap();
-        let adapted = row["delta_e00_to_d65_adapted"].as_f64().unwrap();
-        assert!(adapted < raw / 3.0, "{row}");
-    }
-    // No temporary files are left beside the results.
-    let names: Vec<String> = std::fs::read_dir(&out)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    assert_eq!(names.len(), 2, "{names:?}");
-}

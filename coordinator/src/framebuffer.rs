@@ -1,7 +1,9 @@
 //! The image a job assembles from its tiles, and the wire form of one tile's pixels.
 //!
 //! A tile travels and is stored as little-endian f32: first X, Y, Z of every pixel (row-major
-//! within the tile), then, when the job keeps spectra, the 81 bands of every pixel.
+//! within the tile), then, when the scene has a sky, each pixel's sky coverage (the fraction of
+//! its camera samples that saw the sky), then, when the job keeps spectra, the 81 bands of every
+//! pixel. The first two make the tile's image part, the last its spectral part.
 
 use restauro_scene::plan::Rect;
 use restauro_spectral::grid::BANDS;
@@ -15,10 +17,11 @@ pub struct TileDataError {
     pub problem: String,
 }
 
-/// The byte sizes of a tile's two parts.
-pub fn tile_sizes(rect: &Rect, spectral: bool) -> (usize, usize) {
+/// The byte sizes of a tile's two parts: the image (XYZ, and sky coverage when `sky`) and the
+/// spectra.
+pub fn tile_sizes(rect: &Rect, spectral: bool, sky: bool) -> (usize, usize) {
     let pixels = rect.width as usize * rect.height as usize;
-    (pixels * 3 * 4, if spectral { pixels * BANDS * 4 } else { 0 })
+    (pixels * (3 + usize::from(sky)) * 4, if spectral { pixels * BANDS * 4 } else { 0 })
 }
 
 /// Absolute XYZ (Y in cd/m²) of every pixel, and the spectral radiance band by band when kept.
@@ -28,22 +31,26 @@ pub struct Framebuffer {
     pub xyz: Vec<[f32; 3]>,
     /// One plane per band, each `width × height`.
     pub spectral: Option<Vec<Vec<f32>>>,
+    /// The fraction of each pixel's camera samples that saw the sky, when the scene has one.
+    pub sky: Option<Vec<f32>>,
 }
 
 impl Framebuffer {
-    pub fn new(width: u32, height: u32, spectral: bool) -> Self {
+    pub fn new(width: u32, height: u32, spectral: bool, sky: bool) -> Self {
         let n = width as usize * height as usize;
         Self {
             width,
             height,
             xyz: vec![[0.0; 3]; n],
             spectral: spectral.then(|| vec![vec![0.0; n]; BANDS]),
+            sky: sky.then(|| vec![0.0; n]),
         }
     }
 
     /// Places tile `index` at `rect` from its wire bytes, refusing data of the wrong size.
     pub fn place(&mut self, index: u32, rect: &Rect, data: &[u8]) -> Result<(), TileDataError> {
-        let (xyz_bytes, spectral_bytes) = tile_sizes(rect, self.spectral.is_some());
+        let (xyz_bytes, spectral_bytes) =
+            tile_sizes(rect, self.spectral.is_some(), self.sky.is_some());
         if data.len() != xyz_bytes + spectral_bytes {
             return Err(TileDataError {
                 tile: index,
@@ -67,11 +74,18 @@ impl Framebuffer {
         let floats = |bytes: &[u8]| -> Vec<f32> {
             bytes.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect()
         };
-        let xyz = floats(&data[..xyz_bytes]);
+        let pixels = rect.width as usize * rect.height as usize;
+        let xyz = floats(&data[..pixels * 12]);
+        let coverage = floats(&data[pixels * 12..xyz_bytes]);
         let spectral = floats(&data[xyz_bytes..]);
         let w = rect.width as usize;
         for (i, p) in xyz.chunks_exact(3).enumerate() {
             self.xyz[at(self.width, rect, i, w)] = [p[0], p[1], p[2]];
+        }
+        if let Some(sky) = &mut self.sky {
+            for (i, &c) in coverage.iter().enumerate() {
+                sky[at(self.width, rect, i, w)] = c;
+            }
         }
         if let Some(planes) = &mut self.spectral {
             for (i, bands) in spectral.chunks_exact(BANDS).enumerate() {
@@ -90,13 +104,15 @@ fn at(image_width: u32, rect: &Rect, i: usize, w: usize) -> usize {
     (rect.y as usize + i / w) * image_width as usize + rect.x as usize + i % w
 }
 
-/// The wire bytes of a tile: XYZ, then the spectra when given (each pixel's 81 bands).
+/// The wire bytes of a tile: XYZ, the sky coverage when given, then the spectra when given
+/// (each pixel's 81 bands).
 pub fn encode_tile<'a>(
     xyz: &[[f32; 3]],
+    sky: Option<&[f32]>,
     spectral: Option<impl Iterator<Item = &'a [f32]>>,
 ) -> Vec<u8> {
-    let mut out = Vec::with_capacity(xyz.len() * 12);
-    for v in xyz.iter().flatten() {
+    let mut out = Vec::with_capacity(xyz.len() * 16);
+    for v in xyz.iter().flatten().chain(sky.into_iter().flatten()) {
         out.extend_from_slice(&v.to_le_bytes());
     }
     if let Some(pixels) = spectral {
@@ -115,14 +131,16 @@ mod tests {
 
     #[test]
     fn tiles_land_where_their_rectangle_says() {
-        let mut fb = Framebuffer::new(5, 4, true);
+        let mut fb = Framebuffer::new(5, 4, true, true);
         let rect = Rect { x: 3, y: 1, width: 2, height: 3 };
         let xyz: Vec<[f32; 3]> = (0..6).map(|i| [i as f32, 10.0 + i as f32, 20.0]).collect();
+        let sky: Vec<f32> = (0..6).map(|i| i as f32 / 8.0).collect();
         let spectra: Vec<Vec<f32>> = (0..6).map(|i| vec![i as f32 * 0.5; BANDS]).collect();
-        let data = encode_tile(&xyz, Some(spectra.iter().map(Vec::as_slice)));
+        let data = encode_tile(&xyz, Some(&sky), Some(spectra.iter().map(Vec::as_slice)));
         fb.place(7, &rect, &data).unwrap();
         // Pixel 3 of the 2-wide tile is its second row, second column: image (4, 2).
         assert_eq!(fb.xyz[2 * 5 + 4], [3.0, 13.0, 20.0]);
+        assert_eq!(fb.sky.as_ref().unwrap()[2 * 5 + 4], 3.0 / 8.0);
         assert_eq!(fb.spectral.as_ref().unwrap()[40][2 * 5 + 4], 1.5);
         assert_eq!(fb.xyz[0], [0.0; 3]);
         let err = fb.place(7, &rect, &data[..data.len() - 4]).unwrap_err();

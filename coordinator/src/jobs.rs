@@ -133,6 +133,9 @@ pub struct Record {
     pub width: u32,
     pub height: u32,
     pub tile: u32,
+    /// Whether the scene has a sky: its tiles then carry each pixel's sky coverage.
+    #[serde(default)]
+    pub sky: bool,
     /// What the renders were made with, for the files' headers.
     pub info: String,
     pub results: Vec<String>,

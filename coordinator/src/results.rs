@@ -10,7 +10,7 @@ use crate::image_files::{
 use restauro_spectral::appearance::{ChannelSpace, retinex_xyz};
 use restauro_spectral::display::{DisplayParams, Exposure, encode, to_u8};
 use restauro_spectral::grid::wavelength_nm;
-use restauro_spectral::retinex::RetinexParams;
+use restauro_spectral::retinex::{RetinexParams, WhiteReference};
 use restauro_spectral::rgb_space::RgbSpace;
 use std::path::Path;
 use std::time::Instant;
@@ -84,7 +84,11 @@ pub fn write_results(
 ) -> Result<Written, ResultsError> {
     let name = options.name;
     let (width, height) = (frame.width as usize, frame.height as usize);
-    let image = XyzImage { width, height, pixels: frame.xyz, emitter: None };
+    // A pixel most of whose camera samples saw the sky is a light source: marked in the EXR's
+    // `emitter` channel, and kept from being the Retinex's white (a bright sky in view would
+    // otherwise darken the building to a silhouette).
+    let emitter = frame.sky.as_ref().map(|c| c.iter().map(|&f| f >= 0.5).collect::<Vec<bool>>());
+    let image = XyzImage { width, height, pixels: frame.xyz, emitter: emitter.clone() };
     let attrs = [
         ("restauroRender", options.info),
         ("restauroXyzUnits", "absolute: Y in cd/m2 (K_m = 683 lm/W)"),
@@ -103,19 +107,28 @@ pub fn write_results(
     let mut retinex_s = 0.0;
     if let Some(params) = &options.retinex {
         let started = Instant::now();
+        let mut params = params.clone();
+        if let (Some(mask), WhiteReference::Paper) = (&emitter, &params.white) {
+            params.white = WhiteReference::ExcludeEmitters(mask.clone());
+        }
         let (perceived, stats) =
-            retinex_xyz(&image.pixels, width, height, params, ChannelSpace::default(), &|_, _| {})
+            retinex_xyz(&image.pixels, width, height, &params, ChannelSpace::default(), &|_, _| {})
                 .map_err(|e| ResultsError::Retinex(e.to_string()))?;
         retinex_s = started.elapsed().as_secs_f64();
+        let white = match &params.white {
+            WhiteReference::Paper => "paper".to_owned(),
+            WhiteReference::Percentile(p) => format!("percentile:{p}"),
+            WhiteReference::ExcludeEmitters(_) => "sky-excluded".to_owned(),
+        };
         let settings = format!(
-            "paths={} length={} threshold={} seed={} space={}",
+            "paths={} length={} threshold={} seed={} space={} white={white}",
             params.paths,
             stats.length,
             params.threshold,
             params.seed,
             ChannelSpace::default()
         );
-        let perceived = XyzImage { width, height, pixels: perceived, emitter: None };
+        let perceived = XyzImage { width, height, pixels: perceived, emitter };
         let exr = format!("{name}-retinex.exr");
         let png = format!("{name}-retinex.png");
         write_xyz_exr(

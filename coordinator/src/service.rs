@@ -232,7 +232,8 @@ impl Shared {
         let Some(record) = self.set_state(id, State::Assembling) else { return };
         let started = Instant::now();
         let outcome = (|| -> Result<Vec<String>, String> {
-            let mut frame = Framebuffer::new(record.width, record.height, record.options.spectral);
+            let mut frame =
+                Framebuffer::new(record.width, record.height, record.options.spectral, record.sky);
             for (index, rect) in record.tiles().iter().enumerate() {
                 let data = self
                     .store
@@ -467,6 +468,7 @@ impl pb::render_server::Render for RenderService {
             width: plan.width,
             height: plan.height,
             tile: plan.tile,
+            sky: plan.sky,
             info: format!(
                 "variant={} integrator={integrator} spp={} max_depth={} seed={}",
                 plan.variant.as_deref().unwrap_or("base"),
@@ -734,7 +736,7 @@ impl pb::work_server::Work for WorkService {
             _ => return Err(Status::invalid_argument("a tile report starts with its header")),
         };
         let lease = self.lease_from(header.worker_id, header.lease.as_ref())?;
-        let (rect, spectral) = {
+        let (rect, spectral, sky) = {
             let st = self.0.lock();
             match st.jobs.get(&*lease.job) {
                 Some(r) if matches!(r.state, State::Queued | State::Running) => {
@@ -744,7 +746,7 @@ impl pb::work_server::Work for WorkService {
                             lease.job, lease.tile
                         )));
                     };
-                    (rect, r.options.spectral)
+                    (rect, r.options.spectral, r.sky)
                 }
                 _ => {
                     return Ok(Response::new(pb::ReportReply {
@@ -754,7 +756,7 @@ impl pb::work_server::Work for WorkService {
                 }
             }
         };
-        let (xyz_bytes, spectral_bytes) = tile_sizes(&rect, spectral);
+        let (xyz_bytes, spectral_bytes) = tile_sizes(&rect, spectral, sky);
         let expected = xyz_bytes + spectral_bytes;
         if header.xyz_bytes as usize != xyz_bytes
             || header.spectral_bytes as usize != spectral_bytes

@@ -18,5 +18,6 @@ pub mod obj;
 pub mod photometric;
 pub mod plan;
 pub mod ply;
+pub mod samples;
 pub mod scene_file;
 pub mod vrml;

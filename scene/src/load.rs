@@ -8,7 +8,9 @@ use crate::assets::{Assets, FolderAssets, extension};
 use crate::error::{Result, SceneError};
 use crate::mesh::Mesh;
 use crate::photometric::{self, Photometry};
-use crate::scene_file::{self, Light, MaterialModel, SceneFile, SpectrumSource, SunPreset, UpAxis};
+use crate::scene_file::{
+    self, Light, MaterialModel, SceneFile, SkyModel, SkyPreset, SpectrumSource, SunPreset, UpAxis,
+};
 use crate::sun::{Site, SunPosition, direction_to_sun, sun_position};
 use crate::{gltf_mesh, obj, ply, vrml};
 use glam::{DMat3, DMat4, DVec3};
@@ -89,6 +91,8 @@ pub enum ResolvedLight {
         illuminance_lux: f64,
         spectrum: String,
     },
+    /// The sky dome: `illuminance_lux` on a horizontal surface open to the whole sky.
+    Sky { illuminance_lux: f64, model: SkyModel, spectrum: String },
 }
 
 /// A scene that has passed every check.
@@ -856,8 +860,44 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
                     spectrum: spectrum.clone(),
                 }
             }
+            Light::Sky { illuminance_lux, preset, model, spectrum } => {
+                ctx.emission(spectrum, &format!("{place}.spectrum"))?;
+                let (lux, preset_model) = match (illuminance_lux, preset) {
+                    (Some(_), Some(_)) => {
+                        return Err(
+                            ctx.invalid(&place, "give illuminance_lux or a preset, not both")
+                        );
+                    }
+                    (Some(e), None) => (*e, SkyModel::CieOvercast),
+                    (None, Some(SkyPreset::Overcast)) => (10_000.0, SkyModel::CieOvercast),
+                    (None, Some(SkyPreset::Clear)) => (15_000.0, SkyModel::Uniform),
+                    (None, None) => {
+                        return Err(ctx.invalid(
+                            &place,
+                            "give illuminance_lux, or preset = \"overcast\" or \"clear\"",
+                        ));
+                    }
+                };
+                if !(lux.is_finite() && lux >= 0.0) {
+                    return Err(ctx.invalid(
+                        format!("{place}.illuminance_lux"),
+                        format!("{lux} is not a finite illuminance ≥ 0 lux"),
+                    ));
+                }
+                ResolvedLight::Sky {
+                    illuminance_lux: lux,
+                    model: model.unwrap_or(preset_model),
+                    spectrum: spectrum.clone(),
+                }
+            }
         };
         lights.push(resolved);
+    }
+    if file.lights.iter().filter(|l| matches!(l, Light::Sky { .. })).count() > 1 {
+        return Err(ctx.invalid(
+            "lights",
+            "more than one sky; a scene has one sky dome (give its total illuminance_lux)",
+        ));
     }
 
     // Variants.

@@ -42,6 +42,10 @@ pub struct Plan {
     pub max_depth: u32,
     pub seed: u64,
     pub spectral: bool,
+    /// Whether the scene has a sky. Its tiles then carry each pixel's sky coverage (the fraction
+    /// of its camera samples that saw the sky), so the Retinex can keep the sky from becoming
+    /// the white.
+    pub sky: bool,
     pub tile: u32,
     /// The tiles in row-major order; a tile's index is its place here.
     pub tiles: Vec<Rect>,
@@ -157,6 +161,7 @@ impl Plan {
             max_depth: render.max_depth,
             seed: render.seed,
             spectral: options.spectral,
+            sky: scene.lights.iter().any(|l| matches!(l, crate::load::ResolvedLight::Sky { .. })),
             tile,
             tiles: tiles(width, height, tile),
         })

@@ -39,6 +39,11 @@
 //! preset = "sun"                # 100 000 lux, 50° above the horizon
 //! spectrum = "daylight"
 //!
+//! [[lights]]
+//! kind = "sky"
+//! preset = "overcast"           # the CIE overcast sky, 10 000 lux on the horizontal
+//! spectrum = "daylight"
+//!
 //! [variants.as-found]
 //! state = "degraded"
 //! ```
@@ -363,6 +368,42 @@ pub enum Light {
         site: Option<SiteTime>,
         spectrum: String,
     },
+    /// The sky dome: light from every direction above the horizon, given by the illuminance it
+    /// gives a horizontal surface open to the whole sky (its diffuse horizontal illuminance).
+    Sky {
+        #[serde(default)]
+        illuminance_lux: Option<f64>,
+        /// `overcast` (10 000 lux, the CIE overcast sky) or `clear` (15 000 lux of diffuse
+        /// skylight beside a summer sun, uniform).
+        #[serde(default)]
+        preset: Option<SkyPreset>,
+        /// How luminance varies over the dome; `cie-overcast` unless given (`uniform` for the
+        /// `clear` preset).
+        #[serde(default)]
+        model: Option<SkyModel>,
+        spectrum: String,
+    },
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SkyPreset {
+    /// 10 000 lux, the CIE standard overcast sky.
+    Overcast,
+    /// 15 000 lux of diffuse skylight, uniform: the sky beside a summer sun.
+    Clear,
+}
+
+/// The luminance distribution of a sky, over zenith angle θ.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SkyModel {
+    /// The same luminance in every direction: L = E_h / π.
+    Uniform,
+    /// The CIE standard overcast sky (Moon & Spencer 1942; CIE S 011/E:2003, type 1):
+    /// L(θ) = L_z (1 + 2 cos θ) / 3, three times brighter at the zenith than at the horizon,
+    /// with E_h = 7π L_z / 9.
+    CieOvercast,
 }
 
 /// A restoration hypothesis: which state each object (or each part of an object) is in.

@@ -215,6 +215,31 @@ fn each_class_of_bad_scene_is_refused_with_place_and_fix() {
         ),
         (good.replace("state = \"degraded\"", "state = \"restored\""), "unknown state `restored`"),
         (
+            scene_toml(OBJ_OBJECT, "[[lights]]\nkind = \"sky\"\nspectrum = \"sunlight\"\n"),
+            "lights[1]: give illuminance_lux, or preset = \"overcast\" or \"clear\"",
+        ),
+        (
+            scene_toml(
+                OBJ_OBJECT,
+                "[[lights]]\nkind = \"sky\"\nilluminance_lux = -1.0\nspectrum = \"sunlight\"\n",
+            ),
+            "lights[1].illuminance_lux: -1 is not a finite illuminance ≥ 0 lux",
+        ),
+        (
+            scene_toml(
+                OBJ_OBJECT,
+                "[[lights]]\nkind = \"sky\"\npreset = \"overcast\"\nspectrum = \"sunlight\"\n[[lights]]\nkind = \"sky\"\npreset = \"clear\"\nspectrum = \"sunlight\"\n",
+            ),
+            "more than one sky",
+        ),
+        (
+            scene_toml(
+                OBJ_OBJECT,
+                "[[lights]]\nkind = \"sky\"\npreset = \"overcast\"\nmodel = \"perez\"\nspectrum = \"sunlight\"\n",
+            ),
+            "unknown variant `perez`",
+        ),
+        (
             scene_toml(OBJ_OBJECT, "[render]\nsamples_per_pixel = 0"),
             "render.samples_per_pixel is 0",
         ),

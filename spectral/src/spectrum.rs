@@ -117,6 +117,14 @@ impl Spectrum {
         }
     }
 
+    /// `self += k · light`: light seen directly (the sky behind a camera ray).
+    #[inline]
+    pub fn add_scaled(&mut self, light: &Spectrum, k: f32) {
+        for (o, &l) in self.0.iter_mut().zip(&light.0) {
+            *o += l * k;
+        }
+    }
+
     /// `self += weight · light · (ρ·a + b)`: [`Spectrum::add_reflected`] behind a spectral
     /// path throughput.
     #[inline]

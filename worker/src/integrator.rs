@@ -8,8 +8,15 @@
 //!   direction drawn from the BSDF, with Russian roulette after three bounces. It adds the
 //!   diffuse inter-reflection that the paper notes ray tracing underestimates.
 //!
+//! The sky, an extended source, is sampled at every vertex by a cosine-weighted direction about
+//! the normal (pdf cos θ/π) with a shadow ray to infinity: the estimate of its reflected radiance
+//! is f(wo, wi) · L_sky(wi) · π. A camera ray that escapes sees the sky's radiance; a bounce that
+//! escapes adds nothing, because the sky was already counted at the vertex it left (Whitted's
+//! mirror rays therefore do not reflect the sky).
+//!
 //! All 81 bands travel together on every ray; nothing here allocates.
 
+use crate::bsdf::cosine_sample;
 use crate::prepared::{Hit, PreparedScene};
 use crate::sampler::PixelSampler;
 use glam::Vec3A;
@@ -63,28 +70,51 @@ enum Weight<'a> {
     Spectral(&'a Spectrum),
 }
 
-/// Adds the direct light at a hit to `out`: Σ f(wo, wi) · E⊥(λ) · cos θi over the visible
+/// A surface hit seen from the ray that found it: the hit, its local frame, and the direction
+/// back along the ray in that frame.
+struct Vertex<'a> {
+    hit: &'a Hit,
+    frame: Frame,
+    wo: Vec3A,
+}
+
+impl Weight<'_> {
+    /// `out += weight · light · (ρ·a + b)`.
+    #[inline]
+    fn add(self, out: &mut Spectrum, light: &Spectrum, rho: &Spectrum, a: f32, b: f32) {
+        match self {
+            Weight::Neutral(t) => out.add_reflected(light, rho, a * t, b * t),
+            Weight::Spectral(w) => out.add_reflected_weighted(w, light, rho, a, b),
+        }
+    }
+}
+
+/// Adds the direct light at a vertex to `out`: Σ f(wo, wi) · E⊥(λ) · cos θi over the visible
 /// sources, times `weight`. With f = ρ(λ)·a + b and E⊥ = s·S(λ), each source adds
-/// S(λ)·(ρ(λ)·a·s·cos + b·s·cos) in one pass over the bands, with no temporary spectrum.
+/// S(λ)·(ρ(λ)·a·s·cos + b·s·cos) in one pass over the bands, with no temporary spectrum. The
+/// sky, when there is one, adds one sample of its reflected radiance.
 #[inline]
 fn add_direct(
     scene: &PreparedScene,
-    hit: &Hit,
-    frame: &Frame,
-    wo_local: Vec3A,
+    v: &Vertex<'_>,
     weight: Weight<'_>,
+    sampler: &mut PixelSampler,
     rays: &mut u64,
     out: &mut Spectrum,
 ) {
+    let hit = v.hit;
     let origin = lift(hit);
     let bsdf = &scene.materials[hit.material as usize];
+    if scene.sky.is_some() {
+        add_sky(scene, v, origin, weight, sampler, rays, out);
+    }
     for light in &scene.lights {
         let Some(inc) = light.incident(hit.point) else { continue };
         let cos = inc.direction.dot(hit.normal);
         if cos <= 0.0 {
             continue;
         }
-        let (a, b) = bsdf.parts(wo_local, frame.to_local(inc.direction));
+        let (a, b) = bsdf.parts(v.wo, v.frame.to_local(inc.direction));
         if a <= 0.0 && b <= 0.0 {
             continue;
         }
@@ -95,13 +125,42 @@ fn add_direct(
             continue;
         }
         let k = inc.scale * cos;
-        match weight {
-            Weight::Neutral(t) => out.add_reflected(inc.spectrum, bsdf.rho(), a * k * t, b * k * t),
-            Weight::Spectral(w) => {
-                out.add_reflected_weighted(w, inc.spectrum, bsdf.rho(), a * k, b * k)
-            }
-        }
+        weight.add(out, inc.spectrum, bsdf.rho(), a * k, b * k);
     }
+}
+
+/// One sample of the sky's light reflected at a vertex: a direction drawn with pdf cos θ/π
+/// about the normal and a shadow ray to infinity; the estimate is
+/// f · L · cos θ / (cos θ/π) = f · L · π.
+#[inline]
+fn add_sky(
+    scene: &PreparedScene,
+    v: &Vertex<'_>,
+    origin: Vec3A,
+    weight: Weight<'_>,
+    sampler: &mut PixelSampler,
+    rays: &mut u64,
+    out: &mut Spectrum,
+) {
+    let Some(sky) = &scene.sky else { return };
+    let (u1, u2) = sampler.next2();
+    let wi = cosine_sample(u1, u2);
+    let direction = v.frame.to_world(wi);
+    let luminance = sky.luminance_cd_m2(direction);
+    if luminance <= 0.0 {
+        return;
+    }
+    let bsdf = &scene.materials[v.hit.material as usize];
+    let (a, b) = bsdf.parts(v.wo, wi);
+    if a <= 0.0 && b <= 0.0 {
+        return;
+    }
+    *rays += 1;
+    if scene.occluded(origin, direction, f32::INFINITY) {
+        return;
+    }
+    let k = luminance * std::f32::consts::PI;
+    weight.add(out, &sky.per_nit, bsdf.rho(), a * k, b * k);
 }
 
 /// The spectral radiance (W·sr⁻¹·m⁻²·nm⁻¹) arriving at the camera along the ray; `rays`
@@ -118,7 +177,8 @@ pub fn radiance(
     out
 }
 
-/// [`radiance`], added to `out`: a pixel sums its samples in place.
+/// [`radiance`], added to `out`: a pixel sums its samples in place. Returns whether the camera
+/// ray escaped to the sky (so saw it, if there is one).
 pub fn add_radiance(
     scene: &PreparedScene,
     origin: Vec3A,
@@ -126,7 +186,7 @@ pub fn add_radiance(
     sampler: &mut PixelSampler,
     rays: &mut u64,
     out: &mut Spectrum,
-) {
+) -> bool {
     // Whitted's bounces are neutral (Fresnel of a dielectric); the path tracer's become spectral
     // at its first bounce.
     let mut neutral = 1.0f32;
@@ -135,14 +195,22 @@ pub fn add_radiance(
     let max_depth = scene.settings.max_depth.max(1);
     for depth in 0..max_depth {
         *rays += 1;
-        let Some(hit) = scene.intersect(origin, direction, f32::INFINITY) else { break };
+        let Some(hit) = scene.intersect(origin, direction, f32::INFINITY) else {
+            if depth == 0 {
+                if let Some(sky) = &scene.sky {
+                    out.add_scaled(&sky.per_nit, sky.luminance_cd_m2(direction));
+                }
+                return true;
+            }
+            break;
+        };
         let frame = Frame::new(hit.normal);
         let wo = frame.to_local(-direction);
         let weight = match &spectral {
             Some(t) => Weight::Spectral(t),
             None => Weight::Neutral(neutral),
         };
-        add_direct(scene, &hit, &frame, wo, weight, rays, out);
+        add_direct(scene, &Vertex { hit: &hit, frame, wo }, weight, sampler, rays, out);
         if depth + 1 == max_depth {
             break;
         }
@@ -176,4 +244,5 @@ pub fn add_radiance(
         }
         origin = lift(&hit);
     }
+    false
 }

@@ -7,10 +7,13 @@
 //! ```
 //!
 //! and cos α is applied by the integrator; for the sun, E⊥(λ) = E_v · S_e(λ) / Σ K S_e Δλ.
-//! All lights here are delta lights (a point or a direction), sampled exactly.
+//! These are delta lights (a point or a direction), sampled exactly. The sky is the one
+//! extended source: a dome of luminance L_v(ω) (cd/m²) above the horizon, whose spectral radiance
+//! is L_v(ω) · S_e(λ) / Σ K(λ) S_e(λ) Δλ, sampled by the integrator over the hemisphere.
 
 use glam::Vec3A;
 use restauro_scene::photometric::Photometry;
+use restauro_scene::scene_file::SkyModel;
 use restauro_spectral::Spectrum;
 
 /// How a luminaire's intensity varies with direction.
@@ -39,6 +42,42 @@ pub enum Light {
     Point { position: Vec3A, intensity_cd: f32, per_cd: Spectrum, distribution: Distribution },
     /// A distant source: `direction` towards it, `irradiance` E⊥(λ) on a surface facing it.
     Distant { direction: Vec3A, irradiance: Spectrum },
+}
+
+/// The sky dome: its luminance over directions above the horizon (nothing comes from below it:
+/// the ground is geometry).
+#[derive(Clone, Debug)]
+pub struct Sky {
+    /// S_e(λ)/Σ K S_e Δλ: the spectral radiance of one cd/m² (W·sr⁻¹·m⁻²·nm⁻¹).
+    pub per_nit: Spectrum,
+    /// The luminance at the zenith, cd/m².
+    pub zenith_cd_m2: f32,
+    pub model: SkyModel,
+}
+
+impl Sky {
+    /// A sky giving `illuminance_lux` on a horizontal surface open to all of it:
+    /// uniform, E_h = π L; CIE overcast, E_h = ∫ L_z (1 + 2 cos θ)/3 · cos θ dω = 7π L_z / 9.
+    pub fn new(illuminance_lux: f64, model: SkyModel, per_nit: Spectrum) -> Self {
+        let zenith = match model {
+            SkyModel::Uniform => illuminance_lux / std::f64::consts::PI,
+            SkyModel::CieOvercast => 9.0 * illuminance_lux / (7.0 * std::f64::consts::PI),
+        };
+        Self { per_nit, zenith_cd_m2: zenith as f32, model }
+    }
+
+    /// The luminance (cd/m²) seen looking along `direction` (unit; +Z up): zero below the horizon.
+    #[inline]
+    pub fn luminance_cd_m2(&self, direction: Vec3A) -> f32 {
+        let cos_theta = direction.z;
+        if cos_theta <= 0.0 {
+            return 0.0;
+        }
+        match self.model {
+            SkyModel::Uniform => self.zenith_cd_m2,
+            SkyModel::CieOvercast => self.zenith_cd_m2 * (1.0 + 2.0 * cos_theta) / 3.0,
+        }
+    }
 }
 
 /// A light's contribution at a point: the direction towards it, the distance (∞ for distant

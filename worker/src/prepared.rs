@@ -4,7 +4,7 @@
 
 use crate::bsdf::Bsdf;
 use crate::camera::Camera;
-use crate::light::{Distribution, Light};
+use crate::light::{Distribution, Light, Sky};
 use crate::sampler::Strata;
 use glam::Vec3A;
 use obvhs::BvhBuildParams;
@@ -59,6 +59,8 @@ pub struct PreparedScene {
     material_of: Vec<u32>,
     pub materials: Vec<Bsdf>,
     pub lights: Vec<Light>,
+    /// The sky, sampled over the hemisphere (at most one: the loader refuses two).
+    pub sky: Option<Sky>,
 }
 
 /// A surface hit.
@@ -136,7 +138,16 @@ impl PreparedScene {
             })
             .collect();
         let material_of: Vec<u32> = order.iter().map(|&i| material_of[i as usize]).collect();
-        let lights = scene.lights.iter().map(|l| light(scene, l)).collect::<Result<Vec<_>, _>>()?;
+        let mut lights = Vec::new();
+        let mut sky = None;
+        for l in &scene.lights {
+            match l {
+                ResolvedLight::Sky { illuminance_lux, model, spectrum } => {
+                    sky = Some(Sky::new(*illuminance_lux, *model, luminous(scene, spectrum)?));
+                }
+                _ => lights.push(light(scene, l)?),
+            }
+        }
         Ok(Self {
             camera: Camera::new(&scene.camera),
             strata: Strata::new(settings.samples_per_pixel),
@@ -147,6 +158,7 @@ impl PreparedScene {
             material_of,
             materials,
             lights,
+            sky,
         })
     }
 
@@ -293,5 +305,8 @@ fn light(scene: &LoadedScene, l: &ResolvedLight) -> Result<Light, TraceError> {
             direction: Vec3A::from(direction.map(|v| v as f32)).normalize(),
             irradiance: luminous(scene, spectrum)? * (*illuminance_lux as f32),
         },
+        ResolvedLight::Sky { .. } => {
+            return Err(TraceError::Scene("the sky is not a delta light".into()));
+        }
     })
 }

@@ -340,8 +340,9 @@ impl Worker {
         }
         let tile = rx.await.context("the render thread stopped")?;
         let render_s = started.elapsed().as_secs_f64();
-        let mut data = Vec::with_capacity(tile.xyz.len() * 12);
-        for v in tile.xyz.iter().flatten() {
+        // The wire form of coordinator::framebuffer: XYZ, sky coverage (scenes with a sky), spectra.
+        let mut data = Vec::with_capacity(tile.xyz.len() * 16);
+        for v in tile.xyz.iter().flatten().chain(tile.sky.iter().flatten()) {
             data.extend_from_slice(&v.to_le_bytes());
         }
         let xyz_bytes = data.len() as u64;

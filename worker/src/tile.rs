@@ -33,6 +33,8 @@ pub struct TileResult {
     pub xyz: Vec<[f32; 3]>,
     /// The spectral radiance of each pixel, when asked for.
     pub spectral: Option<Vec<Spectrum>>,
+    /// When the scene has a sky: the fraction of each pixel's camera samples that saw it.
+    pub sky: Option<Vec<f32>>,
     /// The rays traced for the tile.
     pub rays: u64,
 }
@@ -63,27 +65,36 @@ fn keyed_camera_ray(
     (scene.camera.direction(x as f32 + dx, y as f32 + dy), sampler)
 }
 
-/// The sum of the spectral radiance of pixel (x, y)'s samples.
+/// The sum of the spectral radiance of pixel (x, y)'s samples, and how many saw the sky.
 #[inline]
-fn pixel_sum(scene: &PreparedScene, x: u32, y: u32, rays: &mut u64) -> Spectrum {
+fn pixel_sum(scene: &PreparedScene, x: u32, y: u32, rays: &mut u64) -> (Spectrum, u32) {
     let key = PixelKey::new(scene.settings.seed, x, y);
     let mut sum = Spectrum::ZERO;
+    let mut sky = 0;
     for s in 0..scene.settings.samples_per_pixel.max(1) {
         let (direction, mut sampler) = keyed_camera_ray(scene, key, x, y, s);
-        add_radiance(scene, scene.camera.origin, direction, &mut sampler, rays, &mut sum);
+        sky += u32::from(add_radiance(
+            scene,
+            scene.camera.origin,
+            direction,
+            &mut sampler,
+            rays,
+            &mut sum,
+        ));
     }
-    sum
+    (sum, sky)
 }
 
 /// [`pixel`], counting the rays traced.
 pub fn pixel_counted(scene: &PreparedScene, x: u32, y: u32, rays: &mut u64) -> Spectrum {
-    pixel_sum(scene, x, y, rays) * (1.0 / scene.settings.samples_per_pixel.max(1) as f32)
+    pixel_sum(scene, x, y, rays).0 * (1.0 / scene.settings.samples_per_pixel.max(1) as f32)
 }
 
 /// Renders `rect`: absolute XYZ per pixel, and the spectral radiance too when `spectral` is set
 /// (kept only then: a row of spectra is 81 times the size of its XYZ).
 pub fn render_tile(scene: &PreparedScene, rect: Rect, spectral: bool) -> TileResult {
-    type Row = (Vec<[f32; 3]>, Option<Vec<Spectrum>>, u64);
+    type Row = (Vec<[f32; 3]>, Option<Vec<Spectrum>>, Option<Vec<f32>>, u64);
+    let has_sky = scene.sky.is_some();
     let rows: Vec<Row> = (rect.y..rect.y + rect.height)
         .into_par_iter()
         .map(|y| {
@@ -91,26 +102,35 @@ pub fn render_tile(scene: &PreparedScene, rect: Rect, spectral: bool) -> TileRes
             let width = rect.width as usize;
             let mut xyz = Vec::with_capacity(width);
             let mut spectra = spectral.then(|| Vec::with_capacity(width));
+            let mut sky = has_sky.then(|| Vec::with_capacity(width));
             let mean = 1.0 / scene.settings.samples_per_pixel.max(1) as f32;
             for x in rect.x..rect.x + rect.width {
                 // The film is linear: the XYZ of the sum, scaled, is the XYZ of the mean.
-                let sum = pixel_sum(scene, x, y, &mut rays);
+                let (sum, saw_sky) = pixel_sum(scene, x, y, &mut rays);
                 xyz.push(film_xyz(&sum).map(|v| v * mean));
                 if let Some(s) = &mut spectra {
                     s.push(sum * mean);
                 }
+                if let Some(s) = &mut sky {
+                    s.push(saw_sky as f32 * mean);
+                }
             }
-            (xyz, spectra, rays)
+            (xyz, spectra, sky, rays)
         })
         .collect();
-    let rays = rows.iter().map(|r| r.2).sum();
-    let mut xyz = Vec::with_capacity(rect.width as usize * rect.height as usize);
-    let mut spectra = spectral.then(|| Vec::with_capacity(xyz.capacity()));
-    for (row_xyz, row_spectra, _) in rows {
+    let rays = rows.iter().map(|r| r.3).sum();
+    let pixels = rect.width as usize * rect.height as usize;
+    let mut xyz = Vec::with_capacity(pixels);
+    let mut spectra = spectral.then(|| Vec::with_capacity(pixels));
+    let mut sky = has_sky.then(|| Vec::with_capacity(pixels));
+    for (row_xyz, row_spectra, row_sky, _) in rows {
         xyz.extend(row_xyz);
         if let (Some(all), Some(row)) = (&mut spectra, row_spectra) {
             all.extend(row);
         }
+        if let (Some(all), Some(row)) = (&mut sky, row_sky) {
+            all.extend(row);
+        }
     }
-    TileResult { rect, xyz, spectral: spectra, rays }
+    TileResult { rect, xyz, spectral: spectra, sky, rays }
 }

@@ -1,0 +1,130 @@
+//! `restauro demo --quick`, the README's first command at its smallest, through the embedded
+//! cluster: every image it lists exists and decodes, the sample board obeys ρ·E/π, and under CIE
+//! A the Retinex brings each stone closer to its D65 render than the unfiltered render is — the
+//! paper's claim (Rossi, Marini & Rizzi 2004, Fig. 12), measured here from the EXR files.
+
+use restauro_coordinator::image_files::{XyzImage, read_exr};
+use restauro_spectral::Lab;
+use restauro_spectral::appearance::d65_white;
+use restauro_spectral::ciede2000::ciede2000;
+use restauro_spectral::colorimetry::Xyz;
+use restauro_tests::{restauro, text};
+use serde_json::Value;
+use std::path::Path;
+
+fn decode_png(path: &Path) -> (u32, u32) {
+    let file = std::fs::File::open(path).unwrap();
+    let mut reader = png::Decoder::new(std::io::BufReader::new(file)).read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    (info.width, info.height)
+}
+
+/// The mean XYZ over `rect` ({x0, y0, x1, y1}) and the coefficient of variation of its Y.
+fn mean(image: &XyzImage, rect: &Value) -> (Xyz, f64) {
+    let r = |k: &str| rect[k].as_u64().unwrap() as usize;
+    let (mut sum, mut sum_y2, mut n) = ([0.0f64; 3], 0.0, 0.0);
+    for y in r("y0")..r("y1") {
+        for x in r("x0")..r("x1") {
+            let p = image.pixels[y * image.width + x];
+            for k in 0..3 {
+                sum[k] += f64::from(p[k]);
+            }
+            sum_y2 += f64::from(p[1]).powi(2);
+            n += 1.0;
+        }
+    }
+    assert!(n > 20.0, "the square {rect} covers {n} pixels");
+    let m = sum.map(|v| v / n);
+    let variance = (sum_y2 / n - m[1] * m[1]).max(0.0);
+    (Xyz::from_array(m), variance.sqrt() / m[1])
+}
+
+#[test]
+fn the_quick_demo_writes_what_it_lists_and_the_retinex_adapts() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("demo");
+    let o = restauro(&["demo", "--quick", "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(text(&o).contains(&format!("results are in {}", out.display())), "{}", text(&o));
+    let report: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let markdown = std::fs::read_to_string(out.join("report.md")).unwrap();
+
+    // Every listed image exists and decodes; every render's files are listed; four sheets.
+    let images = report["images"].as_array().unwrap();
+    let listed: Vec<&str> = images.iter().map(|i| i["file"].as_str().unwrap()).collect();
+    for file in &listed {
+        let path = out.join(file);
+        if file.ends_with(".png") {
+            let (w, h) = decode_png(&path);
+            assert!(w > 0 && h > 0, "{file}");
+        } else {
+            assert!(file.ends_with(".exr"), "{file}");
+            let image = read_exr(&path, usize::MAX).unwrap_or_else(|e| panic!("{file}: {e}"));
+            assert_eq!(image.pixels.len(), image.width * image.height, "{file}");
+            assert!(image.pixels.iter().flatten().all(|v| v.is_finite()), "{file}");
+        }
+        assert!(markdown.contains(file), "report.md does not list {file}");
+    }
+    let renders = report["renders"].as_array().unwrap();
+    assert_eq!(renders.len(), 8);
+    for r in renders {
+        for f in r["files"].as_array().unwrap() {
+            assert!(listed.contains(&f.as_str().unwrap()), "{f} is not listed");
+        }
+        assert!(r["render_s"].as_f64().unwrap() > 0.0, "{r}");
+    }
+    for sheet in ["facade.png", "cleaning-delta-e.png", "stones.png", "boards.png"] {
+        assert!(listed.contains(&format!("sheets/{sheet}").as_str()), "{sheet}");
+    }
+    // Nothing half-written is left: every file was written under a temporary name and renamed.
+    let mut folders = vec![out.clone()];
+    while let Some(folder) = folders.pop() {
+        for entry in std::fs::read_dir(&folder).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                folders.push(path);
+            } else {
+                assert!(!path.to_string_lossy().ends_with(".tmp"), "{} is left", path.display());
+            }
+        }
+    }
+
+    // The stone experiment, from the files.
+    let read = |name: &str| {
+        let path = out.join(format!("renders/{name}/{name}.exr"));
+        read_exr(&path, usize::MAX).unwrap()
+    };
+    let seen = |name: &str| {
+        let path = out.join(format!("renders/{name}/{name}-retinex.exr"));
+        read_exr(&path, usize::MAX).unwrap()
+    };
+    let (d65, a, a_seen) = (read("samples-D65"), read("samples-A"), seen("samples-A"));
+    let samples = report["samples"].as_array().unwrap();
+    let white = samples.iter().find(|s| s["state"] == "reference").unwrap();
+    let (white_d65, cv) = mean(&d65, &white["rect"]);
+    // The white tile (ρ = 0.9, a Lambertian square under 1000 lux from above): 0.9·1000/π cd/m²,
+    // within 0.5 % (the light is a direction; only f32 rounding and the spectral sums differ).
+    let expect = 0.9 * 1000.0 / std::f64::consts::PI;
+    assert!((white_d65.y / expect - 1.0).abs() < 0.005, "{} vs {expect}", white_d65.y);
+    assert!(cv < 1e-3, "the white tile is not uniform: {cv}");
+    let (white_a, _) = mean(&a, &white["rect"]);
+    let lab = |xyz: Xyz, white_y: f64| Lab::from_xyz(xyz.scale(1.0 / white_y), d65_white());
+    let mut checked = 0;
+    for s in samples.iter().filter(|s| s["state"] != "reference") {
+        let (reference, cv) = mean(&d65, &s["rect"]);
+        assert!(cv < 0.01, "{}: not a uniform square ({cv})", s["label"]);
+        let reference = lab(reference, white_d65.y);
+        let unfiltered = lab(mean(&a, &s["rect"]).0, white_a.y);
+        let retinex = lab(mean(&a_seen, &s["rect"]).0, 1.0);
+        let (before, after) = (ciede2000(reference, unfiltered), ciede2000(reference, retinex));
+        assert!(
+            after < before,
+            "{} under CIE A: ΔE00 to the D65 render {after:.2} after the Retinex, {before:.2} without",
+            s["label"]
+        );
+        checked += 1;
+    }
+    assert_eq!(checked, 4);
+}

@@ -237,6 +237,9 @@ impl LocalCluster {
             .arg(&worker_file)
             .args(coordinator_args)
             .env("RUST_LOG", std::env::var("RUST_LOG").unwrap_or_else(|_| "warn".into()))
+            // An operator's setting for one service; here it would put three processes on
+            // one port.
+            .env_remove("RESTAURO_METRICS_LISTEN")
             .stdin(Stdio::piped())
             .stdout(Stdio::piped())
             .stderr(log("coordinator")?)
@@ -264,6 +267,9 @@ impl LocalCluster {
                 .arg("--cache")
                 .arg(dir.path().join(format!("cache-{i}")))
                 .env("RUST_LOG", std::env::var("RUST_LOG").unwrap_or_else(|_| "warn".into()))
+                // An operator's setting for one service; here it would put three processes on
+                // one port.
+                .env_remove("RESTAURO_METRICS_LISTEN")
                 .stdin(Stdio::piped())
                 .stdout(Stdio::null())
                 .stderr(log(&format!("worker-{}", i + 1))?)

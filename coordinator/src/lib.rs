@@ -9,6 +9,7 @@ pub mod group_commit;
 pub mod image_files;
 pub mod jobs;
 pub mod logging;
+pub mod metrics;
 pub mod results;
 pub mod scheduler;
 pub mod server;

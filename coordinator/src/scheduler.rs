@@ -361,9 +361,35 @@ fn reindex(ready: &mut BTreeSet<ReadyKey>, before: Option<ReadyKey>, after: Opti
     }
 }
 
+/// Counts since the scheduler started, for the metrics.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Totals {
+    /// Leases granted.
+    pub leased: u64,
+    /// Tiles completed (current leases only; stale reports are not counted).
+    pub done: u64,
+    /// Tiles put back in their queue: expired, failed, handed back, or lost with a worker.
+    pub requeued: u64,
+    /// Leases that ran past the lease timeout.
+    pub lease_expiries: u64,
+    /// Workers dropped for silence past the heartbeat timeout.
+    pub workers_lost: u64,
+}
+
+/// The scheduler's state at one instant, for the metrics.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Gauges {
+    /// Tiles waiting for a lease, over all running jobs.
+    pub queued: u64,
+    /// Tiles leased and not yet reported.
+    pub leased: u64,
+    pub workers: u64,
+}
+
 /// The coordinator's tile scheduler. See the module documentation for the policy.
 pub struct Scheduler {
     config: Config,
+    totals: Totals,
     jobs: Vec<Option<Job>>,
     free_slots: Vec<Slot>,
     by_id: FxMap<Arc<str>, Slot>,
@@ -382,6 +408,7 @@ impl Scheduler {
     pub fn new(config: Config) -> Self {
         Scheduler {
             config,
+            totals: Totals::default(),
             jobs: Vec::new(),
             free_slots: Vec::new(),
             by_id: FxMap::default(),
@@ -556,6 +583,7 @@ impl Scheduler {
             holder.leases.insert(pack(slot, tile));
             out.push(Lease { job: job.id.clone(), tile, attempt, worker });
         }
+        self.totals.leased += out.len() as u64;
         out
     }
 
@@ -592,6 +620,7 @@ impl Scheduler {
         tile.state = TileState::Done;
         job.done += 1;
         job.leased -= 1;
+        self.totals.done += 1;
         let finished = job.done == job.total;
         if finished {
             job.state = JobState::Finished;
@@ -663,6 +692,7 @@ impl Scheduler {
         job.leased -= 1;
         job.queued += 1;
         job.requeued += 1;
+        self.totals.requeued += 1;
         reindex(&mut self.ready, before, job.ready_key(slot));
         self.lease_deadlines.remove(&(deadline, slot, tile));
         if let Some(w) = self.workers.get_mut(&worker) {
@@ -704,12 +734,14 @@ impl Scheduler {
             if deadline > now {
                 break;
             }
+            self.totals.lease_expiries += 1;
             revoked.push(self.requeue(slot, tile));
         }
         while let Some(&(deadline, worker)) = self.worker_deadlines.first() {
             if deadline > now {
                 break;
             }
+            self.totals.workers_lost += 1;
             revoked.extend(self.remove_worker(worker, now));
         }
         revoked
@@ -770,6 +802,20 @@ impl Scheduler {
             .collect();
         out.sort_unstable_by_key(|w| w.id);
         out
+    }
+
+    /// Counts since the scheduler started.
+    pub fn totals(&self) -> Totals {
+        self.totals
+    }
+
+    /// Tiles queued and leased, and workers registered, now.
+    pub fn gauges(&self) -> Gauges {
+        Gauges {
+            queued: self.pending_tiles(),
+            leased: self.lease_deadlines.len() as u64,
+            workers: self.workers.len() as u64,
+        }
     }
 
     /// Queued tiles over all running jobs (including tiles only excluded workers could take).
@@ -846,6 +892,31 @@ mod tests {
         assert_eq!(s.pending_tiles(), 0);
         let done: u64 = s.workers().iter().map(|w| w.done).sum();
         assert_eq!(done, 10);
+    }
+
+    /// The metrics' totals and gauges follow leases, completions, expiries and lost workers.
+    #[test]
+    fn totals_and_gauges_count_what_happened() {
+        let (mut s, t0) = setup();
+        add(&mut s, "a", 0, 5, t0);
+        let w1 = s.register_worker("w1", 8, t0);
+        let w2 = s.register_worker("w2", 8, t0);
+        let first = s.lease(w1, 2, t0);
+        let second = s.lease(w2, 1, t0);
+        assert_eq!(s.gauges(), Gauges { queued: 2, leased: 3, workers: 2 });
+        s.complete(&first[0], t0);
+        // Past the lease timeout: w1's other lease and w2's lease expire, and w1, silent since
+        // the start, is dropped; w2 heartbeats just before.
+        let later = t0 + s.config().lease_timeout.max(s.config().heartbeat_timeout) + secs(1);
+        s.heartbeat(w2, later);
+        assert_eq!(s.expire(later).len(), 2);
+        let t = s.totals();
+        let counts = (t.leased, t.done, t.lease_expiries, t.requeued, t.workers_lost);
+        assert_eq!(counts, (3, 1, 2, 2, 1));
+        assert_eq!(s.gauges(), Gauges { queued: 4, leased: 0, workers: 1 });
+        // A late report of an expired lease is stale and not counted as done.
+        assert_eq!(s.complete(&second[0], later), Completion::Stale);
+        assert_eq!(s.totals().done, 1);
     }
 
     #[test]

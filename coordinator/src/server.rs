@@ -5,6 +5,8 @@ use crate::auth::{Role, Tokens};
 use crate::scheduler;
 use crate::service::{Config, RenderService, Shared, WorkService};
 use anyhow::{Context, Result, bail};
+use restauro_ops::signal::stop_signal;
+use restauro_ops::token::read_token;
 use restauro_proto::pb::render_server::RenderServer;
 use restauro_proto::pb::work_server::WorkServer;
 use restauro_scene::load::Limits;
@@ -55,6 +57,11 @@ pub struct CoordinatorArgs {
     /// The private key of --tls-cert (PEM; else RESTAURO_TLS_KEY).
     #[arg(long, env = "RESTAURO_TLS_KEY", requires = "tls_cert")]
     pub tls_key: Option<PathBuf>,
+    /// Serve Prometheus metrics (/metrics) and health (/healthz, /readyz) over HTTP on this
+    /// address (else RESTAURO_METRICS_LISTEN; off when neither is given). Port 0 picks a free
+    /// port, printed as `metrics on ADDR`.
+    #[arg(long, env = "RESTAURO_METRICS_LISTEN")]
+    pub metrics_listen: Option<SocketAddr>,
     /// Exit when standard input closes (an embedded cluster's processes end with their parent).
     #[arg(long, hide = true)]
     pub exit_with_stdin: bool,
@@ -78,55 +85,11 @@ fn tls_identity(args: &CoordinatorArgs) -> Result<Option<tonic::transport::Ident
     Ok(Some(tonic::transport::Identity::from_pem(cert, key)))
 }
 
-/// A token from a file, else from an environment variable; refuses an empty one.
-pub fn read_token(file: Option<&Path>, variable: &str, flag: &str) -> Result<String> {
-    let token = match file {
-        Some(path) => std::fs::read_to_string(path)
-            .with_context(|| format!("reading the token file {}", path.display()))?,
-        None => std::env::var(variable).unwrap_or_default(),
-    };
-    let token = token.trim().to_owned();
-    if token.is_empty() {
-        bail!("no token: give {flag} FILE or set {variable}");
-    }
-    Ok(token)
-}
-
 fn seconds(value: f64, flag: &str) -> Result<Duration> {
     if !(value.is_finite() && value > 0.0 && value < 1e6) {
         bail!("{flag} {value}: use a number of seconds above 0");
     }
     Ok(Duration::from_secs_f64(value))
-}
-
-/// Resolves when `shutdown` should begin: SIGTERM or Ctrl-C, or the end of standard input when
-/// asked.
-async fn stop_signal(exit_with_stdin: bool) {
-    let stdin_closed = async move {
-        if exit_with_stdin {
-            let mut buf = [0u8; 64];
-            let mut stdin = tokio::io::stdin();
-            use tokio::io::AsyncReadExt;
-            while matches!(stdin.read(&mut buf).await, Ok(n) if n > 0) {}
-        } else {
-            std::future::pending::<()>().await;
-        }
-    };
-    #[cfg(unix)]
-    {
-        let mut term = tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate())
-            .expect("installing a SIGTERM handler");
-        tokio::select! {
-            _ = term.recv() => {}
-            _ = tokio::signal::ctrl_c() => {}
-            _ = stdin_closed => {}
-        }
-    }
-    #[cfg(not(unix))]
-    tokio::select! {
-        _ = tokio::signal::ctrl_c() => {}
-        _ = stdin_closed => {}
-    }
 }
 
 pub fn run(args: &CoordinatorArgs) -> Result<()> {
@@ -161,18 +124,49 @@ pub fn run(args: &CoordinatorArgs) -> Result<()> {
         .build()
         .context("starting the async runtime")?;
     let tls = tls_identity(args)?;
-    runtime.block_on(serve(config, args.listen, tls, stop_signal(args.exit_with_stdin)))
+    let exit_with_stdin = args.exit_with_stdin;
+    let endpoints = Endpoints { grpc: args.listen, metrics: args.metrics_listen };
+    runtime.block_on(serve(config, endpoints, tls, stop_signal(exit_with_stdin)))
+}
+
+/// Where the coordinator serves.
+#[derive(Clone, Copy, Debug)]
+pub struct Endpoints {
+    /// Both gRPC services, gRPC health and reflection.
+    pub grpc: SocketAddr,
+    /// Prometheus metrics and HTTP health, when given.
+    pub metrics: Option<SocketAddr>,
 }
 
 /// Serves until `stop` resolves.
 pub async fn serve(
     config: Config,
-    listen: SocketAddr,
+    endpoints: Endpoints,
     tls: Option<tonic::transport::Identity>,
     stop: impl Future<Output = ()> + Send + 'static,
 ) -> Result<()> {
+    let listen = endpoints.grpc;
+    // One stop for both servers.
+    let (stop_tx, stop_rx) = tokio::sync::watch::channel(false);
+    tokio::spawn(async move {
+        stop.await;
+        let _ = stop_tx.send(true);
+    });
+    let stopped = |mut rx: tokio::sync::watch::Receiver<bool>| async move {
+        let _ = rx.wait_for(|s| *s).await;
+    };
     let has_tls = tls.is_some();
-    let mut server = tonic::transport::Server::builder();
+    // Every call in a span named by its method, so a log line says which call it belongs to;
+    // calls about one tile record its job, tile and worker in the span.
+    let mut server = tonic::transport::Server::builder().trace_fn(|request| {
+        tracing::info_span!(
+            "grpc",
+            method = %request.uri().path(),
+            job = tracing::field::Empty,
+            tile = tracing::field::Empty,
+            worker = tracing::field::Empty,
+        )
+    });
     if let Some(identity) = tls {
         server = server
             .tls_config(tonic::transport::ServerTlsConfig::new().identity(identity))
@@ -185,10 +179,20 @@ pub async fn serve(
         TcpListener::bind(listen).await.with_context(|| format!("listening on {listen}"))?;
     let addr = listener.local_addr()?;
     info!(%addr, data = %data.display(), tls = has_tls, "coordinator listening");
+    let metrics = match endpoints.metrics {
+        Some(at) => {
+            let probe: std::sync::Arc<dyn restauro_ops::endpoint::Probe> = shared.clone();
+            Some(restauro_ops::endpoint::serve(at, probe, stopped(stop_rx.clone())).await?)
+        }
+        None => None,
+    };
     {
-        // The embedded cluster and the tests read the address from here.
+        // The embedded cluster and the tests read the addresses from here.
         let mut out = std::io::stdout().lock();
         writeln!(out, "listening on {addr}")?;
+        if let Some((at, _)) = &metrics {
+            writeln!(out, "metrics on {at}")?;
+        }
         out.flush()?;
     }
     let timer = {
@@ -210,12 +214,32 @@ pub async fn serve(
         WorkServer::new(WorkService(shared)).max_decoding_message_size(MAX_MESSAGE_BYTES),
         tokens.interceptor(Role::Worker),
     );
+    // The standard gRPC health service, without a token (probes carry none), and reflection,
+    // so that `grpcurl` lists and calls the services without the .proto file.
+    let (health, health_service) = tonic_health::server::health_reporter();
+    health.set_serving::<RenderServer<RenderService>>().await;
+    health.set_serving::<WorkServer<WorkService>>().await;
+    let reflection = || {
+        tonic_reflection::server::Builder::configure()
+            .register_encoded_file_descriptor_set(restauro_proto::FILE_DESCRIPTOR_SET)
+            .register_encoded_file_descriptor_set(tonic_health::pb::FILE_DESCRIPTOR_SET)
+    };
+    // Both versions of reflection: older grpcurl and other tools speak only v1alpha.
+    let reflection_v1 = reflection().build_v1().context("building the reflection service")?;
+    let reflection_v1alpha =
+        reflection().build_v1alpha().context("building the reflection service")?;
     server
+        .add_service(health_service)
+        .add_service(reflection_v1)
+        .add_service(reflection_v1alpha)
         .add_service(render)
         .add_service(work)
-        .serve_with_incoming_shutdown(TcpListenerStream::new(listener), stop)
+        .serve_with_incoming_shutdown(TcpListenerStream::new(listener), stopped(stop_rx))
         .await?;
     timer.abort();
+    if let Some((_, task)) = metrics {
+        let _ = task.await;
+    }
     info!("coordinator stopped");
     Ok(())
 }

@@ -8,6 +8,7 @@ use crate::auth::Tokens;
 use crate::framebuffer::{Framebuffer, tile_sizes};
 use crate::group_commit::TileCommits;
 use crate::jobs::{Options, Record, State};
+use crate::metrics::Metrics;
 use crate::results::{ResultOptions, parse_exposure, write_results};
 use crate::scheduler::{self, Completion, Failure, Lease, Scheduler};
 use crate::store::Store;
@@ -56,6 +57,7 @@ pub struct Shared {
     /// High bits of every worker id this run hands out: a worker registered with an earlier run
     /// of the coordinator is unknown to this one, never mistaken for another worker.
     epoch: u64,
+    pub metrics: Metrics,
 }
 
 struct State2 {
@@ -88,6 +90,24 @@ fn asset_hash(reference: &str) -> Result<&str, Status> {
     })
 }
 
+/// What the operations endpoint reports for the coordinator.
+impl restauro_ops::endpoint::Probe for Shared {
+    fn refresh(&self) {
+        let st = self.lock();
+        let unfinished = st.jobs.values().filter(|r| !r.state.is_final()).count() as u64;
+        self.metrics.update(st.scheduler.gauges(), st.scheduler.totals(), unfinished);
+    }
+
+    fn registry(&self) -> &prometheus_client::registry::Registry {
+        self.metrics.registry()
+    }
+
+    /// The store is open once `Shared` exists; the coordinator is ready while it serves.
+    fn ready(&self) -> Result<(), String> {
+        Ok(())
+    }
+}
+
 impl Shared {
     /// Opens the store in `config.data_dir` and resumes every unfinished job in it.
     pub fn open(config: Config) -> anyhow::Result<Arc<Shared>> {
@@ -112,6 +132,7 @@ impl Shared {
             work: Notify::new(),
             changed: watch::Sender::new(0),
             epoch,
+            metrics: Metrics::new(),
         });
         let mut to_assemble = Vec::new();
         for (id, bytes) in shared.store.jobs()? {
@@ -189,10 +210,19 @@ impl Shared {
     /// Expires overdue leases and silent workers; called on a timer.
     pub fn expire(&self) {
         let mut st = self.lock();
+        let before = st.scheduler.totals();
         let expired = st.scheduler.expire(Instant::now());
+        let after = st.scheduler.totals();
+        let lost = after.workers_lost - before.workers_lost;
+        if lost > 0 {
+            warn!(workers = lost, "dropped worker(s) silent past the heartbeat timeout");
+        }
         if !expired.is_empty() {
-            for l in &expired {
-                info!(job = %l.job, tile = l.tile, attempt = l.attempt, worker = l.worker, "lease expired; tile requeued");
+            // The first ones ran past the lease timeout; the rest were held by dropped workers.
+            let timed_out = (after.lease_expiries - before.lease_expiries) as usize;
+            for (i, l) in expired.iter().enumerate() {
+                let why = if i < timed_out { "lease expired" } else { "worker dropped" };
+                info!(job = %l.job, tile = l.tile, attempt = l.attempt, worker = l.worker, "{why}; tile requeued");
             }
             drop(st);
             self.work.notify_waiters();
@@ -229,6 +259,7 @@ impl Shared {
     /// Assembles a job whose tiles are all stored, runs the Retinex and writes the results.
     /// Runs on a blocking thread.
     fn assemble(&self, id: &str) {
+        let _span = tracing::info_span!("assemble", job = %id).entered();
         let Some(record) = self.set_state(id, State::Assembling) else { return };
         let started = Instant::now();
         let outcome = (|| -> Result<Vec<String>, String> {
@@ -259,6 +290,9 @@ impl Shared {
             let options = ResultOptions { name: &stem, info: &record.info, exposure, retinex };
             let written = write_results(&dir, frame, &options).map_err(|e| e.to_string())?;
             info!(job = %id, retinex_s = written.retinex_s, "results written");
+            if self.config.retinex {
+                self.metrics.retinex_seconds.observe(written.retinex_s);
+            }
             Ok(written.files)
         })();
         match outcome {
@@ -413,6 +447,7 @@ impl pb::render_server::Render for RenderService {
                 "asset {reference}: the bytes received do not have this hash; upload it again"
             )));
         }
+        self.0.metrics.asset_bytes_received.inc_by(data.len() as u64);
         let shared = self.0.clone();
         blocking(move || shared.store.put_asset(&hash, &data)).await?.map_err(internal)?;
         Ok(Response::new(pb::AssetList { references: vec![reference] }))
@@ -574,6 +609,7 @@ impl pb::render_server::Render for RenderService {
         let data = tokio::fs::read(&path)
             .await
             .map_err(|e| internal(format!("{}: {e}", path.display())))?;
+        self.0.metrics.result_bytes_sent.inc_by(data.len() as u64);
         Ok(Response::new(chunk_stream(req.name, data)))
     }
 
@@ -736,6 +772,10 @@ impl pb::work_server::Work for WorkService {
             _ => return Err(Status::invalid_argument("a tile report starts with its header")),
         };
         let lease = self.lease_from(header.worker_id, header.lease.as_ref())?;
+        let span = tracing::Span::current();
+        span.record("job", &*lease.job);
+        span.record("tile", lease.tile);
+        span.record("worker", lease.worker);
         let (rect, spectral, sky) = {
             let st = self.0.lock();
             match st.jobs.get(&*lease.job) {
@@ -788,6 +828,10 @@ impl pb::work_server::Work for WorkService {
                 lease.job,
                 data.len()
             )));
+        }
+        self.0.metrics.tile_bytes_received.inc_by(data.len() as u64);
+        if header.render_s.is_finite() && header.render_s >= 0.0 {
+            self.0.metrics.tile_render_seconds.observe(header.render_s);
         }
         // Durable first, then accepted: an acknowledged tile is never rendered again.
         self.0.tile_commits.put(lease.job.clone(), lease.tile, data).await.map_err(internal)?;
@@ -885,6 +929,7 @@ impl pb::work_server::Work for WorkService {
             .await?
             .map_err(internal)?
             .ok_or_else(|| Status::not_found(format!("no asset {reference}")))?;
+        self.0.metrics.asset_bytes_sent.inc_by(data.len() as u64);
         Ok(Response::new(chunk_stream(reference, data)))
     }
 }

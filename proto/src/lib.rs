@@ -18,6 +18,10 @@ pub mod pb {
 
 pub use pb::*;
 
+/// The encoded `FileDescriptorSet` of `restauro.proto`, for the gRPC reflection service.
+pub const FILE_DESCRIPTOR_SET: &[u8] =
+    include_bytes!(concat!(env!("OUT_DIR"), "/restauro_descriptor.bin"));
+
 pub mod transport;
 
 /// Adds the protocol version and a bearer token to every outgoing request (clients and workers).

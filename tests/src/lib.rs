@@ -26,6 +26,8 @@ pub fn binary(name: &str) -> PathBuf {
 pub struct Coordinator {
     pub child: Child,
     pub url: String,
+    /// The address of its metrics endpoint, when started with `--metrics-listen`.
+    pub metrics: Option<String>,
 }
 
 pub const CLIENT_TOKEN: &str = "client-token-for-tests";
@@ -61,14 +63,21 @@ impl Coordinator {
             .spawn()
             .unwrap();
         let mut line = String::new();
-        BufReader::new(child.stdout.take().unwrap()).read_line(&mut line).unwrap();
+        let mut stdout = BufReader::new(child.stdout.take().unwrap());
+        stdout.read_line(&mut line).unwrap();
         let addr = line.trim().strip_prefix("listening on ").unwrap_or_else(|| {
             panic!(
                 "coordinator did not start: {}",
                 std::fs::read_to_string(dir.join("coordinator.log")).unwrap_or_default()
             )
         });
-        Coordinator { child, url: format!("http://{addr}") }
+        let url = format!("http://{addr}");
+        let metrics = extra.contains(&"--metrics-listen").then(|| {
+            let mut line = String::new();
+            stdout.read_line(&mut line).unwrap();
+            line.trim().strip_prefix("metrics on ").expect("the metrics address").to_owned()
+        });
+        Coordinator { child, url, metrics }
     }
 }
 

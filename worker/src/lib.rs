@@ -7,6 +7,7 @@ pub mod bsdf;
 pub mod camera;
 pub mod integrator;
 pub mod light;
+pub mod metrics;
 pub mod prepared;
 pub mod process;
 pub mod sampler;

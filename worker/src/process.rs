@@ -8,9 +8,12 @@
 //! When the coordinator goes away the worker keeps trying to reach it; a restarted coordinator
 //! does not know the worker, which then registers again.
 
+use crate::metrics::WorkerMetrics;
 use crate::prepared::{PreparedScene, Settings};
 use crate::tile::{Rect, render_tile};
 use anyhow::{Context, Result, anyhow, bail};
+use restauro_ops::signal::stop_signal;
+use restauro_ops::token::read_token;
 use restauro_proto::pb::work_client::WorkClient;
 use restauro_proto::{self as pb, CHUNK_BYTES, Credentials, PROTOCOL_VERSION};
 use restauro_scene::bundle::Bundle;
@@ -25,7 +28,7 @@ use std::time::{Duration, Instant};
 use tokio::sync::{oneshot, watch};
 use tonic::service::interceptor::InterceptedService;
 use tonic::transport::Channel;
-use tracing::{info, warn};
+use tracing::{Instrument, debug, info, info_span, warn};
 
 type Client = WorkClient<InterceptedService<Channel, Credentials>>;
 
@@ -56,6 +59,11 @@ pub struct WorkerArgs {
     /// Append `job tile attempt` for every tile rendered to this file (for tests).
     #[arg(long, hide = true)]
     pub tile_log: Option<PathBuf>,
+    /// Serve Prometheus metrics (/metrics) and health (/healthz; /readyz once registered) over
+    /// HTTP on this address (else RESTAURO_METRICS_LISTEN; off when neither is given). Port 0
+    /// picks a free port, printed as `metrics on ADDR`.
+    #[arg(long, env = "RESTAURO_METRICS_LISTEN")]
+    pub metrics_listen: Option<std::net::SocketAddr>,
     /// Exit when standard input closes (an embedded cluster's processes end with their parent).
     #[arg(long, hide = true)]
     pub exit_with_stdin: bool,
@@ -74,23 +82,11 @@ struct Worker {
     cache: PathBuf,
     jobs: HashMap<String, Arc<ReadyJob>>,
     stop: watch::Receiver<bool>,
-}
-
-fn token(args: &WorkerArgs) -> Result<String> {
-    let token = match &args.token_file {
-        Some(path) => std::fs::read_to_string(path)
-            .with_context(|| format!("reading the token file {}", path.display()))?,
-        None => std::env::var("RESTAURO_WORKER_TOKEN").unwrap_or_default(),
-    };
-    let token = token.trim().to_owned();
-    if token.is_empty() {
-        bail!("no worker token: give --token-file FILE or set RESTAURO_WORKER_TOKEN");
-    }
-    Ok(token)
+    metrics: Arc<WorkerMetrics>,
 }
 
 pub fn run(args: &WorkerArgs) -> Result<()> {
-    let token = token(args)?;
+    let token = read_token(args.token_file.as_deref(), "RESTAURO_WORKER_TOKEN", "--token-file")?;
     let threads = if args.threads == 0 { num_threads() } else { args.threads };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
@@ -113,6 +109,20 @@ pub fn run(args: &WorkerArgs) -> Result<()> {
             info!("stop requested: finishing the tile in hand");
             let _ = stop_tx.send(true);
         });
+        let metrics = Arc::new(WorkerMetrics::new());
+        // The endpoint outlives the drain, so a probe sees the worker until it exits.
+        let endpoint = match args.metrics_listen {
+            Some(at) => {
+                let probe: Arc<dyn restauro_ops::endpoint::Probe> = metrics.clone();
+                let (addr, task) =
+                    restauro_ops::endpoint::serve(at, probe, std::future::pending()).await?;
+                let mut out = std::io::stdout().lock();
+                writeln!(out, "metrics on {addr}")?;
+                out.flush()?;
+                Some(task)
+            }
+            None => None,
+        };
         let mut worker = Worker {
             args: args.clone(),
             token,
@@ -120,33 +130,18 @@ pub fn run(args: &WorkerArgs) -> Result<()> {
             cache,
             jobs: HashMap::new(),
             stop,
+            metrics,
         };
-        worker.serve(threads as u32).await
+        let served = worker.serve(threads as u32).await;
+        if let Some(task) = endpoint {
+            task.abort();
+        }
+        served
     })
 }
 
 fn num_threads() -> usize {
     std::thread::available_parallelism().map_or(1, |n| n.get())
-}
-
-async fn stop_signal(exit_with_stdin: bool) {
-    let stdin_closed = async move {
-        if exit_with_stdin {
-            use tokio::io::AsyncReadExt;
-            let mut buf = [0u8; 64];
-            let mut stdin = tokio::io::stdin();
-            while matches!(stdin.read(&mut buf).await, Ok(n) if n > 0) {}
-        } else {
-            std::future::pending::<()>().await;
-        }
-    };
-    let mut term = tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate())
-        .expect("installing a SIGTERM handler");
-    tokio::select! {
-        _ = term.recv() => {}
-        _ = tokio::signal::ctrl_c() => {}
-        _ = stdin_closed => {}
-    }
 }
 
 fn is_refusal(status: &tonic::Status) -> bool {
@@ -224,6 +219,7 @@ impl Worker {
             };
             let id = reply.worker_id;
             info!(worker = id, %name, capacity, "registered");
+            self.metrics.registered.set(1);
             let heartbeat = {
                 let mut client = client.clone();
                 let period = Duration::from_millis(u64::from(reply.heartbeat_ms.max(50)));
@@ -252,6 +248,7 @@ impl Worker {
                         info!("leaving: {}", status.message());
                     }
                     heartbeat.abort();
+                    self.metrics.registered.set(0);
                     info!("drained; exiting");
                     return Ok(());
                 }
@@ -266,6 +263,7 @@ impl Worker {
                     Ok(r) => r.into_inner(),
                     Err(status) => {
                         warn!("pulling leases: {}; reconnecting", status.message());
+                        self.metrics.registered.set(0);
                         while reports.join_next().await.is_some() {}
                         heartbeat.abort();
                         tokio::time::sleep(Duration::from_millis(100)).await;
@@ -274,18 +272,21 @@ impl Worker {
                 };
                 if !reply.known {
                     info!("the coordinator does not know this worker; registering again");
+                    self.metrics.registered.set(0);
                     while reports.join_next().await.is_some() {}
                     heartbeat.abort();
                     continue 'connection;
                 }
                 for lease in reply.leases {
-                    match self.render(&mut client, id, lease).await {
+                    let span = info_span!("tile", job = %lease.job_id, tile = lease.tile, attempt = lease.attempt);
+                    match self.render(&mut client, id, lease).instrument(span.clone()).await {
                         Ok(Some(report)) => {
                             while reports.len() >= MAX_REPORTS_IN_FLIGHT {
                                 reports.join_next().await;
                             }
                             let client = client.clone();
-                            reports.spawn(report.deliver(client));
+                            let metrics = self.metrics.clone();
+                            reports.spawn(report.deliver(client, metrics).instrument(span));
                         }
                         Ok(None) => {}
                         Err(e) => warn!("{e:#}"),
@@ -340,6 +341,9 @@ impl Worker {
         }
         let tile = rx.await.context("the render thread stopped")?;
         let render_s = started.elapsed().as_secs_f64();
+        self.metrics.tiles_rendered.inc();
+        self.metrics.tile_render_seconds.observe(render_s);
+        debug!(render_s, rays = tile.rays, "tile rendered");
         // The wire form of coordinator::framebuffer: XYZ, sky coverage (scenes with a sky), spectra.
         let mut data = Vec::with_capacity(tile.xyz.len() * 16);
         for v in tile.xyz.iter().flatten().chain(tile.sky.iter().flatten()) {
@@ -450,6 +454,7 @@ impl Worker {
         if blake3::hash(&bytes).to_hex().as_str() != hash {
             bail!("asset {reference} arrived damaged (its hash differs)");
         }
+        self.metrics.asset_bytes_received.inc_by(bytes.len() as u64);
         let temporary = self.cache.join(format!("{hash}.partial-{}", std::process::id()));
         if std::fs::write(&temporary, &bytes)
             .and_then(|()| std::fs::rename(&temporary, &cached))
@@ -473,7 +478,7 @@ struct Report {
 impl Report {
     /// Sends the tile in chunks, retrying while the coordinator is unreachable: a result is
     /// kept until it is acknowledged (or refused, or given up after many attempts).
-    async fn deliver(self, mut client: Client) {
+    async fn deliver(self, mut client: Client, metrics: Arc<WorkerMetrics>) {
         let lease = self.header.lease.clone().unwrap_or_default();
         let mut backoff = Duration::from_millis(100);
         for attempt in 0.. {
@@ -487,7 +492,10 @@ impl Report {
             );
             match client.report_tile(tokio_stream::iter(messages)).await {
                 Ok(reply) => {
-                    if !reply.get_ref().accepted {
+                    metrics.bytes_sent.inc_by(self.data.len() as u64);
+                    if reply.get_ref().accepted {
+                        metrics.tiles_delivered.inc();
+                    } else {
                         info!(job = %lease.job_id, tile = lease.tile, "result no longer wanted (stale lease)");
                     }
                     return;

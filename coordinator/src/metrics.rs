@@ -1,0 +1,147 @@
+//! The coordinator's Prometheus metrics. The scheduler's counts are kept by the scheduler itself
+//! (`scheduler::Totals`, `scheduler::Gauges`) and copied in at each scrape; what happens at the
+//! service edge (bytes, render and Retinex times) is recorded where it happens.
+//!
+//! `restauro_tiles_queued` is the signal to scale workers on: tiles waiting for a lease over all
+//! running jobs.
+
+use crate::scheduler::{Gauges, Totals};
+use prometheus_client::metrics::counter::Counter;
+use prometheus_client::metrics::gauge::Gauge;
+use prometheus_client::metrics::histogram::{Histogram, exponential_buckets};
+use prometheus_client::registry::{Registry, Unit};
+
+pub struct Metrics {
+    registry: Registry,
+    tiles_queued: Gauge,
+    tiles_leased: Gauge,
+    workers_connected: Gauge,
+    jobs_unfinished: Gauge,
+    leases_total: Counter,
+    tiles_done_total: Counter,
+    tiles_requeued_total: Counter,
+    lease_expiries_total: Counter,
+    workers_lost_total: Counter,
+    /// The render time workers report per tile.
+    pub tile_render_seconds: Histogram,
+    /// The Retinex stage of each finished job.
+    pub retinex_seconds: Histogram,
+    /// Tile results received from workers.
+    pub tile_bytes_received: Counter,
+    /// Scene assets uploaded by clients.
+    pub asset_bytes_received: Counter,
+    /// Scene assets sent to workers.
+    pub asset_bytes_sent: Counter,
+    /// Result files sent to clients.
+    pub result_bytes_sent: Counter,
+}
+
+impl Default for Metrics {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Metrics {
+    pub fn new() -> Self {
+        let mut registry = Registry::with_prefix("restauro");
+        let gauge = |registry: &mut Registry, name: &str, help: &str| {
+            let g = Gauge::default();
+            registry.register(name, help, g.clone());
+            g
+        };
+        let counter = |registry: &mut Registry, name: &str, help: &str| {
+            let c = Counter::default();
+            registry.register(name, help, c.clone());
+            c
+        };
+        let tiles_queued =
+            gauge(&mut registry, "tiles_queued", "Tiles waiting for a lease over all running jobs");
+        let tiles_leased = gauge(&mut registry, "tiles_leased", "Tiles leased to workers now");
+        let workers_connected =
+            gauge(&mut registry, "workers_connected", "Workers registered and heard from");
+        let jobs_unfinished =
+            gauge(&mut registry, "jobs_unfinished", "Jobs queued, running or being assembled");
+        let leases_total = counter(&mut registry, "leases", "Leases granted");
+        let tiles_done_total = counter(&mut registry, "tiles_done", "Tiles completed");
+        let tiles_requeued_total = counter(
+            &mut registry,
+            "tiles_requeued",
+            "Tiles put back in their queue (expired, failed, handed back, or lost with a worker)",
+        );
+        let lease_expiries_total =
+            counter(&mut registry, "lease_expiries", "Leases that ran past the lease timeout");
+        let workers_lost_total = counter(
+            &mut registry,
+            "workers_lost",
+            "Workers dropped for silence past the heartbeat timeout",
+        );
+        let tile_render_seconds = Histogram::new(exponential_buckets(0.01, 2.0, 14));
+        registry.register_with_unit(
+            "tile_render",
+            "Render time per tile, as workers report it",
+            Unit::Seconds,
+            tile_render_seconds.clone(),
+        );
+        let retinex_seconds = Histogram::new(exponential_buckets(0.05, 2.0, 12));
+        registry.register_with_unit(
+            "retinex",
+            "Retinex time per finished job",
+            Unit::Seconds,
+            retinex_seconds.clone(),
+        );
+        let bytes = |registry: &mut Registry, name: &str, help: &str| {
+            let c = Counter::default();
+            registry.register_with_unit(name, help, Unit::Bytes, c.clone());
+            c
+        };
+        let tile_bytes_received =
+            bytes(&mut registry, "tile_received", "Tile results received from workers");
+        let asset_bytes_received =
+            bytes(&mut registry, "asset_received", "Scene assets uploaded by clients");
+        let asset_bytes_sent = bytes(&mut registry, "asset_sent", "Scene assets sent to workers");
+        let result_bytes_sent = bytes(&mut registry, "result_sent", "Result files sent to clients");
+        Self {
+            registry,
+            tiles_queued,
+            tiles_leased,
+            workers_connected,
+            jobs_unfinished,
+            leases_total,
+            tiles_done_total,
+            tiles_requeued_total,
+            lease_expiries_total,
+            workers_lost_total,
+            tile_render_seconds,
+            retinex_seconds,
+            tile_bytes_received,
+            asset_bytes_received,
+            asset_bytes_sent,
+            result_bytes_sent,
+        }
+    }
+
+    pub fn registry(&self) -> &Registry {
+        &self.registry
+    }
+
+    /// Copies the scheduler's state in, before a scrape.
+    pub fn update(&self, gauges: Gauges, totals: Totals, jobs_unfinished: u64) {
+        let set = |g: &Gauge, v: u64| {
+            g.set(i64::try_from(v).unwrap_or(i64::MAX));
+        };
+        set(&self.tiles_queued, gauges.queued);
+        set(&self.tiles_leased, gauges.leased);
+        set(&self.workers_connected, gauges.workers);
+        set(&self.jobs_unfinished, jobs_unfinished);
+        // The scheduler's totals only grow; the counters follow them.
+        let follow = |c: &Counter, v: u64| {
+            c.inc_by(v.saturating_sub(c.get()));
+        };
+        follow(&self.leases_total, totals.leased);
+        follow(&self.tiles_done_total, totals.done);
+        follow(&self.tiles_requeued_total, totals.requeued);
+        follow(&self.lease_expiries_total, totals.lease_expiries);
+        follow(&self.workers_lost_total, totals.workers_lost);
+    }
+}

@@ -1,0 +1,80 @@
+//! The operations endpoint, plain HTTP beside the gRPC port: `GET /metrics` (Prometheus text,
+//! OpenMetrics 1.0, rendered at each scrape), `GET /healthz` (the process runs: liveness) and
+//! `GET /readyz` (it can do its work: readiness — a worker that has registered with its
+//! coordinator, a coordinator whose store is open).
+
+use anyhow::{Context, Result};
+use axum::Router;
+use axum::extract::State;
+use axum::http::{StatusCode, header};
+use axum::response::IntoResponse;
+use axum::routing::get;
+use prometheus_client::encoding::text::encode;
+use prometheus_client::registry::Registry;
+use std::net::SocketAddr;
+use std::sync::Arc;
+use tokio::net::TcpListener;
+use tokio::task::JoinHandle;
+use tracing::{info, warn};
+
+/// What a process reports.
+pub trait Probe: Send + Sync + 'static {
+    /// Brings the registry's values up to date for a scrape (gauges read from live state).
+    fn refresh(&self) {}
+    /// The registry to encode.
+    fn registry(&self) -> &Registry;
+    /// `Ok` when ready for work, else why not.
+    fn ready(&self) -> Result<(), String>;
+}
+
+/// The registry in the Prometheus text format.
+pub fn encode_registry(registry: &Registry) -> String {
+    let mut text = String::new();
+    // Writing into a String cannot fail.
+    let _ = encode(&mut text, registry);
+    text
+}
+
+async fn metrics(State(probe): State<Arc<dyn Probe>>) -> impl IntoResponse {
+    probe.refresh();
+    (
+        [(header::CONTENT_TYPE, "application/openmetrics-text; version=1.0.0; charset=utf-8")],
+        encode_registry(probe.registry()),
+    )
+}
+
+async fn healthz() -> &'static str {
+    "ok\n"
+}
+
+async fn readyz(State(probe): State<Arc<dyn Probe>>) -> (StatusCode, String) {
+    match probe.ready() {
+        Ok(()) => (StatusCode::OK, "ready\n".into()),
+        Err(why) => (StatusCode::SERVICE_UNAVAILABLE, format!("not ready: {why}\n")),
+    }
+}
+
+/// Binds `listen` (port 0 picks a free port) and serves until `stop` resolves. Returns the
+/// bound address and the serving task.
+pub async fn serve(
+    listen: SocketAddr,
+    probe: Arc<dyn Probe>,
+    stop: impl Future<Output = ()> + Send + 'static,
+) -> Result<(SocketAddr, JoinHandle<()>)> {
+    let listener = TcpListener::bind(listen)
+        .await
+        .with_context(|| format!("listening for metrics on {listen}"))?;
+    let addr = listener.local_addr()?;
+    let app = Router::new()
+        .route("/metrics", get(metrics))
+        .route("/healthz", get(healthz))
+        .route("/readyz", get(readyz))
+        .with_state(probe);
+    info!(%addr, "metrics and health on http://{addr}/metrics");
+    let task = tokio::spawn(async move {
+        if let Err(e) = axum::serve(listener, app).with_graceful_shutdown(stop).await {
+            warn!(error = %e, "the metrics endpoint stopped");
+        }
+    });
+    Ok((addr, task))
+}

@@ -1,0 +1,7 @@
+//! restauro-ops: what every restauro process shares to be operated — the signals that stop it,
+//! the token files it reads, and the HTTP endpoint an operator's tools scrape and probe
+//! (Prometheus `/metrics`, `/healthz`, `/readyz`).
+
+pub mod endpoint;
+pub mod signal;
+pub mod token;

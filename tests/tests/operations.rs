@@ -1,0 +1,259 @@
+//! What an operator's tools see: the Prometheus endpoints of a coordinator and a worker (real
+//! processes), scraped over HTTP — every listed metric present, and moving when jobs run and when
+//! a lease expires — their health routes, and the gRPC health and reflection services.
+
+use restauro_tests::{Coordinator, aosta_scene, binary, restauro, text, token_files};
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::TcpStream;
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// `GET path` on `addr`: the status code and the body.
+fn get(addr: &str, path: &str) -> (u16, String) {
+    let mut stream = TcpStream::connect(addr).unwrap();
+    stream.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
+    write!(stream, "GET {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n").unwrap();
+    let mut response = String::new();
+    stream.read_to_string(&mut response).unwrap();
+    let status = response.split(' ').nth(1).and_then(|s| s.parse().ok()).unwrap_or(0);
+    let body = response.split_once("\r\n\r\n").map_or("", |(_, b)| b).to_owned();
+    (status, body)
+}
+
+/// The value of the unlabelled sample `name` in a scrape.
+fn value(scrape: &str, name: &str) -> f64 {
+    scrape
+        .lines()
+        .find_map(|l| l.strip_prefix(name).and_then(|rest| rest.strip_prefix(' ')))
+        .and_then(|v| v.trim().parse().ok())
+        .unwrap_or_else(|| panic!("no sample `{name}` in:\n{scrape}"))
+}
+
+fn wait_for(what: &str, timeout: Duration, mut ok: impl FnMut() -> bool) {
+    let deadline = Instant::now() + timeout;
+    while !ok() {
+        assert!(Instant::now() < deadline, "timed out waiting for {what}");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
+/// A worker with its metrics endpoint; its address.
+fn worker(dir: &Path, url: &str) -> (Child, String) {
+    let (_, token) = token_files(dir);
+    let mut child = Command::new(binary("restauro-worker"))
+        .args(["--coordinator", url, "--threads", "1", "--name", "w1", "--token-file"])
+        .arg(&token)
+        .arg("--cache")
+        .arg(dir.join("cache"))
+        .args(["--metrics-listen", "127.0.0.1:0"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::from(std::fs::File::create(dir.join("w1.log")).unwrap()))
+        .spawn()
+        .unwrap();
+    let mut line = String::new();
+    BufReader::new(child.stdout.take().unwrap()).read_line(&mut line).unwrap();
+    let addr = line.trim().strip_prefix("metrics on ").expect("the worker's metrics").to_owned();
+    (child, addr)
+}
+
+fn signal(child: &Child, sig: &str) {
+    let ok = Command::new("kill").args([sig, &child.id().to_string()]).status().unwrap();
+    assert!(ok.success());
+}
+
+const COORDINATOR_METRICS: [&str; 15] = [
+    "restauro_tiles_queued",
+    "restauro_tiles_leased",
+    "restauro_workers_connected",
+    "restauro_jobs_unfinished",
+    "restauro_leases_total",
+    "restauro_tiles_done_total",
+    "restauro_tiles_requeued_total",
+    "restauro_lease_expiries_total",
+    "restauro_workers_lost_total",
+    "restauro_tile_render_seconds_count",
+    "restauro_retinex_seconds_count",
+    "restauro_tile_received_bytes_total",
+    "restauro_asset_received_bytes_total",
+    "restauro_asset_sent_bytes_total",
+    "restauro_result_sent_bytes_total",
+];
+
+const WORKER_METRICS: [&str; 6] = [
+    "restauro_worker_tiles_rendered_total",
+    "restauro_worker_tiles_delivered_total",
+    "restauro_worker_tile_render_seconds_count",
+    "restauro_worker_sent_bytes_total",
+    "restauro_worker_asset_received_bytes_total",
+    "restauro_worker_registered",
+];
+
+#[test]
+fn metrics_are_scraped_and_move_when_jobs_run_and_leases_expire() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = aosta_scene(d, 192, 108);
+    // Leases expire after a second: a stopped worker's tiles go back to the queue quickly,
+    // while a running one renders each small tile in milliseconds.
+    let coordinator = Coordinator::start(
+        d,
+        &d.join("data"),
+        "127.0.0.1:0",
+        &["--metrics-listen", "127.0.0.1:0", "--lease-timeout-s", "1"],
+    );
+    let c = coordinator.metrics.clone().unwrap();
+    let (status, body) = get(&c, "/metrics");
+    assert_eq!(status, 200, "{body}");
+    let before = body;
+    for name in COORDINATOR_METRICS {
+        value(&before, name);
+    }
+    assert_eq!(get(&c, "/healthz").0, 200);
+    assert_eq!(get(&c, "/readyz").0, 200);
+
+    let (mut w, wm) = worker(d, &coordinator.url);
+    // Ready once registered.
+    wait_for("the worker to register", Duration::from_secs(20), || get(&wm, "/readyz").0 == 200);
+    let worker_before = get(&wm, "/metrics").1;
+    for name in WORKER_METRICS {
+        value(&worker_before, name);
+    }
+    assert_eq!(value(&worker_before, "restauro_worker_registered"), 1.0);
+    assert_eq!(value(&get(&c, "/metrics").1, "restauro_workers_connected"), 1.0);
+
+    // A job, start to end.
+    let (client_token, _) = token_files(d);
+    let client = |args: &[&str]| {
+        let mut all = args.to_vec();
+        all.extend(["--coordinator", &coordinator.url, "--token-file"]);
+        all.push(client_token.to_str().unwrap());
+        restauro(&all)
+    };
+    let out = d.join("out");
+    let o = client(&[
+        "submit",
+        &scene,
+        "--wait",
+        "--spp",
+        "1",
+        "--tile",
+        "32",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let after = get(&c, "/metrics").1;
+    let tiles = 6.0 * 4.0; // 192×108 in tiles of 32
+    let moved = |name: &str| value(&after, name) - value(&before, name);
+    assert_eq!(moved("restauro_tiles_done_total"), tiles, "{after}");
+    assert!(moved("restauro_leases_total") >= tiles);
+    assert_eq!(moved("restauro_tile_render_seconds_count"), tiles);
+    assert_eq!(moved("restauro_retinex_seconds_count"), 1.0);
+    for name in [
+        "restauro_tile_received_bytes_total",
+        "restauro_asset_received_bytes_total",
+        "restauro_asset_sent_bytes_total",
+        "restauro_result_sent_bytes_total",
+    ] {
+        assert!(moved(name) > 0.0, "{name} did not move");
+    }
+    assert_eq!(value(&after, "restauro_tiles_queued"), 0.0);
+    assert_eq!(value(&after, "restauro_tiles_leased"), 0.0);
+    assert_eq!(value(&after, "restauro_jobs_unfinished"), 0.0);
+    let worker_after = get(&wm, "/metrics").1;
+    let worker_moved = |name: &str| value(&worker_after, name) - value(&worker_before, name);
+    assert_eq!(worker_moved("restauro_worker_tiles_rendered_total"), tiles);
+    assert_eq!(worker_moved("restauro_worker_tile_render_seconds_count"), tiles);
+    for name in ["restauro_worker_sent_bytes_total", "restauro_worker_asset_received_bytes_total"] {
+        assert!(worker_moved(name) > 0.0, "{name} did not move");
+    }
+    wait_for("the last delivery to count", Duration::from_secs(5), || {
+        value(&get(&wm, "/metrics").1, "restauro_worker_tiles_delivered_total") >= tiles
+    });
+
+    // A second job, with the worker frozen (SIGSTOP) while it holds a lease: tiles are queued
+    // and leased meanwhile, the lease expires and its tile is requeued; thawed, the worker
+    // finishes the job.
+    let o = client(&["submit", &scene, "--spp", "64", "--tile", "16"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let mut seen_queued = false;
+    let mut seen_leased = false;
+    let mut expired = false;
+    for _ in 0..5 {
+        wait_for("the second job to start", Duration::from_secs(20), || {
+            value(&get(&c, "/metrics").1, "restauro_tiles_leased") >= 1.0
+        });
+        signal(&w, "-STOP");
+        let frozen = get(&c, "/metrics").1;
+        seen_queued |= value(&frozen, "restauro_tiles_queued") > 0.0;
+        seen_leased |= value(&frozen, "restauro_tiles_leased") > 0.0;
+        let deadline = Instant::now() + Duration::from_secs(4);
+        while Instant::now() < deadline && !expired {
+            expired = value(&get(&c, "/metrics").1, "restauro_lease_expiries_total") >= 1.0;
+            std::thread::sleep(Duration::from_millis(100));
+        }
+        signal(&w, "-CONT");
+        if expired {
+            break;
+        }
+    }
+    assert!(seen_queued && seen_leased && expired, "{seen_queued} {seen_leased} {expired}");
+    let now = get(&c, "/metrics").1;
+    assert!(value(&now, "restauro_tiles_requeued_total") >= 1.0, "{now}");
+    let _ = w.kill();
+    let _ = w.wait();
+}
+
+/// The standard gRPC health service answers without a token; reflection lists the services.
+#[test]
+fn grpc_health_and_reflection_answer() {
+    use tonic_health::pb::HealthCheckRequest;
+    use tonic_health::pb::health_check_response::ServingStatus;
+    use tonic_health::pb::health_client::HealthClient;
+    use tonic_reflection::pb::v1::ServerReflectionRequest;
+    use tonic_reflection::pb::v1::server_reflection_client::ServerReflectionClient;
+    use tonic_reflection::pb::v1::server_reflection_request::MessageRequest;
+    use tonic_reflection::pb::v1::server_reflection_response::MessageResponse;
+
+    let dir = tempfile::tempdir().unwrap();
+    let coordinator = Coordinator::start(dir.path(), &dir.path().join("data"), "127.0.0.1:0", &[]);
+    let runtime = tokio::runtime::Runtime::new().unwrap();
+    runtime.block_on(async {
+        let channel = tonic::transport::Endpoint::from_shared(coordinator.url.clone())
+            .unwrap()
+            .connect()
+            .await
+            .unwrap();
+        let mut health = HealthClient::new(channel.clone());
+        for service in ["", "restauro.v1.Render", "restauro.v1.Work"] {
+            let reply = health
+                .check(HealthCheckRequest { service: service.into() })
+                .await
+                .unwrap_or_else(|s| panic!("health of `{service}`: {s}"))
+                .into_inner();
+            assert_eq!(reply.status, ServingStatus::Serving as i32, "`{service}`");
+        }
+        let unknown = health.check(HealthCheckRequest { service: "nope".into() }).await;
+        assert_eq!(unknown.unwrap_err().code(), tonic::Code::NotFound);
+
+        let mut reflection = ServerReflectionClient::new(channel);
+        let request = ServerReflectionRequest {
+            host: String::new(),
+            message_request: Some(MessageRequest::ListServices(String::new())),
+        };
+        let mut replies = reflection
+            .server_reflection_info(tokio_stream::iter([request]))
+            .await
+            .unwrap()
+            .into_inner();
+        let reply = replies.message().await.unwrap().unwrap();
+        let Some(MessageResponse::ListServicesResponse(list)) = reply.message_response else {
+            panic!("{reply:?}");
+        };
+        let names: Vec<String> = list.service.into_iter().map(|s| s.name).collect();
+        for expected in ["restauro.v1.Render", "restauro.v1.Work", "grpc.health.v1.Health"] {
+            assert!(names.iter().any(|n| n == expected), "{expected} not in {names:?}");
+        }
+    });
+}

@@ -169,9 +169,64 @@ pub fn write_exr(
     atomic_file::write_with(path, |w| {
         let mut buffer = io::Cursor::new(Vec::new());
         image.write().to_buffered(&mut buffer).map_err(io::Error::other)?;
-        io::Write::write_all(w, buffer.get_ref())
+        let mut bytes = buffer.into_inner();
+        sort_header_attributes(&mut bytes);
+        io::Write::write_all(w, &bytes)
     })
     .map_err(|source| ImageFileError::Io { path: path.to_owned(), source })
+}
+
+/// Puts the attributes of a single-part OpenEXR header in name order. The exr crate keeps them
+/// in a `HashMap`, whose order differs from one map to the next, so the same image would be
+/// written as different bytes by different processes; OpenEXR readers take attributes in any
+/// order. The header keeps its length, so the offset table after it stays valid. Files it does
+/// not recognise (multi-part, malformed) are left as they are.
+fn sort_header_attributes(bytes: &mut [u8]) {
+    // OpenEXR 2.0 §"File Layout": magic (4 bytes), version and flags (4), then attributes
+    // `name\0 type\0 size:i32 value[size]`, ended by a null byte.
+    const MULTIPART: u32 = 0x1000;
+    let Some(version) = bytes.get(4..8).and_then(|v| v.try_into().ok()).map(u32::from_le_bytes)
+    else {
+        return;
+    };
+    if version & MULTIPART != 0 {
+        return;
+    }
+    let start = 8;
+    let mut at = start;
+    let mut attributes: Vec<std::ops::Range<usize>> = Vec::new();
+    let null_after =
+        |from: usize| bytes.get(from..)?.iter().position(|&b| b == 0).map(|i| from + i);
+    loop {
+        match bytes.get(at) {
+            Some(0) => break,
+            Some(_) => {}
+            None => return,
+        }
+        let Some(name_end) = null_after(at) else { return };
+        let Some(type_end) = null_after(name_end + 1) else { return };
+        let Some(size) = bytes
+            .get(type_end + 1..type_end + 5)
+            .map(|s| i32::from_le_bytes(s.try_into().expect("four bytes")))
+        else {
+            return;
+        };
+        let Ok(size) = usize::try_from(size) else { return };
+        let end = type_end + 5 + size;
+        if end > bytes.len() {
+            return;
+        }
+        attributes.push(at..end);
+        at = end;
+    }
+    let name = |r: &std::ops::Range<usize>| {
+        let n = &bytes[r.start..];
+        &n[..n.iter().position(|&b| b == 0).unwrap_or(0)]
+    };
+    let mut sorted = attributes.clone();
+    sorted.sort_by(|a, b| name(a).cmp(name(b)));
+    let header: Vec<u8> = sorted.iter().flat_map(|r| bytes[r.clone()].to_vec()).collect();
+    bytes[start..at].copy_from_slice(&header);
 }
 
 /// Write an XYZ image as OpenEXR: channels X, Y, Z and linear sRGB-primaries R, G, B preview
@@ -319,6 +374,41 @@ mod tests {
         let path = dir.join("a.exr");
         write_xyz_exr(&path, &image, &[("restauroNote", "test")]).unwrap();
         assert_eq!(read_exr(&path, MAX_PIXELS).unwrap(), image);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// The same image is the same bytes, however the exr crate's map ordered its attributes
+    /// (each write builds a new map with its own random order), and it still reads back.
+    #[test]
+    fn the_same_image_is_the_same_bytes() {
+        let dir = scratch("same-bytes");
+        let image = XyzImage {
+            width: 2,
+            height: 1,
+            pixels: vec![[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]],
+            emitter: Some(vec![false, true]),
+        };
+        let attributes: Vec<(String, String)> =
+            (0..8).map(|i| (format!("restauroNote{i}"), format!("value {i}"))).collect();
+        let attributes: Vec<(&str, &str)> =
+            attributes.iter().map(|(k, v)| (k.as_str(), v.as_str())).collect();
+        let mut first: Option<Vec<u8>> = None;
+        for i in 0..12 {
+            let path = dir.join(format!("{i}.exr"));
+            write_spectral_exr(&path, &image, vec![(380.0, vec![0.5, 0.25])], &attributes).unwrap();
+            let bytes = std::fs::read(&path).unwrap();
+            match &first {
+                Some(f) => assert!(*f == bytes, "write {i} differs from the first"),
+                None => first = Some(bytes),
+            }
+            assert_eq!(read_exr(&path, MAX_PIXELS).unwrap(), image);
+        }
+        // Not sorting would have been caught: the names do appear in order in the header.
+        let bytes = first.unwrap();
+        let at = |needle: &str| bytes.windows(needle.len()).position(|w| w == needle.as_bytes());
+        let positions: Vec<usize> =
+            (0..8).map(|i| at(&format!("restauroNote{i}")).unwrap()).collect();
+        assert!(positions.windows(2).all(|p| p[0] < p[1]), "{positions:?}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

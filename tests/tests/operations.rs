@@ -257,3 +257,33 @@ fn grpc_health_and_reflection_answer() {
         }
     });
 }
+
+/// A worker told to stop (SIGTERM, as Kubernetes and systemd do when scaling down) while its
+/// coordinator is unreachable holds no tile: it exits at once, successfully, and says why — an
+/// orchestrator must not count it as a failed pod or unit.
+#[test]
+fn a_worker_stopped_while_its_coordinator_is_away_exits_cleanly() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // A port nobody listens on: bound, then released.
+    let port = std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
+    let (mut w, metrics) = worker(d, &format!("http://127.0.0.1:{port}"));
+    let log = d.join("w1.log");
+    wait_for("the worker to retry", Duration::from_secs(20), || {
+        std::fs::read_to_string(&log).unwrap_or_default().contains("cannot reach the coordinator")
+    });
+    assert_eq!(get(&metrics, "/readyz").0, 503, "not registered, so not ready");
+
+    signal(&w, "-TERM");
+    let deadline = Instant::now() + Duration::from_secs(10);
+    let status = loop {
+        if let Some(status) = w.try_wait().unwrap() {
+            break status;
+        }
+        assert!(Instant::now() < deadline, "the worker did not exit within 10 s of SIGTERM");
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let text = std::fs::read_to_string(&log).unwrap();
+    assert!(status.success(), "the worker exited with {status}:\n{text}");
+    assert!(text.contains("stopped before reaching the coordinator"), "{text}");
+}

@@ -159,30 +159,42 @@ impl Worker {
         *self.stop.borrow()
     }
 
-    async fn connect(&self) -> Result<Client> {
+    /// Connects, retrying while the coordinator is unreachable. `None` when a stop is requested
+    /// first: a worker that is not connected holds no tile, so stopping then is a clean exit (an
+    /// orchestrator scaling workers down while the coordinator restarts must not see a failure).
+    async fn connect(&self) -> Result<Option<Client>> {
         let credentials = Credentials::new(&self.token, self.args.protocol_version)
             .map_err(|e| anyhow!("worker token: {e}"))?;
         let endpoint = restauro_proto::transport::endpoint(
             &self.args.coordinator,
             self.args.tls_ca.as_deref(),
         )?;
+        let mut stop = self.stop.clone();
         let mut backoff = Duration::from_millis(50);
         loop {
-            match endpoint.connect().await {
+            // A connection attempt to a host that drops packets can take as long as TCP's own
+            // timeout: the stop request must not wait for it.
+            let attempt = tokio::select! {
+                attempt = endpoint.connect() => attempt,
+                _ = stop.wait_for(|stopping| *stopping) => return Ok(None),
+            };
+            match attempt {
                 Ok(channel) => {
-                    return Ok(WorkClient::with_interceptor(channel, credentials)
-                        .max_decoding_message_size(8 << 20));
+                    return Ok(Some(
+                        WorkClient::with_interceptor(channel, credentials)
+                            .max_decoding_message_size(8 << 20),
+                    ));
                 }
                 Err(e) => {
-                    if self.stopping() {
-                        bail!("stopped while connecting");
-                    }
                     warn!(
                         "cannot reach the coordinator at {}: {}; retrying",
                         self.args.coordinator,
                         restauro_proto::transport::error_chain(&e)
                     );
-                    tokio::time::sleep(backoff).await;
+                    tokio::select! {
+                        () = tokio::time::sleep(backoff) => {}
+                        _ = stop.wait_for(|stopping| *stopping) => return Ok(None),
+                    }
                     backoff = (backoff * 2).min(Duration::from_secs(1));
                 }
             }
@@ -197,7 +209,10 @@ impl Worker {
             if self.stopping() {
                 return Ok(());
             }
-            let mut client = self.connect().await?;
+            let Some(mut client) = self.connect().await? else {
+                info!("stopped before reaching the coordinator: no tile in hand");
+                return Ok(());
+            };
             let reply = match client
                 .register(pb::RegisterRequest {
                     protocol_version: self.args.protocol_version,

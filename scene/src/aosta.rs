@@ -538,6 +538,16 @@ preset = "overcast"
 spectrum = "daylight"
 "#;
 
+/// The `[spectra]` lines of the facade's two stones, cleaned (measured) and as found. The stone
+/// experiment (`samples.rs`) writes the same lines, so its samples are the facade's stones.
+pub(crate) const STONE_SPECTRA: &str = r#"travertine = "travertine_tufa_solid__eco_ward73"
+puddinga = "conglomerate_quartz_solid__eco_ward48"
+soot = "carbon_black_soot_proxy__usgs_GDS68"
+# DERIVED, not measured: the stones as found, an areal mixture with the soot proxy
+# (30 % of the surface covered by black deposit).
+travertine_soiled = { mix = [{ spectrum = "travertine", weight = 0.7 }, { spectrum = "soot", weight = 0.3 }] }
+puddinga_soiled = { mix = [{ spectrum = "puddinga", weight = 0.7 }, { spectrum = "soot", weight = 0.3 }] }"#;
+
 /// The scene file: materials from the shipped spectra, the degraded states derived, the light
 /// of `lighting`, a person standing in front.
 fn scene_toml(width: u32, height: u32, lighting: Lighting) -> String {
@@ -565,9 +575,7 @@ max_depth = 4
 seed = 1
 
 [spectra]
-travertine = "travertine_tufa_solid__eco_ward73"
-puddinga = "conglomerate_quartz_solid__eco_ward48"
-soot = "carbon_black_soot_proxy__usgs_GDS68"
+{STONE_SPECTRA}
 # Stand-ins: no lime mortar is measured in the libraries; grey concrete is the closest.
 mortar = "concrete_road_lightgrey__usgs_GDS375"
 paving = "gneiss_granitoid_solid__eco_ward82"
@@ -576,10 +584,7 @@ interior = "sandstone_brownstone_portland_solid__eco_ward60"
 daylight = {{ illuminant = "D65" }}
 sunlight = {{ illuminant = "D55" }}
 skylight = {{ illuminant = "daylight:12000" }}
-# DERIVED, not measured: the stones as found, an areal mixture with the soot proxy
-# (30 % of the surface covered by black deposit).
-travertine_soiled = {{ mix = [{{ spectrum = "travertine", weight = 0.7 }}, {{ spectrum = "soot", weight = 0.3 }}] }}
-puddinga_soiled = {{ mix = [{{ spectrum = "puddinga", weight = 0.7 }}, {{ spectrum = "soot", weight = 0.3 }}] }}
+# DERIVED, not measured: the mortar as found, 20 % of its surface covered by the soot proxy.
 mortar_soiled = {{ mix = [{{ spectrum = "mortar", weight = 0.8 }}, {{ spectrum = "soot", weight = 0.2 }}] }}
 
 [materials.travertine]

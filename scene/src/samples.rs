@@ -11,6 +11,7 @@
 //! with the carbon-black soot proxy (30 %). The grey board and the white tile are ideal neutral
 //! reflectances (flat 30 % and 90 %), written beside the scene as CSV files.
 
+use crate::aosta::STONE_SPECTRA;
 use std::fmt::Write as _;
 
 /// One square on the board.
@@ -174,14 +175,10 @@ max_depth = 1
 seed = 1
 
 [spectra]
-travertine = "travertine_tufa_solid__eco_ward73"
-puddinga = "conglomerate_quartz_solid__eco_ward48"
-soot = "carbon_black_soot_proxy__usgs_GDS68"
+{STONE_SPECTRA}
 grey = {{ file = "grey.csv" }}
 white = {{ file = "white.csv" }}
 light = {{ illuminant = "{illuminant}" }}
-travertine_soiled = {{ mix = [{{ spectrum = "travertine", weight = 0.7 }}, {{ spectrum = "soot", weight = 0.3 }}] }}
-puddinga_soiled = {{ mix = [{{ spectrum = "puddinga", weight = 0.7 }}, {{ spectrum = "soot", weight = 0.3 }}] }}
 
 [materials.travertine_found]
 model = "lambert"

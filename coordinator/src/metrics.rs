@@ -10,6 +10,7 @@ use prometheus_client::metrics::counter::Counter;
 use prometheus_client::metrics::gauge::Gauge;
 use prometheus_client::metrics::histogram::{Histogram, exponential_buckets};
 use prometheus_client::registry::{Registry, Unit};
+use restauro_ops::metric::{register, tile_render_histogram};
 
 pub struct Metrics {
     registry: Registry,
@@ -45,62 +46,51 @@ impl Default for Metrics {
 impl Metrics {
     pub fn new() -> Self {
         let mut registry = Registry::with_prefix("restauro");
-        let gauge = |registry: &mut Registry, name: &str, help: &str| {
-            let g = Gauge::default();
-            registry.register(name, help, g.clone());
-            g
+        let r = &mut registry;
+        let gauge = |r: &mut Registry, name: &str, help: &str| {
+            register(r, name, help, None, Gauge::default())
         };
-        let counter = |registry: &mut Registry, name: &str, help: &str| {
-            let c = Counter::default();
-            registry.register(name, help, c.clone());
-            c
+        let counter = |r: &mut Registry, name: &str, help: &str| {
+            register(r, name, help, None, Counter::default())
+        };
+        let bytes = |r: &mut Registry, name: &str, help: &str| {
+            register(r, name, help, Some(Unit::Bytes), Counter::default())
         };
         let tiles_queued =
-            gauge(&mut registry, "tiles_queued", "Tiles waiting for a lease over all running jobs");
-        let tiles_leased = gauge(&mut registry, "tiles_leased", "Tiles leased to workers now");
-        let workers_connected =
-            gauge(&mut registry, "workers_connected", "Workers registered and heard from");
+            gauge(r, "tiles_queued", "Tiles waiting for a lease over all running jobs");
+        let tiles_leased = gauge(r, "tiles_leased", "Tiles leased to workers now");
+        let workers_connected = gauge(r, "workers_connected", "Workers registered and heard from");
         let jobs_unfinished =
-            gauge(&mut registry, "jobs_unfinished", "Jobs queued, running or being assembled");
-        let leases_total = counter(&mut registry, "leases", "Leases granted");
-        let tiles_done_total = counter(&mut registry, "tiles_done", "Tiles completed");
+            gauge(r, "jobs_unfinished", "Jobs queued, running or being assembled");
+        let leases_total = counter(r, "leases", "Leases granted");
+        let tiles_done_total = counter(r, "tiles_done", "Tiles completed");
         let tiles_requeued_total = counter(
-            &mut registry,
+            r,
             "tiles_requeued",
             "Tiles put back in their queue (expired, failed, handed back, or lost with a worker)",
         );
         let lease_expiries_total =
-            counter(&mut registry, "lease_expiries", "Leases that ran past the lease timeout");
-        let workers_lost_total = counter(
-            &mut registry,
-            "workers_lost",
-            "Workers dropped for silence past the heartbeat timeout",
-        );
-        let tile_render_seconds = Histogram::new(exponential_buckets(0.01, 2.0, 14));
-        registry.register_with_unit(
+            counter(r, "lease_expiries", "Leases that ran past the lease timeout");
+        let workers_lost_total =
+            counter(r, "workers_lost", "Workers dropped for silence past the heartbeat timeout");
+        let tile_render_seconds = register(
+            r,
             "tile_render",
             "Render time per tile, as workers report it",
-            Unit::Seconds,
-            tile_render_seconds.clone(),
+            Some(Unit::Seconds),
+            tile_render_histogram(),
         );
-        let retinex_seconds = Histogram::new(exponential_buckets(0.05, 2.0, 12));
-        registry.register_with_unit(
+        let retinex_seconds = register(
+            r,
             "retinex",
             "Retinex time per finished job",
-            Unit::Seconds,
-            retinex_seconds.clone(),
+            Some(Unit::Seconds),
+            Histogram::new(exponential_buckets(0.05, 2.0, 12)),
         );
-        let bytes = |registry: &mut Registry, name: &str, help: &str| {
-            let c = Counter::default();
-            registry.register_with_unit(name, help, Unit::Bytes, c.clone());
-            c
-        };
-        let tile_bytes_received =
-            bytes(&mut registry, "tile_received", "Tile results received from workers");
-        let asset_bytes_received =
-            bytes(&mut registry, "asset_received", "Scene assets uploaded by clients");
-        let asset_bytes_sent = bytes(&mut registry, "asset_sent", "Scene assets sent to workers");
-        let result_bytes_sent = bytes(&mut registry, "result_sent", "Result files sent to clients");
+        let tile_bytes_received = bytes(r, "tile_received", "Tile results received from workers");
+        let asset_bytes_received = bytes(r, "asset_received", "Scene assets uploaded by clients");
+        let asset_bytes_sent = bytes(r, "asset_sent", "Scene assets sent to workers");
+        let result_bytes_sent = bytes(r, "result_sent", "Result files sent to clients");
         Self {
             registry,
             tiles_queued,

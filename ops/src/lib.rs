@@ -3,5 +3,6 @@
 //! (Prometheus `/metrics`, `/healthz`, `/readyz`).
 
 pub mod endpoint;
+pub mod metric;
 pub mod signal;
 pub mod token;

@@ -3,8 +3,9 @@
 
 use prometheus_client::metrics::counter::Counter;
 use prometheus_client::metrics::gauge::Gauge;
-use prometheus_client::metrics::histogram::{Histogram, exponential_buckets};
+use prometheus_client::metrics::histogram::Histogram;
 use prometheus_client::registry::{Registry, Unit};
+use restauro_ops::metric::{register, tile_render_histogram};
 
 pub struct WorkerMetrics {
     registry: Registry,
@@ -28,40 +29,43 @@ impl Default for WorkerMetrics {
 impl WorkerMetrics {
     pub fn new() -> Self {
         let mut registry = Registry::with_prefix("restauro_worker");
-        let tiles_rendered = Counter::default();
-        registry.register("tiles_rendered", "Tiles rendered", tiles_rendered.clone());
-        let tiles_delivered = Counter::default();
-        registry.register(
+        let r = &mut registry;
+        let tiles_rendered =
+            register(r, "tiles_rendered", "Tiles rendered", None, Counter::default());
+        let tiles_delivered = register(
+            r,
             "tiles_delivered",
             "Tile results the coordinator acknowledged",
-            tiles_delivered.clone(),
+            None,
+            Counter::default(),
         );
-        let tile_render_seconds = Histogram::new(exponential_buckets(0.01, 2.0, 14));
-        registry.register_with_unit(
+        let tile_render_seconds = register(
+            r,
             "tile_render",
             "Render time per tile",
-            Unit::Seconds,
-            tile_render_seconds.clone(),
+            Some(Unit::Seconds),
+            tile_render_histogram(),
         );
-        let bytes_sent = Counter::default();
-        registry.register_with_unit(
+        let bytes_sent = register(
+            r,
             "sent",
             "Tile results sent and acknowledged",
-            Unit::Bytes,
-            bytes_sent.clone(),
+            Some(Unit::Bytes),
+            Counter::default(),
         );
-        let asset_bytes_received = Counter::default();
-        registry.register_with_unit(
+        let asset_bytes_received = register(
+            r,
             "asset_received",
             "Scene assets fetched from the coordinator",
-            Unit::Bytes,
-            asset_bytes_received.clone(),
+            Some(Unit::Bytes),
+            Counter::default(),
         );
-        let registered = Gauge::default();
-        registry.register(
+        let registered = register(
+            r,
             "registered",
             "1 while registered with a coordinator",
-            registered.clone(),
+            None,
+            Gauge::default(),
         );
         Self {
             registry,

@@ -223,9 +223,11 @@ fn sort_header_attributes(bytes: &mut [u8]) {
         let n = &bytes[r.start..];
         &n[..n.iter().position(|&b| b == 0).unwrap_or(0)]
     };
-    let mut sorted = attributes.clone();
-    sorted.sort_by(|a, b| name(a).cmp(name(b)));
-    let header: Vec<u8> = sorted.iter().flat_map(|r| bytes[r.clone()].to_vec()).collect();
+    attributes.sort_by(|a, b| name(a).cmp(name(b)));
+    let mut header = Vec::with_capacity(at - start);
+    for r in attributes {
+        header.extend_from_slice(&bytes[r]);
+    }
     bytes[start..at].copy_from_slice(&header);
 }
 

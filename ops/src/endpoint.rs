@@ -78,3 +78,32 @@ pub async fn serve(
     });
     Ok((addr, task))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    struct Nothing(Registry);
+
+    impl Probe for Nothing {
+        fn registry(&self) -> &Registry {
+            &self.0
+        }
+
+        fn ready(&self) -> Result<(), String> {
+            Ok(())
+        }
+    }
+
+    /// A metrics address already taken is refused with that address, not served elsewhere.
+    #[test]
+    fn a_taken_address_is_refused_with_its_name() {
+        let taken = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+        let at = taken.local_addr().unwrap();
+        let runtime = tokio::runtime::Builder::new_current_thread().enable_all().build().unwrap();
+        let probe: Arc<dyn Probe> = Arc::new(Nothing(Registry::default()));
+        let error = runtime.block_on(serve(at, probe, std::future::pending())).unwrap_err();
+        let message = format!("{error:#}");
+        assert!(message.starts_with(&format!("listening for metrics on {at}:")), "{message}");
+    }
+}

@@ -18,3 +18,41 @@ pub fn read_token(file: Option<&Path>, variable: &str, flag: &str) -> Result<Str
     }
     Ok(token)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A variable no environment sets, so the fallback finds nothing.
+    const UNSET: &str = "RESTAURO_TEST_TOKEN_NEVER_SET";
+
+    #[test]
+    fn a_token_file_is_read_and_trimmed() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("worker.token");
+        std::fs::write(&path, "  s3cret\n").unwrap();
+        assert_eq!(read_token(Some(&path), UNSET, "--token-file").unwrap(), "s3cret");
+    }
+
+    #[test]
+    fn an_empty_token_names_the_flag_and_the_variable() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("empty.token");
+        std::fs::write(&path, " \n\t\n").unwrap();
+        for file in [Some(path.as_path()), None] {
+            let message = read_token(file, UNSET, "--token-file").unwrap_err().to_string();
+            assert_eq!(message, format!("no token: give --token-file FILE or set {UNSET}"));
+        }
+    }
+
+    #[test]
+    fn a_missing_token_file_is_named() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("absent.token");
+        let message = format!("{:#}", read_token(Some(&path), UNSET, "--token-file").unwrap_err());
+        assert!(
+            message.starts_with(&format!("reading the token file {}:", path.display())),
+            "{message}"
+        );
+    }
+}

@@ -406,7 +406,7 @@ async fn render_all(
                     Kind::Facade { variant, .. } => Some(variant.to_string()),
                     Kind::Samples { .. } => None,
                 },
-                lights: loaded.lights.iter().map(describe_light).collect(),
+                lights: loaded.lights.iter().map(ToString::to_string).collect(),
                 integrator: format!("{:?}", render.integrator).to_lowercase(),
                 width: plan.width,
                 height: plan.height,
@@ -485,25 +485,6 @@ async fn watch_all(
 
 fn relative(out: &Path, path: &Path) -> String {
     path.strip_prefix(out).unwrap_or(path).display().to_string()
-}
-
-fn describe_light(l: &ResolvedLight) -> String {
-    match l {
-        ResolvedLight::Sun { azimuth_deg, elevation_deg, illuminance_lux, spectrum, .. } => {
-            format!(
-                "sun: {illuminance_lux} lux, azimuth {azimuth_deg:.1}°, elevation {elevation_deg:.1}°, spectrum {spectrum}"
-            )
-        }
-        ResolvedLight::Sky { illuminance_lux, model, spectrum } => {
-            format!("sky: {illuminance_lux} lux on the horizontal, {model:?}, spectrum {spectrum}")
-        }
-        ResolvedLight::Point { position, intensity_cd, .. } => {
-            format!("point luminaire at {position:?}: {intensity_cd} cd")
-        }
-        ResolvedLight::Spot { position, intensity_cd, cone_deg, .. } => {
-            format!("spot at {position:?}: {intensity_cd} cd, cone {cone_deg}°")
-        }
-    }
 }
 
 /// The horizontal illuminance of a scene's lights that light the whole ground alike (sun and

@@ -4,7 +4,7 @@ use crate::cli::{LimitArgs, SceneCommand};
 use anyhow::{Context, Result};
 use restauro_coordinator::atomic_file;
 use restauro_scene::bundle::bundle_scene;
-use restauro_scene::load::{Limits, LoadedScene, ResolvedLight, load_scene};
+use restauro_scene::load::{Limits, LoadedScene, load_scene};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -53,26 +53,7 @@ pub fn summary(path: &Path, scene: &LoadedScene) -> String {
         }
     }
     for l in &scene.lights {
-        let _ = match l {
-            ResolvedLight::Sun {
-                azimuth_deg, elevation_deg, illuminance_lux, spectrum, ..
-            } => writeln!(
-                s,
-                "  sun: {illuminance_lux} lux, azimuth {azimuth_deg:.2}°, elevation {elevation_deg:.2}°, spectrum {spectrum}"
-            ),
-            ResolvedLight::Point { position, intensity_cd, photometry, .. } => writeln!(
-                s,
-                "  point luminaire at {position:?}: {intensity_cd} cd{}",
-                if photometry.is_some() { ", photometric file" } else { "" }
-            ),
-            ResolvedLight::Spot { position, intensity_cd, cone_deg, .. } => {
-                writeln!(s, "  spot at {position:?}: {intensity_cd} cd, cone {cone_deg}°")
-            }
-            ResolvedLight::Sky { illuminance_lux, model, spectrum } => writeln!(
-                s,
-                "  sky: {illuminance_lux} lux on the horizontal, {model:?} distribution, spectrum {spectrum}"
-            ),
-        };
+        let _ = writeln!(s, "  {l}");
     }
     let variants: Vec<&str> = scene.file.variants.keys().map(String::as_str).collect();
     let _ = writeln!(

@@ -95,6 +95,35 @@ pub enum ResolvedLight {
     Sky { illuminance_lux: f64, model: SkyModel, spectrum: String },
 }
 
+/// One line describing the light, for people: what `restauro scene check` lists and the demo's
+/// report records.
+impl std::fmt::Display for ResolvedLight {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ResolvedLight::Sun {
+                azimuth_deg, elevation_deg, illuminance_lux, spectrum, ..
+            } => {
+                write!(
+                    f,
+                    "sun: {illuminance_lux} lux, azimuth {azimuth_deg:.2}°, elevation {elevation_deg:.2}°, spectrum {spectrum}"
+                )
+            }
+            ResolvedLight::Point { position, intensity_cd, photometry, .. } => write!(
+                f,
+                "point luminaire at {position:?}: {intensity_cd} cd{}",
+                if photometry.is_some() { ", photometric file" } else { "" }
+            ),
+            ResolvedLight::Spot { position, intensity_cd, cone_deg, .. } => {
+                write!(f, "spot at {position:?}: {intensity_cd} cd, cone {cone_deg}°")
+            }
+            ResolvedLight::Sky { illuminance_lux, model, spectrum } => write!(
+                f,
+                "sky: {illuminance_lux} lux on the horizontal, {model:?} distribution, spectrum {spectrum}"
+            ),
+        }
+    }
+}
+
 /// A scene that has passed every check.
 #[derive(Clone, Debug)]
 pub struct LoadedScene {

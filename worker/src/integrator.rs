@@ -105,9 +105,7 @@ fn add_direct(
     let hit = v.hit;
     let origin = lift(hit);
     let bsdf = &scene.materials[hit.material as usize];
-    if scene.sky.is_some() {
-        add_sky(scene, v, origin, weight, sampler, rays, out);
-    }
+    add_sky(scene, v, origin, weight, sampler, rays, out);
     for light in &scene.lights {
         let Some(inc) = light.incident(hit.point) else { continue };
         let cos = inc.direction.dot(hit.normal);
@@ -129,9 +127,9 @@ fn add_direct(
     }
 }
 
-/// One sample of the sky's light reflected at a vertex: a direction drawn with pdf cos θ/π
-/// about the normal and a shadow ray to infinity; the estimate is
-/// f · L · cos θ / (cos θ/π) = f · L · π.
+/// One sample of the sky's light reflected at a vertex (nothing when the scene has no sky): a
+/// direction drawn with pdf cos θ/π about the normal and a shadow ray to infinity; the estimate
+/// is f · L · cos θ / (cos θ/π) = f · L · π.
 #[inline]
 fn add_sky(
     scene: &PreparedScene,

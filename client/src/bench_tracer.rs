@@ -8,11 +8,11 @@
 
 use crate::cli::{BenchArgs, BenchScene};
 use anyhow::{Context, Result};
+use restauro_render::integrator::lift;
+use restauro_render::prepared::{PreparedScene, Settings};
+use restauro_render::tile::{Rect, camera_ray, render_tile};
 use restauro_scene::load::{Limits, LoadedScene, load_scene};
 use restauro_scene::scene_file::Integrator;
-use restauro_worker::integrator::lift;
-use restauro_worker::prepared::{PreparedScene, Settings};
-use restauro_worker::tile::{Rect, camera_ray, render_tile};
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::time::Instant;

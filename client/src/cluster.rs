@@ -4,7 +4,7 @@
 
 use anyhow::{Context, Result, anyhow, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use restauro_coordinator::atomic_file;
+use restauro_image::atomic_file;
 use restauro_proto::pb::render_client::RenderClient;
 use restauro_proto::{self as pb, CHUNK_BYTES, Credentials, PROTOCOL_VERSION};
 use restauro_scene::bundle::Bundle;

@@ -16,11 +16,11 @@ fn main() -> ExitCode {
         Command::Jobs(args) => restauro::jobs_cmd::jobs(args),
         Command::Workers(args) => restauro::jobs_cmd::workers(args),
         Command::Coordinator(args) => {
-            restauro_coordinator::logging::init();
+            restauro_ops::logging::init();
             restauro_coordinator::server::run(args).map(|()| String::new())
         }
         Command::Worker(args) => {
-            restauro_coordinator::logging::init();
+            restauro_ops::logging::init();
             restauro_worker::process::run(args).map(|()| String::new())
         }
         Command::Retinex(args) => restauro::retinex::run(args),

@@ -4,7 +4,7 @@
 use crate::cli::{DisplayArgs, DisplayTarget, RetinexArgs};
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use restauro_coordinator::image_files::{
+use restauro_image::image_files::{
     MAX_PIXELS, PngPixels, XyzImage, read_exr, write_png, write_xyz_exr,
 };
 use restauro_spectral::appearance::retinex_xyz;

@@ -2,7 +2,7 @@
 
 use crate::cli::{LimitArgs, SceneCommand};
 use anyhow::{Context, Result};
-use restauro_coordinator::atomic_file;
+use restauro_image::atomic_file;
 use restauro_scene::bundle::bundle_scene;
 use restauro_scene::load::{Limits, LoadedScene, load_scene};
 use std::fmt::Write as _;

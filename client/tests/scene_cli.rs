@@ -76,8 +76,7 @@ fn render_writes_exr_with_spectral_layers_and_png() {
     ]);
     assert!(text.contains("wrote") && text.contains("aosta-cleaned.exr"), "{text}");
     let image =
-        restauro_coordinator::image_files::read_exr(&results.join("aosta-cleaned.exr"), 1 << 20)
-            .unwrap();
+        restauro_image::image_files::read_exr(&results.join("aosta-cleaned.exr"), 1 << 20).unwrap();
     assert_eq!((image.width, image.height), (48, 27));
     assert!(image.pixels.iter().any(|p| p[1] > 100.0), "the sunlit facade is bright");
     let png = std::fs::read(results.join("aosta-cleaned.png")).unwrap();

@@ -15,6 +15,6 @@ struct Cli {
 }
 
 fn main() -> anyhow::Result<()> {
-    restauro_coordinator::logging::init();
+    restauro_ops::logging::init();
     run(&Cli::parse().args)
 }

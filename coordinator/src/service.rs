@@ -5,13 +5,13 @@
 //! `.await` or a store write; store writes and image work run on tokio's blocking pool.
 
 use crate::auth::Tokens;
-use crate::framebuffer::{Framebuffer, tile_sizes};
 use crate::group_commit::TileCommits;
 use crate::jobs::{Options, Record, State};
 use crate::metrics::Metrics;
-use crate::results::{ResultOptions, parse_exposure, write_results};
 use crate::scheduler::{self, Completion, Failure, Lease, Scheduler};
 use crate::store::Store;
+use restauro_image::framebuffer::{Framebuffer, tile_sizes};
+use restauro_image::results::{ResultOptions, parse_exposure, write_results};
 use restauro_proto::{self as pb, CHUNK_BYTES, PROTOCOL_VERSION};
 use restauro_scene::bundle::Bundle;
 use restauro_scene::load::Limits;

@@ -1,8 +1,9 @@
 //! restauro-ops: what every restauro process shares to be operated — the signals that stop it,
-//! the token files it reads, and the HTTP endpoint an operator's tools scrape and probe
+//! the token files it reads, its logs, and the HTTP endpoint an operator's tools scrape and probe
 //! (Prometheus `/metrics`, `/healthz`, `/readyz`).
 
 pub mod endpoint;
+pub mod logging;
 pub mod metric;
 pub mod signal;
 pub mod token;

@@ -107,7 +107,7 @@ pub struct PixelRect {
 /// Where the inner `fraction` of `sample` lies in an image of `width × height` of this scene:
 /// the board point (x, y) is seen at pixel (W/2 + s·x, H/2 − s·y), with
 /// s = (H/2) / (h·tan(fov/2)) pixels per metre for a camera at height h (the pinhole camera's
-/// image plane, `restauro_worker::camera`).
+/// image plane, `restauro_render::camera`).
 pub fn pixel_rect(sample: &Sample, width: u32, height: u32, fraction: f64) -> PixelRect {
     let s =
         f64::from(height) / 2.0 / (CAMERA_HEIGHT_M * (VERTICAL_FOV_DEG.to_radians() / 2.0).tan());

@@ -1,6 +1,6 @@
 //! The cluster, as real processes on loopback: a coordinator, two workers and the client.
 
-use restauro_coordinator::image_files::read_exr;
+use restauro_image::image_files::read_exr;
 use restauro_tests::{
     CLIENT_TOKEN, Coordinator, WORKER_TOKEN, Worker, aosta_scene, restauro, text, token_files,
 };

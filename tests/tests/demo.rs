@@ -3,7 +3,7 @@
 //! A the Retinex brings each stone closer to its D65 render than the unfiltered render is — the
 //! paper's claim (Rossi, Marini & Rizzi 2004, Fig. 12), measured here from the EXR files.
 
-use restauro_coordinator::image_files::{XyzImage, read_exr};
+use restauro_image::image_files::{XyzImage, read_exr};
 use restauro_spectral::Lab;
 use restauro_spectral::appearance::d65_white;
 use restauro_spectral::ciede2000::ciede2000;

@@ -15,6 +15,6 @@ struct Cli {
 }
 
 fn main() -> anyhow::Result<()> {
-    restauro_worker::process::init_logging();
+    restauro_ops::logging::init();
     run(&Cli::parse().args)
 }

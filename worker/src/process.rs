@@ -9,13 +9,13 @@
 //! does not know the worker, which then registers again.
 
 use crate::metrics::WorkerMetrics;
-use crate::prepared::{PreparedScene, Settings};
-use crate::tile::{Rect, render_tile};
 use anyhow::{Context, Result, anyhow, bail};
 use restauro_ops::signal::stop_signal;
 use restauro_ops::token::read_token;
 use restauro_proto::pb::work_client::WorkClient;
 use restauro_proto::{self as pb, CHUNK_BYTES, Credentials, PROTOCOL_VERSION};
+use restauro_render::prepared::{PreparedScene, Settings};
+use restauro_render::tile::{Rect, render_tile};
 use restauro_scene::bundle::Bundle;
 use restauro_scene::load::Limits;
 use restauro_scene::plan::Plan;
@@ -554,12 +554,4 @@ fn hostname() -> String {
             || format!("worker-{}", std::process::id()),
             |h| format!("{h}-{}", std::process::id()),
         )
-}
-
-/// Logs to standard error, filtered by `RUST_LOG` (default `info`).
-pub fn init_logging() {
-    let filter = tracing_subscriber::EnvFilter::try_from_default_env()
-        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info"));
-    let _ =
-        tracing_subscriber::fmt().with_env_filter(filter).with_writer(std::io::stderr).try_init();
 }

@@ -1,12 +1,12 @@
 //! The tracer against closed forms. Tolerances are stated with each test.
 
 use glam::Vec3A;
+use restauro_render::prepared::{PreparedScene, Settings};
+use restauro_render::tile::{Rect, camera_ray, pixel, render_tile};
 use restauro_scene::load::{Limits, LoadedScene, load_scene};
 use restauro_scene::scene_file::Integrator;
 use restauro_spectral::colorimetry::{Observer, absolute_xyz};
 use restauro_spectral::keyed_random::KeyedRng;
-use restauro_worker::prepared::{PreparedScene, Settings};
-use restauro_worker::tile::{Rect, camera_ray, pixel, render_tile};
 use std::f64::consts::PI;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -225,7 +225,7 @@ fn images_are_bit_identical_across_tiles_and_threads() {
     assert!(a.iter().any(|p| p[1] > 0.0));
 }
 
-fn mean_y(tile: &restauro_worker::tile::TileResult) -> f64 {
+fn mean_y(tile: &restauro_render::tile::TileResult) -> f64 {
     tile.xyz.iter().map(|p| f64::from(p[1])).sum::<f64>() / tile.xyz.len() as f64
 }
 

@@ -1,0 +1,11 @@
+//! restauro-image: what restauro writes and reads as image files — OpenEXR with absolute XYZ and
+//! spectral layers, PNG with its colour space ([`image_files`]), every file written atomically
+//! ([`atomic_file`]) — the framebuffer that tiles are assembled into and the byte layout tiles
+//! travel in ([`framebuffer`]), and a finished render's files with the Retinex and the display
+//! transform ([`results`]). The coordinator and the client both use it; neither needs the other
+//! to write a file.
+
+pub mod atomic_file;
+pub mod framebuffer;
+pub mod image_files;
+pub mod results;

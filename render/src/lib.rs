@@ -1,0 +1,12 @@
+//! restauro-render: the spectral tracer as a library — scene preparation with a CWBVH
+//! ([`prepared`]), the pinhole [`camera`], keyed [`sampler`], the [`bsdf`]s, photometric
+//! [`light`]s, the Whitted and path [`integrator`]s and [`tile`] rendering. It knows nothing of
+//! the network: the worker process and `restauro render --in-process` both call it.
+
+pub mod bsdf;
+pub mod camera;
+pub mod integrator;
+pub mod light;
+pub mod prepared;
+pub mod sampler;
+pub mod tile;

@@ -3,8 +3,8 @@
 //!
 //! A real coordinator process (this executable, on loopback, its store on disk) receives
 //! several jobs of many small tiles; each simulated worker has its own connection and does what
-//! a worker does — register, pull one lease, report the tile (header and pixel data, streamed),
-//! pull the next — except rendering: its tiles are black. The jobs are submitted (and checked)
+//! a worker does — register, pull a few leases, report each tile (header and pixel data,
+//! streamed), pull again — except rendering: its tiles are black. The jobs are submitted (and checked)
 //! first; the clock runs from the workers' first pull to the last acknowledged result, so every
 //! tile counted was leased, reported, checked and committed durably (in groups) by the
 //! coordinator.
@@ -55,6 +55,11 @@ pub fn bench(args: &BenchArgs) -> Result<String> {
     let scene =
         crate::scene_cmd::write_aosta(dir.path(), args.width as u32, args.height as u32, 1)?.sunny;
     let bundle = bundle_scene(&scene, &Limits::default())?;
+    // The tiles' layout: with a sky, each pixel carries its sky coverage too.
+    let sky = restauro_scene::load::load_scene(&scene, &Limits::default())?
+        .lights
+        .iter()
+        .any(|l| matches!(l, restauro_scene::load::ResolvedLight::Sky { .. }));
     let cluster = LocalCluster::start_with(0, None, &["--no-retinex"])?;
     let runtime = cluster::runtime()?;
     let workers = args.workers.max(1);
@@ -75,18 +80,17 @@ pub fn bench(args: &BenchArgs) -> Result<String> {
         let mut total_tiles = 0u64;
         let mut tiles_per_job = 0;
         for j in 0..jobs {
+            let spec = restauro_scene::job::JobSpec {
+                name: restauro_scene::job::JobName::new(&format!("bench-{j}"))?,
+                render: restauro_scene::plan::RenderOptions {
+                    tile: Some(tile),
+                    samples_per_pixel: Some(1),
+                    ..Default::default()
+                },
+                ..Default::default()
+            };
             let status = client
-                .submit_job(pb::SubmitJobRequest {
-                    protocol_version: PROTOCOL_VERSION,
-                    manifest_json: bundle.canonical_json(),
-                    options: Some(pb::RenderOptions {
-                        tile,
-                        samples_per_pixel: 1,
-                        ..Default::default()
-                    }),
-                    priority: 0,
-                    name: format!("bench-{j}"),
-                })
+                .submit_job(pb::convert::submit_request(bundle.canonical_json(), &spec))
                 .await
                 .map_err(|s| cluster::refused("submitting a benchmark job", s))?
                 .into_inner();
@@ -97,16 +101,18 @@ pub fn bench(args: &BenchArgs) -> Result<String> {
         let own_cpu_before = process_cpu_seconds("self");
         let started = Instant::now();
         let mut tasks = tokio::task::JoinSet::new();
-        for (client, id) in registered {
-            tasks.spawn(simulated_worker(client, id, counts.clone(), stop.clone()));
+        for (client, session) in registered {
+            tasks.spawn(simulated_worker(client, session, sky, counts.clone(), stop.clone()));
         }
         let deadline = Instant::now() + Duration::from_secs(600);
         while counts.accepted.load(Ordering::Relaxed) < total_tiles {
             if Instant::now() > deadline {
                 bail!("the benchmark did not finish in 10 minutes");
             }
-            if tasks.try_join_next().is_some_and(|r| matches!(r, Ok(Err(_)) | Err(_))) {
-                bail!("a simulated worker failed");
+            match tasks.try_join_next() {
+                Some(Ok(Err(e))) => bail!("a simulated worker failed: {e:#}"),
+                Some(Err(e)) => bail!("a simulated worker stopped: {e}"),
+                _ => {}
             }
             tokio::time::sleep(Duration::from_millis(2)).await;
         }
@@ -157,7 +163,7 @@ async fn futures_join_all<T: Send + 'static>(
 }
 
 /// A simulated worker's own connection, registered.
-async fn register(url: &str, token: &str, index: usize) -> Result<(Worker, u64)> {
+async fn register(url: &str, token: &str, index: usize) -> Result<(Worker, pb::WorkerSession)> {
     let channel = Endpoint::from_shared(url.to_owned())?
         .tcp_nodelay(true)
         .connect()
@@ -174,57 +180,52 @@ async fn register(url: &str, token: &str, index: usize) -> Result<(Worker, u64)>
         })
         .await
         .map_err(|s| anyhow!("registering a simulated worker: {}", s.message()))?;
-    Ok((client, reply.into_inner().worker_id))
+    let session = reply.into_inner().session.context("registered without a session")?;
+    Ok((client, session))
 }
 
-/// Pulls a lease, reports a black tile of the leased size asking for the next lease with it,
-/// and so on; pulls again (waiting) only when a report brings no new lease.
+/// Pulls up to four leases and reports a black tile of each leased size, then pulls again.
 async fn simulated_worker(
     mut client: Worker,
-    id: u64,
+    session: pb::WorkerSession,
+    sky: bool,
     counts: Arc<Counts>,
     stop: Arc<AtomicBool>,
 ) -> Result<()> {
-    let mut queue: Vec<pb::Lease> = Vec::new();
     while !stop.load(Ordering::Relaxed) {
-        let Some(lease) = queue.pop() else {
-            let reply = client
-                .pull_leases(pb::PullRequest { worker_id: id, max: 1, wait_ms: 50 })
-                .await
-                .map_err(|s| anyhow!("pulling: {}", s.message()))?
-                .into_inner();
-            if !reply.known {
-                bail!("the coordinator forgot a simulated worker");
-            }
-            counts.leases.fetch_add(reply.leases.len() as u64, Ordering::Relaxed);
-            queue = reply.leases;
-            continue;
-        };
-        let rect = lease.rect.unwrap_or_default();
-        let bytes = rect.width as usize * rect.height as usize * 12;
-        let header = pb::TileHeader {
-            worker_id: id,
-            lease: Some(lease),
-            rays: 0,
-            render_s: 0.0,
-            xyz_bytes: bytes as u64,
-            spectral_bytes: 0,
-            want: 1,
-        };
-        let messages = [
-            pb::TileChunk { part: Some(pb::tile_chunk::Part::Header(header)) },
-            pb::TileChunk { part: Some(pb::tile_chunk::Part::Data(vec![0; bytes])) },
-        ];
         let reply = client
-            .report_tile(tokio_stream::iter(messages))
+            .pull_leases(pb::PullRequest { session: Some(session.clone()), max: 4, wait_ms: 50 })
             .await
-            .map_err(|s| anyhow!("reporting: {}", s.message()))?
+            .map_err(|s| anyhow!("pulling: {}", s.message()))?
             .into_inner();
-        if reply.accepted {
-            counts.accepted.fetch_add(1, Ordering::Relaxed);
+        if !reply.known {
+            bail!("the coordinator forgot a simulated worker");
         }
         counts.leases.fetch_add(reply.leases.len() as u64, Ordering::Relaxed);
-        queue.extend(reply.leases);
+        for lease in reply.leases {
+            let rect = restauro_scene::plan::Rect::from(lease.rect.unwrap_or_default());
+            let (bytes, _) = restauro_image::framebuffer::tile_sizes(&rect, false, sky);
+            let header = pb::TileHeader {
+                session: Some(session.clone()),
+                lease: Some(lease),
+                rays: 0,
+                render_s: 0.0,
+                xyz_bytes: bytes as u64,
+                spectral_bytes: 0,
+            };
+            let messages = [
+                pb::TileChunk { part: Some(pb::tile_chunk::Part::Header(header)) },
+                pb::TileChunk { part: Some(pb::tile_chunk::Part::Data(vec![0; bytes])) },
+            ];
+            let reply = client
+                .report_tile(tokio_stream::iter(messages))
+                .await
+                .map_err(|s| anyhow!("reporting: {}", s.message()))?
+                .into_inner();
+            if reply.accepted {
+                counts.accepted.fetch_add(1, Ordering::Relaxed);
+            }
+        }
     }
     Ok(())
 }

@@ -88,25 +88,7 @@ pub enum SceneCommand {
     },
 }
 
-/// The limits that protect the machine from a scene.
-#[derive(Debug, Args)]
-pub struct LimitArgs {
-    /// The most triangles a scene may have.
-    #[arg(long, default_value_t = 50_000_000)]
-    pub max_triangles: u64,
-    /// The most pixels an image may have.
-    #[arg(long, default_value_t = 16_384 * 16_384)]
-    pub max_pixels: u64,
-    /// The largest file a scene may refer to, in MiB.
-    #[arg(long, default_value_t = 2048)]
-    pub max_file_mb: u64,
-    /// The most samples per pixel.
-    #[arg(long, default_value_t = 65_536)]
-    pub max_spp: u32,
-    /// The most bounces of a path.
-    #[arg(long, default_value_t = 64)]
-    pub max_depth: u32,
-}
+pub use restauro_scene::limits::LimitArgs;
 
 #[derive(Debug, Args)]
 pub struct RenderArgs {
@@ -139,6 +121,12 @@ pub struct RenderArgs {
     /// The PNG's exposure: auto[:KEY], absolute:<cd/m²> or relative.
     #[arg(long, default_value = "auto")]
     pub exposure: String,
+    /// Retinex path samples per pixel (1–4096).
+    #[arg(long, default_value_t = restauro_scene::job::RetinexOptions::default().paths)]
+    pub retinex_paths: u32,
+    /// The Retinex's random seed.
+    #[arg(long, default_value_t = 0)]
+    pub retinex_seed: u64,
     /// Render in this process, without a cluster.
     #[arg(long, conflicts_with = "coordinator")]
     pub in_process: bool,

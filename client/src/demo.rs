@@ -33,7 +33,9 @@ use restauro_image::atomic_file;
 use restauro_image::image_files::{PngPixels, XyzImage, read_exr, write_png};
 use restauro_proto as pb;
 use restauro_scene::bundle::bundle_scene;
+use restauro_scene::job::{JobName, JobSpec};
 use restauro_scene::load::{Limits, LoadedScene, ResolvedLight, load_scene};
+use restauro_scene::plan::RenderOptions;
 use restauro_scene::samples::{self, PixelRect, SAMPLES, WHITE_REFLECTANCE};
 use restauro_spectral::Lab;
 use restauro_spectral::appearance::d65_white;
@@ -361,22 +363,21 @@ async fn render_all(
         let bundle = bundle_scene(&job.scene, &Limits::default())?;
         cluster::upload(&mut client, &bundle).await?;
         let variant = match &job.kind {
-            Kind::Facade { variant, .. } => variant.to_string(),
-            Kind::Samples { .. } => String::new(),
+            Kind::Facade { variant, .. } => Some(variant.to_string()),
+            Kind::Samples { .. } => None,
+        };
+        let spec = JobSpec {
+            name: JobName::new(&job.key)?,
+            priority: (jobs.len() - index) as i32,
+            render: RenderOptions {
+                variant,
+                samples_per_pixel: Some(job.spp),
+                ..RenderOptions::default()
+            },
+            ..JobSpec::default()
         };
         let status = client
-            .submit_job(pb::SubmitJobRequest {
-                protocol_version: pb::PROTOCOL_VERSION,
-                manifest_json: bundle.canonical_json(),
-                options: Some(pb::RenderOptions {
-                    variant,
-                    samples_per_pixel: job.spp,
-                    exposure: "auto".into(),
-                    ..Default::default()
-                }),
-                priority: (jobs.len() - index) as i32,
-                name: job.key.clone(),
-            })
+            .submit_job(pb::convert::submit_request(bundle.canonical_json(), &spec))
             .await
             .map_err(|s| cluster::refused(&format!("submitting {}", job.scene.display()), s))?
             .into_inner();
@@ -392,7 +393,11 @@ async fn render_all(
     let mut finished = Vec::new();
     for ((job, (status, render_s)), plan) in jobs.iter().zip(statuses).zip(&submitted) {
         if status.state != pb::JobState::Done as i32 {
-            bail!("the demo's render {} ended without results: {}", job.key, status.error);
+            bail!(
+                "the demo's render {} ended without results: {}",
+                job.key,
+                crate::jobs_cmd::shown(&status.error)
+            );
         }
         let dir = out.join("renders").join(&job.key);
         let files = cluster::fetch(&client, &status, &dir).await?;

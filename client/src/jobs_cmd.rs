@@ -2,7 +2,7 @@
 
 use crate::cli::{ConnectArgs, FetchArgs, JobArgs, SubmitArgs};
 use crate::cluster::{self, Client, refused};
-use crate::render::{checked_bundle, job_name, proto_options};
+use crate::render::{checked_bundle, job_spec};
 use anyhow::{Context, Result, bail};
 use restauro_proto as pb;
 use std::fmt::Write as _;
@@ -32,6 +32,14 @@ fn with_client<T>(c: &ConnectArgs, f: impl AsyncFnOnce(&mut Client) -> Result<T>
     })
 }
 
+/// A text from the coordinator as a terminal may show it: control characters escaped, so no
+/// name can move the cursor, clear the screen or begin a new line.
+pub fn shown(text: &str) -> String {
+    text.chars()
+        .map(|c| if c.is_control() { c.escape_default().to_string() } else { c.to_string() })
+        .collect()
+}
+
 fn state_name(state: i32) -> String {
     pb::JobState::try_from(state)
         .unwrap_or(pb::JobState::Unspecified)
@@ -53,17 +61,12 @@ pub fn submit(args: &SubmitArgs) -> Result<String> {
         tls_ca: r.connect.tls_ca.clone(),
         protocol_version: pb::PROTOCOL_VERSION,
     };
+    let spec = job_spec(r, args.priority)?;
     let (bundle, _plan) = checked_bundle(r)?;
     with_client(&connect, async |client| {
         cluster::upload(client, &bundle).await?;
         let status = client
-            .submit_job(pb::SubmitJobRequest {
-                protocol_version: pb::PROTOCOL_VERSION,
-                manifest_json: bundle.canonical_json(),
-                options: Some(proto_options(r)),
-                priority: args.priority,
-                name: job_name(r),
-            })
+            .submit_job(pb::convert::submit_request(bundle.canonical_json(), &spec))
             .await
             .map_err(|s| refused(&format!("submitting {}", r.scene.display()), s))?
             .into_inner();
@@ -71,7 +74,12 @@ pub fn submit(args: &SubmitArgs) -> Result<String> {
         if args.wait {
             let status = cluster::watch(client, &status.job_id, true).await?;
             if status.state != pb::JobState::Done as i32 {
-                bail!("job {} is {}: {}", status.job_id, state_name(status.state), status.error);
+                bail!(
+                    "job {} is {}: {}",
+                    status.job_id,
+                    state_name(status.state),
+                    shown(&status.error)
+                );
             }
             for f in cluster::fetch(client, &status, &r.out).await? {
                 let _ = writeln!(s, "wrote {}", f.display());
@@ -88,7 +96,11 @@ pub fn watch(args: &JobArgs) -> Result<String> {
             "job {} {}{}\n",
             status.job_id,
             state_name(status.state),
-            if status.error.is_empty() { String::new() } else { format!(": {}", status.error) }
+            if status.error.is_empty() {
+                String::new()
+            } else {
+                format!(": {}", shown(&status.error))
+            }
         ))
     })
 }
@@ -139,8 +151,8 @@ pub fn jobs(args: &ConnectArgs) -> Result<String> {
                 j.tiles_done,
                 j.tiles_total,
                 j.elapsed_s,
-                j.name,
-                if j.error.is_empty() { String::new() } else { format!(" ({})", j.error) }
+                shown(&j.name),
+                if j.error.is_empty() { String::new() } else { format!(" ({})", shown(&j.error)) }
             );
         }
         Ok(s)
@@ -160,13 +172,13 @@ pub fn workers(args: &ConnectArgs) -> Result<String> {
                 s,
                 "{:x} {:<24} capacity {:>2}  leases {:>2}  done {:>6}  failed {:>3}  seen {:.1} s ago  {}",
                 w.worker_id,
-                w.name,
+                shown(&w.name),
                 w.capacity,
                 w.leases,
                 w.tiles_done,
                 w.tiles_failed,
                 w.last_seen_s,
-                w.build
+                shown(&w.build)
             );
         }
         Ok(s)

@@ -8,14 +8,16 @@ use crate::cluster::{self, LocalCluster};
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use restauro_image::framebuffer::{Framebuffer, encode_tile};
-use restauro_image::results::{ResultOptions, parse_exposure, write_results};
+use restauro_image::results::{ResultOptions, write_results};
 use restauro_proto as pb;
 use restauro_render::prepared::{PreparedScene, Settings};
 use restauro_render::tile::render_tile;
 use restauro_scene::bundle::{Bundle, bundle_scene};
+use restauro_scene::job::{JobName, JobSpec, RetinexOptions};
 use restauro_scene::load::{Limits, load_scene};
 use restauro_scene::plan::{Plan, RenderOptions};
 use restauro_scene::scene_file::Integrator;
+use restauro_spectral::display::Exposure;
 use restauro_spectral::retinex::RetinexParams;
 use std::fmt::Write as _;
 use std::time::Instant;
@@ -45,33 +47,33 @@ pub fn job_name(args: &RenderArgs) -> String {
     }
 }
 
+/// The job the command line asks for: its one conversion to the domain's job, checked here as
+/// the coordinator checks it.
+pub fn job_spec(args: &RenderArgs, priority: i32) -> Result<JobSpec> {
+    let exposure: Exposure = args.exposure.parse().map_err(|e| anyhow::anyhow!("--{e}"))?;
+    let retinex = RetinexOptions::new(Some(args.retinex_paths), Some(args.retinex_seed))
+        .map_err(|e| anyhow::anyhow!("--retinex-paths: {}", e.problem))?;
+    let name = job_name(args);
+    let name = JobName::new(&name).map_err(|e| {
+        anyhow::anyhow!("the job's name (from the scene file and variant) `{name}`: {}", e.problem)
+    })?;
+    let spec = JobSpec { name, priority, render: render_options(args), exposure, retinex };
+    spec.checked().map_err(|e| {
+        let flag = match e.field {
+            "render.samples_per_pixel" => "spp",
+            other => other.trim_start_matches("render."),
+        };
+        anyhow::anyhow!("--{flag}: {}", e.problem)
+    })
+}
+
 /// Checks the scene here (errors name the user's own files) and bundles it for a coordinator.
 pub fn checked_bundle(args: &RenderArgs) -> Result<(Bundle, Plan)> {
     let limits: Limits = (&args.limits).into();
     let scene = load_scene(&args.scene, &limits)?;
     let plan = Plan::new(&scene, &render_options(args), &limits, &args.scene)?;
-    parse_exposure(&args.exposure).map_err(|e| anyhow::anyhow!("--{e}"))?;
     let bundle = bundle_scene(&args.scene, &limits)?;
     Ok((bundle, plan))
-}
-
-pub fn proto_options(args: &RenderArgs) -> pb::RenderOptions {
-    pb::RenderOptions {
-        variant: args.variant.clone().unwrap_or_default(),
-        integrator: match args.integrator {
-            Some(IntegratorArg::Whitted) => "whitted".into(),
-            Some(IntegratorArg::Path) => "path".into(),
-            None => String::new(),
-        },
-        samples_per_pixel: args.spp.unwrap_or(0),
-        width: args.width.unwrap_or(0),
-        height: args.height.unwrap_or(0),
-        spectral: args.spectral,
-        tile: args.tile.unwrap_or(0),
-        exposure: args.exposure.clone(),
-        retinex_paths: 0,
-        retinex_seed: 0,
-    }
 }
 
 pub fn run(args: &RenderArgs) -> Result<String> {
@@ -91,26 +93,24 @@ pub fn run(args: &RenderArgs) -> Result<String> {
             (c.url.clone(), c.client_token.clone(), Some(c))
         }
     };
+    let spec = job_spec(args, 0)?;
     let (bundle, plan) = checked_bundle(args)?;
-    let name = job_name(args);
     let runtime = cluster::runtime()?;
     let (status, files) = runtime.block_on(async {
         let mut client = cluster::connect_as(&url, &token, tls_ca, pb::PROTOCOL_VERSION).await?;
         cluster::upload(&mut client, &bundle).await?;
         let submitted = client
-            .submit_job(pb::SubmitJobRequest {
-                protocol_version: pb::PROTOCOL_VERSION,
-                manifest_json: bundle.canonical_json(),
-                options: Some(proto_options(args)),
-                priority: 0,
-                name: name.clone(),
-            })
+            .submit_job(pb::convert::submit_request(bundle.canonical_json(), &spec))
             .await
             .map_err(|s| cluster::refused(&format!("submitting {}", args.scene.display()), s))?
             .into_inner();
         let status = cluster::watch(&mut client, &submitted.job_id, true).await?;
         if status.state != pb::JobState::Done as i32 {
-            anyhow::bail!("job {} ended without results: {}", status.job_id, status.error);
+            anyhow::bail!(
+                "job {} ended without results: {}",
+                status.job_id,
+                crate::jobs_cmd::shown(&status.error)
+            );
         }
         let files = cluster::fetch(&client, &status, &args.out).await?;
         anyhow::Ok((status, files))
@@ -142,14 +142,14 @@ pub fn run(args: &RenderArgs) -> Result<String> {
 fn run_in_process(args: &RenderArgs) -> Result<String> {
     let limits: Limits = (&args.limits).into();
     let mut scene = load_scene(&args.scene, &limits)?;
-    let plan = Plan::new(&scene, &render_options(args), &limits, &args.scene)?;
+    let spec = job_spec(args, 0)?;
+    let plan = Plan::new(&scene, &spec.render, &limits, &args.scene)?;
     plan.apply(&mut scene);
-    let exposure = parse_exposure(&args.exposure).map_err(|e| anyhow::anyhow!("--{e}"))?;
     let started = Instant::now();
     let prepared = PreparedScene::new(&scene, plan.variant.as_deref(), Settings::from(&plan))?;
     let prepare_s = started.elapsed().as_secs_f64();
     let bar =
-        ProgressBar::with_draw_target(Some(plan.tiles.len() as u64), ProgressDrawTarget::stderr());
+        ProgressBar::with_draw_target(Some(plan.tile_count().into()), ProgressDrawTarget::stderr());
     bar.set_style(
         ProgressStyle::with_template(
             "render {bar:40} {pos}/{len} tiles, {elapsed} elapsed, eta {eta}",
@@ -158,21 +158,21 @@ fn run_in_process(args: &RenderArgs) -> Result<String> {
     );
     let mut frame = Framebuffer::new(plan.width, plan.height, plan.spectral, plan.sky);
     let render_started = Instant::now();
-    for (index, rect) in plan.tiles.iter().enumerate() {
-        let tile = render_tile(&prepared, *rect, plan.spectral);
+    for (index, rect) in plan.tiles().enumerate() {
+        let tile = render_tile(&prepared, rect, plan.spectral);
         // The same bytes a worker sends: the in-process image is the cluster's, bit for bit.
         let data = encode_tile(
             &tile.xyz,
             tile.sky.as_deref(),
             tile.spectral.as_ref().map(|s| s.iter().map(|p| &p.0[..])),
         );
-        frame.place(index as u32, rect, &data)?;
+        frame.place(index as u32, &rect, &data)?;
         bar.inc(1);
     }
     bar.finish_and_clear();
     let render_s = render_started.elapsed().as_secs_f64();
     let mean_y = frame.xyz.iter().map(|p| f64::from(p[1])).sum::<f64>() / frame.xyz.len() as f64;
-    let name = job_name(args);
+    let name = spec.name.file_stem();
     let integrator = format!("{:?}", plan.integrator).to_lowercase();
     let info = format!(
         "variant={} integrator={integrator} spp={} max_depth={} seed={}",
@@ -189,8 +189,12 @@ fn run_in_process(args: &RenderArgs) -> Result<String> {
         &ResultOptions {
             name: &name,
             info: &info,
-            exposure,
-            retinex: Some(RetinexParams::default()),
+            exposure: spec.exposure,
+            retinex: Some(RetinexParams {
+                paths: spec.retinex.paths,
+                seed: spec.retinex.seed,
+                ..RetinexParams::default()
+            }),
         },
     )?;
     let mut s = String::new();

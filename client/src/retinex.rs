@@ -40,26 +40,7 @@ pub fn parse_white(text: &str, image: &XyzImage, input: &Path) -> Result<WhiteRe
 
 /// `--exposure auto[:KEY] | absolute:<cd/m²> | relative`.
 pub fn parse_exposure(text: &str) -> Result<Exposure> {
-    let lower = text.to_ascii_lowercase();
-    let number = |s: &str, what: &str| -> Result<f64> {
-        match s.parse::<f64>() {
-            Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
-            _ => bail!("--exposure `{text}`: {what} must be a number > 0"),
-        }
-    };
-    match lower.as_str() {
-        "auto" => Ok(Exposure::Automatic { key: 0.18 }),
-        "relative" => Ok(Exposure::Relative),
-        _ => {
-            if let Some(k) = lower.strip_prefix("auto:") {
-                Ok(Exposure::Automatic { key: number(k, "the key")? })
-            } else if let Some(l) = lower.strip_prefix("absolute:") {
-                Ok(Exposure::Absolute { white_cd_m2: number(l, "the white luminance (cd/m²)")? })
-            } else {
-                bail!("--exposure `{text}`: use auto, auto:<key>, absolute:<cd/m²> or relative")
-            }
-        }
-    }
+    text.parse().map_err(|e| anyhow::anyhow!("--{e}"))
 }
 
 fn write_display_png(

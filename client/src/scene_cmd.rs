@@ -1,24 +1,12 @@
 //! `restauro scene aosta | check | bundle`.
 
-use crate::cli::{LimitArgs, SceneCommand};
+use crate::cli::SceneCommand;
 use anyhow::{Context, Result};
 use restauro_image::atomic_file;
 use restauro_scene::bundle::bundle_scene;
 use restauro_scene::load::{Limits, LoadedScene, load_scene};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-
-impl From<&LimitArgs> for Limits {
-    fn from(a: &LimitArgs) -> Limits {
-        Limits {
-            max_pixels: a.max_pixels,
-            max_triangles: a.max_triangles,
-            max_samples_per_pixel: a.max_spp,
-            max_depth: a.max_depth,
-            max_file_bytes: a.max_file_mb.saturating_mul(1 << 20),
-        }
-    }
-}
 
 /// A summary of a loaded scene: what a restorer checks before rendering.
 pub fn summary(path: &Path, scene: &LoadedScene) -> String {

@@ -88,5 +88,5 @@ fn render_writes_exr_with_spectral_layers_and_png() {
         "{err}"
     );
     let err = refused(&["render", s, "--out", r, "--spp", "0"]);
-    assert!(err.contains("samples_per_pixel: 0 samples per pixel; use at least 1"), "{err}");
+    assert!(err.contains("--spp: 0; use at least 1"), "{err}");
 }

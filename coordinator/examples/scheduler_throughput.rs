@@ -1,10 +1,10 @@
 #![allow(clippy::print_stdout)] // A benchmark: its JSON on stdout is its output.
 //! Throughput of the tile scheduler: 300 workers, 4 jobs of 5,000 tiles. Each round every worker
 //! leases up to 4 tiles (so ~1,200 leases are outstanding at once, as on a busy farm), then all
-//! of them are completed. `Instant::now()` is read for every call, as the coordinator would.
+//! of them are completed and committed. `Instant::now()` is read for every call, as the coordinator would.
 //! The scenario is repeated to get a measurable duration; setup is not timed.
 
-use restauro_coordinator::scheduler::{Completion, Config, Scheduler};
+use restauro_coordinator::scheduler::{Completion, Config, Scheduler, WorkerId};
 use std::time::{Duration, Instant};
 
 const WORKERS: u32 = 300;
@@ -19,12 +19,12 @@ fn main() {
     for _ in 0..RUNS {
         let t0 = Instant::now();
         let mut s = Scheduler::new(Config::default());
-        let workers: Vec<u64> = (0..WORKERS)
+        let workers: Vec<WorkerId> = (0..WORKERS)
             .map(|i| s.register_worker(&format!("worker-{i}"), PER_LEASE, t0))
             .collect();
         for j in 0..JOBS {
             let id = format!("00000000-0000-4000-8000-{j:012}");
-            s.add_job(id, 0, TILES, &[], t0).expect("fresh job");
+            s.add_job(id.into(), 0, TILES, &[], t0).expect("fresh job");
         }
         let mut finished = 0;
         let mut batch = Vec::with_capacity((WORKERS * PER_LEASE) as usize);
@@ -36,7 +36,9 @@ fn main() {
             assert!(!batch.is_empty(), "scheduler stalled");
             for lease in batch.drain(..) {
                 match s.complete(&lease, Instant::now()) {
-                    Completion::Accepted { job_finished } => finished += u32::from(job_finished),
+                    Completion::Accepted => {
+                        finished += u32::from(s.committed(&lease.job, lease.tile));
+                    }
                     Completion::Stale => panic!("unexpected stale completion"),
                 }
                 pairs += 1;

@@ -5,6 +5,7 @@
 //! role's token is PERMISSION_DENIED (authenticated, but forbidden). Tokens are compared in
 //! constant time (through their BLAKE3 hashes), so timing tells nothing of them.
 
+use crate::error::CoordinatorError;
 use restauro_proto::{PROTOCOL_HEADER, PROTOCOL_VERSION};
 use tonic::{Request, Status};
 
@@ -49,28 +50,32 @@ impl Tokens {
 
     fn check(&self, role: Role, request: &Request<()>) -> Result<(), Status> {
         let metadata = request.metadata();
-        let version = metadata
-            .get(PROTOCOL_HEADER)
-            .and_then(|v| v.to_str().ok())
-            .and_then(|v| v.parse::<u32>().ok());
-        if version != Some(PROTOCOL_VERSION) {
-            let theirs = version.map_or("none".to_owned(), |v| v.to_string());
-            return Err(Status::failed_precondition(format!(
-                "protocol version {theirs} refused: this coordinator speaks protocol \
-                 {PROTOCOL_VERSION}; run a {} of the same restauro release",
-                role.name()
-            )));
-        }
-        let token = metadata
+        let version = metadata.get(PROTOCOL_HEADER).and_then(|v| v.to_str().ok());
+        let bearer = metadata
             .get("authorization")
             .and_then(|v| v.to_str().ok())
-            .and_then(|v| v.strip_prefix("Bearer "))
-            .ok_or_else(|| {
-                Status::unauthenticated(format!(
-                    "no bearer token: a {} must send `authorization: Bearer <token>`",
-                    role.name()
-                ))
-            })?;
+            .and_then(|v| v.strip_prefix("Bearer "));
+        Ok(self.authorize(role, version, bearer)?)
+    }
+
+    /// Checks a caller's protocol version and bearer token for `role`'s door (the same check
+    /// for every transport).
+    pub fn authorize(
+        &self,
+        role: Role,
+        version: Option<&str>,
+        bearer: Option<&str>,
+    ) -> Result<(), CoordinatorError> {
+        let version = version.and_then(|v| v.parse::<u32>().ok());
+        if version != Some(PROTOCOL_VERSION) {
+            let theirs = version.map_or("none".to_owned(), |v| v.to_string());
+            return Err(CoordinatorError::ProtocolVersion {
+                theirs,
+                ours: PROTOCOL_VERSION,
+                role: role.name(),
+            });
+        }
+        let token = bearer.ok_or(CoordinatorError::NoToken { role: role.name() })?;
         let hash = blake3::hash(token.as_bytes());
         let (mine, other) = match role {
             Role::Client => (self.client, self.worker),
@@ -84,13 +89,9 @@ impl Tokens {
                 Role::Client => Role::Worker,
                 Role::Worker => Role::Client,
             };
-            Err(Status::permission_denied(format!(
-                "forbidden: this is a {} token, and only a {} token may call this service",
-                other_role.name(),
-                role.name()
-            )))
+            Err(CoordinatorError::WrongRole { held: other_role.name(), needed: role.name() })
         } else {
-            Err(Status::unauthenticated(format!("the {} token is not valid", role.name())))
+            Err(CoordinatorError::BadToken { role: role.name() })
         }
     }
 }

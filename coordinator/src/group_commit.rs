@@ -3,7 +3,12 @@
 //! committed at once (no waiting for company); under load the batches grow by themselves,
 //! which is what lets a few hundred workers report thousands of tiles a second while every
 //! acknowledged tile stays durable.
+//!
+//! A job's tiles are dropped through the same queue ([`TileCommits::remove_job`]), so every tile
+//! queued before the removal is written before it and none after it survives it: a late result
+//! can never bring back the tiles of a job that was finished, cancelled or failed.
 
+use crate::ids::JobId;
 use crate::store::{Store, StoreError};
 use std::sync::Arc;
 use std::sync::mpsc;
@@ -12,11 +17,18 @@ use tokio::sync::oneshot;
 /// A batch stops growing at this many bytes of pixel data.
 const MAX_BATCH_BYTES: usize = 64 << 20;
 
-struct Pending {
-    job: Arc<str>,
-    tile: u32,
-    data: Vec<u8>,
-    done: oneshot::Sender<Result<(), StoreError>>,
+enum Pending {
+    Tile { job: JobId, tile: u32, data: Vec<u8>, done: oneshot::Sender<Result<(), StoreError>> },
+    RemoveJob { job: JobId, done: oneshot::Sender<Result<(), StoreError>> },
+}
+
+impl Pending {
+    fn bytes(&self) -> usize {
+        match self {
+            Pending::Tile { data, .. } => data.len(),
+            Pending::RemoveJob { .. } => 0,
+        }
+    }
 }
 
 /// The queue in front of the store's tile table, drained by one thread.
@@ -30,35 +42,86 @@ impl TileCommits {
     pub fn start(store: Arc<Store>) -> std::io::Result<TileCommits> {
         let (queue, incoming) = mpsc::channel::<Pending>();
         let thread = std::thread::Builder::new().name("store-commit".into()).spawn(move || {
-            while let Ok(first) = incoming.recv() {
-                let mut bytes = first.data.len();
+            let mut next = incoming.recv().ok();
+            while let Some(first) = next.take() {
+                if let Pending::RemoveJob { job, done } = first {
+                    let result = store.remove_tiles(&job);
+                    if let Err(e) = &result {
+                        tracing::warn!(job = %job, "could not drop the job's tiles: {e}");
+                    }
+                    let _ = done.send(result);
+                    next = incoming.recv().ok();
+                    continue;
+                }
+                // Tiles up to the next removal (or the size bound) go in one transaction.
+                let mut bytes = first.bytes();
                 let mut batch = vec![first];
                 while bytes < MAX_BATCH_BYTES {
-                    let Ok(next) = incoming.try_recv() else { break };
-                    bytes += next.data.len();
-                    batch.push(next);
+                    match incoming.try_recv() {
+                        Ok(removal @ Pending::RemoveJob { .. }) => {
+                            next = Some(removal);
+                            break;
+                        }
+                        Ok(tile) => {
+                            bytes += tile.bytes();
+                            batch.push(tile);
+                        }
+                        Err(_) => break,
+                    }
                 }
-                let result =
-                    store.put_tiles(batch.iter().map(|p| (&*p.job, p.tile, p.data.as_slice())));
+                let result = store.put_tiles(batch.iter().filter_map(|p| match p {
+                    Pending::Tile { job, tile, data, .. } => Some((&**job, *tile, data.as_slice())),
+                    Pending::RemoveJob { .. } => None,
+                }));
                 tracing::trace!(tiles = batch.len(), bytes, "tiles committed");
                 for p in batch {
-                    let _ = p.done.send(result.clone());
+                    if let Pending::Tile { done, .. } = p {
+                        let _ = done.send(result.clone());
+                    }
+                }
+                if next.is_none() {
+                    next = incoming.recv().ok();
                 }
             }
         })?;
         Ok(TileCommits { queue: Some(queue), thread: Some(thread) })
     }
 
-    /// Stores a finished tile; returns once it is durable.
-    pub async fn put(&self, job: Arc<str>, tile: u32, data: Vec<u8>) -> Result<(), StoreError> {
+    /// Queues a finished tile for the store; the receiver answers once it is durable (or not).
+    /// Queuing itself never waits, so it may be done under the lock that decided to accept the
+    /// tile, which is what orders it before a later removal.
+    pub fn put(&self, job: JobId, tile: u32, data: Vec<u8>) -> Committed {
         let (done, committed) = oneshot::channel();
-        let lost = || StoreError::Store {
-            path: "store".into(),
-            message: "the committing thread has stopped".into(),
-        };
-        let queue = self.queue.as_ref().ok_or_else(lost)?;
-        queue.send(Pending { job, tile, data, done }).map_err(|_| lost())?;
-        committed.await.map_err(|_| lost())?
+        self.send(Pending::Tile { job, tile, data, done });
+        Committed(committed)
+    }
+
+    /// Queues the removal of every tile of `job`, after the tiles queued before it.
+    pub fn remove_job(&self, job: JobId) -> Committed {
+        let (done, committed) = oneshot::channel();
+        self.send(Pending::RemoveJob { job, done });
+        Committed(committed)
+    }
+
+    fn send(&self, pending: Pending) {
+        // A stopped committer drops the sender, and the receiver then reports it.
+        if let Some(queue) = &self.queue {
+            let _ = queue.send(pending);
+        }
+    }
+}
+
+/// The answer of the store for one queued operation.
+pub struct Committed(oneshot::Receiver<Result<(), StoreError>>);
+
+impl Committed {
+    pub async fn wait(self) -> Result<(), StoreError> {
+        self.0.await.unwrap_or_else(|_| {
+            Err(StoreError::Store {
+                path: "store".into(),
+                message: "the committing thread has stopped".into(),
+            })
+        })
     }
 }
 
@@ -82,12 +145,12 @@ mod tests {
         {
             let store = Arc::new(Store::open(&path).unwrap());
             let commits = Arc::new(TileCommits::start(store).unwrap());
-            let job: Arc<str> = Arc::from("job-a");
+            let job = JobId::from("job-a");
             let mut tasks = Vec::new();
             for tile in 0..200u32 {
                 let (commits, job) = (commits.clone(), job.clone());
                 tasks.push(tokio::spawn(async move {
-                    commits.put(job, tile, tile.to_le_bytes().repeat(3)).await
+                    commits.put(job, tile, tile.to_le_bytes().repeat(3)).wait().await
                 }));
             }
             for t in tasks {
@@ -99,5 +162,23 @@ mod tests {
         let store = Store::open(&path).unwrap();
         assert_eq!(store.finished_tiles("job-a").unwrap(), (0..200).collect::<Vec<_>>());
         assert_eq!(store.tile("job-a", 137).unwrap().unwrap(), 137u32.to_le_bytes().repeat(3));
+    }
+
+    /// A removal is ordered after the tiles queued before it and before those queued after.
+    #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+    async fn a_removal_drops_what_came_before_it_and_nothing_after() {
+        let dir = tempfile::tempdir().unwrap();
+        let store = Arc::new(Store::open(&dir.path().join("store.redb")).unwrap());
+        let commits = TileCommits::start(store.clone()).unwrap();
+        let job = JobId::from("job-a");
+        let before: Vec<_> = (0..50).map(|t| commits.put(job.clone(), t, vec![1; 64])).collect();
+        let removal = commits.remove_job(job.clone());
+        let after = commits.put(job.clone(), 99, vec![2; 64]);
+        for c in before {
+            c.wait().await.unwrap();
+        }
+        removal.wait().await.unwrap();
+        after.wait().await.unwrap();
+        assert_eq!(store.finished_tiles("job-a").unwrap(), vec![99]);
     }
 }

@@ -1,12 +1,20 @@
 //! restauro-coordinator: jobs, tile scheduling, leases, framebuffer assembly, the display
 //! pipeline, persistence and the gRPC services. It never links the tracer (restauro-render):
 //! it plans a job from the scene alone and assembles what workers send.
+//!
+//! The domain layer is [`farm`]; [`grpc`] is one door to it (the studio's HTTP API another).
 
+pub mod assembly;
+pub mod asset_store;
 pub mod auth;
+pub mod error;
+pub mod farm;
 pub mod group_commit;
-pub mod jobs;
+pub mod grpc;
+pub mod ids;
+pub mod job;
+pub mod lease;
 pub mod metrics;
 pub mod scheduler;
 pub mod server;
-pub mod service;
 pub mod store;

@@ -51,28 +51,23 @@
 //! scheduler-assigned integers or job ids chosen by the coordinator, so flooding resistance is
 //! not needed and SipHash would be a large part of the per-tile cost.
 //!
-//! [`Lease::job`] is an `Arc<str>` rather than a `String` so handing out a lease costs a
+//! [`Lease::job`] is a [`JobId`] (an `Arc<str>` inside) rather than a `String` so handing out a lease costs a
 //! reference-count increment instead of an allocation.
 
 use std::cmp::Reverse;
 use std::collections::{BTreeSet, HashMap, HashSet};
 use std::fmt;
 use std::hash::{BuildHasherDefault, Hasher};
-use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-/// Job identifier (UUID text), chosen by the caller.
-pub type JobId = String;
-
-/// Worker identifier, assigned by [`Scheduler::register_worker`] starting at 1 and never reused,
-/// so a message from a forgotten worker can never be mistaken for one from a new worker.
-pub type WorkerId = u64;
+pub use crate::ids::{JobId, WorkerId};
 
 /// Permission for one worker to render one tile.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub struct Lease {
-    /// The job id; shared with the scheduler (`Arc<str>`) to keep leasing allocation-free.
-    pub job: Arc<str>,
+    /// The job id; shared with the scheduler (an `Arc<str>` inside) to keep leasing
+    /// allocation-free.
+    pub job: JobId,
     /// Tile index, `0..tiles`.
     pub tile: u32,
     /// 1 for a tile's first lease, one more on every re-lease of that tile. Only the latest
@@ -108,11 +103,12 @@ impl Default for Config {
     }
 }
 
-/// Outcome of [`Scheduler::complete`].
+/// Outcome of [`Scheduler::complete`] and [`Scheduler::complete_inherited`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Completion {
-    /// The tile is done; `job_finished` is true when it was the job's last tile.
-    Accepted { job_finished: bool },
+    /// The result is the tile's: store it, then call [`Scheduler::committed`] (or
+    /// [`Scheduler::commit_failed`]). No other result of the tile is accepted meanwhile.
+    Accepted,
     /// The result must be dropped (see the module doc on staleness).
     Stale,
 }
@@ -128,10 +124,13 @@ pub enum Failure {
     Stale,
 }
 
-/// Lifecycle state of a job.
+/// Whether a job's tiles are still handed out. (The job's own lifecycle — queued, running,
+/// assembling, … — is the coordinator's `job::JobState`; this is only the scheduler's part.)
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub enum JobState {
+pub enum Dispatch {
+    /// Tiles are leased and results accepted.
     Running,
+    /// Every tile is done and committed.
     Finished,
     Failed(String),
     Cancelled,
@@ -144,11 +143,11 @@ pub struct JobProgress {
     pub done: u32,
     /// Tiles currently leased (always 0 once the job is no longer running).
     pub leased: u32,
-    /// Tiles neither done nor leased.
+    /// Tiles neither done, being committed, nor leased.
     pub queued: u32,
     /// Times any tile went back to the queue (expiry, worker loss, failure, give back).
     pub requeued: u32,
-    pub state: JobState,
+    pub state: Dispatch,
 }
 
 /// Snapshot of a registered worker.
@@ -264,6 +263,8 @@ fn unpack(key: u64) -> (Slot, u32) {
     ((key >> 32) as u32, key as u32)
 }
 
+/// A tile's life: queued → leased → committing → done; back to queued when a lease expires, is
+/// failed or handed back, or its worker is lost, and when a commit fails.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum TileState {
     Queued,
@@ -272,6 +273,9 @@ enum TileState {
         worker: WorkerId,
         deadline: Instant,
     },
+    /// A result was accepted and is being written to the store; nothing else is accepted for
+    /// the tile until the write ends.
+    Committing,
     Done,
 }
 
@@ -285,7 +289,7 @@ struct Tile {
 }
 
 struct Job {
-    id: Arc<str>,
+    id: JobId,
     /// Order of addition, for the "older job first" tie-break.
     seq: u64,
     priority: i32,
@@ -299,10 +303,12 @@ struct Job {
     /// amortised O(1).
     cursor: u32,
     done: u32,
+    /// Tiles accepted and being committed.
+    committing: u32,
     leased: u32,
     queued: u32,
     requeued: u32,
-    state: JobState,
+    state: Dispatch,
     /// Explicit failures per worker, for exclusion.
     worker_failures: FxMap<WorkerId, u32>,
 }
@@ -310,7 +316,7 @@ struct Job {
 impl Job {
     /// Key in the ready set, if the job belongs there (running with queued tiles).
     fn ready_key(&self, slot: Slot) -> Option<ReadyKey> {
-        (self.state == JobState::Running && self.queued > 0).then_some((
+        (self.state == Dispatch::Running && self.queued > 0).then_some((
             Reverse(self.priority),
             self.leased,
             self.seq,
@@ -392,7 +398,7 @@ pub struct Scheduler {
     totals: Totals,
     jobs: Vec<Option<Job>>,
     free_slots: Vec<Slot>,
-    by_id: FxMap<Arc<str>, Slot>,
+    by_id: FxMap<JobId, Slot>,
     next_seq: u64,
     /// Running jobs with queued tiles, in serving order.
     ready: BTreeSet<ReadyKey>,
@@ -415,7 +421,7 @@ impl Scheduler {
             next_seq: 0,
             ready: BTreeSet::new(),
             workers: FxMap::default(),
-            next_worker: 1,
+            next_worker: WorkerId(1),
             lease_deadlines: BTreeSet::new(),
             worker_deadlines: BTreeSet::new(),
         }
@@ -444,7 +450,7 @@ impl Scheduler {
         done: &[u32],
         _now: Instant,
     ) -> Result<(), AddJobError> {
-        if self.by_id.contains_key(job.as_str()) {
+        if self.by_id.contains_key(&job) {
             return Err(AddJobError::Duplicate(job));
         }
         if let Some(&tile) = done.iter().find(|&&t| t >= tiles) {
@@ -461,7 +467,7 @@ impl Scheduler {
             }
         }
         let finished = done_count == tiles;
-        let id: Arc<str> = Arc::from(job);
+        let id = job;
         let slot = self.free_slots.pop().unwrap_or_else(|| {
             self.jobs.push(None);
             (self.jobs.len() - 1) as Slot
@@ -475,10 +481,11 @@ impl Scheduler {
             requeue: BTreeSet::new(),
             cursor: 0,
             done: done_count,
+            committing: 0,
             leased: 0,
             queued: tiles - done_count,
             requeued: 0,
-            state: if finished { JobState::Finished } else { JobState::Running },
+            state: if finished { Dispatch::Finished } else { Dispatch::Running },
             worker_failures: FxMap::default(),
         };
         self.next_seq += 1;
@@ -492,7 +499,7 @@ impl Scheduler {
 
     pub fn register_worker(&mut self, name: &str, capacity: u32, now: Instant) -> WorkerId {
         let id = self.next_worker;
-        self.next_worker += 1;
+        self.next_worker.0 += 1;
         self.workers.insert(
             id,
             Worker {
@@ -591,7 +598,7 @@ impl Scheduler {
     fn current(&self, lease: &Lease) -> Option<Slot> {
         let slot = *self.by_id.get(&*lease.job)?;
         let job = self.job(slot);
-        if job.state != JobState::Running {
+        if job.state != Dispatch::Running {
             return None;
         }
         let tile = job.tiles.get(lease.tile as usize)?;
@@ -605,37 +612,124 @@ impl Scheduler {
         }
     }
 
-    /// Marks the lease's tile done. `Stale` (and nothing changes) unless it is the tile's current
-    /// lease in a running job.
+    /// Accepts the lease's result: the tile is being committed, and no other result of it is
+    /// accepted meanwhile. `Stale` (and nothing changes) unless it is the tile's current lease
+    /// in a running job. The tile counts as done once [`Scheduler::committed`] is called.
     pub fn complete(&mut self, lease: &Lease, now: Instant) -> Completion {
         let Some(slot) = self.current(lease) else {
             return Completion::Stale;
         };
-        let job = self.jobs[slot as usize].as_mut().expect("current job is live");
-        let before = job.ready_key(slot);
-        let tile = &mut job.tiles[lease.tile as usize];
-        let TileState::Leased { deadline, .. } = tile.state else {
-            unreachable!("current lease is leased");
+        self.touch(lease.worker, now);
+        let before = self.job(slot).ready_key(slot);
+        self.revoke(slot, lease.tile);
+        let job = self.job_mut(slot);
+        job.committing += 1;
+        job.tiles[lease.tile as usize].state = TileState::Committing;
+        let after = job.ready_key(slot);
+        reindex(&mut self.ready, before, after);
+        if let Some(w) = self.workers.get_mut(&lease.worker) {
+            w.done += 1;
+        }
+        Completion::Accepted
+    }
+
+    /// Accepts a result whose lease a previous run of the coordinator granted (it cannot be
+    /// checked against this run's leases, only against the store's signature; see the
+    /// coordinator's `lease_ticket`): the tile is taken if it is neither done nor being
+    /// committed, revoking this run's lease of it, if any (that result would be the same bytes:
+    /// tiles are deterministic). `Stale` otherwise, or when the job is not running.
+    pub fn complete_inherited(&mut self, job: &str, tile: u32) -> Completion {
+        let Some(&slot) = self.by_id.get(job) else {
+            return Completion::Stale;
         };
-        tile.state = TileState::Done;
-        job.done += 1;
-        job.leased -= 1;
+        let entry = self.job(slot);
+        if entry.state != Dispatch::Running {
+            return Completion::Stale;
+        }
+        let before = entry.ready_key(slot);
+        match entry.tiles.get(tile as usize).map(|t| t.state) {
+            Some(TileState::Leased { .. }) => {
+                self.revoke(slot, tile);
+            }
+            Some(TileState::Queued) => {
+                let job = self.job_mut(slot);
+                job.requeue.remove(&tile);
+                job.queued -= 1;
+            }
+            _ => return Completion::Stale,
+        }
+        let job = self.job_mut(slot);
+        job.committing += 1;
+        job.tiles[tile as usize].state = TileState::Committing;
+        let after = job.ready_key(slot);
+        reindex(&mut self.ready, before, after);
+        Completion::Accepted
+    }
+
+    /// The accepted result of `tile` is durable: the tile is done. True when it was the job's
+    /// last tile (the job is then `Finished`). False, and nothing changes, when the tile is not
+    /// being committed (the job was cancelled or failed meanwhile).
+    pub fn committed(&mut self, job: &str, tile: u32) -> bool {
+        let Some(slot) = self.committing(job, tile) else {
+            return false;
+        };
         self.totals.done += 1;
+        let job = self.job_mut(slot);
+        job.tiles[tile as usize].state = TileState::Done;
+        job.committing -= 1;
+        job.done += 1;
         let finished = job.done == job.total;
         if finished {
-            job.state = JobState::Finished;
+            job.state = Dispatch::Finished;
             job.tiles = Vec::new();
             job.requeue = BTreeSet::new();
             job.worker_failures = FxMap::default();
         }
-        reindex(&mut self.ready, before, job.ready_key(slot));
-        self.lease_deadlines.remove(&(deadline, slot, lease.tile));
-        if let Some(w) = self.workers.get_mut(&lease.worker) {
-            w.leases.remove(&pack(slot, lease.tile));
-            w.done += 1;
+        finished
+    }
+
+    /// The accepted result of `tile` could not be stored: the tile goes back to the queue,
+    /// counting against nobody.
+    pub fn commit_failed(&mut self, job: &str, tile: u32) {
+        let Some(slot) = self.committing(job, tile) else {
+            return;
+        };
+        let job = self.job_mut(slot);
+        let before = job.ready_key(slot);
+        job.tiles[tile as usize].state = TileState::Queued;
+        job.committing -= 1;
+        job.queued += 1;
+        job.requeued += 1;
+        job.requeue.insert(tile);
+        let after = job.ready_key(slot);
+        self.totals.requeued += 1;
+        reindex(&mut self.ready, before, after);
+    }
+
+    /// The slot of a running job whose `tile` is being committed.
+    fn committing(&self, job: &str, tile: u32) -> Option<Slot> {
+        let slot = *self.by_id.get(job)?;
+        let entry = self.job(slot);
+        let state = entry.tiles.get(tile as usize)?.state;
+        (entry.state == Dispatch::Running && state == TileState::Committing).then_some(slot)
+    }
+
+    /// Ends the current lease of a leased tile (its deadline and its holder's record of it),
+    /// leaving the tile's state and the job's place in the ready set to the caller, which
+    /// takes the job's ready key before and reindexes after. The revoked lease.
+    fn revoke(&mut self, slot: Slot, tile: u32) -> Lease {
+        let job = self.jobs[slot as usize].as_mut().expect("leased job is live");
+        let entry = &mut job.tiles[tile as usize];
+        let TileState::Leased { worker, deadline } = entry.state else {
+            unreachable!("only leased tiles are revoked");
+        };
+        let attempt = entry.attempt;
+        job.leased -= 1;
+        self.lease_deadlines.remove(&(deadline, slot, tile));
+        if let Some(w) = self.workers.get_mut(&worker) {
+            w.leases.remove(&pack(slot, tile));
         }
-        self.touch(lease.worker, now);
-        Completion::Accepted { job_finished: finished }
+        Lease { job: job.id.clone(), tile, attempt, worker }
     }
 
     /// Reports that the worker could not render the tile. The tile is requeued and counted
@@ -660,7 +754,7 @@ impl Scheduler {
         let distinct = failed_on.len() as u32;
         if max_tile_failures != 0 && distinct >= max_tile_failures {
             let reason = format!("tile {} failed on {distinct} workers: {reason}", lease.tile);
-            self.abort_job(slot, JobState::Failed(reason.clone()));
+            self.abort_job(slot, Dispatch::Failed(reason.clone()));
             return Failure::JobFailed { reason };
         }
         Failure::Requeued
@@ -680,30 +774,22 @@ impl Scheduler {
     /// Takes the current lease of a tile away and puts the tile at the head of its job's queue.
     /// Returns the revoked lease.
     fn requeue(&mut self, slot: Slot, tile: u32) -> Lease {
-        let job = self.jobs[slot as usize].as_mut().expect("leased job is live");
-        let before = job.ready_key(slot);
-        let entry = &mut job.tiles[tile as usize];
-        let TileState::Leased { worker, deadline } = entry.state else {
-            unreachable!("only leased tiles are requeued");
-        };
-        entry.state = TileState::Queued;
-        let attempt = entry.attempt;
+        let before = self.job(slot).ready_key(slot);
+        let lease = self.revoke(slot, tile);
+        let job = self.job_mut(slot);
+        job.tiles[tile as usize].state = TileState::Queued;
         job.requeue.insert(tile);
-        job.leased -= 1;
         job.queued += 1;
         job.requeued += 1;
+        let after = job.ready_key(slot);
         self.totals.requeued += 1;
-        reindex(&mut self.ready, before, job.ready_key(slot));
-        self.lease_deadlines.remove(&(deadline, slot, tile));
-        if let Some(w) = self.workers.get_mut(&worker) {
-            w.leases.remove(&pack(slot, tile));
-        }
-        Lease { job: job.id.clone(), tile, attempt, worker }
+        reindex(&mut self.ready, before, after);
+        lease
     }
 
     /// Ends a running job: drops its outstanding leases (making them stale), leaves every
     /// unfinished tile counted as queued, and frees the tile table. O(tiles), once per job.
-    fn abort_job(&mut self, slot: Slot, state: JobState) {
+    fn abort_job(&mut self, slot: Slot, state: Dispatch) {
         let job = self.jobs[slot as usize].as_mut().expect("aborted job is live");
         if let Some(key) = job.ready_key(slot) {
             self.ready.remove(&key);
@@ -718,6 +804,7 @@ impl Scheduler {
             }
         }
         job.leased = 0;
+        job.committing = 0;
         job.queued = job.total - job.done;
         job.tiles = Vec::new();
         job.requeue = BTreeSet::new();
@@ -751,8 +838,8 @@ impl Scheduler {
     /// stale. False if the job is unknown or not running.
     pub fn cancel(&mut self, job: &str) -> bool {
         match self.by_id.get(job) {
-            Some(&slot) if self.job(slot).state == JobState::Running => {
-                self.abort_job(slot, JobState::Cancelled);
+            Some(&slot) if self.job(slot).state == Dispatch::Running => {
+                self.abort_job(slot, Dispatch::Cancelled);
                 true
             }
             _ => false,
@@ -765,8 +852,8 @@ impl Scheduler {
         let Some(&slot) = self.by_id.get(job) else {
             return;
         };
-        if self.job(slot).state == JobState::Running {
-            self.abort_job(slot, JobState::Cancelled);
+        if self.job(slot).state == Dispatch::Running {
+            self.abort_job(slot, Dispatch::Cancelled);
         }
         self.by_id.remove(job);
         self.jobs[slot as usize] = None;
@@ -849,7 +936,13 @@ mod tests {
     }
 
     fn add(s: &mut Scheduler, id: &str, priority: i32, tiles: u32, now: Instant) {
-        s.add_job(id.to_owned(), priority, tiles, &[], now).unwrap();
+        s.add_job(id.into(), priority, tiles, &[], now).unwrap();
+    }
+
+    /// Completes and commits a lease; true when it finished its job.
+    fn finish(s: &mut Scheduler, l: &Lease, now: Instant) -> bool {
+        assert_eq!(s.complete(l, now), Completion::Accepted, "{l:?}");
+        s.committed(&l.job, l.tile)
     }
 
     fn tiles_of(leases: &[Lease]) -> Vec<(String, u32)> {
@@ -862,7 +955,7 @@ mod tests {
         add(&mut s, "a", 0, 10, t0);
         let w1 = s.register_worker("w1", 4, t0);
         let w2 = s.register_worker("w2", 4, t0);
-        assert_eq!((w1, w2), (1, 2));
+        assert_eq!((w1, w2), (WorkerId(1), WorkerId(2)));
         let mut seen = HashSet::new();
         let mut finished = 0;
         let mut completions = 0;
@@ -878,7 +971,7 @@ mod tests {
             }
             for l in &batch {
                 completions += 1;
-                if s.complete(l, t0) == (Completion::Accepted { job_finished: true }) {
+                if finish(&mut s, l, t0) {
                     finished += 1;
                     assert_eq!(completions, 10);
                 }
@@ -888,7 +981,7 @@ mod tests {
         assert_eq!(finished, 1);
         let p = s.progress("a").unwrap();
         assert_eq!((p.done, p.leased, p.queued, p.requeued), (10, 0, 0, 0));
-        assert_eq!(p.state, JobState::Finished);
+        assert_eq!(p.state, Dispatch::Finished);
         assert_eq!(s.pending_tiles(), 0);
         let done: u64 = s.workers().iter().map(|w| w.done).sum();
         assert_eq!(done, 10);
@@ -904,7 +997,7 @@ mod tests {
         let first = s.lease(w1, 2, t0);
         let second = s.lease(w2, 1, t0);
         assert_eq!(s.gauges(), Gauges { queued: 2, leased: 3, workers: 2 });
-        s.complete(&first[0], t0);
+        finish(&mut s, &first[0], t0);
         // Past the lease timeout: w1's other lease and w2's lease expire, and w1, silent since
         // the start, is dropped; w2 heartbeats just before.
         let later = t0 + s.config().lease_timeout.max(s.config().heartbeat_timeout) + secs(1);
@@ -963,7 +1056,8 @@ mod tests {
         let new = s.lease(w, 1, t0 + secs(30)).remove(0);
         assert_eq!((new.tile, new.attempt), (0, 2));
         assert_eq!(s.complete(&old, t0 + secs(31)), Completion::Stale);
-        assert_eq!(s.complete(&new, t0 + secs(31)), Completion::Accepted { job_finished: false });
+        assert_eq!(s.complete(&new, t0 + secs(31)), Completion::Accepted);
+        assert!(!s.committed(&new.job, new.tile));
         assert_eq!(s.progress("a").unwrap().done, 1);
     }
 
@@ -991,13 +1085,13 @@ mod tests {
         add(&mut s, "a", 0, 2, t0);
         let w = s.register_worker("w", 1, t0);
         let l = s.lease(w, 1, t0).remove(0);
-        assert_eq!(s.complete(&l, t0), Completion::Accepted { job_finished: false });
+        assert!(!finish(&mut s, &l, t0));
         assert_eq!(s.complete(&l, t0), Completion::Stale);
         assert_eq!(s.progress("a").unwrap().done, 1);
         assert_eq!(s.workers()[0].done, 1);
         // Someone else's lease, or an unknown job, is stale too.
         let l2 = s.lease(w, 1, t0).remove(0);
-        let forged = Lease { worker: 99, ..l2.clone() };
+        let forged = Lease { worker: WorkerId(99), ..l2.clone() };
         assert_eq!(s.complete(&forged, t0), Completion::Stale);
         let unknown = Lease { job: "zz".into(), ..l2 };
         assert_eq!(s.complete(&unknown, t0), Completion::Stale);
@@ -1031,7 +1125,7 @@ mod tests {
         let reason = "tile 0 failed on 3 workers: meh".to_owned();
         assert_eq!(s.fail(&other[0], "meh", t0), Failure::JobFailed { reason: reason.clone() });
         let p = s.progress("a").unwrap();
-        assert_eq!(p.state, JobState::Failed(reason));
+        assert_eq!(p.state, Dispatch::Failed(reason));
         assert_eq!(s.complete(&other[1], t0), Completion::Stale);
         assert!(s.lease(w3, 1, t0).is_empty());
         assert_eq!(s.pending_tiles(), 0);
@@ -1079,7 +1173,7 @@ mod tests {
         // Only a has queued tiles now: w1 gets nothing, and a keeps waiting, not failed.
         assert!(s.lease(w1, 2, t0).is_empty());
         let p = s.progress("a").unwrap();
-        assert_eq!((p.state, p.queued, p.leased), (JobState::Running, 8, 2));
+        assert_eq!((p.state, p.queued, p.leased), (Dispatch::Running, 8, 2));
         assert_eq!(s.pending_tiles(), 8);
     }
 
@@ -1099,7 +1193,7 @@ mod tests {
         assert_eq!(s.pending_tiles(), 0);
         assert_eq!(s.workers()[0].leases, 0);
         let p = s.progress("a").unwrap();
-        assert_eq!((p.state, p.done, p.leased, p.queued), (JobState::Cancelled, 0, 0, 5));
+        assert_eq!((p.state, p.done, p.leased, p.queued), (Dispatch::Cancelled, 0, 0, 5));
         // No lease deadline is left behind; only the worker's heartbeat.
         assert_eq!(s.next_deadline(), Some(t0 + secs(15)));
         s.remove_job("a");
@@ -1119,10 +1213,10 @@ mod tests {
         let w = s.register_worker("w", 8, t0);
         let ls = s.lease(w, 8, t0);
         assert_eq!(ls.iter().map(|l| l.tile).collect::<Vec<_>>(), [1, 3]);
-        assert_eq!(s.complete(&ls[0], t0), Completion::Accepted { job_finished: false });
-        assert_eq!(s.complete(&ls[1], t0), Completion::Accepted { job_finished: true });
+        assert!(!finish(&mut s, &ls[0], t0));
+        assert!(finish(&mut s, &ls[1], t0));
         s.add_job("b".into(), 0, 2, &[1, 0], t0).unwrap();
-        assert_eq!(s.progress("b").unwrap().state, JobState::Finished);
+        assert_eq!(s.progress("b").unwrap().state, Dispatch::Finished);
         assert_eq!(
             s.add_job("c".into(), 0, 2, &[2], t0),
             Err(AddJobError::TileOutOfRange { tile: 2, tiles: 2 })
@@ -1148,7 +1242,7 @@ mod tests {
         assert!(s.give_back(&again[1], t0));
         assert_eq!(s.lease(w, 1, t0)[0].tile, 1);
         assert_eq!(s.workers()[0].failed, 0);
-        assert_eq!(s.progress("a").unwrap().state, JobState::Running);
+        assert_eq!(s.progress("a").unwrap().state, Dispatch::Running);
     }
 
     #[test]
@@ -1187,6 +1281,90 @@ mod tests {
             again.iter().map(|l| (l.tile, l.attempt)).collect::<Vec<_>>(),
             [(0, 2), (1, 2), (2, 1), (3, 1)]
         );
-        assert_eq!(s.register_worker("w3", 1, t0), 3);
+        assert_eq!(s.register_worker("w3", 1, t0), WorkerId(3));
+    }
+
+    /// Between acceptance and the store's commit a tile takes no other result, expires with no
+    /// lease and is not re-leased; it is done only once committed.
+    #[test]
+    fn an_accepted_tile_is_done_only_once_committed() {
+        let (mut s, t0) = setup();
+        add(&mut s, "a", 0, 2, t0);
+        let w1 = s.register_worker("w1", 2, t0);
+        let w2 = s.register_worker("w2", 2, t0);
+        let l = s.lease(w1, 1, t0).remove(0);
+        assert_eq!(s.complete(&l, t0), Completion::Accepted);
+        assert_eq!(s.complete(&l, t0), Completion::Stale);
+        assert_eq!(s.complete_inherited("a", l.tile), Completion::Stale);
+        let p = s.progress("a").unwrap();
+        assert_eq!((p.done, p.leased, p.queued), (0, 0, 1));
+        // Past every timeout: nothing of the committing tile expires, and only tile 1 is leased.
+        let later = t0 + secs(100);
+        s.heartbeat(w2, later);
+        assert!(s.expire(later).is_empty());
+        assert_eq!(tiles_of(&s.lease(w2, 2, later)), vec![("a".into(), 1)]);
+        assert!(!s.committed("a", l.tile));
+        assert!(!s.committed("a", l.tile), "committed twice");
+        assert_eq!(s.progress("a").unwrap().done, 1);
+    }
+
+    /// A commit that fails puts the tile back at the head of the queue, against nobody.
+    #[test]
+    fn a_failed_commit_requeues_the_tile() {
+        let (mut s, t0) = setup();
+        add(&mut s, "a", 0, 3, t0);
+        let w = s.register_worker("w", 3, t0);
+        let ls = s.lease(w, 2, t0);
+        assert_eq!(s.complete(&ls[1], t0), Completion::Accepted);
+        s.commit_failed("a", 1);
+        let p = s.progress("a").unwrap();
+        assert_eq!((p.done, p.leased, p.queued, p.requeued), (0, 1, 2, 1));
+        let again = s.lease(w, 1, t0).remove(0);
+        assert_eq!((again.tile, again.attempt), (1, 2));
+        assert_eq!(s.workers()[0].failed, 0);
+        assert!(!finish(&mut s, &again, t0));
+    }
+
+    /// A job cancelled while a tile commits: the commit's end changes nothing.
+    #[test]
+    fn a_commit_ending_after_a_cancel_changes_nothing() {
+        let (mut s, t0) = setup();
+        add(&mut s, "a", 0, 1, t0);
+        let w = s.register_worker("w", 1, t0);
+        let l = s.lease(w, 1, t0).remove(0);
+        assert_eq!(s.complete(&l, t0), Completion::Accepted);
+        assert!(s.cancel("a"));
+        assert!(!s.committed("a", 0));
+        s.commit_failed("a", 0);
+        let p = s.progress("a").unwrap();
+        assert_eq!((p.state, p.done), (Dispatch::Cancelled, 0));
+        assert_eq!(s.pending_tiles(), 0);
+    }
+
+    /// A result of a lease from a previous run of the coordinator takes a tile that is queued or
+    /// leased in this run (revoking that lease), never one done or committing.
+    #[test]
+    fn an_inherited_result_takes_a_tile_not_yet_done() {
+        let (mut s, t0) = setup();
+        s.add_job("a".into(), 0, 4, &[3], t0).unwrap();
+        let w = s.register_worker("w", 4, t0);
+        let leased = s.lease(w, 1, t0).remove(0);
+        assert_eq!(leased.tile, 0);
+        // Tile 0 is leased in this run, tile 1 queued, tile 3 done at resume.
+        assert_eq!(s.complete_inherited("a", 0), Completion::Accepted);
+        assert_eq!(s.complete(&leased, t0), Completion::Stale, "the revoked lease");
+        assert_eq!(s.complete_inherited("a", 1), Completion::Accepted);
+        assert_eq!(s.complete_inherited("a", 1), Completion::Stale);
+        assert_eq!(s.complete_inherited("a", 3), Completion::Stale);
+        assert_eq!(s.complete_inherited("a", 9), Completion::Stale);
+        assert_eq!(s.complete_inherited("zz", 0), Completion::Stale);
+        let p = s.progress("a").unwrap();
+        assert_eq!((p.done, p.leased, p.queued), (1, 0, 1));
+        assert_eq!(s.workers()[0].leases, 0);
+        assert_eq!(tiles_of(&s.lease(w, 4, t0)), vec![("a".into(), 2)]);
+        assert!(!s.committed("a", 0));
+        assert!(!s.committed("a", 1));
+        let last = Lease { job: "a".into(), tile: 2, attempt: 1, worker: w };
+        assert!(finish(&mut s, &last, t0));
     }
 }

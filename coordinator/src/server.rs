@@ -2,14 +2,15 @@
 //! asked to stop.
 
 use crate::auth::{Role, Tokens};
+use crate::farm::{Config, Farm};
+use crate::grpc::{RenderService, WorkService};
 use crate::scheduler;
-use crate::service::{Config, RenderService, Shared, WorkService};
 use anyhow::{Context, Result, bail};
 use restauro_ops::signal::stop_signal;
 use restauro_ops::token::read_token;
 use restauro_proto::pb::render_server::RenderServer;
 use restauro_proto::pb::work_server::WorkServer;
-use restauro_scene::load::Limits;
+use restauro_scene::limits::{LimitArgs, Limits};
 use std::io::Write as _;
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
@@ -45,12 +46,16 @@ pub struct CoordinatorArgs {
     /// Unfinished jobs accepted at once.
     #[arg(long, default_value_t = 64)]
     pub max_jobs: usize,
+    /// Uploads in progress at once, in MiB: an upload waits for room, and is refused after a
+    /// minute without.
+    #[arg(long, default_value_t = 1024)]
+    pub max_upload_mb: u64,
+    /// What a job's scene and render may ask (sent to the workers with each job).
+    #[command(flatten)]
+    pub limits: LimitArgs,
     /// Skip the Retinex stage (and its files).
     #[arg(long)]
     pub no_retinex: bool,
-    /// The largest image accepted, in pixels.
-    #[arg(long, default_value_t = Limits::default().max_pixels)]
-    pub max_pixels: u64,
     /// Serve TLS with this certificate chain (PEM; needs --tls-key; else RESTAURO_TLS_CERT).
     #[arg(long, env = "RESTAURO_TLS_CERT", requires = "tls_key")]
     pub tls_cert: Option<PathBuf>,
@@ -109,8 +114,9 @@ pub fn run(args: &CoordinatorArgs) -> Result<()> {
     let config = Config {
         data_dir: args.data.clone(),
         tokens: Tokens::new(&client, &worker),
-        limits: Limits { max_pixels: args.max_pixels, ..Limits::default() },
+        limits: Limits::from(&args.limits),
         max_jobs: args.max_jobs.max(1),
+        max_upload_bytes: args.max_upload_mb.max(1).saturating_mul(1 << 20),
         scheduler: scheduler::Config {
             lease_timeout: seconds(args.lease_timeout_s, "--lease-timeout-s")?,
             heartbeat_timeout: seconds(args.heartbeat_timeout_s, "--heartbeat-timeout-s")?,
@@ -174,14 +180,14 @@ pub async fn serve(
     }
     let tokens = config.tokens.clone();
     let data = config.data_dir.clone();
-    let shared = tokio::task::spawn_blocking(move || Shared::open(config)).await??;
+    let farm = tokio::task::spawn_blocking(move || Farm::open(config)).await??;
     let listener =
         TcpListener::bind(listen).await.with_context(|| format!("listening on {listen}"))?;
     let addr = listener.local_addr()?;
     info!(%addr, data = %data.display(), tls = has_tls, "coordinator listening");
     let metrics = match endpoints.metrics {
         Some(at) => {
-            let probe: std::sync::Arc<dyn restauro_ops::endpoint::Probe> = shared.clone();
+            let probe: std::sync::Arc<dyn restauro_ops::endpoint::Probe> = farm.clone();
             Some(restauro_ops::endpoint::serve(at, probe, stopped(stop_rx.clone())).await?)
         }
         None => None,
@@ -195,23 +201,13 @@ pub async fn serve(
         }
         out.flush()?;
     }
-    let timer = {
-        let shared = shared.clone();
-        tokio::spawn(async move {
-            let mut tick = tokio::time::interval(Duration::from_millis(200));
-            loop {
-                tick.tick().await;
-                shared.expire();
-            }
-        })
-    };
+    let timer = tokio::spawn(farm.clone().run_timer());
     let render = InterceptedService::new(
-        RenderServer::new(RenderService(shared.clone()))
-            .max_decoding_message_size(MAX_MESSAGE_BYTES),
+        RenderServer::new(RenderService(farm.clone())).max_decoding_message_size(MAX_MESSAGE_BYTES),
         tokens.interceptor(Role::Client),
     );
     let work = InterceptedService::new(
-        WorkServer::new(WorkService(shared)).max_decoding_message_size(MAX_MESSAGE_BYTES),
+        WorkServer::new(WorkService(farm)).max_decoding_message_size(MAX_MESSAGE_BYTES),
         tokens.interceptor(Role::Worker),
     );
     // The standard gRPC health service, without a token (probes carry none), and reflection,

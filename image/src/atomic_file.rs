@@ -31,6 +31,27 @@ pub fn write_with(
     result
 }
 
+/// Removes the temporary files an interrupted [`write_with`] left in `dir` (a process killed
+/// between creating its temporary file and renaming it); the number removed.
+pub fn remove_leftovers(dir: &Path) -> io::Result<usize> {
+    let mut removed = 0;
+    for entry in std::fs::read_dir(dir)? {
+        let entry = entry?;
+        let name = entry.file_name();
+        let name = name.to_string_lossy();
+        let leftover = name.starts_with('.')
+            && name
+                .strip_suffix(".tmp")
+                .and_then(|n| n.rsplit_once('.'))
+                .is_some_and(|(_, pid)| !pid.is_empty() && pid.bytes().all(|b| b.is_ascii_digit()));
+        if leftover && entry.file_type()?.is_file() {
+            std::fs::remove_file(entry.path())?;
+            removed += 1;
+        }
+    }
+    Ok(removed)
+}
+
 /// Write `bytes` to `path` whole or not at all.
 pub fn write(path: &Path, bytes: &[u8]) -> io::Result<()> {
     write_with(path, |w| w.write_all(bytes))
@@ -70,5 +91,23 @@ mod tests {
         assert_eq!(std::fs::read(&path).unwrap(), b"old");
         assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn leftovers_of_an_interrupted_write_are_removed_and_nothing_else() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        super::write(&d.join("a.exr"), b"whole").unwrap();
+        std::fs::write(d.join(".a.exr.4242.tmp"), b"half").unwrap();
+        std::fs::write(d.join(".b.png.7.tmp"), b"half").unwrap();
+        std::fs::write(d.join(".hidden.tmp"), b"mine").unwrap();
+        std::fs::write(d.join("c.tmp"), b"mine").unwrap();
+        assert_eq!(super::remove_leftovers(d).unwrap(), 2);
+        let mut left: Vec<String> = std::fs::read_dir(d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        left.sort();
+        assert_eq!(left, [".hidden.tmp", "a.exr", "c.tmp"]);
     }
 }

@@ -4,6 +4,10 @@
 //! within the tile), then, when the scene has a sky, each pixel's sky coverage (the fraction of
 //! its camera samples that saw the sky), then, when the job keeps spectra, the 81 bands of every
 //! pixel. The first two make the tile's image part, the last its spectral part.
+//!
+//! Every value must be a radiometric quantity a tracer can produce: finite and not negative
+//! (X, Y, Z and spectral radiance), and a coverage between 0 and 1. [`check_tile`] refuses
+//! anything else, so a broken or hostile worker cannot put NaN or ∞ into an image.
 
 use restauro_scene::plan::Rect;
 use restauro_spectral::grid::BANDS;
@@ -22,6 +26,52 @@ pub struct TileDataError {
 pub fn tile_sizes(rect: &Rect, spectral: bool, sky: bool) -> (usize, usize) {
     let pixels = rect.width as usize * rect.height as usize;
     (pixels * (3 + usize::from(sky)) * 4, if spectral { pixels * BANDS * 4 } else { 0 })
+}
+
+/// Checks a tile's wire bytes: the size its rectangle and layout give, and every value in range.
+pub fn check_tile(
+    index: u32,
+    rect: &Rect,
+    spectral: bool,
+    sky: bool,
+    data: &[u8],
+) -> Result<(), TileDataError> {
+    let refuse = |problem: String| TileDataError {
+        tile: index,
+        width: rect.width,
+        height: rect.height,
+        problem,
+    };
+    let (image_bytes, spectral_bytes) = tile_sizes(rect, spectral, sky);
+    if data.len() != image_bytes + spectral_bytes {
+        return Err(refuse(format!(
+            "{} bytes of pixel data, expected {}",
+            data.len(),
+            image_bytes + spectral_bytes
+        )));
+    }
+    let xyz_bytes = rect.width as usize * rect.height as usize * 12;
+    let value =
+        |at: usize| f32::from_le_bytes([data[at], data[at + 1], data[at + 2], data[at + 3]]);
+    let part = |at: usize| match at {
+        a if a < xyz_bytes => ("XYZ", a / 12),
+        a if a < image_bytes => ("sky coverage", (a - xyz_bytes) / 4),
+        a => ("spectral radiance", (a - image_bytes) / (BANDS * 4)),
+    };
+    for at in (0..data.len()).step_by(4) {
+        let v = value(at);
+        let in_range = if (xyz_bytes..image_bytes).contains(&at) {
+            (0.0..=1.0).contains(&v)
+        } else {
+            v.is_finite() && v >= 0.0
+        };
+        if !in_range {
+            let (what, pixel) = part(at);
+            let expected = if what == "sky coverage" { "0 to 1" } else { "finite and ≥ 0" };
+            return Err(refuse(format!("pixel {pixel} has {what} {v}, which must be {expected}")));
+        }
+    }
+    Ok(())
 }
 
 /// Absolute XYZ (Y in cd/m²) of every pixel, and the spectral radiance band by band when kept.
@@ -49,20 +99,8 @@ impl Framebuffer {
 
     /// Places tile `index` at `rect` from its wire bytes, refusing data of the wrong size.
     pub fn place(&mut self, index: u32, rect: &Rect, data: &[u8]) -> Result<(), TileDataError> {
-        let (xyz_bytes, spectral_bytes) =
-            tile_sizes(rect, self.spectral.is_some(), self.sky.is_some());
-        if data.len() != xyz_bytes + spectral_bytes {
-            return Err(TileDataError {
-                tile: index,
-                width: rect.width,
-                height: rect.height,
-                problem: format!(
-                    "{} bytes of pixel data, expected {}",
-                    data.len(),
-                    xyz_bytes + spectral_bytes
-                ),
-            });
-        }
+        let (xyz_bytes, _) = tile_sizes(rect, self.spectral.is_some(), self.sky.is_some());
+        check_tile(index, rect, self.spectral.is_some(), self.sky.is_some(), data)?;
         if rect.x + rect.width > self.width || rect.y + rect.height > self.height {
             return Err(TileDataError {
                 tile: index,
@@ -147,5 +185,32 @@ mod tests {
         assert!(err.to_string().contains("expected"), "{err}");
         let outside = Rect { x: 4, y: 1, width: 2, height: 3 };
         assert!(fb.place(8, &outside, &data).is_err());
+    }
+
+    /// NaN, ∞ and negative radiance, and a coverage outside 0–1, are refused wherever they sit.
+    #[test]
+    fn values_a_tracer_cannot_produce_are_refused() {
+        let rect = Rect { x: 0, y: 0, width: 2, height: 2 };
+        let xyz = vec![[1.0f32, 2.0, 3.0]; 4];
+        let sky = vec![0.5f32; 4];
+        let spectra = vec![vec![0.25f32; BANDS]; 4];
+        let good = encode_tile(&xyz, Some(&sky), Some(spectra.iter().map(Vec::as_slice)));
+        check_tile(0, &rect, true, true, &good).unwrap();
+        let image_bytes = 4 * 16;
+        for (at, bad, what) in [
+            (4, f32::NAN, "XYZ"),
+            (40, f32::INFINITY, "XYZ"),
+            (0, -1.0, "XYZ"),
+            (48 + 4, 1.5, "sky coverage"),
+            (image_bytes + 81 * 4 * 3 + 8, f32::NAN, "spectral radiance"),
+            (image_bytes, -0.5, "spectral radiance"),
+        ] {
+            let mut data = good.clone();
+            data[at..at + 4].copy_from_slice(&bad.to_le_bytes());
+            let e = check_tile(3, &rect, true, true, &data).unwrap_err().to_string();
+            assert!(e.contains(what) && e.starts_with("tile 3"), "{e}");
+        }
+        let e = check_tile(3, &rect, true, true, &good[..good.len() - 4]).unwrap_err();
+        assert!(e.to_string().contains("expected"), "{e}");
     }
 }

@@ -40,32 +40,6 @@ pub struct Written {
     pub retinex_s: f64,
 }
 
-/// Parses an exposure: `auto`, `auto:<key>`, `absolute:<cd/m²>` or `relative`.
-pub fn parse_exposure(text: &str) -> Result<Exposure, String> {
-    let lower = text.to_ascii_lowercase();
-    let number = |s: &str, what: &str| -> Result<f64, String> {
-        match s.parse::<f64>() {
-            Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
-            _ => Err(format!("exposure `{text}`: {what} must be a number > 0")),
-        }
-    };
-    match lower.as_str() {
-        "auto" | "" => Ok(Exposure::Automatic { key: 0.18 }),
-        "relative" => Ok(Exposure::Relative),
-        _ => {
-            if let Some(k) = lower.strip_prefix("auto:") {
-                Ok(Exposure::Automatic { key: number(k, "the key")? })
-            } else if let Some(l) = lower.strip_prefix("absolute:") {
-                Ok(Exposure::Absolute { white_cd_m2: number(l, "the white luminance (cd/m²)")? })
-            } else {
-                Err(format!(
-                    "exposure `{text}`: use auto, auto:<key>, absolute:<cd/m²> or relative"
-                ))
-            }
-        }
-    }
-}
-
 fn write_display_png(
     path: &Path,
     image: &XyzImage,

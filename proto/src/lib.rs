@@ -1,8 +1,10 @@
 //! restauro's wire types: `proto/restauro.proto` — the client-facing `Render` service and the
-//! worker-facing `Work` service — and the code tonic/prost generate from it, nothing else.
+//! worker-facing `Work` service — the code tonic/prost generate from it, and the one conversion
+//! of each wire type to its domain type and back ([`convert`]): a wire value is checked once, at
+//! the edge, and only domain types travel further.
 
 /// The protocol version spoken by this build. A worker or client of another version is refused.
-pub const PROTOCOL_VERSION: u32 = 1;
+pub const PROTOCOL_VERSION: u32 = 2;
 
 /// The metadata key that carries the caller's protocol version on every call.
 pub const PROTOCOL_HEADER: &str = "x-restauro-protocol";
@@ -22,6 +24,7 @@ pub use pb::*;
 pub const FILE_DESCRIPTOR_SET: &[u8] =
     include_bytes!(concat!(env!("OUT_DIR"), "/restauro_descriptor.bin"));
 
+pub mod convert;
 pub mod transport;
 
 /// Adds the protocol version and a bearer token to every outgoing request (clients and workers).

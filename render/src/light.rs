@@ -127,6 +127,20 @@ impl Distribution {
 }
 
 impl Light {
+    /// The memory the light holds, in bytes (its measured distribution's table included).
+    pub fn memory_bytes(&self) -> usize {
+        let table = match self {
+            Light::Point {
+                distribution: Distribution::Photometric { photometry: p, .. }, ..
+            } => {
+                (p.gamma_deg.len() + p.c_deg.len() + p.candela.iter().map(Vec::len).sum::<usize>())
+                    * std::mem::size_of::<f64>()
+            }
+            _ => 0,
+        };
+        std::mem::size_of::<Self>() + table
+    }
+
     #[inline]
     pub fn incident(&self, p: Vec3A) -> Option<Incident<'_>> {
         match self {

@@ -167,6 +167,21 @@ impl PreparedScene {
         self.triangles.len()
     }
 
+    /// The memory the prepared scene holds, in bytes (the BVH, the triangles and their
+    /// attributes, materials and lights; a luminaire's measured distribution is counted by its
+    /// share of the table), for a worker's bound on the scenes it keeps.
+    pub fn memory_bytes(&self) -> usize {
+        use std::mem::size_of;
+        size_of::<Self>()
+            + self.bvh.nodes.len() * size_of::<obvhs::cwbvh::node::CwBvhNode>()
+            + self.bvh.primitive_indices.len() * size_of::<u32>()
+            + self.triangles.len() * size_of::<RtTriangle>()
+            + self.normals.len() * size_of::<Vec3A>()
+            + self.material_of.len() * size_of::<u32>()
+            + self.materials.len() * size_of::<Bsdf>()
+            + self.lights.iter().map(Light::memory_bytes).sum::<usize>()
+    }
+
     /// The closest hit along the ray within (tmin, tmax).
     #[inline]
     pub fn intersect(&self, origin: Vec3A, direction: Vec3A, tmax: f32) -> Option<Hit> {

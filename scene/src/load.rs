@@ -20,27 +20,7 @@ use restauro_spectral::{Illuminant, Spectrum, library};
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
-/// What a scene may ask of the machine. Each refusal says which limit and how to raise it.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Limits {
-    pub max_pixels: u64,
-    pub max_triangles: u64,
-    pub max_samples_per_pixel: u32,
-    pub max_depth: u32,
-    pub max_file_bytes: u64,
-}
-
-impl Default for Limits {
-    fn default() -> Self {
-        Self {
-            max_pixels: 16_384 * 16_384,
-            max_triangles: 50_000_000,
-            max_samples_per_pixel: 65_536,
-            max_depth: 64,
-            max_file_bytes: 2 << 30,
-        }
-    }
-}
+pub use crate::limits::Limits;
 
 /// The camera in world coordinates.
 #[derive(Clone, Debug, PartialEq)]

@@ -6,10 +6,11 @@
 use crate::error::{Result, SceneError};
 use crate::load::{Limits, LoadedScene};
 use crate::scene_file::Integrator;
+use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 /// A rectangle of pixels, from the top-left corner of the image.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Rect {
     pub x: u32,
     pub y: u32,
@@ -18,7 +19,7 @@ pub struct Rect {
 }
 
 /// What a render may change of the scene's own settings; `None` keeps the scene's.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct RenderOptions {
     pub variant: Option<String>,
     pub integrator: Option<Integrator>,
@@ -32,7 +33,7 @@ pub struct RenderOptions {
 }
 
 /// The resolved render.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Plan {
     pub width: u32,
     pub height: u32,
@@ -46,9 +47,8 @@ pub struct Plan {
     /// of its camera samples that saw the sky), so the Retinex can keep the sky from becoming
     /// the white.
     pub sky: bool,
+    /// The tile edge in pixels; the tiles follow from it and the image size ([`Plan::tile`]).
     pub tile: u32,
-    /// The tiles in row-major order; a tile's index is its place here.
-    pub tiles: Vec<Rect>,
 }
 
 /// A tile edge that gives an image of `width × height` about 48 tiles or more (so each of
@@ -62,7 +62,8 @@ pub fn auto_tile(width: u32, height: u32) -> u32 {
 /// How many tiles of edge `tile` cover `width × height`.
 pub fn tile_count(width: u32, height: u32, tile: u32) -> u32 {
     let tile = tile.max(1);
-    width.div_ceil(tile) * height.div_ceil(tile)
+    let count = u64::from(width.div_ceil(tile)) * u64::from(height.div_ceil(tile));
+    u32::try_from(count).unwrap_or(u32::MAX)
 }
 
 /// Tile `index` of `tiles(width, height, tile)`, computed directly.
@@ -100,13 +101,48 @@ impl Plan {
         limits: &Limits,
         path: &Path,
     ) -> Result<Plan> {
-        let invalid = |place: &str, problem: String| SceneError::Invalid {
-            path: path.to_owned(),
-            place: place.to_owned(),
-            problem,
-        };
+        if let Some(v) = &options.variant
+            && !scene.file.variants.contains_key(v)
+        {
+            let known: Vec<&str> = scene.file.variants.keys().map(String::as_str).collect();
+            let known = if known.is_empty() { "none".to_owned() } else { known.join(", ") };
+            return Err(SceneError::invalid(
+                path,
+                "variant",
+                format!("unknown variant `{v}`; the scene defines {known}"),
+            ));
+        }
+        let render = &scene.file.render;
         let width = options.width.unwrap_or(scene.camera.width);
         let height = options.height.unwrap_or(scene.camera.height);
+        let plan = Plan {
+            width,
+            height,
+            variant: options.variant.clone(),
+            integrator: options.integrator.unwrap_or(render.integrator),
+            samples_per_pixel: options.samples_per_pixel.unwrap_or(render.samples_per_pixel),
+            max_depth: render.max_depth,
+            seed: render.seed,
+            spectral: options.spectral,
+            sky: scene.lights.iter().any(|l| matches!(l, crate::load::ResolvedLight::Sky { .. })),
+            tile: options.tile.unwrap_or_else(|| auto_tile(width, height)),
+        };
+        plan.check(limits, path)?;
+        Ok(plan)
+    }
+
+    /// Checks the plan against `limits`: what [`Plan::new`] refuses, and what a worker checks of
+    /// a plan it is sent.
+    pub fn check(&self, limits: &Limits, path: &Path) -> Result<()> {
+        let (width, height, tile) = (self.width, self.height, self.tile);
+        let invalid = |place: &str, problem: String| SceneError::invalid(path, place, problem);
+        let limit = |what: String, value: u64, limit: u64, fix: &str| SceneError::Limit {
+            path: path.to_owned(),
+            what,
+            value,
+            limit,
+            fix: fix.to_owned(),
+        };
         let pixels = u64::from(width) * u64::from(height);
         if width == 0 || height == 0 {
             return Err(invalid(
@@ -115,56 +151,65 @@ impl Plan {
             ));
         }
         if pixels > limits.max_pixels {
-            return Err(SceneError::Limit {
-                path: path.to_owned(),
-                what: format!("the image ({width}×{height})"),
-                value: pixels,
-                limit: limits.max_pixels,
-                fix: "render a smaller image, or raise the pixel limit (--max-pixels)".into(),
-            });
-        }
-        let render = &scene.file.render;
-        let samples_per_pixel = options.samples_per_pixel.unwrap_or(render.samples_per_pixel);
-        if samples_per_pixel == 0 {
-            return Err(invalid("samples_per_pixel", "0 samples per pixel; use at least 1".into()));
-        }
-        if samples_per_pixel > limits.max_samples_per_pixel {
-            return Err(SceneError::Limit {
-                path: path.to_owned(),
-                what: "samples_per_pixel".into(),
-                value: samples_per_pixel.into(),
-                limit: limits.max_samples_per_pixel.into(),
-                fix: "use fewer samples per pixel, or raise the limit (--max-spp)".into(),
-            });
-        }
-        if let Some(v) = &options.variant
-            && !scene.file.variants.contains_key(v)
-        {
-            let known: Vec<&str> = scene.file.variants.keys().map(String::as_str).collect();
-            let known = if known.is_empty() { "none".to_owned() } else { known.join(", ") };
-            return Err(invalid(
-                "variant",
-                format!("unknown variant `{v}`; the scene defines {known}"),
+            let fix = "render a smaller image, or raise the pixel limit (--max-pixels)";
+            return Err(limit(
+                format!("the image ({width}×{height})"),
+                pixels,
+                limits.max_pixels,
+                fix,
             ));
         }
-        let tile = match options.tile {
-            Some(0) => return Err(invalid("tile", "a tile of 0 pixels; use at least 1".into())),
-            Some(t) => t,
-            None => auto_tile(width, height),
-        };
-        Ok(Plan {
-            width,
-            height,
-            variant: options.variant.clone(),
-            integrator: options.integrator.unwrap_or(render.integrator),
-            samples_per_pixel,
-            max_depth: render.max_depth,
-            seed: render.seed,
-            spectral: options.spectral,
-            sky: scene.lights.iter().any(|l| matches!(l, crate::load::ResolvedLight::Sky { .. })),
-            tile,
-            tiles: tiles(width, height, tile),
-        })
+        if self.spectral && pixels > limits.max_spectral_pixels {
+            let fix = "render a smaller image with --spectral, or raise the limit \
+                       (--max-spectral-pixels)";
+            let what = format!("the spectral image ({width}×{height})");
+            return Err(limit(what, pixels, limits.max_spectral_pixels, fix));
+        }
+        if self.samples_per_pixel == 0 {
+            return Err(invalid("samples_per_pixel", "0 samples per pixel; use at least 1".into()));
+        }
+        if self.samples_per_pixel > limits.max_samples_per_pixel {
+            let fix = "use fewer samples per pixel, or raise the limit (--max-spp)";
+            let (value, max) = (self.samples_per_pixel.into(), limits.max_samples_per_pixel.into());
+            return Err(limit("samples_per_pixel".into(), value, max, fix));
+        }
+        if self.max_depth > limits.max_depth {
+            let fix = "use fewer bounces (render.max_depth), or raise the limit (--max-depth)";
+            let (value, max) = (self.max_depth.into(), limits.max_depth.into());
+            return Err(limit("max_depth".into(), value, max, fix));
+        }
+        if tile < limits.min_tile.max(1) {
+            return Err(invalid(
+                "tile",
+                format!(
+                    "a tile of {tile} px is smaller than the smallest tile edge, {} px; use a \
+                     larger tile, or lower the limit (--min-tile)",
+                    limits.min_tile.max(1)
+                ),
+            ));
+        }
+        let tiles = u64::from(width.div_ceil(tile)) * u64::from(height.div_ceil(tile));
+        if tiles > u64::from(limits.max_tiles) {
+            let fix = "use a larger tile (--tile), or raise the limit (--max-tiles)";
+            let what = format!("the number of tiles ({width}×{height} in tiles of {tile} px)");
+            return Err(limit(what, tiles, limits.max_tiles.into(), fix));
+        }
+        Ok(())
+    }
+
+    /// How many tiles the image has.
+    pub fn tile_count(&self) -> u32 {
+        tile_count(self.width, self.height, self.tile)
+    }
+
+    /// Tile `index`, computed directly (a plan never lists its tiles).
+    pub fn tile_rect(&self, index: u32) -> Option<Rect> {
+        tile_rect(self.width, self.height, self.tile, index)
+    }
+
+    /// The tiles in row-major order, computed as they are read.
+    pub fn tiles(&self) -> impl Iterator<Item = Rect> + '_ {
+        (0..self.tile_count()).filter_map(|i| self.tile_rect(i))
     }
 
     /// The scene with the plan's image size on its camera.

@@ -16,10 +16,10 @@
 
 use crate::rgb_space::RgbSpace;
 use glam::DVec3;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// How absolute luminance becomes display luminance.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "mode", rename_all = "snake_case")]
 pub enum Exposure {
     /// This luminance (cd/m²) is shown as the display's white.
@@ -28,6 +28,58 @@ pub enum Exposure {
     Automatic { key: f64 },
     /// The image is relative already: Y = 1 is white.
     Relative,
+}
+
+impl Default for Exposure {
+    /// Automatic, with middle grey at 0.18 of the white.
+    fn default() -> Self {
+        Exposure::Automatic { key: 0.18 }
+    }
+}
+
+impl Exposure {
+    /// The exposure if its number is usable: finite and above 0 (and a key at most 1).
+    pub fn checked(self) -> Result<Self, String> {
+        match self {
+            Exposure::Automatic { key } if !(key.is_finite() && key > 0.0 && key <= 1.0) => Err(
+                format!("an automatic exposure's key of {key}: use a number above 0, at most 1"),
+            ),
+            Exposure::Absolute { white_cd_m2 }
+                if !(white_cd_m2.is_finite() && white_cd_m2 > 0.0 && white_cd_m2 < 1e12) =>
+            {
+                Err(format!(
+                    "an absolute exposure's white of {white_cd_m2} cd/m²: use a luminance above 0"
+                ))
+            }
+            ok => Ok(ok),
+        }
+    }
+}
+
+/// `auto`, `auto:<key>`, `absolute:<cd/m²>` or `relative` (the command line's form).
+impl std::str::FromStr for Exposure {
+    type Err = String;
+
+    fn from_str(text: &str) -> Result<Self, String> {
+        let lower = text.trim().to_ascii_lowercase();
+        let number = |s: &str| s.parse::<f64>().map_err(|_| format!("`{s}` is not a number"));
+        let exposure = match lower.as_str() {
+            "auto" => Exposure::default(),
+            "relative" => Exposure::Relative,
+            _ => {
+                if let Some(k) = lower.strip_prefix("auto:") {
+                    Exposure::Automatic { key: number(k)? }
+                } else if let Some(l) = lower.strip_prefix("absolute:") {
+                    Exposure::Absolute { white_cd_m2: number(l)? }
+                } else {
+                    return Err(format!(
+                        "exposure `{text}`: use auto, auto:<key>, absolute:<cd/m²> or relative"
+                    ));
+                }
+            }
+        };
+        exposure.checked().map_err(|e| format!("exposure `{text}`: {e}"))
+    }
 }
 
 /// The log-average luminance exp(mean ln(δ + Y)) (Reinhard et al. 2002, Eq. 1) over the pixels

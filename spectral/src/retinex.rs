@@ -104,7 +104,7 @@ const LOG_FLOOR: f32 = -20.0;
 /// A sample is clamped at s = −16 (a lightness of 1e-7 of white) so it fits in 15 bits; a
 /// 32-bit sum then holds 2¹⁸ samples, and `paths` ≤ 4096 keeps every pixel far below that.
 const S_MIN: i32 = -16 * 1024;
-const MAX_PATHS: u32 = 4096;
+pub const MAX_PATHS: u32 = 4096;
 
 /// The 8 neighbour steps in circular order, so that ±1 turns by 45°.
 const STEPS: [(i32, i32); 8] =

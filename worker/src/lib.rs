@@ -2,5 +2,7 @@
 //! fetches each job's scene once, renders the tiles with restauro-render and reports them
 //! ([`process`]), and serves its own metrics ([`metrics`]).
 
+pub mod failure;
 pub mod metrics;
 pub mod process;
+pub mod scene_cache;

@@ -6,21 +6,25 @@
 //! finished and delivered, then the worker exits.
 //!
 //! When the coordinator goes away the worker keeps trying to reach it; a restarted coordinator
-//! does not know the worker, which then registers again.
+//! does not know the worker's session, and the worker registers again. Results outlive a
+//! session: a tile rendered under one is delivered with the next (its lease's ticket still
+//! proves it was given out, see the coordinator's `lease`), so a coordinator restart loses no
+//! finished work.
 
+use crate::failure::{JobError, retryable};
 use crate::metrics::WorkerMetrics;
+use crate::scene_cache::SceneCache;
 use anyhow::{Context, Result, anyhow, bail};
 use restauro_ops::signal::stop_signal;
 use restauro_ops::token::read_token;
 use restauro_proto::pb::work_client::WorkClient;
 use restauro_proto::{self as pb, CHUNK_BYTES, Credentials, PROTOCOL_VERSION};
 use restauro_render::prepared::{PreparedScene, Settings};
-use restauro_render::tile::{Rect, render_tile};
+use restauro_render::tile::render_tile;
 use restauro_scene::bundle::Bundle;
-use restauro_scene::load::Limits;
-use restauro_scene::plan::Plan;
-use restauro_scene::scene_file::Integrator;
-use std::collections::{BTreeMap, HashMap};
+use restauro_scene::limits::Limits;
+use restauro_scene::plan::{Plan, Rect};
+use std::collections::BTreeMap;
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -53,6 +57,10 @@ pub struct WorkerArgs {
     /// Where fetched scene assets are cached, by hash.
     #[arg(long)]
     pub cache: Option<PathBuf>,
+    /// The memory the prepared scenes of the jobs in hand may hold, in MiB; the least recently
+    /// used scene goes first when a new one does not fit.
+    #[arg(long, default_value_t = 4096)]
+    pub scene_cache_mb: usize,
     /// The protocol version to announce (for testing the coordinator's refusal).
     #[arg(long, hide = true, default_value_t = PROTOCOL_VERSION)]
     pub protocol_version: u32,
@@ -72,16 +80,21 @@ pub struct WorkerArgs {
 /// A job ready to render.
 struct ReadyJob {
     scene: PreparedScene,
-    spectral: bool,
+    plan: Plan,
 }
+
+/// The worker's registration, shared with the tasks that deliver results: `None` while it is
+/// not registered.
+type SessionWatch = watch::Receiver<Option<pb::WorkerSession>>;
 
 struct Worker {
     args: WorkerArgs,
     token: String,
     pool: Arc<rayon::ThreadPool>,
     cache: PathBuf,
-    jobs: HashMap<String, Arc<ReadyJob>>,
+    scenes: SceneCache<ReadyJob>,
     stop: watch::Receiver<bool>,
+    session: watch::Sender<Option<pb::WorkerSession>>,
     metrics: Arc<WorkerMetrics>,
 }
 
@@ -96,6 +109,7 @@ pub fn run(args: &WorkerArgs) -> Result<()> {
     let cache =
         args.cache.clone().unwrap_or_else(|| std::env::temp_dir().join("restauro-worker-cache"));
     std::fs::create_dir_all(&cache).with_context(|| format!("creating {}", cache.display()))?;
+    remove_partial_assets(&cache);
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(1)
         .enable_all()
@@ -128,8 +142,9 @@ pub fn run(args: &WorkerArgs) -> Result<()> {
             token,
             pool: Arc::new(pool),
             cache,
-            jobs: HashMap::new(),
+            scenes: SceneCache::new(args.scene_cache_mb.saturating_mul(1 << 20)),
             stop,
+            session: watch::Sender::new(None),
             metrics,
         };
         let served = worker.serve(threads as u32).await;
@@ -144,6 +159,17 @@ fn num_threads() -> usize {
     std::thread::available_parallelism().map_or(1, |n| n.get())
 }
 
+/// Removes the files of asset downloads a killed worker left behind.
+fn remove_partial_assets(cache: &Path) {
+    let Ok(entries) = std::fs::read_dir(cache) else { return };
+    for entry in entries.flatten() {
+        if entry.file_name().to_string_lossy().contains(".partial-") {
+            let _ = std::fs::remove_file(entry.path());
+        }
+    }
+}
+
+/// A refusal that retrying does not cure (the wrong token, another protocol, a bad request).
 fn is_refusal(status: &tonic::Status) -> bool {
     matches!(
         status.code(),
@@ -201,17 +227,19 @@ impl Worker {
         }
     }
 
-    /// Registers, heartbeats and renders until stopped; reconnects and registers again when the
-    /// coordinator goes away or forgets this worker.
+    /// Registers, heartbeats and renders until stopped; connects and registers again when the
+    /// coordinator goes away or forgets this worker. Rendered tiles are delivered in the
+    /// background, across registrations, each kept until acknowledged.
     async fn serve(&mut self, capacity: u32) -> Result<()> {
         let name = self.args.name.clone().unwrap_or_else(hostname);
+        let mut reports = tokio::task::JoinSet::new();
         'connection: loop {
             if self.stopping() {
-                return Ok(());
+                return self.drain(&mut reports, None).await;
             }
             let Some(mut client) = self.connect().await? else {
                 info!("stopped before reaching the coordinator: no tile in hand");
-                return Ok(());
+                return self.drain(&mut reports, None).await;
             };
             let reply = match client
                 .register(pb::RegisterRequest {
@@ -232,43 +260,32 @@ impl Worker {
                     continue;
                 }
             };
-            let id = reply.worker_id;
-            info!(worker = id, %name, capacity, "registered");
+            let session = reply.session.ok_or_else(|| anyhow!("registered without a session"))?;
+            info!(worker = session.worker_id, %name, capacity, "registered");
+            self.session.send_replace(Some(session.clone()));
             self.metrics.registered.set(1);
-            let heartbeat = {
-                let mut client = client.clone();
-                let period = Duration::from_millis(u64::from(reply.heartbeat_ms.max(50)));
-                tokio::spawn(async move {
-                    let mut tick = tokio::time::interval(period);
-                    loop {
-                        tick.tick().await;
-                        match client.heartbeat(pb::HeartbeatRequest { worker_id: id }).await {
-                            Ok(r) if !r.get_ref().known => return,
-                            _ => {}
-                        }
-                    }
-                })
-            };
-            // Results travel back in the background, each kept until acknowledged, so the next
-            // tile starts while the coordinator commits the last one.
-            let mut reports = tokio::task::JoinSet::new();
+            let heartbeat = heartbeat(client.clone(), session.clone(), reply.heartbeat_ms);
+            // Results rendered under an earlier session go first: a restarted coordinator takes
+            // them (their leases' tickets prove them), and this worker must not lease one of
+            // those tiles again and render it twice.
+            if !reports.is_empty() {
+                let settled = tokio::time::timeout(DRAIN_PATIENCE, async {
+                    while reports.join_next().await.is_some() {}
+                });
+                if settled.await.is_err() {
+                    warn!("results of an earlier session still undelivered; going on");
+                }
+            }
             loop {
                 if self.stopping() {
-                    // Drain: deliver what is rendered, then leave, handing back any lease granted
-                    // to a poll that was abandoned.
-                    while reports.join_next().await.is_some() {}
-                    let leave =
-                        pb::ReturnRequest { worker_id: id, leases: Vec::new(), leaving: true };
-                    if let Err(status) = client.return_leases(leave).await {
-                        info!("leaving: {}", status.message());
-                    }
                     heartbeat.abort();
-                    self.metrics.registered.set(0);
-                    info!("drained; exiting");
-                    return Ok(());
+                    return self.drain(&mut reports, Some((client, session))).await;
                 }
-                let pull =
-                    client.pull_leases(pb::PullRequest { worker_id: id, max: 1, wait_ms: 1000 });
+                let pull = client.pull_leases(pb::PullRequest {
+                    session: Some(session.clone()),
+                    max: 1,
+                    wait_ms: 1000,
+                });
                 let mut stop = self.stop.clone();
                 let pulled = tokio::select! {
                     pulled = pull => pulled,
@@ -278,30 +295,29 @@ impl Worker {
                     Ok(r) => r.into_inner(),
                     Err(status) => {
                         warn!("pulling leases: {}; reconnecting", status.message());
-                        self.metrics.registered.set(0);
-                        while reports.join_next().await.is_some() {}
-                        heartbeat.abort();
+                        self.unregistered(&heartbeat);
                         tokio::time::sleep(Duration::from_millis(100)).await;
                         continue 'connection;
                     }
                 };
                 if !reply.known {
                     info!("the coordinator does not know this worker; registering again");
-                    self.metrics.registered.set(0);
-                    while reports.join_next().await.is_some() {}
-                    heartbeat.abort();
+                    self.unregistered(&heartbeat);
                     continue 'connection;
                 }
                 for lease in reply.leases {
                     let span = info_span!("tile", job = %lease.job_id, tile = lease.tile, attempt = lease.attempt);
-                    match self.render(&mut client, id, lease).instrument(span.clone()).await {
+                    match self.render(&mut client, &session, lease).instrument(span.clone()).await {
                         Ok(Some(report)) => {
                             while reports.len() >= MAX_REPORTS_IN_FLIGHT {
                                 reports.join_next().await;
                             }
-                            let client = client.clone();
-                            let metrics = self.metrics.clone();
-                            reports.spawn(report.deliver(client, metrics).instrument(span));
+                            let delivery = report.deliver(
+                                client.clone(),
+                                self.session.subscribe(),
+                                self.metrics.clone(),
+                            );
+                            reports.spawn(delivery.instrument(span));
                         }
                         Ok(None) => {}
                         Err(e) => warn!("{e:#}"),
@@ -311,31 +327,66 @@ impl Worker {
         }
     }
 
+    fn unregistered(&self, heartbeat: &tokio::task::JoinHandle<()>) {
+        heartbeat.abort();
+        self.session.send_replace(None);
+        self.metrics.registered.set(0);
+    }
+
+    /// Delivers what is rendered, then leaves, handing back any lease granted to a poll that was
+    /// abandoned. Without a connection, results wait for none: they are lost with the worker,
+    /// and their tiles go back to the queue when its leases expire.
+    async fn drain(
+        &self,
+        reports: &mut tokio::task::JoinSet<()>,
+        connection: Option<(Client, pb::WorkerSession)>,
+    ) -> Result<()> {
+        let Some((mut client, session)) = connection else {
+            reports.abort_all();
+            return Ok(());
+        };
+        let delivered = tokio::time::timeout(DRAIN_PATIENCE, async {
+            while reports.join_next().await.is_some() {}
+        });
+        if delivered.await.is_err() {
+            warn!("results still undelivered after {DRAIN_PATIENCE:?}: leaving without them");
+            reports.abort_all();
+        }
+        let leave = pb::ReturnRequest { session: Some(session), leases: Vec::new(), leaving: true };
+        if let Err(status) = client.return_leases(leave).await {
+            info!("leaving: {}", status.message());
+        }
+        self.session.send_replace(None);
+        self.metrics.registered.set(0);
+        info!("drained; exiting");
+        Ok(())
+    }
+
     /// Renders one leased tile; the result, ready to send. `None` when the job could not be
-    /// prepared (the tile is reported as failed).
+    /// made ready (the tile is then reported as failed, retryable or not).
     async fn render(
         &mut self,
         client: &mut Client,
-        id: u64,
+        session: &pb::WorkerSession,
         lease: pb::Lease,
     ) -> Result<Option<Report>> {
-        let rect = lease.rect.ok_or_else(|| anyhow!("a lease without a rectangle"))?;
-        let rect = Rect { x: rect.x, y: rect.y, width: rect.width, height: rect.height };
-        let job = match self.job(client, &lease.job_id).await {
+        let job = match self.job(client, session, &lease.job_id).await {
             Ok(job) => job,
             Err(e) => {
-                let reason = format!("{e:#}");
-                warn!(job = %lease.job_id, tile = lease.tile, "{reason}");
-                client
-                    .fail_tile(pb::FailRequest {
-                        worker_id: id,
-                        lease: Some(lease.clone()),
-                        reason,
-                    })
-                    .await?;
+                self.fail(client, session, lease, &e).await?;
                 return Ok(None);
             }
         };
+        let rect = lease.rect.map(Rect::from);
+        if rect.is_none() || rect != job.plan.tile_rect(lease.tile) {
+            let e = JobError::Scene(format!(
+                "lease of tile {} with rectangle {rect:?}, which is not the plan's tile",
+                lease.tile
+            ));
+            self.fail(client, session, lease, &e).await?;
+            return Ok(None);
+        }
+        let rect = rect.expect("checked");
         if let Some(log) = &self.args.tile_log {
             let line = format!("{} {} {}\n", lease.job_id, lease.tile, lease.attempt);
             std::fs::OpenOptions::new()
@@ -350,124 +401,171 @@ impl Worker {
         {
             let job = job.clone();
             self.pool.spawn(move || {
-                let tile = render_tile(&job.scene, rect, job.spectral);
+                let tile = render_tile(&job.scene, rect, job.plan.spectral);
                 let _ = tx.send(tile);
             });
         }
-        let tile = rx.await.context("the render thread stopped")?;
+        let tile = match rx.await {
+            Ok(tile) => tile,
+            Err(_) => {
+                let e = JobError::Local("the render thread stopped".into());
+                self.fail(client, session, lease, &e).await?;
+                return Ok(None);
+            }
+        };
         let render_s = started.elapsed().as_secs_f64();
         self.metrics.tiles_rendered.inc();
         self.metrics.tile_render_seconds.observe(render_s);
         debug!(render_s, rays = tile.rays, "tile rendered");
-        // The wire form of coordinator::framebuffer: XYZ, sky coverage (scenes with a sky), spectra.
-        let mut data = Vec::with_capacity(tile.xyz.len() * 16);
-        for v in tile.xyz.iter().flatten().chain(tile.sky.iter().flatten()) {
-            data.extend_from_slice(&v.to_le_bytes());
-        }
-        let xyz_bytes = data.len() as u64;
-        if let Some(spectra) = &tile.spectral {
-            for v in spectra.iter().flat_map(|s| s.0.iter()) {
-                data.extend_from_slice(&v.to_le_bytes());
-            }
-        }
+        let data = restauro_image::framebuffer::encode_tile(
+            &tile.xyz,
+            tile.sky.as_deref(),
+            tile.spectral.as_ref().map(|s| s.iter().map(|p| &p.0[..])),
+        );
+        let (image_bytes, spectral_bytes) =
+            restauro_image::framebuffer::tile_sizes(&rect, job.plan.spectral, job.plan.sky);
         let header = pb::TileHeader {
-            worker_id: id,
+            session: None,
             lease: Some(lease),
             rays: tile.rays,
             render_s,
-            xyz_bytes,
-            spectral_bytes: data.len() as u64 - xyz_bytes,
-            // The next lease is pulled while this result travels; none is wanted with it.
-            want: 0,
+            xyz_bytes: image_bytes as u64,
+            spectral_bytes: spectral_bytes as u64,
         };
         Ok(Some(Report { header, data }))
     }
 
-    /// The prepared scene of a job, fetched and prepared on first use.
-    async fn job(&mut self, client: &mut Client, job_id: &str) -> Result<Arc<ReadyJob>> {
-        if let Some(job) = self.jobs.get(job_id) {
-            return Ok(job.clone());
+    /// Tells the coordinator the tile could not be rendered here, and whether that was the
+    /// transport's fault (`failure::retryable`).
+    async fn fail(
+        &self,
+        client: &mut Client,
+        session: &pb::WorkerSession,
+        lease: pb::Lease,
+        error: &JobError,
+    ) -> Result<()> {
+        let reason = error.to_string();
+        let retryable = retryable(error);
+        warn!(job = %lease.job_id, tile = lease.tile, retryable, "{reason}");
+        if retryable {
+            // The coordinator (or the way to it) is in trouble: give it a moment.
+            tokio::time::sleep(Duration::from_millis(200)).await;
         }
-        let spec = client
-            .fetch_job(pb::JobRef { job_id: job_id.to_owned() })
+        client
+            .fail_tile(pb::FailRequest {
+                session: Some(session.clone()),
+                lease: Some(lease),
+                reason,
+                retryable,
+            })
             .await
-            .map_err(|s| anyhow!("fetching job {job_id}: {}", s.message()))?
+            .map_err(|s| anyhow!("reporting a failed tile: {}", s.message()))?;
+        Ok(())
+    }
+
+    /// The prepared scene of a job, fetched and prepared on first use: the coordinator's own
+    /// plan and limits, so that no worker plans a job otherwise than the coordinator did.
+    async fn job(
+        &mut self,
+        client: &mut Client,
+        session: &pb::WorkerSession,
+        job_id: &str,
+    ) -> Result<Arc<ReadyJob>, JobError> {
+        if let Some(job) = self.scenes.get(job_id) {
+            return Ok(job);
+        }
+        let fetch = |what: String| move |status| JobError::Fetch { what, status };
+        let spec = client
+            .fetch_job(pb::FetchJobRequest {
+                session: Some(session.clone()),
+                job_id: job_id.to_owned(),
+            })
+            .await
+            .map_err(fetch(format!("job {job_id}")))?
             .into_inner();
-        let skeleton: Bundle =
-            Bundle { scene: serde_json_scene(&spec.manifest_json)?, files: BTreeMap::new() };
+        let scene_error = |e: &dyn std::fmt::Display| JobError::Scene(format!("job {job_id}: {e}"));
+        let plan = Plan::try_from(spec.plan.ok_or_else(|| scene_error(&"no plan"))?)
+            .map_err(|e| scene_error(&e))?;
+        let limits = Limits::from(spec.limits.ok_or_else(|| scene_error(&"no limits"))?);
+        let label = PathBuf::from(format!("job {job_id}"));
+        plan.check(&limits, &label).map_err(|e| scene_error(&e))?;
+        let skeleton = Bundle {
+            scene: Bundle::parse_manifest(&spec.manifest_json).map_err(|e| scene_error(&e))?,
+            files: BTreeMap::new(),
+        };
         let mut files = BTreeMap::new();
         for reference in skeleton.references() {
-            let (hash, bytes) = self.asset(client, &reference).await?;
+            let (hash, bytes) = self.asset(client, session, &reference, &limits).await?;
             files.insert(hash, bytes);
         }
-        let options = spec.options.unwrap_or_default();
         let manifest = spec.manifest_json;
         let pool = self.pool.clone();
         let job_name = job_id.to_owned();
-        let ready = tokio::task::spawn_blocking(move || -> Result<ReadyJob> {
-            let bundle = Bundle::from_parts(&manifest, files)?;
-            let limits = Limits::default();
-            let mut scene = bundle.load(&limits)?;
-            let render_options = restauro_scene::plan::RenderOptions {
-                variant: nonempty(&options.variant),
-                integrator: match options.integrator.as_str() {
-                    "" => None,
-                    "whitted" => Some(Integrator::Whitted),
-                    "path" => Some(Integrator::Path),
-                    other => bail!("integrator `{other}`: use whitted or path"),
-                },
-                samples_per_pixel: nonzero(options.samples_per_pixel),
-                width: nonzero(options.width),
-                height: nonzero(options.height),
-                spectral: options.spectral,
-                tile: nonzero(options.tile),
-            };
-            let plan = Plan::new(&scene, &render_options, &limits, Path::new(&format!("job {job_name}")))?;
+        let ready = tokio::task::spawn_blocking(move || -> Result<ReadyJob, JobError> {
+            let scene_error = |e: &dyn std::fmt::Display| JobError::Scene(format!("job {job_name}: {e}"));
+            let bundle = Bundle::from_parts(&manifest, files).map_err(|e| scene_error(&e))?;
+            let mut scene = bundle.load(&limits).map_err(|e| scene_error(&e))?;
             plan.apply(&mut scene);
             let started = Instant::now();
-            let prepared = pool.install(|| {
-                PreparedScene::new(&scene, plan.variant.as_deref(), Settings::from(&plan))
-            })?;
-            info!(job = %job_name, triangles = prepared.triangle_count(), seconds = started.elapsed().as_secs_f64(), "scene prepared");
-            Ok(ReadyJob { scene: prepared, spectral: plan.spectral })
+            let prepared = pool
+                .install(|| PreparedScene::new(&scene, plan.variant.as_deref(), Settings::from(&plan)))
+                .map_err(|e| scene_error(&e))?;
+            info!(job = %job_name, triangles = prepared.triangle_count(), mib = prepared.memory_bytes() >> 20, seconds = started.elapsed().as_secs_f64(), "scene prepared");
+            Ok(ReadyJob { scene: prepared, plan })
         })
-        .await??;
+        .await
+        .map_err(|e| JobError::Local(format!("preparing job {job_id}: {e}")))??;
+        let bytes = ready.scene.memory_bytes();
         let ready = Arc::new(ready);
-        // A worker keeps a few jobs' scenes; older ones are prepared again if they come back.
-        if self.jobs.len() >= 4 {
-            self.jobs.clear();
+        for evicted in self.scenes.insert(job_id, ready.clone(), bytes) {
+            info!(job = %evicted, "scene dropped from the cache (least recently used)");
         }
-        self.jobs.insert(job_id.to_owned(), ready.clone());
         Ok(ready)
     }
 
     /// An asset's bytes, from the disk cache or the coordinator, checked against its hash.
-    async fn asset(&self, client: &mut Client, reference: &str) -> Result<(String, Vec<u8>)> {
+    async fn asset(
+        &self,
+        client: &mut Client,
+        session: &pb::WorkerSession,
+        reference: &str,
+        limits: &Limits,
+    ) -> Result<(String, Vec<u8>), JobError> {
         let hash = reference
             .strip_prefix("blake3:")
             .and_then(|r| r.split_once('.'))
-            .map(|(h, _)| h.to_owned())
+            .map(|(h, _)| h.to_ascii_lowercase())
             .filter(|h| h.len() == 64 && h.bytes().all(|b| b.is_ascii_hexdigit()))
-            .ok_or_else(|| anyhow!("asset reference `{reference}` is not blake3:<hash>.<ext>"))?;
+            .ok_or_else(|| {
+                JobError::Scene(format!("asset reference `{reference}` is not blake3:<hash>.<ext>"))
+            })?;
         let cached = self.cache.join(&hash);
         if let Ok(bytes) = std::fs::read(&cached)
             && blake3::hash(&bytes).to_hex().as_str() == hash
         {
             return Ok((hash, bytes));
         }
+        let fetch = |status| JobError::Fetch { what: format!("asset {reference}"), status };
         let mut stream = client
-            .fetch_asset(pb::AssetRef { reference: reference.to_owned() })
+            .fetch_asset(pb::FetchAssetRequest {
+                session: Some(session.clone()),
+                reference: reference.to_owned(),
+            })
             .await
-            .map_err(|s| anyhow!("fetching {reference}: {}", s.message()))?
+            .map_err(fetch)?
             .into_inner();
         let mut bytes = Vec::new();
-        while let Some(chunk) =
-            stream.message().await.map_err(|s| anyhow!("fetching {reference}: {}", s.message()))?
-        {
+        while let Some(chunk) = stream.message().await.map_err(fetch)? {
+            if (bytes.len() + chunk.data.len()) as u64 > limits.max_file_bytes {
+                return Err(JobError::Scene(format!(
+                    "asset {reference} is larger than the limit of {} bytes",
+                    limits.max_file_bytes
+                )));
+            }
             bytes.extend_from_slice(&chunk.data);
         }
         if blake3::hash(&bytes).to_hex().as_str() != hash {
-            bail!("asset {reference} arrived damaged (its hash differs)");
+            return Err(JobError::Damaged { reference: reference.to_owned() });
         }
         self.metrics.asset_bytes_received.inc_by(bytes.len() as u64);
         let temporary = self.cache.join(format!("{hash}.partial-{}", std::process::id()));
@@ -475,14 +573,41 @@ impl Worker {
             .and_then(|()| std::fs::rename(&temporary, &cached))
             .is_err()
         {
+            let _ = std::fs::remove_file(&temporary);
             warn!("could not cache {reference} in {}", self.cache.display());
         }
         Ok((hash, bytes))
     }
 }
 
+/// Heartbeats until the coordinator no longer knows the session (or the task is aborted).
+fn heartbeat(
+    mut client: Client,
+    session: pb::WorkerSession,
+    period_ms: u32,
+) -> tokio::task::JoinHandle<()> {
+    let period = Duration::from_millis(u64::from(period_ms.max(50)));
+    tokio::spawn(async move {
+        let mut tick = tokio::time::interval(period);
+        loop {
+            tick.tick().await;
+            let beat = pb::HeartbeatRequest { session: Some(session.clone()) };
+            match client.heartbeat(beat).await {
+                Ok(r) if !r.get_ref().known => return,
+                _ => {}
+            }
+        }
+    })
+}
+
 /// Rendered tiles sent back at once; more wait for one of these to be acknowledged.
 const MAX_REPORTS_IN_FLIGHT: usize = 4;
+
+/// How long a rendered tile is kept for delivery while the coordinator cannot be reached.
+const DELIVERY_PATIENCE: Duration = Duration::from_secs(600);
+
+/// How long a stopping worker waits for its results to be delivered.
+const DRAIN_PATIENCE: Duration = Duration::from_secs(120);
 
 /// A rendered tile on its way to the coordinator.
 struct Report {
@@ -491,21 +616,45 @@ struct Report {
 }
 
 impl Report {
-    /// Sends the tile in chunks, retrying while the coordinator is unreachable: a result is
-    /// kept until it is acknowledged (or refused, or given up after many attempts).
-    async fn deliver(self, mut client: Client, metrics: Arc<WorkerMetrics>) {
+    /// Sends the tile in chunks with the worker's session of the moment, retrying while the
+    /// coordinator is unreachable or does not know the session (then waiting for the worker to
+    /// register again): a result is kept until it is acknowledged, refused, or has waited
+    /// [`DELIVERY_PATIENCE`].
+    async fn deliver(
+        self,
+        mut client: Client,
+        mut session: SessionWatch,
+        metrics: Arc<WorkerMetrics>,
+    ) {
         let lease = self.header.lease.clone().unwrap_or_default();
+        let give_up = tokio::time::Instant::now() + DELIVERY_PATIENCE;
         let mut backoff = Duration::from_millis(100);
-        for attempt in 0.. {
-            let mut messages = vec![pb::TileChunk {
-                part: Some(pb::tile_chunk::Part::Header(self.header.clone())),
-            }];
+        loop {
+            let current = match tokio::time::timeout_at(give_up, session.wait_for(Option::is_some))
+                .await
+            {
+                Ok(Ok(s)) => s.clone(),
+                _ => {
+                    warn!(job = %lease.job_id, tile = lease.tile, "giving up on the result: not registered with a coordinator");
+                    return;
+                }
+            };
+            let mut header = self.header.clone();
+            header.session = current.clone();
+            let mut messages =
+                vec![pb::TileChunk { part: Some(pb::tile_chunk::Part::Header(header)) }];
             messages.extend(
                 self.data
                     .chunks(CHUNK_BYTES)
                     .map(|c| pb::TileChunk { part: Some(pb::tile_chunk::Part::Data(c.to_vec())) }),
             );
             match client.report_tile(tokio_stream::iter(messages)).await {
+                Ok(reply) if !reply.get_ref().known => {
+                    // This session is gone; the worker registers again, and this result goes
+                    // with the next session.
+                    let _ =
+                        tokio::time::timeout_at(give_up, session.wait_for(|s| *s != current)).await;
+                }
                 Ok(reply) => {
                     metrics.bytes_sent.inc_by(self.data.len() as u64);
                     if reply.get_ref().accepted {
@@ -520,7 +669,7 @@ impl Report {
                     return;
                 }
                 Err(status) => {
-                    if attempt >= 50 {
+                    if tokio::time::Instant::now() >= give_up {
                         warn!(job = %lease.job_id, tile = lease.tile, "giving up on the result: {}", status.message());
                         return;
                     }
@@ -531,18 +680,6 @@ impl Report {
             }
         }
     }
-}
-
-fn serde_json_scene(manifest: &str) -> Result<restauro_scene::scene_file::SceneFile> {
-    Bundle::parse_manifest(manifest).map_err(|e| anyhow!("{e}"))
-}
-
-fn nonzero(v: u32) -> Option<u32> {
-    (v != 0).then_some(v)
-}
-
-fn nonempty(s: &str) -> Option<String> {
-    (!s.is_empty()).then(|| s.to_owned())
 }
 
 fn hostname() -> String {

@@ -1,0 +1,150 @@
+//! The coordinator's one error type, and its one mapping to a gRPC status. Every refusal says
+//! what was refused and what to do; the gRPC code tells a program whether to retry.
+
+use crate::ids::JobId;
+use crate::job::JobState;
+use crate::store::StoreError;
+use restauro_proto::convert::WireError;
+use restauro_scene::SceneError;
+
+#[derive(Debug, thiserror::Error)]
+pub enum CoordinatorError {
+    /// A caller of another protocol version.
+    #[error(
+        "protocol version {theirs} refused: this coordinator speaks protocol {ours}; run a \
+         {role} of the same restauro release"
+    )]
+    ProtocolVersion { theirs: String, ours: u32, role: &'static str },
+
+    #[error("no bearer token: a {role} must send `authorization: Bearer <token>`")]
+    NoToken { role: &'static str },
+
+    #[error("the {role} token is not valid")]
+    BadToken { role: &'static str },
+
+    #[error("forbidden: this is a {held} token, and only a {needed} token may call this service")]
+    WrongRole { held: &'static str, needed: &'static str },
+
+    /// A request field the domain cannot hold.
+    #[error("invalid request: {0}")]
+    Wire(#[from] WireError),
+
+    /// The scene of a submission does not load or plan.
+    #[error("{0}")]
+    Scene(#[from] SceneError),
+
+    #[error("asset reference `{reference}`: expected `blake3:<64 hex digits>.<extension>`")]
+    AssetReference { reference: String },
+
+    #[error("asset {reference} has not been uploaded; upload it before submitting")]
+    AssetMissing { reference: String },
+
+    #[error("asset {reference}: {problem}")]
+    AssetUpload { reference: String, problem: String },
+
+    #[error("no job {0}")]
+    NoSuchJob(JobId),
+
+    #[error("job {job} has no result `{name}`")]
+    NoSuchResult { job: JobId, name: String },
+
+    #[error("job {job} is {state}, not done: its results are not written yet")]
+    NotDone { job: JobId, state: JobState },
+
+    /// A lifecycle move the job's state does not allow (e.g. finishing a cancelled job).
+    #[error("job {job} is {from}; it cannot become {to}")]
+    IllegalTransition { job: JobId, from: JobState, to: JobState },
+
+    /// A limit of the coordinator's, with the flag that raises it.
+    #[error("{what} is {value}, over the limit of {limit} ({flag}); {fix}")]
+    Limit { what: String, value: u64, limit: u64, flag: &'static str, fix: &'static str },
+
+    #[error(
+        "{open} jobs are unfinished, the most this coordinator takes (--max-jobs); wait for one \
+         to finish or cancel one"
+    )]
+    TooManyJobs { open: usize },
+
+    /// A worker's session the coordinator does not know: it restarted, or dropped the worker.
+    #[error("worker session {worker} is not known to this coordinator: register again")]
+    UnknownSession { worker: u64 },
+
+    /// A lease the coordinator did not grant (its ticket does not verify), or one granted to
+    /// another worker.
+    #[error("lease of tile {tile} of job {job}: {problem}")]
+    ForeignLease { job: String, tile: u32, problem: &'static str },
+
+    /// A tile report whose pixels the job cannot use.
+    #[error("tile {tile} of job {job}: {problem}")]
+    TileData { job: JobId, tile: u32, problem: String },
+
+    /// The store cannot be written (a full disk, a failing device): the request may be retried
+    /// once it recovers.
+    #[error("{0}; the coordinator retries the store and resumes when it can write again")]
+    Store(#[from] StoreError),
+
+    #[error("{path}: {source}")]
+    Io { path: String, source: std::io::Error },
+
+    #[error("internal error: {0}")]
+    Internal(String),
+}
+
+pub type Result<T, E = CoordinatorError> = std::result::Result<T, E>;
+
+impl CoordinatorError {
+    pub fn io(path: &std::path::Path, source: std::io::Error) -> Self {
+        Self::Io { path: path.display().to_string(), source }
+    }
+
+    /// The gRPC code: what a client or worker should do about it.
+    pub fn code(&self) -> tonic::Code {
+        use CoordinatorError as E;
+        use tonic::Code;
+        match self {
+            E::ProtocolVersion { .. } | E::NotDone { .. } | E::IllegalTransition { .. } => {
+                Code::FailedPrecondition
+            }
+            E::AssetMissing { .. } | E::UnknownSession { .. } => Code::FailedPrecondition,
+            E::NoToken { .. } | E::BadToken { .. } => Code::Unauthenticated,
+            E::WrongRole { .. } | E::ForeignLease { .. } => Code::PermissionDenied,
+            E::Wire(_) | E::Scene(_) | E::AssetReference { .. } | E::AssetUpload { .. } => {
+                Code::InvalidArgument
+            }
+            E::TileData { .. } => Code::InvalidArgument,
+            E::NoSuchJob(_) | E::NoSuchResult { .. } => Code::NotFound,
+            E::Limit { .. } | E::TooManyJobs { .. } => Code::ResourceExhausted,
+            E::Store(_) => Code::Unavailable,
+            E::Io { .. } | E::Internal(_) => Code::Internal,
+        }
+    }
+}
+
+/// The one conversion to a gRPC status.
+impl From<CoordinatorError> for tonic::Status {
+    fn from(e: CoordinatorError) -> Self {
+        tonic::Status::new(e.code(), e.to_string())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_error_maps_to_the_code_that_tells_the_caller_what_to_do() {
+        let status = |e: CoordinatorError| tonic::Status::from(e);
+        let s = status(CoordinatorError::TooManyJobs { open: 3 });
+        assert_eq!(s.code(), tonic::Code::ResourceExhausted);
+        assert!(s.message().contains("--max-jobs"), "{}", s.message());
+        let s = status(CoordinatorError::Store(StoreError::Store {
+            path: "/x/store.redb".into(),
+            message: "No space left on device".into(),
+        }));
+        assert_eq!(s.code(), tonic::Code::Unavailable);
+        assert!(s.message().contains("No space left") && s.message().contains("/x/store.redb"));
+        let s = status(CoordinatorError::UnknownSession { worker: 7 });
+        assert_eq!(s.code(), tonic::Code::FailedPrecondition);
+        assert!(s.message().contains("register again"));
+    }
+}

@@ -1,0 +1,914 @@
+//! The farm: the coordinator's one domain layer. Everything the coordinator does — take assets
+//! and jobs from clients, lease tiles to workers, accept their results, assemble, cancel, list —
+//! is a method here on domain types; the gRPC services (`grpc`) only convert the wire to these
+//! types and back, and any other door (the studio's HTTP API) calls the same methods.
+//!
+//! Locks: one `std::sync::Mutex` over the scheduler, the job table and the worker sessions,
+//! never held across an `.await` or a store write. A tile result is decided under it (current
+//! lease, running job) and queued for the store under it too, so the store sees tile writes
+//! and a job's tile removal in the order the decisions were made; it is acknowledged only once
+//! durable, and counts as done only then.
+//!
+//! Record writes go through [`Farm::persist`], which writes the record as it is at the time of
+//! writing, one write at a time: a slow write of an older state can never land after a newer one.
+
+use crate::asset_store::{AssetStore, Upload, asset_hash};
+use crate::auth::Tokens;
+use crate::error::{CoordinatorError, Result};
+use crate::group_commit::TileCommits;
+use crate::ids::{JobId, Session, SessionKey, WorkerId};
+use crate::job::{JobRecord, JobState, JobStatus};
+use crate::lease::{LeaseClaim, LeaseSigner};
+use crate::metrics::Metrics;
+use crate::scheduler::{self, Completion, Failure, Scheduler};
+use crate::store::Store;
+use restauro_image::framebuffer::check_tile;
+use restauro_proto as pb;
+use restauro_scene::bundle::Bundle;
+use restauro_scene::job::{JobSpec, check_label, printable};
+use restauro_scene::limits::Limits;
+use restauro_scene::plan::{Plan, Rect};
+use std::collections::{BTreeMap, HashMap};
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+use tokio::sync::{Notify, mpsc, watch};
+use tracing::{debug, info, warn};
+
+/// How the coordinator runs.
+#[derive(Clone)]
+pub struct Config {
+    /// The store (`store.redb`), the assets (`assets/`) and the results (`jobs/<id>/`).
+    pub data_dir: PathBuf,
+    pub tokens: Tokens,
+    /// What a job's scene and render may ask; sent to workers with each job.
+    pub limits: Limits,
+    /// Unfinished jobs at once; more are refused.
+    pub max_jobs: usize,
+    /// Bytes of uploads in progress at once.
+    pub max_upload_bytes: u64,
+    pub scheduler: scheduler::Config,
+    /// Run the Retinex stage and write its files.
+    pub retinex: bool,
+}
+
+pub struct Farm {
+    pub(crate) config: Config,
+    pub(crate) store: Arc<Store>,
+    assets: AssetStore,
+    commits: TileCommits,
+    signer: LeaseSigner,
+    state: Mutex<FarmState>,
+    /// One record write at a time (see the module doc).
+    persisting: Mutex<()>,
+    /// Woken when tiles are queued (new job, requeue), for waiting pulls.
+    work: Notify,
+    /// Woken when a deadline may have come nearer, for the expiry timer.
+    timer: Notify,
+    /// Bumped on every change of a job, for watchers.
+    changed: watch::Sender<u64>,
+    pub metrics: Metrics,
+}
+
+struct FarmState {
+    scheduler: Scheduler,
+    jobs: BTreeMap<JobId, JobRecord>,
+    workers: HashMap<WorkerId, WorkerEntry>,
+    /// Submissions admitted and not yet recorded: they count towards `max_jobs`.
+    admitting: usize,
+}
+
+struct WorkerEntry {
+    key: SessionKey,
+    build: String,
+}
+
+/// A registered worker, as `restauro workers` shows it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WorkerStatus {
+    pub id: WorkerId,
+    pub name: String,
+    pub capacity: u32,
+    pub leases: u32,
+    pub done: u64,
+    pub failed: u64,
+    pub last_seen_s: f64,
+    pub build: String,
+}
+
+/// What a worker renders for a job: the scene, the plan resolved at submission, and the limits
+/// the scene was checked against.
+pub struct WorkerJob {
+    pub manifest_json: String,
+    pub plan: Plan,
+    pub limits: Limits,
+}
+
+/// How a tile report stands before its pixels are read.
+pub enum Expected {
+    /// The caller's session is not known: it must register again.
+    UnknownSession,
+    /// The lease is not the tile's current one (expired, job cancelled): drop the result.
+    Stale,
+    /// The tile's pixels, in this layout, are wanted.
+    Tile { rect: Rect, spectral: bool, sky: bool },
+}
+
+/// How a tile report ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Reported {
+    UnknownSession,
+    Stale,
+    /// Stored: the tile is done.
+    Accepted,
+}
+
+fn now_unix_ms() -> u64 {
+    SystemTime::now().duration_since(UNIX_EPOCH).map_or(0, |d| d.as_millis() as u64)
+}
+
+/// Counts a submission towards `max_jobs` from its admission until it is recorded or refused.
+struct Admission<'a> {
+    farm: &'a Farm,
+    armed: bool,
+}
+
+impl Drop for Admission<'_> {
+    fn drop(&mut self) {
+        if self.armed {
+            self.farm.lock().admitting -= 1;
+        }
+    }
+}
+
+impl Farm {
+    /// Opens the store in `config.data_dir` and resumes every unfinished job in it.
+    pub fn open(config: Config) -> anyhow::Result<Arc<Farm>> {
+        use anyhow::Context;
+        let jobs_dir = config.data_dir.join("jobs");
+        std::fs::create_dir_all(&jobs_dir)
+            .with_context(|| format!("creating {}", jobs_dir.display()))?;
+        let store = Arc::new(Store::open(&config.data_dir.join("store.redb"))?);
+        let (secret, epoch) = store.begin_run(crate::ids::random_secret())?;
+        let assets = AssetStore::open(
+            &config.data_dir.join("assets"),
+            config.limits.max_file_bytes,
+            config.max_upload_bytes,
+        )?;
+        let moved = store.drain_legacy_assets(|hash, bytes| assets.keep(hash, bytes))?;
+        if moved > 0 {
+            info!(assets = moved, "moved the assets of an earlier release out of the store");
+        }
+        remove_leftover_results(&jobs_dir);
+        let commits =
+            TileCommits::start(store.clone()).context("starting the store's committer")?;
+        let farm = Arc::new(Farm {
+            store,
+            assets,
+            commits,
+            signer: LeaseSigner::new(secret, epoch),
+            state: Mutex::new(FarmState {
+                scheduler: Scheduler::new(config.scheduler.clone()),
+                jobs: BTreeMap::new(),
+                workers: HashMap::new(),
+                admitting: 0,
+            }),
+            config,
+            persisting: Mutex::new(()),
+            work: Notify::new(),
+            timer: Notify::new(),
+            changed: watch::Sender::new(0),
+            metrics: Metrics::new(),
+        });
+        let to_assemble = farm.resume()?;
+        for id in to_assemble {
+            let farm = farm.clone();
+            std::thread::spawn(move || crate::assembly::assemble(&farm, &id));
+        }
+        info!(epoch, "coordinator run started");
+        Ok(farm)
+    }
+
+    /// Loads every job of the store; the unfinished ones go back to the scheduler with their
+    /// finished tiles. The jobs to assemble (every tile stored).
+    fn resume(&self) -> anyhow::Result<Vec<JobId>> {
+        let mut to_assemble = Vec::new();
+        for (id, bytes) in self.store.jobs()? {
+            let mut record = JobRecord::from_bytes(&id, &bytes).map_err(anyhow::Error::msg)?;
+            let id = record.id.clone();
+            if record.format != crate::job::RECORD_FORMAT || !record.state().is_final() {
+                let done = self.store.finished_tiles(&id)?;
+                let total = record.plan.tile_count();
+                if record.state().is_final() {
+                    // An earlier release's record: listed as failed, its tiles dropped.
+                    self.store.remove_tiles(&id)?;
+                    self.store.put_job(&id, &record.to_bytes())?;
+                } else {
+                    info!(job = %id, done = done.len(), total, "resuming job");
+                    let mut st = self.lock();
+                    st.scheduler
+                        .add_job(id.clone(), record.spec.priority, total, &done, Instant::now())
+                        .map_err(|e| anyhow::anyhow!("job {id}: {e}"))?;
+                    if record.resume_assembly(done.len() as u32 == total) {
+                        to_assemble.push(id.clone());
+                    }
+                }
+            }
+            self.lock().jobs.insert(id, record);
+        }
+        Ok(to_assemble)
+    }
+
+    fn lock(&self) -> MutexGuard<'_, FarmState> {
+        self.state.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    fn bump(&self) {
+        self.changed.send_modify(|v| *v += 1);
+    }
+
+    /// Writes the job's record as it is now (see the module doc).
+    pub(crate) fn persist(&self, id: &JobId) {
+        let _one_at_a_time = self.persisting.lock().unwrap_or_else(|p| p.into_inner());
+        let Some(bytes) = self.lock().jobs.get(id).map(JobRecord::to_bytes) else { return };
+        if let Err(e) = self.store.put_job(id, &bytes) {
+            warn!(job = %id, "could not store the job record: {e}");
+        }
+    }
+
+    fn status(st: &FarmState, r: &JobRecord) -> JobStatus {
+        let progress = st.scheduler.progress(&r.id);
+        let total = r.plan.tile_count();
+        let done = match r.state() {
+            JobState::Done | JobState::Assembling | JobState::PostProcessing => total,
+            JobState::Failed | JobState::Cancelled => r.tiles_done_at_end,
+            JobState::Queued | JobState::Running => progress.as_ref().map_or(0, |p| p.done),
+        };
+        JobStatus {
+            id: r.id.clone(),
+            name: r.spec.name.as_str().to_owned(),
+            state: r.state(),
+            tiles_total: total,
+            tiles_done: done,
+            tiles_leased: progress.as_ref().map_or(0, |p| p.leased),
+            tiles_requeued: progress.as_ref().map_or(0, |p| p.requeued),
+            error: r.error.clone(),
+            priority: r.spec.priority,
+            width: r.plan.width,
+            height: r.plan.height,
+            elapsed_s: now_unix_ms().saturating_sub(r.submitted_unix_ms) as f64 / 1e3,
+            results: r.results.clone(),
+        }
+    }
+
+    /// A copy of job `id`'s record.
+    pub(crate) fn jobs_record(&self, id: &JobId) -> Option<JobRecord> {
+        self.lock().jobs.get(id).cloned()
+    }
+
+    fn snapshot(&self, id: &JobId) -> Option<JobStatus> {
+        let st = self.lock();
+        st.jobs.get(id).map(|r| Self::status(&st, r))
+    }
+
+    /// Changes a job's record by `change` under the lock, then stores it and tells watchers.
+    pub(crate) fn transition<T>(
+        &self,
+        id: &JobId,
+        change: impl FnOnce(&mut JobRecord) -> Result<T>,
+    ) -> Result<(T, JobRecord)> {
+        let (value, record) = {
+            let mut st = self.lock();
+            let r = st.jobs.get_mut(id).ok_or_else(|| CoordinatorError::NoSuchJob(id.clone()))?;
+            (change(r)?, r.clone())
+        };
+        self.persist(id);
+        self.bump();
+        Ok((value, record))
+    }
+
+    /// Ends a job that has not ended (failed or cancelled): its tiles leave the scheduler and
+    /// the store. Returns what `end` returned; an ended job is left as it is.
+    fn end_job(
+        &self,
+        st: &mut FarmState,
+        id: &JobId,
+        end: impl FnOnce(&mut JobRecord, u32) -> Result<()>,
+    ) -> Result<()> {
+        let done = st.scheduler.progress(id).map_or(0, |p| p.done);
+        let r = st.jobs.get_mut(id).ok_or_else(|| CoordinatorError::NoSuchJob(id.clone()))?;
+        end(r, done)?;
+        st.scheduler.remove_job(id);
+        // Queued under the lock: after every tile of the job accepted before. (The committer
+        // logs a removal that fails; nothing waits for it.)
+        drop(self.commits.remove_job(id.clone()));
+        Ok(())
+    }
+
+    /// Fails a job with `reason` (a tile failed on several workers; an output could not be
+    /// written). Nothing happens to a job that has ended already.
+    pub(crate) fn fail_job(&self, id: &JobId, reason: String) {
+        let ended = {
+            let mut st = self.lock();
+            self.end_job(&mut st, id, |r, done| r.fail(reason.clone(), done))
+        };
+        if ended.is_ok() {
+            warn!(job = %id, "job failed: {reason}");
+            self.persist(id);
+            self.bump();
+        }
+    }
+
+    /// A job whose results are written: done, and its tiles dropped. Refused when the job
+    /// ended meanwhile (cancelled while its files were written).
+    pub(crate) fn finish_job(&self, id: &JobId, files: Vec<String>) -> Result<()> {
+        {
+            let mut st = self.lock();
+            let r = st.jobs.get_mut(id).ok_or_else(|| CoordinatorError::NoSuchJob(id.clone()))?;
+            r.finish(files)?;
+            st.scheduler.remove_job(id);
+            drop(self.commits.remove_job(id.clone()));
+        }
+        self.persist(id);
+        self.bump();
+        Ok(())
+    }
+
+    /// Where a job's result files go.
+    pub(crate) fn results_dir(&self, id: &JobId) -> PathBuf {
+        self.config.data_dir.join("jobs").join(id.as_str())
+    }
+
+    /// Every asset a manifest names, from the asset store; refuses the manifest when one is
+    /// missing.
+    fn bundle(&self, manifest_json: &str) -> Result<Bundle> {
+        let scene = Bundle::parse_manifest(manifest_json).map_err(|e| {
+            CoordinatorError::Wire(pb::convert::WireError::new(
+                "manifest_json",
+                format!("not a scene bundle: {e}"),
+            ))
+        })?;
+        let skeleton = Bundle { scene, files: BTreeMap::new() };
+        let mut files = BTreeMap::new();
+        for reference in skeleton.references() {
+            let hash = asset_hash(&reference)?;
+            let bytes = self
+                .assets
+                .read(hash)?
+                .ok_or_else(|| CoordinatorError::AssetMissing { reference: reference.clone() })?;
+            files.insert(hash.to_owned(), bytes);
+        }
+        Ok(Bundle::from_parts(manifest_json, files)?)
+    }
+
+    // ------------------------------------------------------------------ clients
+
+    /// Which of `references` the coordinator does not have.
+    pub fn missing_assets(&self, references: Vec<String>) -> Result<Vec<String>> {
+        let mut missing = Vec::new();
+        for reference in references {
+            if !self.assets.has(asset_hash(&reference)?) {
+                missing.push(reference);
+            }
+        }
+        Ok(missing)
+    }
+
+    /// Starts an upload of `reference`, announced as `declared_bytes`.
+    pub async fn begin_upload(&self, reference: &str, declared_bytes: u64) -> Result<Upload> {
+        self.assets.begin(reference, declared_bytes).await
+    }
+
+    fn admit(&self) -> Result<Admission<'_>> {
+        let mut st = self.lock();
+        let open = st.jobs.values().filter(|r| !r.state().is_final()).count() + st.admitting;
+        if open >= self.config.max_jobs {
+            return Err(CoordinatorError::TooManyJobs { open });
+        }
+        st.admitting += 1;
+        Ok(Admission { farm: self, armed: true })
+    }
+
+    /// Takes a job: its scene (every asset uploaded) loaded and planned within the limits,
+    /// its record stored, its tiles queued.
+    pub async fn submit(
+        self: &Arc<Self>,
+        manifest_json: String,
+        spec: JobSpec,
+    ) -> Result<JobStatus> {
+        let mut admission = self.admit()?;
+        let farm = self.clone();
+        let (render, name, manifest) = (spec.render.clone(), spec.name.to_string(), manifest_json);
+        let (plan, manifest) = tokio::task::spawn_blocking(move || -> Result<(Plan, String)> {
+            let bundle = farm.bundle(&manifest)?;
+            let limits = farm.config.limits;
+            let scene = bundle.load(&limits)?;
+            let plan = Plan::new(&scene, &render, &limits, Path::new(&format!("scene {name}")))?;
+            Ok((plan, manifest))
+        })
+        .await
+        .map_err(|e| CoordinatorError::Internal(e.to_string()))??;
+        let id = JobId::random();
+        let tiles = plan.tile_count();
+        let record = JobRecord::new(id.clone(), spec, manifest, plan, now_unix_ms());
+        let (store, key, bytes) = (self.store.clone(), id.clone(), record.to_bytes());
+        tokio::task::spawn_blocking(move || store.put_job(&key, &bytes))
+            .await
+            .map_err(|e| CoordinatorError::Internal(e.to_string()))??;
+        let status = {
+            let mut st = self.lock();
+            admission.armed = false;
+            st.admitting -= 1;
+            st.scheduler
+                .add_job(id.clone(), record.spec.priority, tiles, &[], Instant::now())
+                .map_err(|e| CoordinatorError::Internal(e.to_string()))?;
+            let status = Self::status(&st, &record);
+            st.jobs.insert(id.clone(), record);
+            status
+        };
+        info!(job = %id, name = %status.name, tiles, "job submitted");
+        self.work.notify_waiters();
+        self.bump();
+        Ok(status)
+    }
+
+    /// The job's status now and at every change until it ends. Subscribed before the first
+    /// status is taken, so no change between the two is lost.
+    pub fn watch(self: &Arc<Self>, id: &JobId) -> Result<mpsc::Receiver<JobStatus>> {
+        let mut changes = self.changed.subscribe();
+        let first = self.snapshot(id).ok_or_else(|| CoordinatorError::NoSuchJob(id.clone()))?;
+        let (tx, rx) = mpsc::channel(16);
+        let (farm, id) = (self.clone(), id.clone());
+        tokio::spawn(async move {
+            let mut last = first;
+            if tx.send(last.clone()).await.is_err() {
+                return;
+            }
+            while !last.state.is_final() {
+                if changes.changed().await.is_err() {
+                    return;
+                }
+                let Some(now) = farm.snapshot(&id) else { return };
+                if now != last {
+                    if tx.send(now.clone()).await.is_err() {
+                        return;
+                    }
+                    last = now;
+                }
+            }
+        });
+        Ok(rx)
+    }
+
+    /// The path of one result file of a finished job.
+    pub fn result_path(&self, id: &JobId, name: &str) -> Result<PathBuf> {
+        let st = self.lock();
+        let r = st.jobs.get(id).ok_or_else(|| CoordinatorError::NoSuchJob(id.clone()))?;
+        if r.state() != JobState::Done {
+            return Err(CoordinatorError::NotDone { job: id.clone(), state: r.state() });
+        }
+        if !r.results.iter().any(|f| f == name) {
+            return Err(CoordinatorError::NoSuchResult { job: id.clone(), name: name.to_owned() });
+        }
+        Ok(self.results_dir(id).join(name))
+    }
+
+    /// Cancels a job that has not ended; an ended job is left as it is. Its status.
+    pub fn cancel(&self, id: &JobId) -> Result<JobStatus> {
+        let status = {
+            let mut st = self.lock();
+            let state = st.jobs.get(id).map(JobRecord::state);
+            match state {
+                None => return Err(CoordinatorError::NoSuchJob(id.clone())),
+                Some(s) if !s.is_final() => self.end_job(&mut st, id, |r, done| r.cancel(done))?,
+                Some(_) => {}
+            }
+            Self::status(&st, &st.jobs[id])
+        };
+        info!(job = %id, state = %status.state, "cancel");
+        self.persist(id);
+        self.work.notify_waiters();
+        self.bump();
+        Ok(status)
+    }
+
+    pub fn jobs(&self) -> Vec<JobStatus> {
+        let st = self.lock();
+        st.jobs.values().map(|r| Self::status(&st, r)).collect()
+    }
+
+    pub fn workers(&self) -> Vec<WorkerStatus> {
+        let st = self.lock();
+        let now = Instant::now();
+        st.scheduler
+            .workers()
+            .into_iter()
+            .map(|w| WorkerStatus {
+                id: w.id,
+                name: w.name,
+                capacity: w.capacity,
+                leases: w.leases,
+                done: w.done,
+                failed: w.failed,
+                last_seen_s: now.saturating_duration_since(w.last_seen).as_secs_f64(),
+                build: st.workers.get(&w.id).map(|e| e.build.clone()).unwrap_or_default(),
+            })
+            .collect()
+    }
+
+    // ------------------------------------------------------------------ workers
+
+    /// Registers a worker: its session, and how often it should heartbeat.
+    pub fn register(&self, name: &str, capacity: u32, build: &str) -> Result<(Session, Duration)> {
+        check_label("name", name, 128).map_err(pb::convert::WireError::from)?;
+        check_label("build", build, 256).map_err(pb::convert::WireError::from)?;
+        let key = SessionKey::random();
+        let worker = {
+            let mut st = self.lock();
+            let id = st.scheduler.register_worker(name, capacity.clamp(1, 1024), Instant::now());
+            st.workers.insert(id, WorkerEntry { key, build: build.to_owned() });
+            id
+        };
+        self.timer.notify_one();
+        info!(worker = %worker, %name, capacity, %build, "worker registered");
+        let heartbeat =
+            (self.config.scheduler.heartbeat_timeout / 3).max(Duration::from_millis(50));
+        Ok((Session { worker, key }, heartbeat))
+    }
+
+    /// Whether `session` is a registered worker's, heard from now.
+    fn known(st: &mut FarmState, session: &Session) -> bool {
+        st.workers.get(&session.worker).is_some_and(|e| e.key == session.key)
+            && st.scheduler.heartbeat(session.worker, Instant::now())
+    }
+
+    /// False: the session is unknown (register again).
+    pub fn heartbeat(&self, session: &Session) -> bool {
+        Self::known(&mut self.lock(), session)
+    }
+
+    /// Up to `max` leases, waiting at most `wait` for work; `None` for an unknown session.
+    pub async fn pull(
+        &self,
+        session: &Session,
+        max: u32,
+        wait: Duration,
+    ) -> Option<Vec<pb::Lease>> {
+        let deadline = tokio::time::Instant::now() + wait.min(Duration::from_secs(30));
+        loop {
+            let notified = self.work.notified();
+            tokio::pin!(notified);
+            notified.as_mut().enable();
+            {
+                let mut st = self.lock();
+                if !Self::known(&mut st, session) {
+                    return None;
+                }
+                let leases = self.grant(st, session.worker, max);
+                if !leases.is_empty() {
+                    return Some(leases);
+                }
+            }
+            if tokio::time::timeout_at(deadline, notified).await.is_err() {
+                return Some(Vec::new());
+            }
+        }
+    }
+
+    /// Up to `max` new leases for `worker`, signed for the wire; a queued job whose first tile
+    /// goes out starts running.
+    fn grant(
+        &self,
+        mut st: MutexGuard<'_, FarmState>,
+        worker: WorkerId,
+        max: u32,
+    ) -> Vec<pb::Lease> {
+        let leases = st.scheduler.lease(worker, max.clamp(1, 64), Instant::now());
+        let mut out = Vec::with_capacity(leases.len());
+        let mut started = Vec::new();
+        for l in leases {
+            let Some(record) = st.jobs.get_mut(&l.job) else { continue };
+            if record.start() {
+                started.push(l.job.clone());
+            }
+            let Some(rect) = record.plan.tile_rect(l.tile) else { continue };
+            out.push(self.signer.grant(&l, rect));
+        }
+        drop(st);
+        self.timer.notify_one();
+        for id in &started {
+            self.persist(id);
+        }
+        if !started.is_empty() {
+            self.bump();
+        }
+        out
+    }
+
+    /// Checks that `claim` is a lease this store granted, and in this run to `session`'s
+    /// worker. A lease of an earlier run cannot be tied to a worker (ids are per run): its
+    /// ticket is the proof that the coordinator gave it out.
+    fn check_claim(&self, session: &Session, claim: &LeaseClaim) -> Result<()> {
+        let foreign = |problem| CoordinatorError::ForeignLease {
+            job: claim.job.to_string(),
+            tile: claim.tile,
+            problem,
+        };
+        if !self.signer.verify(claim) {
+            return Err(foreign("its ticket is not one this coordinator gave out"));
+        }
+        if claim.epoch > self.signer.epoch() {
+            return Err(foreign("it names a run of the coordinator that has not happened"));
+        }
+        if claim.epoch == self.signer.epoch() && claim.holder != session.worker {
+            return Err(foreign("it was granted to another worker"));
+        }
+        Ok(())
+    }
+
+    /// How a report of `claim` stands, before its pixels are read.
+    pub fn expect_report(&self, session: &Session, claim: &LeaseClaim) -> Result<Expected> {
+        let mut st = self.lock();
+        if !Self::known(&mut st, session) {
+            return Ok(Expected::UnknownSession);
+        }
+        self.check_claim(session, claim)?;
+        let Some(r) = st.jobs.get(&claim.job) else { return Ok(Expected::Stale) };
+        if !matches!(r.state(), JobState::Queued | JobState::Running) {
+            return Ok(Expected::Stale);
+        }
+        match r.plan.tile_rect(claim.tile) {
+            Some(rect) => Ok(Expected::Tile { rect, spectral: r.plan.spectral, sky: r.plan.sky }),
+            None => Ok(Expected::Stale),
+        }
+    }
+
+    /// A worker's result for `claim`: its pixels checked (a value no tracer produces counts as
+    /// the worker's failure of the tile), then decided (only the tile's current lease, or an
+    /// earlier run's lease of a tile not yet done, is accepted), then stored; the tile is done
+    /// once the store has it.
+    pub async fn report(
+        self: &Arc<Self>,
+        session: &Session,
+        claim: &LeaseClaim,
+        render_s: f64,
+        data: Vec<u8>,
+    ) -> Result<Reported> {
+        let (rect, spectral, sky) = match self.expect_report(session, claim)? {
+            Expected::UnknownSession => return Ok(Reported::UnknownSession),
+            Expected::Stale => return Ok(Reported::Stale),
+            Expected::Tile { rect, spectral, sky } => (rect, spectral, sky),
+        };
+        let tile = claim.tile;
+        let (checked, data) = tokio::task::spawn_blocking(move || {
+            (check_tile(tile, &rect, spectral, sky, &data), data)
+        })
+        .await
+        .map_err(|e| CoordinatorError::Internal(e.to_string()))?;
+        if let Err(e) = checked {
+            let reason = format!("sent pixels no tracer produces: {e}");
+            warn!(job = %claim.job, tile, worker = %session.worker, "{reason}");
+            self.fail(session, claim, &reason, false)?;
+            return Err(CoordinatorError::TileData {
+                job: claim.job.clone(),
+                tile,
+                problem: e.problem,
+            });
+        }
+        self.metrics.tile_bytes_received.inc_by(data.len() as u64);
+        if render_s.is_finite() && render_s >= 0.0 {
+            self.metrics.tile_render_seconds.observe(render_s);
+        }
+        let committed = {
+            let mut st = self.lock();
+            if !Self::known(&mut st, session) {
+                return Ok(Reported::UnknownSession);
+            }
+            let completion = if claim.epoch == self.signer.epoch() {
+                st.scheduler.complete(&self.signer.lease(claim), Instant::now())
+            } else {
+                st.scheduler.complete_inherited(&claim.job, tile)
+            };
+            if completion == Completion::Stale {
+                return Ok(Reported::Stale);
+            }
+            // Queued under the lock: ordered before any later removal of the job's tiles.
+            self.commits.put(claim.job.clone(), tile, data)
+        };
+        match committed.wait().await {
+            Ok(()) => {
+                let finished = {
+                    let mut st = self.lock();
+                    let finished = st.scheduler.committed(&claim.job, tile);
+                    finished
+                        && st.jobs.get_mut(&claim.job).is_some_and(|r| r.begin_assembly().is_ok())
+                };
+                debug!(job = %claim.job, tile, worker = %session.worker, render_s, "tile done");
+                if finished {
+                    self.persist(&claim.job);
+                    let (farm, id) = (self.clone(), claim.job.clone());
+                    tokio::task::spawn_blocking(move || crate::assembly::assemble(&farm, &id));
+                }
+                self.bump();
+                Ok(Reported::Accepted)
+            }
+            Err(e) => {
+                warn!(job = %claim.job, tile, "could not store the tile: {e}; it goes back to the queue");
+                self.lock().scheduler.commit_failed(&claim.job, tile);
+                self.work.notify_waiters();
+                self.bump();
+                Err(e.into())
+            }
+        }
+    }
+
+    /// A worker could not render its tile. A `retryable` failure (the transport's, not the
+    /// tile's) hands the tile back; any other counts against the worker and the tile, and may
+    /// fail the job. `None` for an unknown session; else whether the lease was current.
+    pub fn fail(
+        &self,
+        session: &Session,
+        claim: &LeaseClaim,
+        reason: &str,
+        retryable: bool,
+    ) -> Result<Option<bool>> {
+        let reason = printable(reason, 2000);
+        let outcome = {
+            let mut st = self.lock();
+            if !Self::known(&mut st, session) {
+                return Ok(None);
+            }
+            self.check_claim(session, claim)?;
+            if claim.epoch != self.signer.epoch() {
+                return Ok(Some(false));
+            }
+            let lease = self.signer.lease(claim);
+            warn!(job = %claim.job, tile = claim.tile, worker = %session.worker, retryable, "tile failed: {reason}");
+            if retryable {
+                if st.scheduler.give_back(&lease, Instant::now()) {
+                    Failure::Requeued
+                } else {
+                    Failure::Stale
+                }
+            } else {
+                let outcome = st.scheduler.fail(&lease, &reason, Instant::now());
+                if let Failure::JobFailed { reason } = &outcome {
+                    let reason = reason.clone();
+                    let _ = self.end_job(&mut st, &claim.job, |r, done| r.fail(reason, done));
+                }
+                outcome
+            }
+        };
+        match outcome {
+            Failure::Requeued => {
+                self.work.notify_waiters();
+                self.bump();
+                Ok(Some(true))
+            }
+            Failure::JobFailed { reason } => {
+                warn!(job = %claim.job, "job failed: {reason}");
+                self.persist(&claim.job);
+                self.bump();
+                Ok(Some(true))
+            }
+            Failure::Stale => Ok(Some(false)),
+        }
+    }
+
+    /// A worker hands back leases it will not finish, and, `leaving`, every other lease it
+    /// holds and its session. `None` for an unknown session; else whether any tile went back.
+    pub fn return_leases(
+        &self,
+        session: &Session,
+        claims: &[LeaseClaim],
+        leaving: bool,
+    ) -> Result<Option<bool>> {
+        let any = {
+            let mut st = self.lock();
+            if !Self::known(&mut st, session) {
+                return Ok(None);
+            }
+            let mut any = false;
+            for claim in claims {
+                self.check_claim(session, claim)?;
+                if claim.epoch == self.signer.epoch() {
+                    any |= st.scheduler.give_back(&self.signer.lease(claim), Instant::now());
+                }
+            }
+            if leaving {
+                let returned = st.scheduler.remove_worker(session.worker, Instant::now());
+                st.workers.remove(&session.worker);
+                info!(worker = %session.worker, returned = returned.len(), "worker left");
+                any |= !returned.is_empty();
+            }
+            any
+        };
+        if any {
+            self.work.notify_waiters();
+            self.bump();
+        }
+        Ok(Some(any))
+    }
+
+    /// What a worker renders for job `id`.
+    pub fn worker_job(&self, session: &Session, id: &JobId) -> Result<WorkerJob> {
+        let mut st = self.lock();
+        if !Self::known(&mut st, session) {
+            return Err(CoordinatorError::UnknownSession { worker: session.worker.0 });
+        }
+        let r = st.jobs.get(id).ok_or_else(|| CoordinatorError::NoSuchJob(id.clone()))?;
+        Ok(WorkerJob {
+            manifest_json: r.manifest_json.clone(),
+            plan: r.plan.clone(),
+            limits: self.config.limits,
+        })
+    }
+
+    /// The file of an asset, for a worker.
+    pub fn asset_path(&self, session: &Session, reference: &str) -> Result<PathBuf> {
+        if !Self::known(&mut self.lock(), session) {
+            return Err(CoordinatorError::UnknownSession { worker: session.worker.0 });
+        }
+        let hash = asset_hash(reference)?;
+        if !self.assets.has(hash) {
+            return Err(CoordinatorError::AssetMissing { reference: reference.to_owned() });
+        }
+        Ok(self.assets.path(hash))
+    }
+
+    // ------------------------------------------------------------------ time
+
+    /// Expires overdue leases and silent workers.
+    pub fn expire(&self) {
+        let mut st = self.lock();
+        let before = st.scheduler.totals();
+        let expired = st.scheduler.expire(Instant::now());
+        let after = st.scheduler.totals();
+        let lost = after.workers_lost - before.workers_lost;
+        if lost > 0 {
+            warn!(workers = lost, "dropped worker(s) silent past the heartbeat timeout");
+            let known: std::collections::HashSet<WorkerId> =
+                st.scheduler.workers().iter().map(|w| w.id).collect();
+            st.workers.retain(|id, _| known.contains(id));
+        }
+        if !expired.is_empty() {
+            // The first ones ran past the lease timeout; the rest were held by dropped workers.
+            let timed_out = (after.lease_expiries - before.lease_expiries) as usize;
+            for (i, l) in expired.iter().enumerate() {
+                let why = if i < timed_out { "lease expired" } else { "worker dropped" };
+                info!(job = %l.job, tile = l.tile, attempt = l.attempt, worker = %l.worker, "{why}; tile requeued");
+            }
+            drop(st);
+            self.work.notify_waiters();
+            self.bump();
+        }
+    }
+
+    /// Expires leases and workers as their deadlines come, from the scheduler's own next
+    /// deadline (woken early when a new one may be nearer). Runs until the runtime stops.
+    pub async fn run_timer(self: Arc<Self>) {
+        loop {
+            let next = self.lock().scheduler.next_deadline();
+            let until = next.map_or_else(
+                || tokio::time::Instant::now() + Duration::from_secs(60),
+                tokio::time::Instant::from_std,
+            );
+            tokio::select! {
+                () = tokio::time::sleep_until(until) => self.expire(),
+                () = self.timer.notified() => {}
+            }
+        }
+    }
+}
+
+/// Removes the temporary files that a coordinator killed while writing results left behind.
+fn remove_leftover_results(jobs_dir: &Path) {
+    let Ok(entries) = std::fs::read_dir(jobs_dir) else { return };
+    for entry in entries.flatten() {
+        let dir = entry.path();
+        if dir.is_dir() {
+            match restauro_image::atomic_file::remove_leftovers(&dir) {
+                Ok(0) => {}
+                Ok(n) => info!(dir = %dir.display(), files = n, "removed unfinished result files"),
+                Err(e) => warn!(dir = %dir.display(), "could not clean up: {e}"),
+            }
+        }
+    }
+}
+
+/// What the operations endpoint reports for the coordinator.
+impl restauro_ops::endpoint::Probe for Farm {
+    fn refresh(&self) {
+        let st = self.lock();
+        let unfinished = st.jobs.values().filter(|r| !r.state().is_final()).count() as u64;
+        self.metrics.update(st.scheduler.gauges(), st.scheduler.totals(), unfinished);
+    }
+
+    fn registry(&self) -> &prometheus_client::registry::Registry {
+        self.metrics.registry()
+    }
+
+    fn ready(&self) -> std::result::Result<(), String> {
+        Ok(())
+    }
+}

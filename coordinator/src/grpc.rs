@@ -1,0 +1,406 @@
+//! The coordinator's two gRPC services, `Render` for clients and `Work` for workers: each call
+//! converts its request to domain types (refusing what they cannot hold), calls the [`Farm`],
+//! and converts the answer back. No decision is made here.
+
+use crate::error::{CoordinatorError, Result};
+use crate::farm::{Expected, Farm, Reported, WorkerStatus};
+use crate::ids::{JobId, Session};
+use crate::job::{JobState, JobStatus};
+use crate::lease::LeaseClaim;
+use restauro_proto::convert::WireError;
+use restauro_proto::{self as pb, CHUNK_BYTES, PROTOCOL_VERSION};
+use restauro_scene::job::JobSpec;
+use std::path::PathBuf;
+use std::pin::Pin;
+use std::sync::Arc;
+use std::time::Duration;
+use tokio::io::AsyncReadExt;
+use tokio_stream::wrappers::ReceiverStream;
+use tokio_stream::{Stream, StreamExt};
+use tonic::{Request, Response, Status, Streaming};
+
+type ReplyStream<T> = Pin<Box<dyn Stream<Item = Result<T, Status>> + Send + 'static>>;
+
+/// The client-facing service.
+pub struct RenderService(pub Arc<Farm>);
+/// The worker-facing service.
+pub struct WorkService(pub Arc<Farm>);
+
+impl From<JobState> for pb::JobState {
+    fn from(s: JobState) -> Self {
+        match s {
+            JobState::Queued => pb::JobState::Queued,
+            JobState::Running => pb::JobState::Running,
+            JobState::Assembling => pb::JobState::Assembling,
+            JobState::PostProcessing => pb::JobState::PostProcessing,
+            JobState::Done => pb::JobState::Done,
+            JobState::Failed => pb::JobState::Failed,
+            JobState::Cancelled => pb::JobState::Cancelled,
+        }
+    }
+}
+
+impl From<JobStatus> for pb::JobStatus {
+    fn from(s: JobStatus) -> Self {
+        pb::JobStatus {
+            job_id: s.id.to_string(),
+            name: s.name,
+            state: pb::JobState::from(s.state) as i32,
+            tiles_total: s.tiles_total,
+            tiles_done: s.tiles_done,
+            tiles_leased: s.tiles_leased,
+            tiles_requeued: s.tiles_requeued,
+            error: s.error,
+            priority: s.priority,
+            width: s.width,
+            height: s.height,
+            elapsed_s: s.elapsed_s,
+            results: s.results,
+        }
+    }
+}
+
+impl From<WorkerStatus> for pb::WorkerStatus {
+    fn from(w: WorkerStatus) -> Self {
+        pb::WorkerStatus {
+            worker_id: w.id.0,
+            name: w.name,
+            capacity: w.capacity,
+            leases: w.leases,
+            tiles_done: w.done,
+            tiles_failed: w.failed,
+            last_seen_s: w.last_seen_s,
+            build: w.build,
+        }
+    }
+}
+
+/// A job id from the wire: the coordinator's ids are UUIDs, and nothing else names a job.
+fn job_id(text: &str) -> Result<JobId> {
+    if uuid::Uuid::parse_str(text).is_err() {
+        return Err(
+            WireError::new("job_id", format!("`{}` is not a job id", text.escape_debug())).into()
+        );
+    }
+    Ok(JobId::from(text))
+}
+
+/// The version a request carries in its body (the interceptor checked the header's).
+fn check_version(version: u32, role: &'static str) -> Result<()> {
+    if version != PROTOCOL_VERSION {
+        let theirs = version.to_string();
+        return Err(CoordinatorError::ProtocolVersion { theirs, ours: PROTOCOL_VERSION, role });
+    }
+    Ok(())
+}
+
+fn session(s: Option<&pb::WorkerSession>) -> Result<Session> {
+    Ok(Session::try_from(s)?)
+}
+
+fn claim(lease: Option<&pb::Lease>) -> Result<LeaseClaim> {
+    Ok(LeaseClaim::try_from(lease.ok_or_else(|| WireError::missing("lease"))?)?)
+}
+
+/// A file sent in chunks, read as it is sent.
+fn file_stream(
+    name: String,
+    path: PathBuf,
+    on_bytes: impl Fn(u64) + Send + 'static,
+) -> ReplyStream<pb::Chunk> {
+    let (tx, rx) = tokio::sync::mpsc::channel(4);
+    tokio::spawn(async move {
+        let send = async |r: Result<pb::Chunk, Status>| tx.send(r).await.is_ok();
+        let mut file = match tokio::fs::File::open(&path).await {
+            Ok(f) => f,
+            Err(e) => {
+                send(Err(CoordinatorError::io(&path, e).into())).await;
+                return;
+            }
+        };
+        let total = file.metadata().await.map_or(0, |m| m.len());
+        let mut first = true;
+        loop {
+            let mut data = vec![0u8; CHUNK_BYTES];
+            let n = match file.read(&mut data).await {
+                Ok(n) => n,
+                Err(e) => {
+                    send(Err(CoordinatorError::io(&path, e).into())).await;
+                    return;
+                }
+            };
+            if n == 0 && !first {
+                return;
+            }
+            data.truncate(n);
+            on_bytes(n as u64);
+            let name = if first { name.clone() } else { String::new() };
+            first = false;
+            if !send(Ok(pb::Chunk { name, total_bytes: total, data })).await || n == 0 {
+                return;
+            }
+        }
+    });
+    Box::pin(ReceiverStream::new(rx))
+}
+
+#[tonic::async_trait]
+impl pb::render_server::Render for RenderService {
+    async fn missing_assets(
+        &self,
+        request: Request<pb::AssetList>,
+    ) -> Result<Response<pb::AssetList>, Status> {
+        let references = self.0.missing_assets(request.into_inner().references)?;
+        Ok(Response::new(pb::AssetList { references }))
+    }
+
+    async fn upload_asset(
+        &self,
+        request: Request<Streaming<pb::Chunk>>,
+    ) -> Result<Response<pb::AssetList>, Status> {
+        let mut stream = request.into_inner();
+        let first = stream.message().await?.ok_or_else(|| {
+            CoordinatorError::from(WireError::new("chunk", "an upload needs at least one chunk"))
+        })?;
+        let reference = first.name.clone();
+        let mut upload = self.0.begin_upload(&reference, first.total_bytes).await?;
+        upload.write(&first.data).await?;
+        while let Some(chunk) = stream.message().await? {
+            upload.write(&chunk.data).await?;
+        }
+        let bytes = upload.finish().await?;
+        self.0.metrics.asset_bytes_received.inc_by(bytes);
+        Ok(Response::new(pb::AssetList { references: vec![reference] }))
+    }
+
+    async fn submit_job(
+        &self,
+        request: Request<pb::SubmitJobRequest>,
+    ) -> Result<Response<pb::JobStatus>, Status> {
+        let req = request.into_inner();
+        check_version(req.protocol_version, "client")?;
+        let spec = JobSpec::try_from(&req).map_err(CoordinatorError::from)?;
+        let status = self.0.submit(req.manifest_json, spec).await?;
+        Ok(Response::new(status.into()))
+    }
+
+    type WatchJobStream = ReplyStream<pb::JobStatus>;
+
+    async fn watch_job(
+        &self,
+        request: Request<pb::JobRef>,
+    ) -> Result<Response<Self::WatchJobStream>, Status> {
+        let id = job_id(&request.into_inner().job_id)?;
+        let statuses = self.0.watch(&id)?;
+        let stream = ReceiverStream::new(statuses).map(|s| Ok(pb::JobStatus::from(s)));
+        Ok(Response::new(Box::pin(stream)))
+    }
+
+    type FetchResultStream = ReplyStream<pb::Chunk>;
+
+    async fn fetch_result(
+        &self,
+        request: Request<pb::FetchResultRequest>,
+    ) -> Result<Response<Self::FetchResultStream>, Status> {
+        let req = request.into_inner();
+        let path = self.0.result_path(&job_id(&req.job_id)?, &req.name)?;
+        let farm = self.0.clone();
+        let sent = move |n| {
+            farm.metrics.result_bytes_sent.inc_by(n);
+        };
+        Ok(Response::new(file_stream(req.name, path, sent)))
+    }
+
+    async fn cancel_job(
+        &self,
+        request: Request<pb::JobRef>,
+    ) -> Result<Response<pb::JobStatus>, Status> {
+        let status = self.0.cancel(&job_id(&request.into_inner().job_id)?)?;
+        Ok(Response::new(status.into()))
+    }
+
+    async fn list_jobs(
+        &self,
+        _request: Request<pb::ListJobsRequest>,
+    ) -> Result<Response<pb::JobList>, Status> {
+        let jobs = self.0.jobs().into_iter().map(Into::into).collect();
+        Ok(Response::new(pb::JobList { jobs }))
+    }
+
+    async fn list_workers(
+        &self,
+        _request: Request<pb::ListWorkersRequest>,
+    ) -> Result<Response<pb::WorkerList>, Status> {
+        let workers = self.0.workers().into_iter().map(Into::into).collect();
+        Ok(Response::new(pb::WorkerList { workers }))
+    }
+}
+
+fn reply(accepted: bool, known: bool) -> Response<pb::ReportReply> {
+    Response::new(pb::ReportReply { accepted, known })
+}
+
+#[tonic::async_trait]
+impl pb::work_server::Work for WorkService {
+    async fn register(
+        &self,
+        request: Request<pb::RegisterRequest>,
+    ) -> Result<Response<pb::RegisterReply>, Status> {
+        let req = request.into_inner();
+        check_version(req.protocol_version, "worker")?;
+        let (session, heartbeat) = self.0.register(&req.name, req.capacity, &req.build)?;
+        Ok(Response::new(pb::RegisterReply {
+            session: Some(session.into()),
+            heartbeat_ms: u32::try_from(heartbeat.as_millis()).unwrap_or(u32::MAX),
+        }))
+    }
+
+    async fn heartbeat(
+        &self,
+        request: Request<pb::HeartbeatRequest>,
+    ) -> Result<Response<pb::HeartbeatReply>, Status> {
+        let session = session(request.get_ref().session.as_ref())?;
+        Ok(Response::new(pb::HeartbeatReply { known: self.0.heartbeat(&session) }))
+    }
+
+    async fn pull_leases(
+        &self,
+        request: Request<pb::PullRequest>,
+    ) -> Result<Response<pb::PullReply>, Status> {
+        let req = request.into_inner();
+        let session = session(req.session.as_ref())?;
+        let wait = Duration::from_millis(u64::from(req.wait_ms));
+        Ok(Response::new(match self.0.pull(&session, req.max, wait).await {
+            Some(leases) => pb::PullReply { leases, known: true },
+            None => pb::PullReply { leases: Vec::new(), known: false },
+        }))
+    }
+
+    async fn report_tile(
+        &self,
+        request: Request<Streaming<pb::TileChunk>>,
+    ) -> Result<Response<pb::ReportReply>, Status> {
+        let mut stream = request.into_inner();
+        let header = match stream.message().await?.and_then(|c| c.part) {
+            Some(pb::tile_chunk::Part::Header(h)) => h,
+            _ => {
+                return Err(CoordinatorError::from(WireError::new(
+                    "header",
+                    "a tile report starts with its header",
+                ))
+                .into());
+            }
+        };
+        let session = session(header.session.as_ref())?;
+        let claim = claim(header.lease.as_ref())?;
+        let span = tracing::Span::current();
+        span.record("job", claim.job.as_str());
+        span.record("tile", claim.tile);
+        span.record("worker", session.worker.0);
+        // Decided before the pixels are read: a stale or unknown report is answered at once.
+        let (rect, spectral, sky) = match self.0.expect_report(&session, &claim)? {
+            Expected::UnknownSession => return Ok(reply(false, false)),
+            Expected::Stale => return Ok(reply(false, true)),
+            Expected::Tile { rect, spectral, sky } => (rect, spectral, sky),
+        };
+        let (image_bytes, spectral_bytes) =
+            restauro_image::framebuffer::tile_sizes(&rect, spectral, sky);
+        let tile_error = |problem: String| CoordinatorError::TileData {
+            job: claim.job.clone(),
+            tile: claim.tile,
+            problem,
+        };
+        if header.xyz_bytes != image_bytes as u64 || header.spectral_bytes != spectral_bytes as u64
+        {
+            return Err(tile_error(format!(
+                "{} + {} bytes announced, expected {image_bytes} + {spectral_bytes}",
+                header.xyz_bytes, header.spectral_bytes
+            ))
+            .into());
+        }
+        let expected = image_bytes + spectral_bytes;
+        let mut data = Vec::with_capacity(expected);
+        while let Some(chunk) = stream.next().await {
+            match chunk?.part {
+                Some(pb::tile_chunk::Part::Data(d)) if data.len() + d.len() <= expected => {
+                    data.extend_from_slice(&d);
+                }
+                Some(pb::tile_chunk::Part::Data(_)) => {
+                    return Err(
+                        tile_error(format!("more than the {expected} bytes announced")).into()
+                    );
+                }
+                _ => return Err(tile_error("a tile report has one header".into()).into()),
+            }
+        }
+        if data.len() != expected {
+            return Err(
+                tile_error(format!("{} bytes received, {expected} announced", data.len())).into()
+            );
+        }
+        Ok(match self.0.report(&session, &claim, header.render_s, data).await? {
+            Reported::UnknownSession => reply(false, false),
+            Reported::Stale => reply(false, true),
+            Reported::Accepted => reply(true, true),
+        })
+    }
+
+    async fn fail_tile(
+        &self,
+        request: Request<pb::FailRequest>,
+    ) -> Result<Response<pb::ReportReply>, Status> {
+        let req = request.into_inner();
+        let session = session(req.session.as_ref())?;
+        let claim = claim(req.lease.as_ref())?;
+        Ok(match self.0.fail(&session, &claim, &req.reason, req.retryable)? {
+            None => reply(false, false),
+            Some(accepted) => reply(accepted, true),
+        })
+    }
+
+    async fn return_leases(
+        &self,
+        request: Request<pb::ReturnRequest>,
+    ) -> Result<Response<pb::ReportReply>, Status> {
+        let req = request.into_inner();
+        let session = session(req.session.as_ref())?;
+        let claims: Vec<LeaseClaim> =
+            req.leases.iter().map(|l| claim(Some(l))).collect::<Result<_>>()?;
+        Ok(match self.0.return_leases(&session, &claims, req.leaving)? {
+            None => reply(false, false),
+            Some(any) => reply(any, true),
+        })
+    }
+
+    async fn fetch_job(
+        &self,
+        request: Request<pb::FetchJobRequest>,
+    ) -> Result<Response<pb::WorkerJob>, Status> {
+        let req = request.into_inner();
+        let session = session(req.session.as_ref())?;
+        let id = job_id(&req.job_id)?;
+        let job = self.0.worker_job(&session, &id)?;
+        Ok(Response::new(pb::WorkerJob {
+            job_id: id.to_string(),
+            manifest_json: job.manifest_json,
+            plan: Some((&job.plan).into()),
+            limits: Some((&job.limits).into()),
+        }))
+    }
+
+    type FetchAssetStream = ReplyStream<pb::Chunk>;
+
+    async fn fetch_asset(
+        &self,
+        request: Request<pb::FetchAssetRequest>,
+    ) -> Result<Response<Self::FetchAssetStream>, Status> {
+        let req = request.into_inner();
+        let session = session(req.session.as_ref())?;
+        let path = self.0.asset_path(&session, &req.reference)?;
+        let farm = self.0.clone();
+        let sent = move |n| {
+            farm.metrics.asset_bytes_sent.inc_by(n);
+        };
+        Ok(Response::new(file_stream(req.reference, path, sent)))
+    }
+}

@@ -1,0 +1,130 @@
+//! A lease as it leaves the coordinator and comes back: the scheduler's lease, the tile's
+//! rectangle, the run (epoch) that granted it, and a ticket — a keyed BLAKE3 hash of all of it
+//! under a secret that never leaves the coordinator's store. A worker can therefore only report,
+//! fail or hand back tiles it was given, whatever it puts in a message; and a coordinator
+//! restarted on the same store still recognises the leases its previous run granted (their
+//! epoch is older and their ticket verifies), so their results are not rendered again.
+
+use crate::ids::{JobId, WorkerId};
+use restauro_proto as pb;
+use restauro_proto::convert::WireError;
+use restauro_scene::plan::Rect;
+
+/// Signs and checks the leases of one run of the coordinator.
+#[derive(Clone)]
+pub struct LeaseSigner {
+    secret: [u8; 32],
+    epoch: u64,
+}
+
+/// What a lease names, as signed.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct LeaseClaim {
+    pub job: JobId,
+    pub tile: u32,
+    pub attempt: u32,
+    pub epoch: u64,
+    pub holder: WorkerId,
+    pub ticket: [u8; 32],
+}
+
+impl LeaseSigner {
+    pub fn new(secret: [u8; 32], epoch: u64) -> Self {
+        Self { secret, epoch }
+    }
+
+    /// This run's epoch.
+    pub fn epoch(&self) -> u64 {
+        self.epoch
+    }
+
+    fn ticket(&self, job: &str, tile: u32, attempt: u32, epoch: u64, holder: WorkerId) -> [u8; 32] {
+        let mut h = blake3::Hasher::new_keyed(&self.secret);
+        // The job id is length-prefixed, so no two leases hash the same bytes.
+        h.update(&(job.len() as u64).to_le_bytes());
+        h.update(job.as_bytes());
+        h.update(&tile.to_le_bytes());
+        h.update(&attempt.to_le_bytes());
+        h.update(&epoch.to_le_bytes());
+        h.update(&holder.0.to_le_bytes());
+        *h.finalize().as_bytes()
+    }
+
+    /// A lease of this run, for the wire.
+    pub fn grant(&self, lease: &crate::scheduler::Lease, rect: Rect) -> pb::Lease {
+        let ticket = self.ticket(&lease.job, lease.tile, lease.attempt, self.epoch, lease.worker);
+        pb::Lease {
+            job_id: lease.job.to_string(),
+            tile: lease.tile,
+            attempt: lease.attempt,
+            rect: Some(rect.into()),
+            epoch: self.epoch,
+            holder: lease.worker.0,
+            ticket: ticket.to_vec(),
+        }
+    }
+
+    /// Whether the claim's ticket is the one this store's secret gives its fields (compared in
+    /// constant time).
+    pub fn verify(&self, c: &LeaseClaim) -> bool {
+        let expected = self.ticket(&c.job, c.tile, c.attempt, c.epoch, c.holder);
+        blake3::Hash::from(expected) == blake3::Hash::from(c.ticket)
+    }
+
+    /// The scheduler's lease a claim of this run names.
+    pub fn lease(&self, c: &LeaseClaim) -> crate::scheduler::Lease {
+        crate::scheduler::Lease {
+            job: c.job.clone(),
+            tile: c.tile,
+            attempt: c.attempt,
+            worker: c.holder,
+        }
+    }
+}
+
+impl TryFrom<&pb::Lease> for LeaseClaim {
+    type Error = WireError;
+    fn try_from(l: &pb::Lease) -> Result<Self, WireError> {
+        let ticket = <[u8; 32]>::try_from(l.ticket.as_slice())
+            .map_err(|_| WireError::new("lease.ticket", "not the 32 bytes the lease came with"))?;
+        Ok(LeaseClaim {
+            job: JobId::from(l.job_id.as_str()),
+            tile: l.tile,
+            attempt: l.attempt,
+            epoch: l.epoch,
+            holder: WorkerId(l.holder),
+            ticket,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scheduler::Lease;
+
+    #[test]
+    fn only_a_granted_lease_verifies_and_the_next_run_still_knows_it() {
+        let run1 = LeaseSigner::new([3; 32], 1);
+        let lease = Lease { job: "j".into(), tile: 4, attempt: 2, worker: WorkerId(9) };
+        let wire = run1.grant(&lease, Rect { x: 0, y: 0, width: 8, height: 8 });
+        let claim = LeaseClaim::try_from(&wire).unwrap();
+        assert!(run1.verify(&claim));
+        assert_eq!(run1.lease(&claim), lease);
+        // The next run on the same store (same secret, next epoch) verifies it too.
+        assert!(LeaseSigner::new([3; 32], 2).verify(&claim));
+        // Another store's secret does not, nor any change of a field.
+        assert!(!LeaseSigner::new([4; 32], 1).verify(&claim));
+        for forged in [
+            LeaseClaim { tile: 5, ..claim.clone() },
+            LeaseClaim { attempt: 3, ..claim.clone() },
+            LeaseClaim { holder: WorkerId(8), ..claim.clone() },
+            LeaseClaim { epoch: 2, ..claim.clone() },
+            LeaseClaim { job: "k".into(), ..claim.clone() },
+        ] {
+            assert!(!run1.verify(&forged), "{forged:?}");
+        }
+        let short = pb::Lease { ticket: vec![0; 31], ..wire };
+        assert_eq!(LeaseClaim::try_from(&short).unwrap_err().field, "lease.ticket");
+    }
+}

@@ -1,0 +1,315 @@
+//! The one conversion of each wire type to its domain type (`TryFrom`, refusing what the domain
+//! cannot hold) and back (`From`). Nothing past this module reads a `pb` options message.
+//!
+//! | wire | domain |
+//! |---|---|
+//! | `pb::RenderOptions` | `restauro_scene::plan::RenderOptions` |
+//! | `pb::Integrator` | `restauro_scene::scene_file::Integrator` (unspecified: the scene's) |
+//! | `pb::Exposure` | `restauro_spectral::display::Exposure` |
+//! | `pb::RetinexOptions` | `restauro_scene::job::RetinexOptions` |
+//! | `pb::SubmitJobRequest` | `restauro_scene::job::JobSpec` (and the manifest) |
+//! | `pb::Plan` | `restauro_scene::plan::Plan` |
+//! | `pb::SceneLimits` | `restauro_scene::limits::Limits` |
+//! | `pb::Rect` | `restauro_scene::plan::Rect` |
+
+use crate::pb;
+use restauro_scene::job::{JobName, JobSpec, JobSpecError, RetinexOptions};
+use restauro_scene::limits::Limits;
+use restauro_scene::plan::{Plan, Rect, RenderOptions};
+use restauro_scene::scene_file::Integrator;
+use restauro_spectral::display::Exposure;
+
+/// A wire message the domain cannot hold: the field and what is wrong with it.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{field}: {problem}")]
+pub struct WireError {
+    pub field: String,
+    pub problem: String,
+}
+
+impl WireError {
+    pub fn new(field: impl Into<String>, problem: impl Into<String>) -> Self {
+        Self { field: field.into(), problem: problem.into() }
+    }
+
+    pub fn missing(field: &str) -> Self {
+        Self::new(field, "missing")
+    }
+}
+
+impl From<JobSpecError> for WireError {
+    fn from(e: JobSpecError) -> Self {
+        Self::new(e.field, e.problem)
+    }
+}
+
+/// The integrator a wire value names; `None` for the scene's own.
+pub fn integrator_from_wire(value: i32, field: &str) -> Result<Option<Integrator>, WireError> {
+    match pb::Integrator::try_from(value) {
+        Ok(pb::Integrator::Unspecified) => Ok(None),
+        Ok(pb::Integrator::Whitted) => Ok(Some(Integrator::Whitted)),
+        Ok(pb::Integrator::Path) => Ok(Some(Integrator::Path)),
+        Err(_) => Err(WireError::new(field, format!("unknown integrator {value}"))),
+    }
+}
+
+impl From<Option<Integrator>> for pb::Integrator {
+    fn from(i: Option<Integrator>) -> Self {
+        match i {
+            None => pb::Integrator::Unspecified,
+            Some(Integrator::Whitted) => pb::Integrator::Whitted,
+            Some(Integrator::Path) => pb::Integrator::Path,
+        }
+    }
+}
+
+impl TryFrom<pb::RenderOptions> for RenderOptions {
+    type Error = WireError;
+    fn try_from(o: pb::RenderOptions) -> Result<Self, WireError> {
+        Ok(RenderOptions {
+            integrator: integrator_from_wire(o.integrator, "render.integrator")?,
+            variant: o.variant,
+            samples_per_pixel: o.samples_per_pixel,
+            width: o.width,
+            height: o.height,
+            spectral: o.spectral,
+            tile: o.tile,
+        })
+    }
+}
+
+impl From<&RenderOptions> for pb::RenderOptions {
+    fn from(o: &RenderOptions) -> Self {
+        pb::RenderOptions {
+            variant: o.variant.clone(),
+            integrator: pb::Integrator::from(o.integrator) as i32,
+            samples_per_pixel: o.samples_per_pixel,
+            width: o.width,
+            height: o.height,
+            spectral: o.spectral,
+            tile: o.tile,
+        }
+    }
+}
+
+/// An absent mode (or an absent message: `unwrap_or_default`) is the default exposure.
+impl TryFrom<pb::Exposure> for Exposure {
+    type Error = WireError;
+    fn try_from(e: pb::Exposure) -> Result<Self, WireError> {
+        use pb::exposure::Mode;
+        let exposure = match e.mode {
+            None => Exposure::default(),
+            Some(Mode::AutomaticKey(key)) => Exposure::Automatic { key },
+            Some(Mode::AbsoluteWhiteCdM2(white_cd_m2)) => Exposure::Absolute { white_cd_m2 },
+            Some(Mode::Relative(true)) => Exposure::Relative,
+            Some(Mode::Relative(false)) => {
+                return Err(WireError::new("exposure.relative", "false; leave the mode out"));
+            }
+        };
+        exposure.checked().map_err(|e| WireError::new("exposure", e))
+    }
+}
+
+impl From<Exposure> for pb::Exposure {
+    fn from(e: Exposure) -> Self {
+        use pb::exposure::Mode;
+        let mode = match e {
+            Exposure::Automatic { key } => Mode::AutomaticKey(key),
+            Exposure::Absolute { white_cd_m2 } => Mode::AbsoluteWhiteCdM2(white_cd_m2),
+            Exposure::Relative => Mode::Relative(true),
+        };
+        pb::Exposure { mode: Some(mode) }
+    }
+}
+
+impl TryFrom<pb::RetinexOptions> for RetinexOptions {
+    type Error = WireError;
+    fn try_from(r: pb::RetinexOptions) -> Result<Self, WireError> {
+        Ok(RetinexOptions::new(r.paths, r.seed)?)
+    }
+}
+
+impl From<RetinexOptions> for pb::RetinexOptions {
+    fn from(r: RetinexOptions) -> Self {
+        pb::RetinexOptions { paths: Some(r.paths), seed: Some(r.seed) }
+    }
+}
+
+/// The job of a submission (its manifest stays in the request: it is the scene, checked when
+/// the coordinator loads it).
+impl TryFrom<&pb::SubmitJobRequest> for JobSpec {
+    type Error = WireError;
+    fn try_from(r: &pb::SubmitJobRequest) -> Result<Self, WireError> {
+        let spec = JobSpec {
+            name: JobName::new(&r.name)?,
+            priority: r.priority,
+            render: r.render.clone().unwrap_or_default().try_into()?,
+            exposure: r.exposure.unwrap_or_default().try_into()?,
+            retinex: r.retinex.unwrap_or_default().try_into()?,
+        };
+        Ok(spec.checked()?)
+    }
+}
+
+/// A submission of `spec` for the scene of `manifest_json`.
+pub fn submit_request(manifest_json: String, spec: &JobSpec) -> pb::SubmitJobRequest {
+    pb::SubmitJobRequest {
+        protocol_version: crate::PROTOCOL_VERSION,
+        manifest_json,
+        render: Some((&spec.render).into()),
+        priority: spec.priority,
+        name: spec.name.as_str().to_owned(),
+        exposure: Some(spec.exposure.into()),
+        retinex: Some(spec.retinex.into()),
+    }
+}
+
+impl From<&Plan> for pb::Plan {
+    fn from(p: &Plan) -> Self {
+        pb::Plan {
+            width: p.width,
+            height: p.height,
+            variant: p.variant.clone(),
+            integrator: pb::Integrator::from(Some(p.integrator)) as i32,
+            samples_per_pixel: p.samples_per_pixel,
+            max_depth: p.max_depth,
+            seed: p.seed,
+            spectral: p.spectral,
+            sky: p.sky,
+            tile: p.tile,
+        }
+    }
+}
+
+/// A plan as sent; its numbers are checked against the limits it came with by the receiver
+/// (`Plan::check`), since only the receiver knows them.
+impl TryFrom<pb::Plan> for Plan {
+    type Error = WireError;
+    fn try_from(p: pb::Plan) -> Result<Self, WireError> {
+        let integrator = integrator_from_wire(p.integrator, "plan.integrator")?
+            .ok_or_else(|| WireError::new("plan.integrator", "unspecified in a resolved plan"))?;
+        Ok(Plan {
+            width: p.width,
+            height: p.height,
+            variant: p.variant,
+            integrator,
+            samples_per_pixel: p.samples_per_pixel,
+            max_depth: p.max_depth,
+            seed: p.seed,
+            spectral: p.spectral,
+            sky: p.sky,
+            tile: p.tile,
+        })
+    }
+}
+
+impl From<&Limits> for pb::SceneLimits {
+    fn from(l: &Limits) -> Self {
+        pb::SceneLimits {
+            max_pixels: l.max_pixels,
+            max_triangles: l.max_triangles,
+            max_samples_per_pixel: l.max_samples_per_pixel,
+            max_depth: l.max_depth,
+            max_file_bytes: l.max_file_bytes,
+            max_spectral_pixels: l.max_spectral_pixels,
+            max_tiles: l.max_tiles,
+            min_tile: l.min_tile,
+        }
+    }
+}
+
+impl From<pb::SceneLimits> for Limits {
+    fn from(l: pb::SceneLimits) -> Self {
+        Limits {
+            max_pixels: l.max_pixels,
+            max_triangles: l.max_triangles,
+            max_samples_per_pixel: l.max_samples_per_pixel,
+            max_depth: l.max_depth,
+            max_file_bytes: l.max_file_bytes,
+            max_spectral_pixels: l.max_spectral_pixels,
+            max_tiles: l.max_tiles,
+            min_tile: l.min_tile.max(1),
+        }
+    }
+}
+
+impl From<Rect> for pb::Rect {
+    fn from(r: Rect) -> Self {
+        pb::Rect { x: r.x, y: r.y, width: r.width, height: r.height }
+    }
+}
+
+impl From<pb::Rect> for Rect {
+    fn from(r: pb::Rect) -> Self {
+        Rect { x: r.x, y: r.y, width: r.width, height: r.height }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_job_spec_survives_the_wire() {
+        let spec = JobSpec {
+            name: JobName::new("aosta-cleaned").unwrap(),
+            priority: -3,
+            render: RenderOptions {
+                variant: Some("cleaned".into()),
+                integrator: Some(Integrator::Path),
+                samples_per_pixel: Some(9),
+                width: Some(320),
+                height: None,
+                spectral: true,
+                tile: Some(32),
+            },
+            exposure: Exposure::Absolute { white_cd_m2: 120.0 },
+            retinex: RetinexOptions::new(Some(40), Some(7)).unwrap(),
+        };
+        let wire = submit_request("{}".into(), &spec);
+        assert_eq!(JobSpec::try_from(&wire).unwrap(), spec);
+    }
+
+    #[test]
+    fn what_the_domain_cannot_hold_is_refused_naming_the_field() {
+        let ok = submit_request("{}".into(), &JobSpec::default());
+        let field = |r: pb::SubmitJobRequest| JobSpec::try_from(&r).unwrap_err().field;
+        let mut r = ok.clone();
+        r.render.as_mut().unwrap().integrator = 9;
+        assert_eq!(field(r), "render.integrator");
+        let mut r = ok.clone();
+        r.retinex = Some(pb::RetinexOptions { paths: Some(4_000_000_000), seed: None });
+        assert_eq!(field(r), "retinex.paths");
+        let mut r = ok.clone();
+        r.name = "x".repeat(100_000);
+        assert_eq!(field(r), "name");
+        let mut r = ok.clone();
+        r.exposure =
+            Some(pb::Exposure { mode: Some(pb::exposure::Mode::AbsoluteWhiteCdM2(f64::NAN)) });
+        assert_eq!(field(r), "exposure");
+        let mut r = ok;
+        r.render.as_mut().unwrap().tile = Some(0);
+        assert_eq!(field(r), "render.tile");
+    }
+
+    #[test]
+    fn a_plan_survives_the_wire_and_needs_an_integrator() {
+        let plan = Plan {
+            width: 64,
+            height: 48,
+            variant: None,
+            integrator: Integrator::Whitted,
+            samples_per_pixel: 4,
+            max_depth: 5,
+            seed: 11,
+            spectral: false,
+            sky: true,
+            tile: 16,
+        };
+        assert_eq!(Plan::try_from(pb::Plan::from(&plan)).unwrap(), plan);
+        let unspecified = pb::Plan { integrator: 0, ..pb::Plan::from(&plan) };
+        assert_eq!(Plan::try_from(unspecified).unwrap_err().field, "plan.integrator");
+        let limits = Limits { max_tiles: 12, ..Limits::default() };
+        assert_eq!(Limits::from(pb::SceneLimits::from(&limits)), limits);
+    }
+}

@@ -1,0 +1,96 @@
+//! What a scene and a render may ask of the machine. Every process that loads a scene or plans a
+//! render checks the same limits: the client before it uploads, the coordinator when a job is
+//! submitted, and the worker with the coordinator's own values (sent with the job), so a job the
+//! coordinator accepted is never refused by a worker. Each refusal names the limit and the flag
+//! that raises it.
+//!
+//! | limit | default | flag |
+//! |---|---|---|
+//! | pixels of an image | 8192 × 8192 | `--max-pixels` |
+//! | pixels of an image with spectral layers | 2048 × 2048 | `--max-spectral-pixels` |
+//! | tiles of an image | 65 536 | `--max-tiles` |
+//! | the smallest tile edge | 8 px | `--min-tile` |
+//! | triangles of a scene | 50 000 000 | `--max-triangles` |
+//! | samples per pixel | 65 536 | `--max-spp` |
+//! | bounces of a path | 64 | `--max-depth` |
+//! | a file of the scene | 2048 MiB | `--max-file-mb` |
+
+/// The limits. `Default` gives the values of the table above.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Limits {
+    pub max_pixels: u64,
+    pub max_triangles: u64,
+    pub max_samples_per_pixel: u32,
+    pub max_depth: u32,
+    pub max_file_bytes: u64,
+    /// Pixels of an image that keeps its 81 spectral bands (324 bytes a pixel at assembly).
+    pub max_spectral_pixels: u64,
+    /// Tiles of one image: the scheduler keeps a few dozen bytes per tile.
+    pub max_tiles: u32,
+    /// The smallest tile edge in pixels (an image narrower than this is one tile wide).
+    pub min_tile: u32,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Self {
+            // 67 Mpixel: the absolute XYZ framebuffer alone is 0.8 GB at assembly.
+            max_pixels: 8192 * 8192,
+            max_triangles: 50_000_000,
+            max_samples_per_pixel: 65_536,
+            max_depth: 64,
+            max_file_bytes: 2 << 30,
+            // 4 Mpixel: the spectral planes are 1.4 GB at assembly.
+            max_spectral_pixels: 2048 * 2048,
+            max_tiles: 65_536,
+            min_tile: 8,
+        }
+    }
+}
+
+/// The limits as command-line flags (`restauro` and `restauro-coordinator` flatten the same
+/// struct, so a flag a message names exists on both).
+#[cfg(feature = "cli")]
+#[derive(Clone, Debug, clap::Args)]
+pub struct LimitArgs {
+    /// The most triangles a scene may have.
+    #[arg(long, default_value_t = Limits::default().max_triangles)]
+    pub max_triangles: u64,
+    /// The most pixels an image may have.
+    #[arg(long, default_value_t = Limits::default().max_pixels)]
+    pub max_pixels: u64,
+    /// The most pixels of an image that keeps its spectral layers (--spectral).
+    #[arg(long, default_value_t = Limits::default().max_spectral_pixels)]
+    pub max_spectral_pixels: u64,
+    /// The most tiles an image may be split into.
+    #[arg(long, default_value_t = Limits::default().max_tiles)]
+    pub max_tiles: u32,
+    /// The smallest tile edge, in pixels.
+    #[arg(long, default_value_t = Limits::default().min_tile)]
+    pub min_tile: u32,
+    /// The largest file a scene may refer to, in MiB.
+    #[arg(long, default_value_t = Limits::default().max_file_bytes >> 20)]
+    pub max_file_mb: u64,
+    /// The most samples per pixel.
+    #[arg(long, default_value_t = Limits::default().max_samples_per_pixel)]
+    pub max_spp: u32,
+    /// The most bounces of a path.
+    #[arg(long, default_value_t = Limits::default().max_depth)]
+    pub max_depth: u32,
+}
+
+#[cfg(feature = "cli")]
+impl From<&LimitArgs> for Limits {
+    fn from(a: &LimitArgs) -> Limits {
+        Limits {
+            max_pixels: a.max_pixels,
+            max_triangles: a.max_triangles,
+            max_samples_per_pixel: a.max_spp,
+            max_depth: a.max_depth,
+            max_file_bytes: a.max_file_mb.saturating_mul(1 << 20),
+            max_spectral_pixels: a.max_spectral_pixels,
+            max_tiles: a.max_tiles,
+            min_tile: a.min_tile.max(1),
+        }
+    }
+}

@@ -108,6 +108,7 @@ impl CoordinatorError {
             E::AssetMissing { .. } | E::UnknownSession { .. } => Code::FailedPrecondition,
             E::NoToken { .. } | E::BadToken { .. } => Code::Unauthenticated,
             E::WrongRole { .. } | E::ForeignLease { .. } => Code::PermissionDenied,
+            E::Scene(SceneError::Limit { .. }) => Code::ResourceExhausted,
             E::Wire(_) | E::Scene(_) | E::AssetReference { .. } | E::AssetUpload { .. } => {
                 Code::InvalidArgument
             }

@@ -251,7 +251,7 @@ impl Farm {
             tiles_total: total,
             tiles_done: done,
             tiles_leased: progress.as_ref().map_or(0, |p| p.leased),
-            tiles_requeued: progress.as_ref().map_or(0, |p| p.requeued),
+            tiles_requeued: progress.as_ref().map_or(r.tiles_requeued_at_end, |p| p.requeued),
             error: r.error.clone(),
             priority: r.spec.priority,
             width: r.plan.width,
@@ -295,9 +295,10 @@ impl Farm {
         id: &JobId,
         end: impl FnOnce(&mut JobRecord, u32) -> Result<()>,
     ) -> Result<()> {
-        let done = st.scheduler.progress(id).map_or(0, |p| p.done);
+        let progress = st.scheduler.progress(id);
         let r = st.jobs.get_mut(id).ok_or_else(|| CoordinatorError::NoSuchJob(id.clone()))?;
-        end(r, done)?;
+        end(r, progress.as_ref().map_or(0, |p| p.done))?;
+        r.tiles_requeued_at_end = progress.map_or(0, |p| p.requeued);
         st.scheduler.remove_job(id);
         // Queued under the lock: after every tile of the job accepted before. (The committer
         // logs a removal that fails; nothing waits for it.)
@@ -324,8 +325,10 @@ impl Farm {
     pub(crate) fn finish_job(&self, id: &JobId, files: Vec<String>) -> Result<()> {
         {
             let mut st = self.lock();
+            let requeued = st.scheduler.progress(id).map_or(0, |p| p.requeued);
             let r = st.jobs.get_mut(id).ok_or_else(|| CoordinatorError::NoSuchJob(id.clone()))?;
             r.finish(files)?;
+            r.tiles_requeued_at_end = requeued;
             st.scheduler.remove_job(id);
             drop(self.commits.remove_job(id.clone()));
         }
@@ -910,5 +913,51 @@ impl restauro_ops::endpoint::Probe for Farm {
 
     fn ready(&self) -> std::result::Result<(), String> {
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn farm(dir: &Path) -> Arc<Farm> {
+        Farm::open(Config {
+            data_dir: dir.to_owned(),
+            tokens: Tokens::new("c", "w"),
+            limits: Limits::default(),
+            max_jobs: 4,
+            max_upload_bytes: 1 << 20,
+            scheduler: scheduler::Config::default(),
+            retinex: false,
+        })
+        .unwrap()
+    }
+
+    /// Defect 5: ids were packed into 16 bits, so the 65 536th registration aliased the first.
+    /// Every registration is its own worker, and a session is only its own with its key.
+    #[test]
+    fn seventy_thousand_registrations_are_seventy_thousand_workers() {
+        let dir = tempfile::tempdir().unwrap();
+        let farm = farm(dir.path());
+        let sessions: Vec<Session> =
+            (0..70_000).map(|i| farm.register(&format!("w{i}"), 1, "b").unwrap().0).collect();
+        let ids: std::collections::HashSet<WorkerId> = sessions.iter().map(|s| s.worker).collect();
+        assert_eq!(ids.len(), 70_000);
+        assert!(farm.heartbeat(&sessions[0]) && farm.heartbeat(&sessions[69_999]));
+        let posing = Session { worker: sessions[0].worker, key: sessions[1].key };
+        assert!(!farm.heartbeat(&posing));
+        assert_eq!(farm.return_leases(&posing, &[], true).unwrap(), None);
+        assert!(farm.heartbeat(&sessions[0]), "a forged leave changed nothing");
+        assert_eq!(farm.workers().len(), 70_000);
+    }
+
+    /// A worker's name and build are shown to others: control characters are refused.
+    #[test]
+    fn a_worker_named_with_control_characters_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let farm = farm(dir.path());
+        let e = farm.register("w\u{1b}[2J", 1, "b").unwrap_err();
+        assert!(e.to_string().contains("name: character"), "{e}");
+        assert!(farm.register("w", 1, &"b".repeat(300)).is_err());
     }
 }

@@ -82,6 +82,8 @@ pub struct JobRecord {
     pub submitted_unix_ms: u64,
     /// Tiles finished when the job left the scheduler (failed or cancelled).
     pub tiles_done_at_end: u32,
+    /// Times a tile went back to the queue, counted until the job left the scheduler.
+    pub tiles_requeued_at_end: u32,
     /// The result files, once done.
     pub results: Vec<String>,
 }
@@ -98,6 +100,7 @@ impl JobRecord {
             error: String::new(),
             submitted_unix_ms: now_ms,
             tiles_done_at_end: 0,
+            tiles_requeued_at_end: 0,
             results: Vec::new(),
         }
     }

@@ -46,25 +46,51 @@ impl PixelSampler {
     }
 }
 
-/// The strata of a pixel's samples: a √count × √count grid (the last row partly filled when
-/// count is not a square), each sample jittered within its cell.
+/// The strata of a pixel's samples: `count` cells of equal area 1/count that tile the pixel,
+/// each sample jittered within its own cell, so that the samples' expected mean is the pixel's
+/// centre for every count. The cells lie in r = ⌊√count⌋ rows; the first `count mod r` rows hold
+/// ⌈count/r⌉ cells and the rest ⌊count/r⌋, and a row of k cells is k/count high. For a square
+/// count this is the √count × √count grid.
 #[derive(Clone, Copy, Debug)]
 pub struct Strata {
-    side: u32,
-    cell: f32,
+    count: u32,
+    rows: u32,
+    /// Cells in each of the first `wide_rows` rows; the others have one fewer.
+    wide: u32,
+    wide_rows: u32,
 }
 
 impl Strata {
     pub fn new(count: u32) -> Self {
-        let side = (count.max(1) as f32).sqrt().ceil().max(1.0) as u32;
-        Self { side, cell: 1.0 / side as f32 }
+        let count = count.max(1);
+        let rows = count.isqrt().max(1);
+        let wide_rows = count % rows;
+        let wide = count / rows + u32::from(wide_rows > 0);
+        Self { count, rows, wide, wide_rows }
     }
 
-    /// The position of sample `index` within the pixel, jittered by (u, v) in [0, 1)².
+    /// The position of sample `index` (taken modulo the count) within the pixel, jittered by
+    /// (u, v) in [0, 1)².
     #[inline]
     pub fn position(&self, index: u32, u: f32, v: f32) -> (f32, f32) {
-        let (sx, sy) = (index % self.side, (index / self.side) % self.side);
-        ((sx as f32 + u) * self.cell, (sy as f32 + v) * self.cell)
+        let index = index % self.count;
+        if self.wide_rows == 0 && self.wide == self.rows {
+            // A square count: the grid, in the arithmetic of a plain grid.
+            let cell = 1.0 / self.rows as f32;
+            let (sx, sy) = (index % self.rows, index / self.rows);
+            return ((sx as f32 + u) * cell, (sy as f32 + v) * cell);
+        }
+        let in_wide = self.wide * self.wide_rows;
+        let (column, cells, before) = if index < in_wide {
+            (index % self.wide, self.wide, index / self.wide * self.wide)
+        } else {
+            let narrow = self.wide - u32::from(self.wide_rows > 0);
+            let j = index - in_wide;
+            (j % narrow, narrow, in_wide + j / narrow * narrow)
+        };
+        let x = (column as f32 + u) / cells as f32;
+        let y = (before as f32 + cells as f32 * v) / self.count as f32;
+        (x, y)
     }
 }
 
@@ -93,5 +119,49 @@ mod tests {
             cells[(y * 4.0) as usize * 4 + (x * 4.0) as usize] += 1;
         }
         assert!(cells.iter().all(|&c| c == 1), "{cells:?}");
+    }
+
+    /// Defect 12: with the last row of a √n grid partly filled, 2 samples both lay in the upper
+    /// half. For every count 1–64 the cells tile the pixel with equal areas, so the mean of the
+    /// cells' centres is the pixel's centre and a fine grid of points falls in each cell equally.
+    #[test]
+    fn every_count_is_stratified_without_bias() {
+        for n in 1..=64u32 {
+            let strata = Strata::new(n);
+            let (mut mx, mut my) = (0.0f64, 0.0f64);
+            for i in 0..n {
+                let (x, y) = strata.position(i, 0.5, 0.5);
+                mx += f64::from(x);
+                my += f64::from(y);
+            }
+            let (mx, my) = (mx / f64::from(n), my / f64::from(n));
+            assert!((mx - 0.5).abs() < 1e-6 && (my - 0.5).abs() < 1e-6, "{n}: mean ({mx}, {my})");
+            // Each cell's corners: (u, v) = (0, 0) and (1, 1) give its extent.
+            let mut area = 0.0f64;
+            let cells: Vec<_> = (0..n)
+                .map(|i| {
+                    let (x0, y0) = strata.position(i, 0.0, 0.0);
+                    let (x1, y1) = strata.position(i, 1.0, 1.0);
+                    area += f64::from(x1 - x0) * f64::from(y1 - y0);
+                    assert!(
+                        ((x1 - x0) * (y1 - y0) * n as f32 - 1.0).abs() < 1e-4,
+                        "{n}: cell {i} is not 1/{n} of the pixel"
+                    );
+                    (x0, y0, x1, y1)
+                })
+                .collect();
+            assert!((area - 1.0).abs() < 1e-5, "{n}: cells cover {area}");
+            // No two cells overlap: every point of a fine grid lies in exactly one.
+            for gy in 0..50 {
+                for gx in 0..50 {
+                    let (px, py) = ((gx as f32 + 0.5) / 50.0, (gy as f32 + 0.5) / 50.0);
+                    let inside = cells
+                        .iter()
+                        .filter(|c| px >= c.0 && px < c.2 && py >= c.1 && py < c.3)
+                        .count();
+                    assert_eq!(inside, 1, "{n}: point ({px}, {py})");
+                }
+            }
+        }
     }
 }

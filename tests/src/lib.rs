@@ -4,6 +4,8 @@
 //! The binaries are the ones `cargo test --workspace` builds beside this crate's test
 //! executables (`target/<profile>/`); this module finds them and starts processes.
 
+pub mod wire;
+
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
@@ -120,6 +122,34 @@ impl Worker {
     }
 }
 
+impl Worker {
+    /// A worker serving its metrics on a free port; the worker and the endpoint's address.
+    pub fn start_with_metrics(
+        dir: &Path,
+        url: &str,
+        name: &str,
+        extra: &[&str],
+    ) -> (Worker, String) {
+        let (_, token) = token_files(dir);
+        let mut child = Command::new(binary("restauro-worker"))
+            .args(["--coordinator", url, "--threads", "1", "--name", name, "--token-file"])
+            .arg(&token)
+            .arg("--cache")
+            .arg(dir.join(format!("cache-{name}")))
+            .args(["--metrics-listen", "127.0.0.1:0"])
+            .args(extra)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::from(std::fs::File::create(dir.join(format!("{name}.log"))).unwrap()))
+            .spawn()
+            .unwrap();
+        let mut line = String::new();
+        BufReader::new(child.stdout.take().unwrap()).read_line(&mut line).unwrap();
+        let addr =
+            line.trim().strip_prefix("metrics on ").expect("the worker's metrics").to_owned();
+        (Worker(child), addr)
+    }
+}
+
 impl Drop for Worker {
     fn drop(&mut self) {
         let _ = self.0.kill();
@@ -153,4 +183,41 @@ pub fn aosta_scene(dir: &Path, width: u32, height: u32) -> String {
     ]);
     assert!(o.status.success(), "{}", text(&o));
     scene.join("aosta.toml").to_str().unwrap().to_owned()
+}
+
+/// `GET path` on `addr` (plain HTTP/1.1): the status code and the body.
+pub fn http_get(addr: &str, path: &str) -> (u16, String) {
+    use std::io::{Read, Write};
+    let mut stream = std::net::TcpStream::connect(addr).unwrap();
+    stream.set_read_timeout(Some(std::time::Duration::from_secs(10))).unwrap();
+    write!(stream, "GET {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n").unwrap();
+    let mut response = String::new();
+    stream.read_to_string(&mut response).unwrap();
+    let status = response.split(' ').nth(1).and_then(|s| s.parse().ok()).unwrap_or(0);
+    let body = response.split_once("\r\n\r\n").map_or("", |(_, b)| b).to_owned();
+    (status, body)
+}
+
+/// The value of the unlabelled sample `name` in a Prometheus scrape.
+pub fn sample(scrape: &str, name: &str) -> f64 {
+    scrape
+        .lines()
+        .find_map(|l| l.strip_prefix(name).and_then(|rest| rest.strip_prefix(' ')))
+        .and_then(|v| v.trim().parse().ok())
+        .unwrap_or_else(|| panic!("no sample `{name}` in:\n{scrape}"))
+}
+
+/// Waits until `ok`, polling; fails the test naming `what` after `timeout`.
+pub fn wait_for(what: &str, timeout: std::time::Duration, mut ok: impl FnMut() -> bool) {
+    let deadline = std::time::Instant::now() + timeout;
+    while !ok() {
+        assert!(std::time::Instant::now() < deadline, "timed out waiting for {what}");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+}
+
+/// Sends `sig` (`-STOP`, `-CONT`, `-TERM`, …) to a process.
+pub fn signal(child: &Child, sig: &str) {
+    let ok = Command::new("kill").args([sig, &child.id().to_string()]).status().unwrap();
+    assert!(ok.success());
 }

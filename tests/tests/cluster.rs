@@ -2,7 +2,7 @@
 
 use restauro_image::image_files::read_exr;
 use restauro_tests::{
-    CLIENT_TOKEN, Coordinator, WORKER_TOKEN, Worker, aosta_scene, restauro, text, token_files,
+    CLIENT_TOKEN, Coordinator, WORKER_TOKEN, Worker, aosta_scene, restauro, text, token_files, wire,
 };
 use std::path::Path;
 use std::time::{Duration, Instant};
@@ -46,7 +46,9 @@ fn two_workers_render_what_one_process_renders_and_survive_a_killed_worker() {
     let coordinator =
         Coordinator::start(d, &d.join("data"), "127.0.0.1:0", &["--heartbeat-timeout-s", "1"]);
     let _w1 = Worker::start(d, &coordinator.url, "w1", &[]);
-    let mut w2 = Worker::start(d, &coordinator.url, "w2", &[]);
+    let w2_log = d.join("w2-tiles.log");
+    let mut w2 =
+        Worker::start(d, &coordinator.url, "w2", &["--tile-log", w2_log.to_str().unwrap()]);
     let (client_token, _) = token_files(d);
     let out = d.join("cluster");
     let o = restauro(&[
@@ -85,9 +87,11 @@ fn two_workers_render_what_one_process_renders_and_survive_a_killed_worker() {
     ]);
     assert!(job.status.success(), "{}", text(&job));
     let id = String::from_utf8_lossy(&job.stdout).trim().to_owned();
-    std::thread::sleep(Duration::from_millis(300));
+    // Killed as soon as it has a tile of this job in hand (it logs a tile as it starts it).
+    restauro_tests::wait_for("w2 to start a tile of the job", Duration::from_secs(60), || {
+        lines(&w2_log).iter().any(|l| l.starts_with(&id))
+    });
     w2.0.kill().unwrap();
-    let started = Instant::now();
     let out8 = d.join("cluster8");
     let o = restauro(&[
         "watch",
@@ -98,7 +102,11 @@ fn two_workers_render_what_one_process_renders_and_survive_a_killed_worker() {
         client_token.to_str().unwrap(),
     ]);
     assert!(text(&o).contains("done"), "{}", text(&o));
-    assert!(started.elapsed() < Duration::from_secs(120));
+    // The tile it held went back to the queue when its heartbeat stopped.
+    let status = tokio::runtime::Runtime::new().unwrap().block_on(async {
+        wire::status(&mut wire::render_client(&coordinator.url).await, &id).await
+    });
+    assert!(status.tiles_requeued >= 1, "no tile was requeued: {status:?}");
     let o = restauro(&[
         "fetch",
         &id,

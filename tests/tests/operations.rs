@@ -2,64 +2,16 @@
 //! processes), scraped over HTTP — every listed metric present, and moving when jobs run and when
 //! a lease expires — their health routes, and the gRPC health and reflection services.
 
-use restauro_tests::{Coordinator, aosta_scene, binary, restauro, text, token_files};
-use std::io::{BufRead, BufReader, Read, Write};
-use std::net::TcpStream;
+use restauro_tests::{
+    Coordinator, Worker, aosta_scene, http_get as get, restauro, sample as value, signal, text,
+    token_files, wait_for,
+};
 use std::path::Path;
-use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-/// `GET path` on `addr`: the status code and the body.
-fn get(addr: &str, path: &str) -> (u16, String) {
-    let mut stream = TcpStream::connect(addr).unwrap();
-    stream.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
-    write!(stream, "GET {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n").unwrap();
-    let mut response = String::new();
-    stream.read_to_string(&mut response).unwrap();
-    let status = response.split(' ').nth(1).and_then(|s| s.parse().ok()).unwrap_or(0);
-    let body = response.split_once("\r\n\r\n").map_or("", |(_, b)| b).to_owned();
-    (status, body)
-}
-
-/// The value of the unlabelled sample `name` in a scrape.
-fn value(scrape: &str, name: &str) -> f64 {
-    scrape
-        .lines()
-        .find_map(|l| l.strip_prefix(name).and_then(|rest| rest.strip_prefix(' ')))
-        .and_then(|v| v.trim().parse().ok())
-        .unwrap_or_else(|| panic!("no sample `{name}` in:\n{scrape}"))
-}
-
-fn wait_for(what: &str, timeout: Duration, mut ok: impl FnMut() -> bool) {
-    let deadline = Instant::now() + timeout;
-    while !ok() {
-        assert!(Instant::now() < deadline, "timed out waiting for {what}");
-        std::thread::sleep(Duration::from_millis(50));
-    }
-}
-
-/// A worker with its metrics endpoint; its address.
-fn worker(dir: &Path, url: &str) -> (Child, String) {
-    let (_, token) = token_files(dir);
-    let mut child = Command::new(binary("restauro-worker"))
-        .args(["--coordinator", url, "--threads", "1", "--name", "w1", "--token-file"])
-        .arg(&token)
-        .arg("--cache")
-        .arg(dir.join("cache"))
-        .args(["--metrics-listen", "127.0.0.1:0"])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::from(std::fs::File::create(dir.join("w1.log")).unwrap()))
-        .spawn()
-        .unwrap();
-    let mut line = String::new();
-    BufReader::new(child.stdout.take().unwrap()).read_line(&mut line).unwrap();
-    let addr = line.trim().strip_prefix("metrics on ").expect("the worker's metrics").to_owned();
-    (child, addr)
-}
-
-fn signal(child: &Child, sig: &str) {
-    let ok = Command::new("kill").args([sig, &child.id().to_string()]).status().unwrap();
-    assert!(ok.success());
+/// A worker with its metrics endpoint; the worker and the endpoint's address.
+fn worker(dir: &Path, url: &str) -> (Worker, String) {
+    Worker::start_with_metrics(dir, url, "w1", &[])
 }
 
 const COORDINATOR_METRICS: [&str; 15] = [
@@ -184,7 +136,7 @@ fn metrics_are_scraped_and_move_when_jobs_run_and_leases_expire() {
         wait_for("the second job to start", Duration::from_secs(20), || {
             value(&get(&c, "/metrics").1, "restauro_tiles_leased") >= 1.0
         });
-        signal(&w, "-STOP");
+        signal(&w.0, "-STOP");
         let frozen = get(&c, "/metrics").1;
         seen_queued |= value(&frozen, "restauro_tiles_queued") > 0.0;
         seen_leased |= value(&frozen, "restauro_tiles_leased") > 0.0;
@@ -193,7 +145,7 @@ fn metrics_are_scraped_and_move_when_jobs_run_and_leases_expire() {
             expired = value(&get(&c, "/metrics").1, "restauro_lease_expiries_total") >= 1.0;
             std::thread::sleep(Duration::from_millis(100));
         }
-        signal(&w, "-CONT");
+        signal(&w.0, "-CONT");
         if expired {
             break;
         }
@@ -201,8 +153,8 @@ fn metrics_are_scraped_and_move_when_jobs_run_and_leases_expire() {
     assert!(seen_queued && seen_leased && expired, "{seen_queued} {seen_leased} {expired}");
     let now = get(&c, "/metrics").1;
     assert!(value(&now, "restauro_tiles_requeued_total") >= 1.0, "{now}");
-    let _ = w.kill();
-    let _ = w.wait();
+    let _ = w.0.kill();
+    let _ = w.0.wait();
 }
 
 /// The standard gRPC health service answers without a token; reflection lists the services.
@@ -274,10 +226,10 @@ fn a_worker_stopped_while_its_coordinator_is_away_exits_cleanly() {
     });
     assert_eq!(get(&metrics, "/readyz").0, 503, "not registered, so not ready");
 
-    signal(&w, "-TERM");
+    signal(&w.0, "-TERM");
     let deadline = Instant::now() + Duration::from_secs(10);
     let status = loop {
-        if let Some(status) = w.try_wait().unwrap() {
+        if let Some(status) = w.0.try_wait().unwrap() {
             break status;
         }
         assert!(Instant::now() < deadline, "the worker did not exit within 10 s of SIGTERM");

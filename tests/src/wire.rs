@@ -1,0 +1,182 @@
+//! A hand-written client and worker of restauro's gRPC protocol, for tests that play a hostile
+//! caller against a real coordinator process: they send what the real client and worker never
+//! would (another worker's lease, a forged ticket, NaN pixels, a name with terminal escapes).
+
+use restauro_proto::pb::render_client::RenderClient;
+use restauro_proto::pb::work_client::WorkClient;
+use restauro_proto::{self as pb, CHUNK_BYTES, Credentials, PROTOCOL_VERSION};
+use restauro_scene::bundle::{Bundle, bundle_scene};
+use restauro_scene::job::JobSpec;
+use restauro_scene::limits::Limits;
+use restauro_scene::plan::Rect;
+use std::path::Path;
+use std::time::Duration;
+use tonic::service::interceptor::InterceptedService;
+use tonic::transport::Channel;
+
+pub type Render = RenderClient<InterceptedService<Channel, Credentials>>;
+pub type Work = WorkClient<InterceptedService<Channel, Credentials>>;
+
+async fn channel(url: &str) -> Channel {
+    Channel::from_shared(url.to_owned()).unwrap().connect().await.unwrap()
+}
+
+/// A client with the tests' client token.
+pub async fn render_client(url: &str) -> Render {
+    let credentials = Credentials::new(crate::CLIENT_TOKEN, PROTOCOL_VERSION).unwrap();
+    RenderClient::with_interceptor(channel(url).await, credentials)
+        .max_decoding_message_size(64 << 20)
+}
+
+/// A worker connection with the tests' worker token.
+pub async fn work_client(url: &str) -> Work {
+    let credentials = Credentials::new(crate::WORKER_TOKEN, PROTOCOL_VERSION).unwrap();
+    WorkClient::with_interceptor(channel(url).await, credentials)
+}
+
+/// The scene's bundle, every asset uploaded.
+pub async fn upload(client: &mut Render, scene: &Path) -> Bundle {
+    let bundle = bundle_scene(scene, &Limits::default()).unwrap();
+    for reference in bundle.references() {
+        let hash = reference.strip_prefix("blake3:").unwrap().split_once('.').unwrap().0;
+        let data = &bundle.files[hash];
+        let mut chunks: Vec<pb::Chunk> = data
+            .chunks(CHUNK_BYTES)
+            .map(|c| pb::Chunk {
+                name: String::new(),
+                total_bytes: data.len() as u64,
+                data: c.to_vec(),
+            })
+            .collect();
+        if chunks.is_empty() {
+            chunks.push(pb::Chunk::default());
+        }
+        chunks[0].name = reference.clone();
+        client.upload_asset(tokio_stream::iter(chunks)).await.unwrap();
+    }
+    bundle
+}
+
+/// Submits `spec` for `bundle`'s scene.
+pub async fn submit(
+    client: &mut Render,
+    bundle: &Bundle,
+    spec: &JobSpec,
+) -> Result<pb::JobStatus, tonic::Status> {
+    let request = pb::convert::submit_request(bundle.canonical_json(), spec);
+    client.submit_job(request).await.map(tonic::Response::into_inner)
+}
+
+/// A registered worker's session.
+pub async fn register(work: &mut Work, name: &str) -> pb::WorkerSession {
+    let reply = work
+        .register(pb::RegisterRequest {
+            protocol_version: PROTOCOL_VERSION,
+            name: name.to_owned(),
+            capacity: 1,
+            build: "restauro-tests".into(),
+        })
+        .await
+        .unwrap()
+        .into_inner();
+    reply.session.unwrap()
+}
+
+/// Up to `max` leases, waiting up to a second.
+pub async fn pull(work: &mut Work, session: &pb::WorkerSession, max: u32) -> pb::PullReply {
+    work.pull_leases(pb::PullRequest { session: Some(session.clone()), max, wait_ms: 1000 })
+        .await
+        .unwrap()
+        .into_inner()
+}
+
+/// Leases, pulled until at least one comes (the job was just submitted).
+pub async fn lease(work: &mut Work, session: &pb::WorkerSession, max: u32) -> Vec<pb::Lease> {
+    for _ in 0..30 {
+        let reply = pull(work, session, max).await;
+        assert!(reply.known, "the coordinator forgot the worker");
+        if !reply.leases.is_empty() {
+            return reply.leases;
+        }
+    }
+    panic!("no lease in 30 s")
+}
+
+/// The bytes of a tile of `rect` whose every value is `value` (XYZ, and sky coverage 0 when
+/// the scene has a sky).
+pub fn tile_data(rect: &Rect, sky: bool, value: f32) -> Vec<u8> {
+    let pixels = rect.width as usize * rect.height as usize;
+    let mut out = Vec::with_capacity(pixels * 16);
+    for _ in 0..pixels * 3 {
+        out.extend_from_slice(&value.to_le_bytes());
+    }
+    if sky {
+        for _ in 0..pixels {
+            out.extend_from_slice(&0f32.to_le_bytes());
+        }
+    }
+    out
+}
+
+/// Reports `data` for `lease` with `session`.
+pub async fn report(
+    work: &mut Work,
+    session: &pb::WorkerSession,
+    lease: &pb::Lease,
+    data: Vec<u8>,
+) -> Result<pb::ReportReply, tonic::Status> {
+    let header = pb::TileHeader {
+        session: Some(session.clone()),
+        lease: Some(lease.clone()),
+        rays: 0,
+        render_s: 0.0,
+        xyz_bytes: data.len() as u64,
+        spectral_bytes: 0,
+    };
+    let messages = [
+        pb::TileChunk { part: Some(pb::tile_chunk::Part::Header(header)) },
+        pb::TileChunk { part: Some(pb::tile_chunk::Part::Data(data)) },
+    ];
+    work.report_tile(tokio_stream::iter(messages)).await.map(tonic::Response::into_inner)
+}
+
+/// The job's status, from the list.
+pub async fn status(client: &mut Render, job: &str) -> pb::JobStatus {
+    let list = client.list_jobs(pb::ListJobsRequest {}).await.unwrap().into_inner();
+    list.jobs.into_iter().find(|j| j.job_id == job).expect("the job is listed")
+}
+
+/// Follows the job until it ends; its last status. Fails the test after `limit`.
+pub async fn wait_end(client: &mut Render, job: &str, limit: Duration) -> pb::JobStatus {
+    let watch = async {
+        let mut stream =
+            client.watch_job(pb::JobRef { job_id: job.to_owned() }).await.unwrap().into_inner();
+        let mut last = None;
+        while let Some(s) = stream.message().await.unwrap() {
+            last = Some(s);
+        }
+        last.expect("a status")
+    };
+    tokio::time::timeout(limit, watch).await.expect("the job ended in time")
+}
+
+/// Whether a status's state is final.
+pub fn is_final(status: &pb::JobStatus) -> bool {
+    matches!(
+        pb::JobState::try_from(status.state),
+        Ok(pb::JobState::Done | pb::JobState::Failed | pb::JobState::Cancelled)
+    )
+}
+
+/// The resident-set peak (VmHWM) and the current resident set (VmRSS) of a process, in KiB.
+pub fn memory_kib(pid: u32) -> (u64, u64) {
+    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).unwrap();
+    let field = |name: &str| {
+        status
+            .lines()
+            .find_map(|l| l.strip_prefix(name))
+            .and_then(|v| v.trim().trim_end_matches(" kB").trim().parse().ok())
+            .unwrap_or(0)
+    };
+    (field("VmHWM:"), field("VmRSS:"))
+}

@@ -1,0 +1,189 @@
+//! A job's life against races and restarts, on real processes: a cancel that lands while the
+//! job is post-processed, watchers that open as a job ends, limits raised on the coordinator
+//! only, and results that a killed coordinator's successor takes instead of rendering again.
+
+use restauro_proto as pb;
+use restauro_scene::job::{JobName, JobSpec, RetinexOptions};
+use restauro_scene::plan::RenderOptions;
+use restauro_scene::scene_file::Integrator;
+use restauro_tests::wire::{self, is_final};
+use restauro_tests::{Coordinator, Worker, aosta_scene, http_get, sample, signal, wait_for};
+use std::path::Path;
+use std::time::Duration;
+
+fn spec(name: &str, tile: u32, spp: u32) -> JobSpec {
+    JobSpec {
+        name: JobName::new(name).unwrap(),
+        render: RenderOptions {
+            samples_per_pixel: Some(spp),
+            tile: Some(tile),
+            ..RenderOptions::default()
+        },
+        ..JobSpec::default()
+    }
+}
+
+/// Defect 7: a cancel that lands while the job is post-processed (its Retinex running) stands:
+/// the job ends cancelled, stays cancelled, and leaves no result files.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_cancel_during_post_processing_is_not_overturned() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = aosta_scene(d, 160, 90);
+    let data = d.join("data");
+    let coordinator = Coordinator::start(d, &data, "127.0.0.1:0", &[]);
+    let mut client = wire::render_client(&coordinator.url).await;
+    let bundle = wire::upload(&mut client, Path::new(&scene)).await;
+    // 512 Retinex paths a pixel: a second or more of post-processing, a wide window for the
+    // cancel.
+    let slow =
+        JobSpec { retinex: RetinexOptions::new(Some(512), None).unwrap(), ..spec("aosta", 64, 1) };
+    let job = wire::submit(&mut client, &bundle, &slow).await.unwrap();
+    let _worker = Worker::start(d, &coordinator.url, "w", &[]);
+    let mut stream =
+        client.watch_job(pb::JobRef { job_id: job.job_id.clone() }).await.unwrap().into_inner();
+    let post_processing = pb::JobState::PostProcessing as i32;
+    loop {
+        let status = stream.message().await.unwrap().expect("the job reaches post-processing");
+        assert!(!is_final(&status), "ended before post-processing: {status:?}");
+        if status.state == post_processing {
+            break;
+        }
+    }
+    let cancelled = client.cancel_job(pb::JobRef { job_id: job.job_id.clone() }).await.unwrap();
+    assert_eq!(cancelled.into_inner().state, pb::JobState::Cancelled as i32);
+    // The Retinex finishes meanwhile; its results must not overturn the cancel.
+    let results = data.join("jobs").join(&job.job_id);
+    wait_for("the assembly to stop and its files to go", Duration::from_secs(120), || {
+        !results.exists()
+    });
+    let last = wire::wait_end(&mut client, &job.job_id, Duration::from_secs(10)).await;
+    assert_eq!(last.state, pb::JobState::Cancelled as i32, "{last:?}");
+    assert!(last.results.is_empty());
+    let e = client
+        .fetch_result(pb::FetchResultRequest {
+            job_id: job.job_id.clone(),
+            name: "aosta.exr".into(),
+        })
+        .await
+        .unwrap_err();
+    assert_eq!(e.code(), tonic::Code::FailedPrecondition, "{e:?}");
+}
+
+/// Defect 8: watchers opened while jobs end all see the end (none waits for a change that
+/// already happened).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn every_watch_opened_as_jobs_end_sees_the_end() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = aosta_scene(d, 16, 8);
+    let coordinator = Coordinator::start(d, &d.join("data"), "127.0.0.1:0", &["--no-retinex"]);
+    let _worker = Worker::start(d, &coordinator.url, "w", &[]);
+    let mut client = wire::render_client(&coordinator.url).await;
+    let bundle = wire::upload(&mut client, Path::new(&scene)).await;
+    for round in 0..10 {
+        let job =
+            wire::submit(&mut client, &bundle, &spec(&format!("j{round}"), 16, 1)).await.unwrap();
+        let mut watchers = tokio::task::JoinSet::new();
+        for _ in 0..20 {
+            let (url, id) = (coordinator.url.clone(), job.job_id.clone());
+            watchers.spawn(async move {
+                let mut client = wire::render_client(&url).await;
+                wire::wait_end(&mut client, &id, Duration::from_secs(60)).await
+            });
+        }
+        while let Some(end) = watchers.join_next().await {
+            assert_eq!(end.unwrap().state, pb::JobState::Done as i32);
+        }
+    }
+}
+
+/// Defect 11: limits raised on the coordinator reach its workers with the job: a job over the
+/// default samples-per-pixel limit, accepted by a coordinator started with a higher one, is
+/// rendered by a worker that has no limit flags of its own.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn workers_render_within_the_coordinators_limits() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = aosta_scene(d, 4, 2);
+    let coordinator = Coordinator::start(
+        d,
+        &d.join("data"),
+        "127.0.0.1:0",
+        &["--max-spp", "100000", "--no-retinex"],
+    );
+    let mut client = wire::render_client(&coordinator.url).await;
+    let bundle = wire::upload(&mut client, Path::new(&scene)).await;
+    let over_default = JobSpec {
+        render: RenderOptions {
+            integrator: Some(Integrator::Whitted),
+            ..spec("many-samples", 8, 70_000).render
+        },
+        ..spec("many-samples", 8, 70_000)
+    };
+    let job = wire::submit(&mut client, &bundle, &over_default).await.unwrap();
+    let _worker = Worker::start(d, &coordinator.url, "w", &[]);
+    let end = wire::wait_end(&mut client, &job.job_id, Duration::from_secs(300)).await;
+    assert_eq!(end.state, pb::JobState::Done as i32, "{end:?}");
+}
+
+fn tile_lines(log: &Path) -> Vec<u32> {
+    std::fs::read_to_string(log)
+        .unwrap_or_default()
+        .lines()
+        .map(|l| l.split(' ').nth(1).unwrap().parse().unwrap())
+        .collect()
+}
+
+/// Defect 21: a tile rendered under a coordinator that is then killed before it acknowledged
+/// the result is taken by the coordinator restarted on the same store, not rendered again:
+/// with one worker, every tile is rendered exactly once across the restart.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn results_of_a_killed_coordinators_leases_are_taken_by_its_successor() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = aosta_scene(d, 64, 32);
+    let data = d.join("data");
+    let args = ["--no-retinex", "--heartbeat-timeout-s", "60"];
+    let mut coordinator = Coordinator::start(d, &data, "127.0.0.1:0", &args);
+    let url = coordinator.url.clone();
+    let mut client = wire::render_client(&url).await;
+    let bundle = wire::upload(&mut client, Path::new(&scene)).await;
+    let job = wire::submit(&mut client, &bundle, &spec("aosta", 16, 64)).await.unwrap();
+    let log = d.join("tiles.log");
+    let (_worker, metrics) =
+        Worker::start_with_metrics(d, &url, "w", &["--tile-log", log.to_str().unwrap()]);
+    let scrape = |name: &str| sample(&http_get(&metrics, "/metrics").1, name);
+    wait_for("three tiles rendered", Duration::from_secs(120), || {
+        scrape("restauro_worker_tiles_rendered_total") >= 3.0
+    });
+    // Frozen, the coordinator acknowledges nothing: the result in flight, or the next one
+    // rendered, is left with the worker when the coordinator is killed.
+    signal(&coordinator.child, "-STOP");
+    let rendered = scrape("restauro_worker_tiles_rendered_total");
+    wait_for("a result the coordinator has not acknowledged", Duration::from_secs(120), || {
+        scrape("restauro_worker_tiles_rendered_total")
+            > scrape("restauro_worker_tiles_delivered_total")
+    });
+    coordinator.child.kill().unwrap();
+    coordinator.child.wait().unwrap();
+    let stored = {
+        let store = restauro_coordinator::store::Store::open(&data.join("store.redb")).unwrap();
+        store.finished_tiles(&job.job_id).unwrap()
+    };
+    let addr = url.strip_prefix("http://").unwrap();
+    let _successor = Coordinator::start(d, &data, addr, &args);
+    let mut client = wire::render_client(&url).await;
+    let end = wire::wait_end(&mut client, &job.job_id, Duration::from_secs(120)).await;
+    assert_eq!(end.state, pb::JobState::Done as i32, "{end:?}");
+    let tiles = tile_lines(&log);
+    let mut sorted = tiles.clone();
+    sorted.sort_unstable();
+    assert_eq!(
+        sorted,
+        (0..end.tiles_total).collect::<Vec<_>>(),
+        "every tile rendered exactly once; {} were rendered before the kill, {} stored",
+        rendered,
+        stored.len()
+    );
+}

@@ -57,6 +57,35 @@ pub async fn upload(client: &mut Render, scene: &Path) -> Bundle {
     bundle
 }
 
+/// A job of `name` in tiles of `tile` pixels at `spp` samples per pixel.
+pub fn spec(name: &str, tile: u32, spp: u32) -> JobSpec {
+    JobSpec {
+        name: restauro_scene::job::JobName::new(name).unwrap(),
+        render: restauro_scene::plan::RenderOptions {
+            samples_per_pixel: Some(spp),
+            tile: Some(tile),
+            ..Default::default()
+        },
+        ..JobSpec::default()
+    }
+}
+
+/// A coordinator process for a test in `dir`, with the Aosta scene of `width × height`
+/// uploaded: the coordinator, a client of it, and the scene's bundle.
+pub async fn farm(
+    dir: &Path,
+    width: u32,
+    height: u32,
+    coordinator_args: &[&str],
+) -> (crate::Coordinator, Render, Bundle) {
+    let scene = crate::aosta_scene(dir, width, height);
+    let coordinator =
+        crate::Coordinator::start(dir, &dir.join("data"), "127.0.0.1:0", coordinator_args);
+    let mut client = render_client(&coordinator.url).await;
+    let bundle = upload(&mut client, Path::new(&scene)).await;
+    (coordinator, client, bundle)
+}
+
 /// Submits `spec` for `bundle`'s scene.
 pub async fn submit(
     client: &mut Render,

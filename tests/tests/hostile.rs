@@ -5,29 +5,19 @@
 
 use restauro_image::image_files::read_exr;
 use restauro_proto as pb;
-use restauro_scene::job::{JobName, JobSpec};
+use restauro_scene::job::JobSpec;
 use restauro_scene::plan::{Rect, RenderOptions};
-use restauro_tests::wire::{self, is_final};
-use restauro_tests::{Coordinator, Worker, aosta_scene, restauro, text};
+use restauro_tests::wire::{self, is_final, spec};
+use restauro_tests::{Coordinator, Worker, restauro, text};
 use std::path::Path;
 use std::time::Duration;
 use tonic::Code;
 
-fn spec(name: &str, tile: u32, spp: u32) -> JobSpec {
-    JobSpec {
-        name: JobName::new(name).unwrap(),
-        render: RenderOptions {
-            samples_per_pixel: Some(spp),
-            tile: Some(tile),
-            ..RenderOptions::default()
-        },
-        ..JobSpec::default()
-    }
-}
-
-/// The in-process render of `scene` with `--spp spp --tile tile`: the reference every cluster
+/// The in-process render of the test's scene with `--spp spp --tile tile`: the reference every cluster
 /// image must equal bit for bit.
-fn reference(dir: &Path, scene: &str, spp: u32, tile: u32) -> Vec<[f32; 3]> {
+fn reference(dir: &Path, spp: u32, tile: u32) -> Vec<[f32; 3]> {
+    let scene = dir.join("aosta").join("aosta.toml");
+    let scene = scene.to_str().unwrap();
     let out = dir.join("reference");
     let (spp, tile) = (spp.to_string(), tile.to_string());
     let args = ["render", scene, "--in-process", "--spp", &spp, "--tile", &tile];
@@ -55,11 +45,8 @@ fn rect(lease: &pb::Lease) -> Rect {
 async fn a_worker_cannot_write_a_tile_it_was_not_leased_nor_act_as_another() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let scene = aosta_scene(d, 64, 32);
+    let (coordinator, mut client, bundle) = wire::farm(d, 64, 32, &[]).await;
     let data = d.join("data");
-    let coordinator = Coordinator::start(d, &data, "127.0.0.1:0", &[]);
-    let mut client = wire::render_client(&coordinator.url).await;
-    let bundle = wire::upload(&mut client, Path::new(&scene)).await;
     let job = wire::submit(&mut client, &bundle, &spec("aosta", 16, 1)).await.unwrap();
 
     let mut holder = wire::work_client(&coordinator.url).await;
@@ -94,7 +81,7 @@ async fn a_worker_cannot_write_a_tile_it_was_not_leased_nor_act_as_another() {
     let _worker = Worker::start(d, &coordinator.url, "honest", &[]);
     let end = wire::wait_end(&mut client, &job.job_id, Duration::from_secs(120)).await;
     assert_eq!(end.state, pb::JobState::Done as i32, "{end:?}");
-    assert!(identical(&result(&data, &job.job_id), &reference(d, &scene, 1, 16)));
+    assert!(identical(&result(&data, &job.job_id), &reference(d, 1, 16)));
 }
 
 /// Defect 3: NaN, ∞ and negative radiance are refused at the edge and count as the sending
@@ -103,11 +90,8 @@ async fn a_worker_cannot_write_a_tile_it_was_not_leased_nor_act_as_another() {
 async fn non_finite_or_negative_pixels_are_refused_and_count_against_the_worker() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let scene = aosta_scene(d, 64, 32);
+    let (coordinator, mut client, bundle) = wire::farm(d, 64, 32, &[]).await;
     let data = d.join("data");
-    let coordinator = Coordinator::start(d, &data, "127.0.0.1:0", &[]);
-    let mut client = wire::render_client(&coordinator.url).await;
-    let bundle = wire::upload(&mut client, Path::new(&scene)).await;
     let job = wire::submit(&mut client, &bundle, &spec("aosta", 16, 1)).await.unwrap();
     let mut work = wire::work_client(&coordinator.url).await;
     // Two bad tiles from one worker (which then gets no more of the job), one from another.
@@ -129,7 +113,7 @@ async fn non_finite_or_negative_pixels_are_refused_and_count_against_the_worker(
     assert_eq!(end.state, pb::JobState::Done as i32, "{end:?}");
     let image = result(&data, &job.job_id);
     assert!(image.iter().flatten().all(|v| v.is_finite() && *v >= 0.0));
-    assert!(identical(&image, &reference(d, &scene, 1, 16)));
+    assert!(identical(&image, &reference(d, 1, 16)));
 }
 
 /// Defect 2: a job that would need gigabytes of tiles is refused naming the limit, and the
@@ -138,11 +122,8 @@ async fn non_finite_or_negative_pixels_are_refused_and_count_against_the_worker(
 async fn jobs_of_too_many_tiles_are_refused_without_harm() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let scene = aosta_scene(d, 32, 16);
-    let coordinator =
-        Coordinator::start(d, &d.join("data"), "127.0.0.1:0", &["--max-pixels", "300000000"]);
-    let mut client = wire::render_client(&coordinator.url).await;
-    let bundle = wire::upload(&mut client, Path::new(&scene)).await;
+    let (coordinator, mut client, bundle) =
+        wire::farm(d, 32, 16, &["--max-pixels", "300000000"]).await;
     let huge = |size: u32, tile: u32| JobSpec {
         render: RenderOptions {
             width: Some(size),
@@ -216,10 +197,7 @@ async fn uploads_are_streamed_bounded_and_checked() {
 async fn submissions_with_unusable_fields_are_refused_naming_the_field() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let scene = aosta_scene(d, 32, 16);
-    let coordinator = Coordinator::start(d, &d.join("data"), "127.0.0.1:0", &[]);
-    let mut client = wire::render_client(&coordinator.url).await;
-    let bundle = wire::upload(&mut client, Path::new(&scene)).await;
+    let (_coordinator, mut client, bundle) = wire::farm(d, 32, 16, &[]).await;
     let good = pb::convert::submit_request(bundle.canonical_json(), &spec("ok", 16, 1));
     let mut cases: Vec<(pb::SubmitJobRequest, &str)> = Vec::new();
     let mut r = good.clone();
@@ -256,10 +234,7 @@ async fn submissions_with_unusable_fields_are_refused_naming_the_field() {
 async fn retryable_failures_count_against_nobody() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let scene = aosta_scene(d, 32, 16);
-    let coordinator = Coordinator::start(d, &d.join("data"), "127.0.0.1:0", &[]);
-    let mut client = wire::render_client(&coordinator.url).await;
-    let bundle = wire::upload(&mut client, Path::new(&scene)).await;
+    let (coordinator, mut client, bundle) = wire::farm(d, 32, 16, &[]).await;
     let job = wire::submit(&mut client, &bundle, &spec("aosta", 16, 1)).await.unwrap();
     let mut work = wire::work_client(&coordinator.url).await;
     for retryable in [true, false] {
@@ -296,12 +271,9 @@ async fn retryable_failures_count_against_nobody() {
 async fn a_late_report_after_the_job_ended_stores_nothing() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let scene = aosta_scene(d, 32, 16);
-    let data = d.join("data");
     let args = ["--lease-timeout-s", "1", "--heartbeat-timeout-s", "60", "--no-retinex"];
-    let mut coordinator = Coordinator::start(d, &data, "127.0.0.1:0", &args);
-    let mut client = wire::render_client(&coordinator.url).await;
-    let bundle = wire::upload(&mut client, Path::new(&scene)).await;
+    let (mut coordinator, mut client, bundle) = wire::farm(d, 32, 16, &args).await;
+    let data = d.join("data");
     let job = wire::submit(&mut client, &bundle, &spec("aosta", 16, 1)).await.unwrap();
     let mut late = wire::work_client(&coordinator.url).await;
     let session = wire::register(&mut late, "late").await;
@@ -326,10 +298,7 @@ async fn a_late_report_after_the_job_ended_stores_nothing() {
 async fn max_jobs_holds_under_concurrent_submissions() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let scene = aosta_scene(d, 32, 16);
-    let coordinator = Coordinator::start(d, &d.join("data"), "127.0.0.1:0", &["--max-jobs", "3"]);
-    let mut client = wire::render_client(&coordinator.url).await;
-    let bundle = wire::upload(&mut client, Path::new(&scene)).await;
+    let (coordinator, mut client, bundle) = wire::farm(d, 32, 16, &["--max-jobs", "3"]).await;
     let mut tasks = tokio::task::JoinSet::new();
     for i in 0..24 {
         let (url, bundle) = (coordinator.url.clone(), bundle.clone());

@@ -3,25 +3,13 @@
 //! only, and results that a killed coordinator's successor takes instead of rendering again.
 
 use restauro_proto as pb;
-use restauro_scene::job::{JobName, JobSpec, RetinexOptions};
+use restauro_scene::job::{JobSpec, RetinexOptions};
 use restauro_scene::plan::RenderOptions;
 use restauro_scene::scene_file::Integrator;
-use restauro_tests::wire::{self, is_final};
-use restauro_tests::{Coordinator, Worker, aosta_scene, http_get, sample, signal, wait_for};
+use restauro_tests::wire::{self, is_final, spec};
+use restauro_tests::{Coordinator, Worker, http_get, sample, signal, wait_for};
 use std::path::Path;
 use std::time::Duration;
-
-fn spec(name: &str, tile: u32, spp: u32) -> JobSpec {
-    JobSpec {
-        name: JobName::new(name).unwrap(),
-        render: RenderOptions {
-            samples_per_pixel: Some(spp),
-            tile: Some(tile),
-            ..RenderOptions::default()
-        },
-        ..JobSpec::default()
-    }
-}
 
 /// Defect 7: a cancel that lands while the job is post-processed (its Retinex running) stands:
 /// the job ends cancelled, stays cancelled, and leaves no result files.
@@ -29,11 +17,8 @@ fn spec(name: &str, tile: u32, spp: u32) -> JobSpec {
 async fn a_cancel_during_post_processing_is_not_overturned() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let scene = aosta_scene(d, 160, 90);
+    let (coordinator, mut client, bundle) = wire::farm(d, 160, 90, &[]).await;
     let data = d.join("data");
-    let coordinator = Coordinator::start(d, &data, "127.0.0.1:0", &[]);
-    let mut client = wire::render_client(&coordinator.url).await;
-    let bundle = wire::upload(&mut client, Path::new(&scene)).await;
     // 512 Retinex paths a pixel: a second or more of post-processing, a wide window for the
     // cancel.
     let slow =
@@ -76,11 +61,8 @@ async fn a_cancel_during_post_processing_is_not_overturned() {
 async fn every_watch_opened_as_jobs_end_sees_the_end() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let scene = aosta_scene(d, 16, 8);
-    let coordinator = Coordinator::start(d, &d.join("data"), "127.0.0.1:0", &["--no-retinex"]);
+    let (coordinator, mut client, bundle) = wire::farm(d, 16, 8, &["--no-retinex"]).await;
     let _worker = Worker::start(d, &coordinator.url, "w", &[]);
-    let mut client = wire::render_client(&coordinator.url).await;
-    let bundle = wire::upload(&mut client, Path::new(&scene)).await;
     for round in 0..10 {
         let job =
             wire::submit(&mut client, &bundle, &spec(&format!("j{round}"), 16, 1)).await.unwrap();
@@ -105,15 +87,8 @@ async fn every_watch_opened_as_jobs_end_sees_the_end() {
 async fn workers_render_within_the_coordinators_limits() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let scene = aosta_scene(d, 4, 2);
-    let coordinator = Coordinator::start(
-        d,
-        &d.join("data"),
-        "127.0.0.1:0",
-        &["--max-spp", "100000", "--no-retinex"],
-    );
-    let mut client = wire::render_client(&coordinator.url).await;
-    let bundle = wire::upload(&mut client, Path::new(&scene)).await;
+    let (coordinator, mut client, bundle) =
+        wire::farm(d, 4, 2, &["--max-spp", "100000", "--no-retinex"]).await;
     let over_default = JobSpec {
         render: RenderOptions {
             integrator: Some(Integrator::Whitted),
@@ -142,13 +117,10 @@ fn tile_lines(log: &Path) -> Vec<u32> {
 async fn results_of_a_killed_coordinators_leases_are_taken_by_its_successor() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let scene = aosta_scene(d, 64, 32);
-    let data = d.join("data");
     let args = ["--no-retinex", "--heartbeat-timeout-s", "60"];
-    let mut coordinator = Coordinator::start(d, &data, "127.0.0.1:0", &args);
+    let (mut coordinator, mut client, bundle) = wire::farm(d, 64, 32, &args).await;
+    let data = d.join("data");
     let url = coordinator.url.clone();
-    let mut client = wire::render_client(&url).await;
-    let bundle = wire::upload(&mut client, Path::new(&scene)).await;
     let job = wire::submit(&mut client, &bundle, &spec("aosta", 16, 64)).await.unwrap();
     let log = d.join("tiles.log");
     let (_worker, metrics) =

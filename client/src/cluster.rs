@@ -107,13 +107,27 @@ fn is_final(status: &pb::JobStatus) -> bool {
     )
 }
 
-/// Follows a job to its end, with a progress bar (tiles done, rate, ETA) when asked.
+/// Whether a watch that failed with `status` may simply be opened again: the coordinator
+/// restarting (the connection reset, `h2 protocol error`, unreachable) rather than refusing.
+fn transient(status: &tonic::Status) -> bool {
+    matches!(
+        status.code(),
+        tonic::Code::Unavailable
+            | tonic::Code::Unknown
+            | tonic::Code::Internal
+            | tonic::Code::Cancelled
+            | tonic::Code::Aborted
+            | tonic::Code::DeadlineExceeded
+    )
+}
+
+/// How long a watch waits for an unreachable coordinator before it gives up.
+const WATCH_PATIENCE: Duration = Duration::from_secs(600);
+
+/// Follows a job to its end, with a progress bar (tiles done, rate, ETA) when asked. A
+/// coordinator that restarts meanwhile is waited for (with back-off, up to ten minutes) and the
+/// watch resumes where it was.
 pub async fn watch(client: &mut Client, job_id: &str, show: bool) -> Result<pb::JobStatus> {
-    let mut stream = client
-        .watch_job(pb::JobRef { job_id: job_id.to_owned() })
-        .await
-        .map_err(|s| refused(&format!("watching job {job_id}"), s))?
-        .into_inner();
     let bar = if show {
         let bar = ProgressBar::with_draw_target(Some(0), ProgressDrawTarget::stderr());
         bar.set_style(
@@ -126,22 +140,52 @@ pub async fn watch(client: &mut Client, job_id: &str, show: bool) -> Result<pb::
     } else {
         ProgressBar::hidden()
     };
-    let mut last = None;
-    while let Some(status) =
-        stream.message().await.map_err(|s| refused(&format!("watching job {job_id}"), s))?
-    {
-        bar.set_length(u64::from(status.tiles_total));
-        bar.set_position(u64::from(status.tiles_done));
-        let state = pb::JobState::try_from(status.state).unwrap_or(pb::JobState::Unspecified);
-        bar.set_message(state.as_str_name().trim_start_matches("JOB_STATE_").to_lowercase());
-        let done = is_final(&status);
-        last = Some(status);
-        if done {
-            break;
+    let mut backoff = Duration::from_millis(100);
+    let mut unreachable_since: Option<Instant> = None;
+    let what = format!("watching job {job_id}");
+    loop {
+        let opened = client.watch_job(pb::JobRef { job_id: job_id.to_owned() }).await;
+        // Why the watch stopped short of the job's end.
+        let status: tonic::Status = match opened {
+            Ok(stream) => {
+                let mut stream = stream.into_inner();
+                loop {
+                    match stream.message().await {
+                        Ok(Some(status)) => {
+                            unreachable_since = None;
+                            backoff = Duration::from_millis(100);
+                            bar.set_length(u64::from(status.tiles_total));
+                            bar.set_position(u64::from(status.tiles_done));
+                            let state = pb::JobState::try_from(status.state)
+                                .unwrap_or(pb::JobState::Unspecified);
+                            let name = state.as_str_name().trim_start_matches("JOB_STATE_");
+                            bar.set_message(name.to_lowercase());
+                            if is_final(&status) {
+                                bar.finish_and_clear();
+                                return Ok(status);
+                            }
+                        }
+                        // The coordinator closed the stream before the end (it is stopping).
+                        Ok(None) => break tonic::Status::unavailable("the watch ended early"),
+                        Err(status) => break status,
+                    }
+                }
+            }
+            Err(status) => status,
+        };
+        if !transient(&status) {
+            bar.finish_and_clear();
+            return Err(refused(&what, status));
         }
+        let since = *unreachable_since.get_or_insert_with(Instant::now);
+        if since.elapsed() > WATCH_PATIENCE {
+            bar.finish_and_clear();
+            return Err(refused(&format!("{what} (gave up after ten minutes)"), status));
+        }
+        bar.set_message("reconnecting");
+        tokio::time::sleep(backoff).await;
+        backoff = (backoff * 2).min(Duration::from_secs(2));
     }
-    bar.finish_and_clear();
-    last.ok_or_else(|| anyhow!("job {job_id}: the coordinator closed the watch without a status"))
 }
 
 /// Downloads every result file of a finished job into `out`, each written atomically; the

@@ -142,6 +142,9 @@ pub fn jobs(args: &ConnectArgs) -> Result<String> {
             .map_err(|s| refused("listing jobs", s))?
             .into_inner();
         let mut s = String::new();
+        if !list.problem.is_empty() {
+            let _ = writeln!(s, "coordinator: {}", shown(&list.problem));
+        }
         for j in list.jobs {
             let _ = writeln!(
                 s,

@@ -495,6 +495,11 @@ impl Farm {
         Ok(status)
     }
 
+    /// The coordinator's own trouble, when it has any (the store cannot be written).
+    pub fn problem(&self) -> Option<String> {
+        self.store.problem()
+    }
+
     pub fn jobs(&self) -> Vec<JobStatus> {
         let st = self.lock();
         st.jobs.values().map(|r| Self::status(&st, r)).collect()
@@ -716,8 +721,11 @@ impl Farm {
                 Ok(Reported::Accepted)
             }
             Err(e) => {
-                warn!(job = %claim.job, tile, "could not store the tile: {e}; it goes back to the queue");
-                self.lock().scheduler.commit_failed(&claim.job, tile);
+                warn!(job = %claim.job, tile, "could not store the tile: {e}; its worker may send it again");
+                let lease = (claim.epoch == self.signer.epoch()).then(|| self.signer.lease(claim));
+                let mut st = self.lock();
+                st.scheduler.commit_failed(&claim.job, tile, lease.as_ref(), Instant::now());
+                drop(st);
                 self.work.notify_waiters();
                 self.bump();
                 Err(e.into())
@@ -905,14 +913,16 @@ impl restauro_ops::endpoint::Probe for Farm {
         let st = self.lock();
         let unfinished = st.jobs.values().filter(|r| !r.state().is_final()).count() as u64;
         self.metrics.update(st.scheduler.gauges(), st.scheduler.totals(), unfinished);
+        self.metrics.store_failing.set(i64::from(self.store.problem().is_some()));
     }
 
     fn registry(&self) -> &prometheus_client::registry::Registry {
         self.metrics.registry()
     }
 
+    /// Not ready while the store cannot be written: new work would only fail.
     fn ready(&self) -> std::result::Result<(), String> {
-        Ok(())
+        self.store.problem().map_or(Ok(()), Err)
     }
 }
 

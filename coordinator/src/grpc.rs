@@ -224,7 +224,7 @@ impl pb::render_server::Render for RenderService {
         _request: Request<pb::ListJobsRequest>,
     ) -> Result<Response<pb::JobList>, Status> {
         let jobs = self.0.jobs().into_iter().map(Into::into).collect();
-        Ok(Response::new(pb::JobList { jobs }))
+        Ok(Response::new(pb::JobList { jobs, problem: self.0.problem().unwrap_or_default() }))
     }
 
     async fn list_workers(

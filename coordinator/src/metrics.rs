@@ -18,6 +18,8 @@ pub struct Metrics {
     tiles_leased: Gauge,
     workers_connected: Gauge,
     jobs_unfinished: Gauge,
+    /// 1 while the store cannot be written.
+    pub store_failing: Gauge,
     leases_total: Counter,
     tiles_done_total: Counter,
     tiles_requeued_total: Counter,
@@ -62,6 +64,8 @@ impl Metrics {
         let workers_connected = gauge(r, "workers_connected", "Workers registered and heard from");
         let jobs_unfinished =
             gauge(r, "jobs_unfinished", "Jobs queued, running or being assembled");
+        let store_failing =
+            gauge(r, "store_failing", "1 while the store cannot be written (a full disk)");
         let leases_total = counter(r, "leases", "Leases granted");
         let tiles_done_total = counter(r, "tiles_done", "Tiles completed");
         let tiles_requeued_total = counter(
@@ -97,6 +101,7 @@ impl Metrics {
             tiles_leased,
             workers_connected,
             jobs_unfinished,
+            store_failing,
             leases_total,
             tiles_done_total,
             tiles_requeued_total,

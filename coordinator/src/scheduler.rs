@@ -688,21 +688,38 @@ impl Scheduler {
         finished
     }
 
-    /// The accepted result of `tile` could not be stored: the tile goes back to the queue,
-    /// counting against nobody.
-    pub fn commit_failed(&mut self, job: &str, tile: u32) {
+    /// The accepted result of `tile` could not be stored. With the `lease` it came with (and
+    /// its worker still registered), the lease is given back to that worker with a new
+    /// deadline, so the same result can be sent again once the store recovers; without (an
+    /// earlier run's lease), the tile goes back to the queue. Either way it counts against
+    /// nobody.
+    pub fn commit_failed(&mut self, job: &str, tile: u32, lease: Option<&Lease>, now: Instant) {
         let Some(slot) = self.committing(job, tile) else {
             return;
         };
-        let job = self.job_mut(slot);
-        let before = job.ready_key(slot);
-        job.tiles[tile as usize].state = TileState::Queued;
+        let before = self.job(slot).ready_key(slot);
+        let holder = lease.filter(|l| self.workers.contains_key(&l.worker));
+        let deadline = now + self.config.lease_timeout;
+        let job = self.jobs[slot as usize].as_mut().expect("committing job is live");
         job.committing -= 1;
-        job.queued += 1;
-        job.requeued += 1;
-        job.requeue.insert(tile);
-        let after = job.ready_key(slot);
-        self.totals.requeued += 1;
+        match holder {
+            Some(l) if job.tiles[tile as usize].attempt == l.attempt => {
+                job.tiles[tile as usize].state = TileState::Leased { worker: l.worker, deadline };
+                job.leased += 1;
+                self.lease_deadlines.insert((deadline, slot, tile));
+                let w = self.workers.get_mut(&l.worker).expect("checked above");
+                w.leases.insert(pack(slot, tile));
+                w.done = w.done.saturating_sub(1);
+            }
+            _ => {
+                job.tiles[tile as usize].state = TileState::Queued;
+                job.queued += 1;
+                job.requeued += 1;
+                job.requeue.insert(tile);
+                self.totals.requeued += 1;
+            }
+        }
+        let after = self.job(slot).ready_key(slot);
         reindex(&mut self.ready, before, after);
     }
 
@@ -1308,21 +1325,32 @@ mod tests {
         assert_eq!(s.progress("a").unwrap().done, 1);
     }
 
-    /// A commit that fails puts the tile back at the head of the queue, against nobody.
+    /// A commit that fails gives the lease back to its worker (its result may be sent again),
+    /// or, for an earlier run's lease, puts the tile back at the head of the queue; against
+    /// nobody either way.
     #[test]
-    fn a_failed_commit_requeues_the_tile() {
+    fn a_failed_commit_gives_the_lease_back_or_requeues_the_tile() {
         let (mut s, t0) = setup();
         add(&mut s, "a", 0, 3, t0);
         let w = s.register_worker("w", 3, t0);
         let ls = s.lease(w, 2, t0);
         assert_eq!(s.complete(&ls[1], t0), Completion::Accepted);
-        s.commit_failed("a", 1);
+        s.commit_failed("a", 1, Some(&ls[1]), t0 + secs(1));
         let p = s.progress("a").unwrap();
-        assert_eq!((p.done, p.leased, p.queued, p.requeued), (0, 1, 2, 1));
-        let again = s.lease(w, 1, t0).remove(0);
-        assert_eq!((again.tile, again.attempt), (1, 2));
+        assert_eq!((p.done, p.leased, p.queued, p.requeued), (0, 2, 1, 0));
+        assert_eq!(s.workers()[0].done, 0);
+        // The same result, sent again, is accepted; the lease has a new deadline.
+        assert!(s.heartbeat(w, t0 + secs(29)));
+        assert_eq!(s.expire(t0 + secs(30)).len(), 1, "only the other lease expired");
+        assert!(!finish(&mut s, &ls[1], t0 + secs(30)));
+        // An inherited result that fails to commit puts its tile back in the queue.
+        assert_eq!(s.complete_inherited("a", 2), Completion::Accepted);
+        s.commit_failed("a", 2, None, t0 + secs(30));
+        let p = s.progress("a").unwrap();
+        assert_eq!((p.done, p.leased, p.queued, p.requeued), (1, 0, 2, 2));
+        let again = s.lease(w, 2, t0 + secs(30));
+        assert_eq!(again.iter().map(|l| (l.tile, l.attempt)).collect::<Vec<_>>(), [(0, 2), (2, 1)]);
         assert_eq!(s.workers()[0].failed, 0);
-        assert!(!finish(&mut s, &again, t0));
     }
 
     /// A job cancelled while a tile commits: the commit's end changes nothing.
@@ -1335,7 +1363,7 @@ mod tests {
         assert_eq!(s.complete(&l, t0), Completion::Accepted);
         assert!(s.cancel("a"));
         assert!(!s.committed("a", 0));
-        s.commit_failed("a", 0);
+        s.commit_failed("a", 0, Some(&l), t0);
         let p = s.progress("a").unwrap();
         assert_eq!((p.state, p.done), (Dispatch::Cancelled, 0));
         assert_eq!(s.pending_tiles(), 0);

@@ -1,15 +1,24 @@
 //! The coordinator's embedded, crash-safe store (redb: copy-on-write B-trees, a durable commit
 //! per write transaction). It keeps what a restart needs to resume without rendering a finished
 //! tile again: every job's record, every finished tile's pixels, and the run's identity (the
-//! secret that signs leases and the count of runs, see `lease_ticket`). Scene assets are files
-//! beside it (`asset_store`).
+//! secret that signs leases and the count of runs, see `lease`). Scene assets are files beside
+//! it (`asset_store`).
 //!
 //! A tile is committed before the worker is told it was accepted, so an acknowledged tile is
 //! never lost; a crash between the two makes the worker's result look unacknowledged, and the
 //! tile is stored a second time with the same bytes (tiles are deterministic).
+//!
+//! **When the disk fails** (full, or a device error), redb refuses every write after the failed
+//! commit until the database is opened again. The store then drops its handle and opens the
+//! file again on the next call (once no transaction holds the old handle), says so in the log
+//! and in [`Store::problem`] — which the coordinator shows in `restauro jobs`, its metrics and
+//! `/readyz` — and clears the problem once writes succeed again with no failure for a few
+//! seconds: the coordinator goes on without a restart when space returns.
 
 use redb::{Database, ReadableDatabase, ReadableTable, TableDefinition};
 use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant, SystemTime};
 
 /// Job id → the job's record (JSON).
 const JOBS: TableDefinition<&str, &[u8]> = TableDefinition::new("jobs");
@@ -28,27 +37,139 @@ pub enum StoreError {
 
 pub type Result<T> = std::result::Result<T, StoreError>;
 
+/// Why the store cannot write, since when, and when a write last failed.
+#[derive(Clone, Debug)]
+struct Problem {
+    since: SystemTime,
+    last: Instant,
+    /// When a write last succeeded after the last failure.
+    recovered: Option<Instant>,
+    message: String,
+}
+
+impl Problem {
+    fn over(&self) -> bool {
+        self.recovered.is_some() && self.last.elapsed() >= PROBLEM_QUIET
+    }
+}
+
+/// A problem is over once writes have succeeded and none has failed for this long: a nearly
+/// full disk may still take a small write between failing large ones.
+const PROBLEM_QUIET: Duration = Duration::from_secs(3);
+
 pub struct Store {
-    db: Database,
     path: PathBuf,
+    /// `None` after an I/O error: the next call opens the file again.
+    db: Mutex<Option<Arc<Database>>>,
+    problem: Mutex<Option<Problem>>,
+}
+
+type Fallible<T> = std::result::Result<T, redb::Error>;
+
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|p| p.into_inner())
 }
 
 impl Store {
     /// Opens the store at `path`, creating it (and its tables) when new.
     pub fn open(path: &Path) -> Result<Store> {
-        let fail = |e: &dyn std::fmt::Display| StoreError::Store {
+        let db = Database::create(path)
+            .map_err(|e| StoreError::Store { path: path.to_owned(), message: e.to_string() })?;
+        let store = Store {
             path: path.to_owned(),
-            message: e.to_string(),
+            db: Mutex::new(Some(Arc::new(db))),
+            problem: Mutex::new(None),
         };
-        let db = Database::create(path).map_err(|e| fail(&e))?;
-        let store = Store { db, path: path.to_owned() };
-        let txn = store.db.begin_write().map_err(|e| fail(&e))?;
-        txn.open_table(JOBS).map_err(|e| fail(&e))?;
-        txn.open_table(TILES).map_err(|e| fail(&e))?;
-        txn.open_table(ASSETS).map_err(|e| fail(&e))?;
-        txn.open_table(META).map_err(|e| fail(&e))?;
-        txn.commit().map_err(|e| fail(&e))?;
+        store.write(|txn| {
+            txn.open_table(JOBS)?;
+            txn.open_table(TILES)?;
+            txn.open_table(ASSETS)?;
+            txn.open_table(META)?;
+            Ok(())
+        })?;
         Ok(store)
+    }
+
+    /// Why the store cannot write now, when it cannot.
+    pub fn problem(&self) -> Option<String> {
+        let mut problem = lock(&self.problem);
+        if problem.as_ref().is_some_and(Problem::over) {
+            *problem = None;
+            tracing::info!(store = %self.path.display(), "the store can be written again");
+        }
+        problem.as_ref().map(|p| {
+            let seconds = p.since.elapsed().map_or(0, |d| d.as_secs());
+            format!(
+                "the store {} cannot be written ({seconds} s): {}",
+                self.path.display(),
+                p.message
+            )
+        })
+    }
+
+    fn error(&self, e: impl std::fmt::Display) -> StoreError {
+        StoreError::Store { path: self.path.clone(), message: e.to_string() }
+    }
+
+    /// The open database, opening the file again after an I/O error.
+    fn handle(&self) -> Result<Arc<Database>> {
+        let mut slot = lock(&self.db);
+        if let Some(db) = &*slot {
+            return Ok(db.clone());
+        }
+        let db = Arc::new(Database::create(&self.path).map_err(|e| self.error(e))?);
+        tracing::info!(store = %self.path.display(), "store opened again");
+        *slot = Some(db.clone());
+        Ok(db)
+    }
+
+    /// Turns a redb error into the store's; an I/O error also drops the handle (redb refuses
+    /// every later write until the database is opened again) and records the problem.
+    fn failed(&self, db: &Arc<Database>, e: redb::Error) -> StoreError {
+        if matches!(e, redb::Error::Io(_) | redb::Error::PreviousIo) {
+            let mut slot = lock(&self.db);
+            if slot.as_ref().is_some_and(|current| Arc::ptr_eq(current, db)) {
+                *slot = None;
+            }
+            let mut problem = lock(&self.problem);
+            match &mut *problem {
+                Some(p) => {
+                    p.last = Instant::now();
+                    p.recovered = None;
+                }
+                None => {
+                    tracing::error!(store = %self.path.display(), "the store cannot be written: {e}; retrying");
+                    *problem = Some(Problem {
+                        since: SystemTime::now(),
+                        last: Instant::now(),
+                        recovered: None,
+                        message: e.to_string(),
+                    });
+                }
+            }
+        }
+        self.error(e)
+    }
+
+    fn write<T>(&self, f: impl FnOnce(&redb::WriteTransaction) -> Fallible<T>) -> Result<T> {
+        let db = self.handle()?;
+        let run = || -> Fallible<T> {
+            let txn = db.begin_write()?;
+            let value = f(&txn)?;
+            txn.commit()?;
+            Ok(value)
+        };
+        let value = run().map_err(|e| self.failed(&db, e))?;
+        if let Some(p) = &mut *lock(&self.problem) {
+            p.recovered = Some(Instant::now());
+        }
+        Ok(value)
+    }
+
+    fn read<T>(&self, f: impl FnOnce(&redb::ReadTransaction) -> Fallible<T>) -> Result<T> {
+        let db = self.handle()?;
+        let run = || -> Fallible<T> { f(&db.begin_read()?) };
+        run().map_err(|e| self.failed(&db, e))
     }
 
     /// Starts a run of the coordinator on this store: the lease-signing secret (made on the
@@ -75,20 +196,6 @@ impl Store {
         })
     }
 
-    fn fail(&self, e: impl std::fmt::Display) -> StoreError {
-        StoreError::Store { path: self.path.clone(), message: e.to_string() }
-    }
-
-    fn write<T>(
-        &self,
-        f: impl FnOnce(&redb::WriteTransaction) -> std::result::Result<T, redb::Error>,
-    ) -> Result<T> {
-        let txn = self.db.begin_write().map_err(|e| self.fail(e))?;
-        let value = f(&txn).map_err(|e| self.fail(e))?;
-        txn.commit().map_err(|e| self.fail(e))?;
-        Ok(value)
-    }
-
     pub fn put_job(&self, id: &str, record: &[u8]) -> Result<()> {
         self.write(|txn| {
             txn.open_table(JOBS)?.insert(id, record)?;
@@ -98,14 +205,15 @@ impl Store {
 
     /// Every job record, by id.
     pub fn jobs(&self) -> Result<Vec<(String, Vec<u8>)>> {
-        let txn = self.db.begin_read().map_err(|e| self.fail(e))?;
-        let table = txn.open_table(JOBS).map_err(|e| self.fail(e))?;
-        let mut out = Vec::new();
-        for entry in table.iter().map_err(|e| self.fail(e))? {
-            let (k, v) = entry.map_err(|e| self.fail(e))?;
-            out.push((k.value().to_owned(), v.value().to_vec()));
-        }
-        Ok(out)
+        self.read(|txn| {
+            let table = txn.open_table(JOBS)?;
+            let mut out = Vec::new();
+            for entry in table.iter()? {
+                let (k, v) = entry?;
+                out.push((k.value().to_owned(), v.value().to_vec()));
+            }
+            Ok(out)
+        })
     }
 
     /// Several finished tiles in one durable transaction (see `group_commit`).
@@ -124,20 +232,18 @@ impl Store {
 
     /// The indices of a job's finished tiles, ascending.
     pub fn finished_tiles(&self, job: &str) -> Result<Vec<u32>> {
-        let txn = self.db.begin_read().map_err(|e| self.fail(e))?;
-        let table = txn.open_table(TILES).map_err(|e| self.fail(e))?;
-        let mut out = Vec::new();
-        for entry in table.range((job, 0)..=(job, u32::MAX)).map_err(|e| self.fail(e))? {
-            let (k, _) = entry.map_err(|e| self.fail(e))?;
-            out.push(k.value().1);
-        }
-        Ok(out)
+        self.read(|txn| {
+            let table = txn.open_table(TILES)?;
+            let mut out = Vec::new();
+            for entry in table.range((job, 0)..=(job, u32::MAX))? {
+                out.push(entry?.0.value().1);
+            }
+            Ok(out)
+        })
     }
 
     pub fn tile(&self, job: &str, tile: u32) -> Result<Option<Vec<u8>>> {
-        let txn = self.db.begin_read().map_err(|e| self.fail(e))?;
-        let table = txn.open_table(TILES).map_err(|e| self.fail(e))?;
-        Ok(table.get((job, tile)).map_err(|e| self.fail(e))?.map(|v| v.value().to_vec()))
+        self.read(|txn| Ok(txn.open_table(TILES)?.get((job, tile))?.map(|v| v.value().to_vec())))
     }
 
     /// Forgets a job's tiles (its results are written; the record stays).
@@ -157,20 +263,13 @@ impl Store {
     ) -> Result<usize> {
         let mut moved = 0;
         loop {
-            let next = {
-                let txn = self.db.begin_read().map_err(|e| self.fail(e))?;
-                let table = txn.open_table(ASSETS).map_err(|e| self.fail(e))?;
-                let mut iter = table.iter().map_err(|e| self.fail(e))?;
-                match iter.next() {
-                    Some(entry) => {
-                        let (k, v) = entry.map_err(|e| self.fail(e))?;
-                        Some((k.value().to_owned(), v.value().to_vec()))
-                    }
-                    None => None,
-                }
-            };
+            let next = self.read(|txn| {
+                let table = txn.open_table(ASSETS)?;
+                let first = table.iter()?.next().transpose()?;
+                Ok(first.map(|(k, v)| (k.value().to_owned(), v.value().to_vec())))
+            })?;
             let Some((hash, bytes)) = next else { return Ok(moved) };
-            keep(&hash, &bytes).map_err(|e| self.fail(e))?;
+            keep(&hash, &bytes).map_err(|e| self.error(e))?;
             self.write(|txn| {
                 txn.open_table(ASSETS)?.remove(hash.as_str())?;
                 Ok(())

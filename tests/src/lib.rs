@@ -51,8 +51,29 @@ pub fn token_files(dir: &Path) -> (PathBuf, PathBuf) {
 impl Coordinator {
     /// Starts `restauro-coordinator` with its store in `data`, on `listen` (port 0: any).
     pub fn start(dir: &Path, data: &Path, listen: &str, extra: &[&str]) -> Coordinator {
+        Self::start_under(&[], dir, data, listen, extra)
+    }
+
+    /// As [`Coordinator::start`], run by the command `prefix` (e.g. `prlimit …`): the process
+    /// that `prefix` finally executes is the coordinator, with the same process id.
+    pub fn start_under(
+        prefix: &[&str],
+        dir: &Path,
+        data: &Path,
+        listen: &str,
+        extra: &[&str],
+    ) -> Coordinator {
         let (c, w) = token_files(dir);
-        let mut child = Command::new(binary("restauro-coordinator"))
+        let coordinator = binary("restauro-coordinator");
+        let mut command = match prefix.split_first() {
+            Some((first, rest)) => {
+                let mut command = Command::new(first);
+                command.args(rest).arg(coordinator);
+                command
+            }
+            None => Command::new(coordinator),
+        };
+        let mut child = command
             .args(["--listen", listen, "--data"])
             .arg(data)
             .arg("--client-token-file")

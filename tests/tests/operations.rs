@@ -14,11 +14,12 @@ fn worker(dir: &Path, url: &str) -> (Worker, String) {
     Worker::start_with_metrics(dir, url, "w1", &[])
 }
 
-const COORDINATOR_METRICS: [&str; 15] = [
+const COORDINATOR_METRICS: [&str; 16] = [
     "restauro_tiles_queued",
     "restauro_tiles_leased",
     "restauro_workers_connected",
     "restauro_jobs_unfinished",
+    "restauro_store_failing",
     "restauro_leases_total",
     "restauro_tiles_done_total",
     "restauro_tiles_requeued_total",

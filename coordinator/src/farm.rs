@@ -9,7 +9,7 @@
 //! and a job's tile removal in the order the decisions were made; it is acknowledged only once
 //! durable, and counts as done only then.
 //!
-//! Record writes go through [`Farm::persist`], which writes the record as it is at the time of
+//! Record writes go through `Farm::persist`, which writes the record as it is at the time of
 //! writing, one write at a time: a slow write of an older state can never land after a newer one.
 
 use crate::asset_store::{AssetStore, Upload, asset_hash};

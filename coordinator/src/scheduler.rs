@@ -27,9 +27,16 @@
 //!   twice counts once for the tile. Expiry and worker loss never count as failures.
 //! * **Staleness.** Only the current lease of a tile counts. Completing or failing a lease of an
 //!   unknown, cancelled, failed or finished job, a lease whose attempt is not the tile's current
-//!   one (e.g. a late result after expiry), a tile already done, or a lease held by another
-//!   worker is answered `Stale` and changes nothing. This keeps the outcome independent of
-//!   message races and trivially deterministic.
+//!   one (e.g. a late result after expiry), a tile already done or being committed, or a lease
+//!   held by another worker is answered `Stale` and changes nothing. This keeps the outcome
+//!   independent of message races and trivially deterministic. The one exception is a result
+//!   of a lease an earlier run of the coordinator granted ([`Scheduler::complete_inherited`]):
+//!   no lease of this run names it, so it is taken for any tile not yet done or committing.
+//! * **Commit.** An accepted result is not yet done: the tile is *committing* until the store
+//!   has it ([`Scheduler::committed`]); meanwhile it takes no other result, has no deadline and
+//!   is not leased. A commit that fails gives the lease back to its worker, which sends the same
+//!   result again ([`Scheduler::commit_failed`]). A job is finished when every tile is done, so
+//!   its assembly never finds a tile missing from the store.
 //!
 //! # Time
 //!
@@ -40,7 +47,7 @@
 //!
 //! # Cost
 //!
-//! The hot path (`lease` + `complete`) is O(log n) per tile: queued tiles are a cursor over
+//! The hot path (`lease` + `complete` + `committed`) is O(log n) per tile: queued tiles are a cursor over
 //! never-leased tiles plus an ordered set of requeued ones, the current lease of every tile is
 //! stored in the job's tile table, every worker keeps the set of its leases, and lease and
 //! heartbeat deadlines live in ordered sets that are updated eagerly, so

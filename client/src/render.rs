@@ -10,7 +10,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use restauro_image::framebuffer::{Framebuffer, encode_tile};
 use restauro_image::results::{ResultOptions, write_results};
 use restauro_proto as pb;
-use restauro_render::prepared::{PreparedScene, Settings};
+use restauro_render::prepared::PreparedScene;
 use restauro_render::tile::render_tile;
 use restauro_scene::bundle::{Bundle, bundle_scene};
 use restauro_scene::job::{JobName, JobSpec, RetinexOptions};
@@ -89,7 +89,14 @@ pub fn run(args: &RenderArgs) -> Result<String> {
             (url.clone(), token, None)
         }
         None => {
-            let c = LocalCluster::start(args.workers.max(1), args.cluster_logs.as_deref())?;
+            // The embedded coordinator checks the job against the limits given here.
+            let limits = args.limits.to_args();
+            let limits: Vec<&str> = limits.iter().map(String::as_str).collect();
+            let c = LocalCluster::start_with(
+                args.workers.max(1),
+                args.cluster_logs.as_deref(),
+                &limits,
+            )?;
             (c.url.clone(), c.client_token.clone(), Some(c))
         }
     };
@@ -146,7 +153,7 @@ fn run_in_process(args: &RenderArgs) -> Result<String> {
     let plan = Plan::new(&scene, &spec.render, &limits, &args.scene)?;
     plan.apply(&mut scene);
     let started = Instant::now();
-    let prepared = PreparedScene::new(&scene, plan.variant.as_deref(), Settings::from(&plan))?;
+    let prepared = PreparedScene::for_plan(&scene, &plan)?;
     let prepare_s = started.elapsed().as_secs_f64();
     let bar =
         ProgressBar::with_draw_target(Some(plan.tile_count().into()), ProgressDrawTarget::stderr());

@@ -28,7 +28,8 @@ pub enum TraceError {
     Scene(String),
 }
 
-/// How to render: from the scene, possibly overridden on the command line.
+/// What the tracer needs of a render: the integrator and its numbers. A job's [`Plan`] gives it
+/// ([`PreparedScene::for_plan`]); benchmarks and tests set it directly.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Settings {
     pub integrator: Integrator,
@@ -73,6 +74,12 @@ pub struct Hit {
 }
 
 impl PreparedScene {
+    /// The scene prepared for a plan: its variant, integrator, samples, depth and seed. The
+    /// worker and `restauro render --in-process` both prepare a job this way.
+    pub fn for_plan(scene: &LoadedScene, plan: &Plan) -> Result<Self, TraceError> {
+        Self::new(scene, plan.variant.as_deref(), Settings::from(plan))
+    }
+
     pub fn new(
         scene: &LoadedScene,
         variant: Option<&str>,

@@ -80,6 +80,27 @@ pub struct LimitArgs {
 }
 
 #[cfg(feature = "cli")]
+impl LimitArgs {
+    /// The same limits as flags, for a process started with them (the embedded cluster's
+    /// coordinator checks a job against the limits its client was given).
+    pub fn to_args(&self) -> Vec<String> {
+        [
+            ("--max-triangles", self.max_triangles.to_string()),
+            ("--max-pixels", self.max_pixels.to_string()),
+            ("--max-spectral-pixels", self.max_spectral_pixels.to_string()),
+            ("--max-tiles", self.max_tiles.to_string()),
+            ("--min-tile", self.min_tile.to_string()),
+            ("--max-file-mb", self.max_file_mb.to_string()),
+            ("--max-spp", self.max_spp.to_string()),
+            ("--max-depth", self.max_depth.to_string()),
+        ]
+        .into_iter()
+        .flat_map(|(flag, value)| [flag.to_owned(), value])
+        .collect()
+    }
+}
+
+#[cfg(feature = "cli")]
 impl From<&LimitArgs> for Limits {
     fn from(a: &LimitArgs) -> Limits {
         Limits {

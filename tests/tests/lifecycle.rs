@@ -92,6 +92,8 @@ async fn workers_render_within_the_coordinators_limits() {
     let over_default = JobSpec {
         render: RenderOptions {
             integrator: Some(Integrator::Whitted),
+            width: Some(2),
+            height: Some(1),
             ..spec("many-samples", 8, 70_000).render
         },
         ..spec("many-samples", 8, 70_000)
@@ -100,6 +102,27 @@ async fn workers_render_within_the_coordinators_limits() {
     let _worker = Worker::start(d, &coordinator.url, "w", &[]);
     let end = wire::wait_end(&mut client, &job.job_id, Duration::from_secs(300)).await;
     assert_eq!(end.state, pb::JobState::Done as i32, "{end:?}");
+    // The same through `restauro render`'s embedded cluster: its coordinator is given the
+    // limits the command was given.
+    let scene = d.join("aosta").join("aosta.toml");
+    let out = d.join("embedded");
+    let o = restauro_tests::restauro(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--spp",
+        "70000",
+        "--max-spp",
+        "100000",
+        "--integrator",
+        "whitted",
+        "--width",
+        "2",
+        "--height",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", restauro_tests::text(&o));
 }
 
 fn tile_lines(log: &Path) -> Vec<u32> {

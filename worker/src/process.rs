@@ -19,7 +19,7 @@ use restauro_ops::signal::stop_signal;
 use restauro_ops::token::read_token;
 use restauro_proto::pb::work_client::WorkClient;
 use restauro_proto::{self as pb, CHUNK_BYTES, Credentials, PROTOCOL_VERSION};
-use restauro_render::prepared::{PreparedScene, Settings};
+use restauro_render::prepared::PreparedScene;
 use restauro_render::tile::render_tile;
 use restauro_scene::bundle::Bundle;
 use restauro_scene::limits::Limits;
@@ -508,7 +508,7 @@ impl Worker {
             plan.apply(&mut scene);
             let started = Instant::now();
             let prepared = pool
-                .install(|| PreparedScene::new(&scene, plan.variant.as_deref(), Settings::from(&plan)))
+                .install(|| PreparedScene::for_plan(&scene, &plan))
                 .map_err(|e| scene_error(&e))?;
             info!(job = %job_name, triangles = prepared.triangle_count(), mib = prepared.memory_bytes() >> 20, seconds = started.elapsed().as_secs_f64(), "scene prepared");
             Ok(ReadyJob { scene: prepared, plan })

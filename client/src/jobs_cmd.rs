@@ -187,3 +187,15 @@ pub fn workers(args: &ConnectArgs) -> Result<String> {
         Ok(s)
     })
 }
+
+#[cfg(test)]
+mod tests {
+    /// Defect 6: a name with terminal escapes and newlines was printed raw by `restauro jobs`.
+    #[test]
+    fn texts_from_the_coordinator_cannot_drive_the_terminal() {
+        let shown = super::shown("evil\u{1b}[2J\nname\r\u{7}");
+        assert!(!shown.chars().any(char::is_control), "{shown:?}");
+        assert_eq!(shown, "evil\\u{1b}[2J\\nname\\r\\u{7}");
+        assert_eq!(super::shown("façade sud"), "façade sud");
+    }
+}

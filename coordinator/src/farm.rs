@@ -65,6 +65,8 @@ pub struct Farm {
     work: Notify,
     /// Woken when a deadline may have come nearer, for the expiry timer.
     timer: Notify,
+    /// When the expiry timer will wake next (`None` while it is computing).
+    timer_wakes: Mutex<Option<Instant>>,
     /// Bumped on every change of a job, for watchers.
     changed: watch::Sender<u64>,
     pub metrics: Metrics,
@@ -177,6 +179,7 @@ impl Farm {
             persisting: Mutex::new(()),
             work: Notify::new(),
             timer: Notify::new(),
+            timer_wakes: Mutex::new(None),
             changed: watch::Sender::new(0),
             metrics: Metrics::new(),
         });
@@ -537,7 +540,7 @@ impl Farm {
             st.workers.insert(id, WorkerEntry { key, build: build.to_owned() });
             id
         };
-        self.timer.notify_one();
+        self.deadline_added();
         info!(worker = %worker, %name, capacity, %build, "worker registered");
         let heartbeat =
             (self.config.scheduler.heartbeat_timeout / 3).max(Duration::from_millis(50));
@@ -603,7 +606,7 @@ impl Farm {
             out.push(self.signer.grant(&l, rect));
         }
         drop(st);
-        self.timer.notify_one();
+        self.deadline_added();
         for id in &started {
             self.persist(id);
         }
@@ -668,11 +671,16 @@ impl Farm {
             Expected::Tile { rect, spectral, sky } => (rect, spectral, sky),
         };
         let tile = claim.tile;
-        let (checked, data) = tokio::task::spawn_blocking(move || {
+        // A large tile (spectral layers) is checked on the blocking pool, a small one here.
+        let (checked, data) = if data.len() < 1 << 20 {
             (check_tile(tile, &rect, spectral, sky, &data), data)
-        })
-        .await
-        .map_err(|e| CoordinatorError::Internal(e.to_string()))?;
+        } else {
+            tokio::task::spawn_blocking(move || {
+                (check_tile(tile, &rect, spectral, sky, &data), data)
+            })
+            .await
+            .map_err(|e| CoordinatorError::Internal(e.to_string()))?
+        };
         if let Err(e) = checked {
             let reason = format!("sent pixels no tracer produces: {e}");
             warn!(job = %claim.job, tile, worker = %session.worker, "{reason}");
@@ -875,15 +883,27 @@ impl Farm {
         }
     }
 
+    /// A lease was granted or a worker registered: wakes the timer if the new deadline may
+    /// come before the one it sleeps towards (new deadlines are at least the shorter timeout
+    /// away, so usually it need not wake).
+    fn deadline_added(&self) {
+        let c = &self.config.scheduler;
+        let soonest = Instant::now() + c.lease_timeout.min(c.heartbeat_timeout);
+        let wakes = *self.timer_wakes.lock().unwrap_or_else(|p| p.into_inner());
+        if wakes.is_none_or(|at| soonest < at) {
+            self.timer.notify_one();
+        }
+    }
+
     /// Expires leases and workers as their deadlines come, from the scheduler's own next
     /// deadline (woken early when a new one may be nearer). Runs until the runtime stops.
     pub async fn run_timer(self: Arc<Self>) {
         loop {
+            *self.timer_wakes.lock().unwrap_or_else(|p| p.into_inner()) = None;
             let next = self.lock().scheduler.next_deadline();
-            let until = next.map_or_else(
-                || tokio::time::Instant::now() + Duration::from_secs(60),
-                tokio::time::Instant::from_std,
-            );
+            let at = next.unwrap_or_else(|| Instant::now() + Duration::from_secs(60));
+            *self.timer_wakes.lock().unwrap_or_else(|p| p.into_inner()) = Some(at);
+            let until = tokio::time::Instant::from_std(at);
             tokio::select! {
                 () = tokio::time::sleep_until(until) => self.expire(),
                 () = self.timer.notified() => {}

@@ -199,22 +199,26 @@ impl Farm {
         for (id, bytes) in self.store.jobs()? {
             let mut record = JobRecord::from_bytes(&id, &bytes).map_err(anyhow::Error::msg)?;
             let id = record.id.clone();
-            if record.format != crate::job::RECORD_FORMAT || !record.state().is_final() {
+            if record.format != crate::job::RECORD_FORMAT {
+                // An earlier release's record: listed as failed, stored anew, its tiles dropped.
+                record.format = crate::job::RECORD_FORMAT;
+                self.store.remove_tiles(&id)?;
+                self.store.put_job(&id, &record.to_bytes())?;
+            } else if record.state().is_final() {
+                // Ended before its tiles were dropped (the coordinator stopped in between).
+                if !self.store.finished_tiles(&id)?.is_empty() {
+                    self.store.remove_tiles(&id)?;
+                }
+            } else {
                 let done = self.store.finished_tiles(&id)?;
                 let total = record.plan.tile_count();
-                if record.state().is_final() {
-                    // An earlier release's record: listed as failed, its tiles dropped.
-                    self.store.remove_tiles(&id)?;
-                    self.store.put_job(&id, &record.to_bytes())?;
-                } else {
-                    info!(job = %id, done = done.len(), total, "resuming job");
-                    let mut st = self.lock();
-                    st.scheduler
-                        .add_job(id.clone(), record.spec.priority, total, &done, Instant::now())
-                        .map_err(|e| anyhow::anyhow!("job {id}: {e}"))?;
-                    if record.resume_assembly(done.len() as u32 == total) {
-                        to_assemble.push(id.clone());
-                    }
+                info!(job = %id, done = done.len(), total, "resuming job");
+                let mut st = self.lock();
+                st.scheduler
+                    .add_job(id.clone(), record.spec.priority, total, &done, Instant::now())
+                    .map_err(|e| anyhow::anyhow!("job {id}: {e}"))?;
+                if record.resume_assembly(done.len() as u32 == total) {
+                    to_assemble.push(id.clone());
                 }
             }
             self.lock().jobs.insert(id, record);
@@ -989,5 +993,26 @@ mod tests {
         let e = farm.register("w\u{1b}[2J", 1, "b").unwrap_err();
         assert!(e.to_string().contains("name: character"), "{e}");
         assert!(farm.register("w", 1, &"b".repeat(300)).is_err());
+    }
+
+    /// A store written by protocol 1: its job is listed as failed with the reason, and its tiles
+    /// and assets do not stay in the store.
+    #[test]
+    fn an_earlier_releases_store_opens_with_its_jobs_listed_as_failed() {
+        let dir = tempfile::tempdir().unwrap();
+        {
+            let store = Store::open(&dir.path().join("store.redb")).unwrap();
+            let old = br#"{"id":"o","name":"aosta","state":"running","options":{}}"#;
+            store.put_job("o", old).unwrap();
+            store.put_tiles([("o", 0, &[1u8, 2, 3][..])]).unwrap();
+        }
+        let farm = farm(dir.path());
+        let jobs = farm.jobs();
+        assert_eq!(jobs.len(), 1);
+        assert_eq!((jobs[0].state, jobs[0].name.as_str()), (JobState::Failed, "aosta"));
+        assert!(jobs[0].error.contains("earlier restauro release"), "{}", jobs[0].error);
+        assert!(farm.store.finished_tiles("o").unwrap().is_empty());
+        let (_, bytes) = farm.store.jobs().unwrap().remove(0);
+        assert_eq!(JobRecord::from_bytes("o", &bytes).unwrap().format, crate::job::RECORD_FORMAT);
     }
 }

@@ -221,6 +221,8 @@ impl JobRecord {
             Some("done" | "failed" | "cancelled")
         );
         let mut record = JobRecord::new(JobId::from(id), spec, String::new(), plan, 0);
+        // Marked as read from an earlier layout, so the coordinator stores it anew.
+        record.format = 1;
         record.state = JobState::Failed;
         record.error = if was_final {
             "stored by an earlier restauro release; its results, if any, are kept in its folder"
@@ -318,6 +320,7 @@ mod tests {
         let old = br#"{"id":"o","name":"aosta","state":"running","options":{}}"#;
         let o = JobRecord::from_bytes("o", old).unwrap();
         assert_eq!((o.state(), o.spec.name.as_str()), (JobState::Failed, "aosta"));
+        assert_ne!(o.format, RECORD_FORMAT);
         assert!(o.error.contains("earlier restauro release"));
         assert!(JobRecord::from_bytes("x", b"not json").is_err());
     }

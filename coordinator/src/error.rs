@@ -105,7 +105,9 @@ impl CoordinatorError {
             E::ProtocolVersion { .. } | E::NotDone { .. } | E::IllegalTransition { .. } => {
                 Code::FailedPrecondition
             }
-            E::AssetMissing { .. } | E::UnknownSession { .. } => Code::FailedPrecondition,
+            E::AssetMissing { .. } => Code::FailedPrecondition,
+            // "Retry at a higher level": register again, then call again.
+            E::UnknownSession { .. } => Code::Aborted,
             E::NoToken { .. } | E::BadToken { .. } => Code::Unauthenticated,
             E::WrongRole { .. } | E::ForeignLease { .. } => Code::PermissionDenied,
             E::Scene(SceneError::Limit { .. }) => Code::ResourceExhausted,
@@ -145,7 +147,7 @@ mod tests {
         assert_eq!(s.code(), tonic::Code::Unavailable);
         assert!(s.message().contains("No space left") && s.message().contains("/x/store.redb"));
         let s = status(CoordinatorError::UnknownSession { worker: 7 });
-        assert_eq!(s.code(), tonic::Code::FailedPrecondition);
+        assert_eq!(s.code(), tonic::Code::Aborted);
         assert!(s.message().contains("register again"));
     }
 }

@@ -32,12 +32,11 @@ pub fn retryable(error: &JobError) -> bool {
             Code::Unavailable
                 | Code::DeadlineExceeded
                 | Code::Cancelled
+                // A coordinator restarted since the lease: this worker must register again.
                 | Code::Aborted
                 | Code::ResourceExhausted
                 | Code::Unknown
                 | Code::Internal
-                // A coordinator restarted since the lease: this worker must register again.
-                | Code::FailedPrecondition
         ),
         // Bytes damaged on the way: another fetch will most likely be whole.
         JobError::Damaged { .. } => true,
@@ -65,11 +64,16 @@ mod tests {
             Code::ResourceExhausted,
             Code::Unknown,
             Code::Internal,
-            Code::FailedPrecondition,
         ] {
             assert!(retryable(&fetch(code)), "{code:?}");
         }
-        for code in [Code::NotFound, Code::InvalidArgument, Code::PermissionDenied] {
+        // An asset the coordinator does not have (FAILED_PRECONDITION), a job it does not know.
+        for code in [
+            Code::NotFound,
+            Code::InvalidArgument,
+            Code::PermissionDenied,
+            Code::FailedPrecondition,
+        ] {
             assert!(!retryable(&fetch(code)), "{code:?}");
         }
         assert!(retryable(&JobError::Damaged { reference: "blake3:00.obj".into() }));

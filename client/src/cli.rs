@@ -106,6 +106,13 @@ pub struct LimitArgs {
     /// The most bounces of a path.
     #[arg(long, default_value_t = 64)]
     pub max_depth: u32,
+    /// The most node instances one mesh file may expand to (VRML97 `USE` copies, glTF nodes
+    /// used more than once).
+    #[arg(long, default_value_t = 20_000_000)]
+    pub max_instances: u64,
+    /// The most vertices of one polygon of a mesh.
+    #[arg(long, default_value_t = 10_000)]
+    pub max_polygon_vertices: u64,
 }
 
 #[derive(Debug, Args)]

@@ -16,6 +16,8 @@ impl From<&LimitArgs> for Limits {
             max_samples_per_pixel: a.max_spp,
             max_depth: a.max_depth,
             max_file_bytes: a.max_file_mb.saturating_mul(1 << 20),
+            max_instances: a.max_instances,
+            max_polygon_vertices: a.max_polygon_vertices,
         }
     }
 }

@@ -19,6 +19,7 @@ pub mod obj;
 pub mod photometric;
 pub mod plan;
 pub mod ply;
+mod ply_layout;
 pub mod samples;
 pub mod scene_file;
 pub mod vrml;

@@ -4,7 +4,7 @@
 //! resolved (the sun's position computed), and the limits that protect the machine enforced.
 //! Nothing renders until all of it has passed.
 
-use crate::assets::{Assets, FolderAssets, extension};
+use crate::assets::{Assets, FolderAssets, extension, utf8_text};
 use crate::error::{Result, SceneError};
 use crate::mesh::Mesh;
 use crate::photometric::{self, Photometry};
@@ -28,6 +28,13 @@ pub struct Limits {
     pub max_samples_per_pixel: u32,
     pub max_depth: u32,
     pub max_file_bytes: u64,
+    /// The most node instances one mesh file may expand to, counting every `USE` (VRML97) and
+    /// every reuse of a node (glTF): a file of a few hundred bytes whose groups each use the
+    /// one before twice stands for 2^40 instances.
+    pub max_instances: u64,
+    /// The most vertices of one polygon (OBJ, PLY, VRML97 faces): more is a corrupt file,
+    /// not a building.
+    pub max_polygon_vertices: u64,
 }
 
 impl Default for Limits {
@@ -38,9 +45,23 @@ impl Default for Limits {
             max_samples_per_pixel: 65_536,
             max_depth: 64,
             max_file_bytes: 2 << 30,
+            max_instances: 20_000_000,
+            max_polygon_vertices: 10_000,
         }
     }
 }
+
+/// The largest coordinate (m, each of x, y and z, after placement) of a vertex, the camera or
+/// a light. Survey coordinates run to millions of metres (UTM northings reach 10⁷ m); beyond
+/// 10⁹ m a scene is a mistake of units or scale, and the tracer's 32-bit floats (and its BVH
+/// builder, which fails on non-finite bounds) are no longer safe.
+pub const MAX_COORDINATE_M: f64 = 1e9;
+/// The most luminous intensity a luminaire may have (cd): the brightest searchlights reach
+/// about 10⁹ cd; more would overflow the 32-bit radiance once multiplied by the spectrum.
+pub const MAX_INTENSITY_CD: f64 = 1e9;
+/// The most illuminance a sun or sky may give (lux): the sun gives about 1.3 × 10⁵ lx at the
+/// top of the atmosphere.
+pub const MAX_ILLUMINANCE_LUX: f64 = 1e6;
 
 /// The camera in world coordinates.
 #[derive(Clone, Debug, PartialEq)]
@@ -152,7 +173,9 @@ impl LoadedScene {
 
 /// Parse the text of a scene file. TOML errors carry their line and column.
 pub fn parse_scene(text: &str, path: &Path) -> Result<SceneFile> {
-    let file: SceneFile = toml::from_str(text).map_err(|e| {
+    let parsed = crate::guard::catch(|| toml::from_str::<SceneFile>(text))
+        .map_err(|_| SceneError::invalid(path, "TOML", crate::guard::gave_up("TOML")))?;
+    let file: SceneFile = parsed.map_err(|e| {
         let (line, column) = e
             .span()
             .map(|s| {
@@ -180,11 +203,18 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<SceneFile> {
 
 /// Load and check the scene file at `path`.
 pub fn load_scene(path: &Path, limits: &Limits) -> Result<LoadedScene> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|source| SceneError::Io { path: path.to_owned(), source })?;
-    let file = parse_scene(&text, path)?;
+    let file = read_scene_file(path, limits)?;
     let assets = FolderAssets::new(path, limits.max_file_bytes)?;
     load(file, &assets, limits)
+}
+
+/// Read and parse the scene file at `path`: a regular file (not a FIFO or a device, which would
+/// block or never end), within the file size limit, UTF-8.
+pub fn read_scene_file(path: &Path, limits: &Limits) -> Result<SceneFile> {
+    let bytes =
+        crate::assets::read_regular_file(path, limits.max_file_bytes, crate::assets::MAX_FILE_FIX)?;
+    let text = crate::assets::utf8_text(bytes, path)?;
+    parse_scene(&text, path)
 }
 
 /// "unknown X `name` (did you mean …?); the scene defines …".
@@ -267,12 +297,16 @@ impl Ctx<'_> {
             }
             SpectrumSource::File { file, extrapolate } => {
                 let bytes = self.assets.read(file, &spectrum_place)?;
-                let text = String::from_utf8(bytes).map_err(|_| {
-                    self.invalid(&spectrum_place, format!("`{file}` is not UTF-8 text"))
-                })?;
+                let shown = self.assets.display_path(file);
+                let text = utf8_text(bytes, &shown)?;
                 let coverage = if *extrapolate { Coverage::HoldEnds } else { Coverage::Require };
-                let loaded = load_csv(&text, file, Quantity::RelativePower, coverage)
-                    .map_err(|e| self.invalid(&spectrum_place, e.to_string()))?;
+                let loaded = load_csv(
+                    &text,
+                    &shown.display().to_string(),
+                    Quantity::RelativePower,
+                    coverage,
+                )
+                .map_err(|e| self.invalid(&spectrum_place, e.to_string()))?;
                 self.notes.extend(
                     loaded.notes.iter().map(|n| format!("spectrum `{name}` ({file}): {n}")),
                 );
@@ -389,24 +423,26 @@ fn check_surface(
     Ok(())
 }
 
-/// Import a mesh by its reference's extension; also returns VRML viewpoints.
+/// Import a mesh by its reference's extension; also returns VRML viewpoints. Messages about the
+/// mesh's content name the mesh file by its path.
 fn import_mesh(
     ctx: &Ctx,
     reference: &str,
     place: &str,
+    limits: &Limits,
 ) -> Result<(Mesh, Vec<vrml::Viewpoint>, UpAxis)> {
     let bytes = ctx.assets.read(reference, place)?;
-    let name = PathBuf::from(reference);
-    let text = || {
-        String::from_utf8(bytes.clone())
-            .map_err(|_| ctx.invalid(place, format!("`{reference}` is not UTF-8 text")))
-    };
+    let name = ctx.assets.display_path(reference);
     Ok(match extension(reference).as_str() {
-        "obj" => (obj::parse(&text()?, &name)?, Vec::new(), UpAxis::Z),
-        "ply" => (ply::parse(&bytes, &name)?, Vec::new(), UpAxis::Z),
-        "gltf" | "glb" => (gltf_mesh::parse(&bytes, &name)?, Vec::new(), UpAxis::Y),
+        "obj" => {
+            let text = utf8_text(bytes, &name)?;
+            (obj::parse_limited(&text, &name, limits)?, Vec::new(), UpAxis::Z)
+        }
+        "ply" => (ply::parse_limited(&bytes, &name, limits)?, Vec::new(), UpAxis::Z),
+        "gltf" | "glb" => (gltf_mesh::parse_limited(&bytes, &name, limits)?, Vec::new(), UpAxis::Y),
         "wrl" => {
-            let scene = vrml::parse(&text()?, &name)?;
+            let text = utf8_text(bytes, &name)?;
+            let scene = vrml::parse_limited(&text, &name, limits)?;
             (scene.mesh, scene.viewpoints, UpAxis::Y)
         }
         other => {
@@ -485,6 +521,42 @@ fn check_mesh(ctx: &mut Ctx, mesh: &mut Mesh, place: &str, reference: &str) -> R
     Ok(())
 }
 
+/// Whether a world coordinate is one the tracer can hold: finite, and within
+/// [`MAX_COORDINATE_M`] (so finite as a 32-bit float too).
+fn placeable(x: f64) -> bool {
+    x.is_finite() && x.abs() <= MAX_COORDINATE_M
+}
+
+/// "must be finite and within ±1e9 m" for a point field.
+fn check_point(ctx: &Ctx, place: &str, p: [f64; 3]) -> Result<()> {
+    if p.iter().all(|&x| placeable(x)) {
+        return Ok(());
+    }
+    Err(ctx.invalid(
+        place,
+        format!(
+            "{p:?} is out of range; every coordinate must be finite and within ±{MAX_COORDINATE_M:e} m \
+             (check the units: restauro works in metres)"
+        ),
+    ))
+}
+
+/// Every vertex of a placed mesh within [`MAX_COORDINATE_M`]: a huge scale or translation
+/// must be refused here, by `scene check`, not by the tracer's BVH builder.
+fn check_placed(ctx: &Ctx, mesh: &Mesh, place: &str, reference: &str) -> Result<()> {
+    match mesh.positions.iter().position(|p| !p.iter().all(|&x| placeable(f64::from(x)))) {
+        None => Ok(()),
+        Some(i) => Err(ctx.invalid(
+            format!("{place}.transform"),
+            format!(
+                "vertex {i} of `{reference}` lands at {:?} m once placed, beyond ±{MAX_COORDINATE_M:e} m; \
+                 check the transform's scale and translate (and the file's units)",
+                mesh.positions[i]
+            ),
+        )),
+    }
+}
+
 fn transform_mesh(mesh: &mut Mesh, m: DMat4) {
     for p in &mut mesh.positions {
         *p = m.transform_point3(DVec3::from_array(p.map(f64::from))).as_vec3().to_array();
@@ -509,8 +581,8 @@ fn transform_mesh(mesh: &mut Mesh, m: DMat4) {
 fn photometry(ctx: &Ctx, reference: &Option<String>, place: &str) -> Result<Option<Photometry>> {
     let Some(reference) = reference else { return Ok(None) };
     let bytes = ctx.assets.read(reference, place)?;
-    let text = String::from_utf8_lossy(&bytes);
-    let name = PathBuf::from(reference);
+    let text = photometric::decode_text(bytes);
+    let name = ctx.assets.display_path(reference);
     Ok(Some(match extension(reference).as_str() {
         "ies" => photometric::parse_ies(&text, &name)?,
         "ldt" => photometric::parse_ldt(&text, &name)?,
@@ -617,7 +689,8 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
                 "every number must be finite, and a scale not 0",
             ));
         }
-        let (mut mesh, vps, file_up) = import_mesh(&ctx, &o.mesh, &format!("{place}.mesh"))?;
+        let (mut mesh, vps, file_up) =
+            import_mesh(&ctx, &o.mesh, &format!("{place}.mesh"), limits)?;
         check_mesh(&mut ctx, &mut mesh, &place, &o.mesh)?;
         triangles += mesh.triangles.len() as u64;
         if triangles > limits.max_triangles {
@@ -630,6 +703,7 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
         }
         let matrix = object_matrix(o, file_up);
         transform_mesh(&mut mesh, matrix);
+        check_placed(&ctx, &mesh, &place, &o.mesh)?;
         viewpoints.insert(o.name.clone(), (vps, matrix));
         // Bind each part to a scene material.
         for key in o.materials.keys() {
@@ -755,9 +829,9 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
         DVec3::from_array(camera.target),
         DVec3::from_array(camera.up),
     );
-    if !(finite3(camera.position) && finite3(camera.target) && finite3(camera.up)) {
-        return Err(ctx.invalid("camera", "position, target and up must be finite"));
-    }
+    check_point(&ctx, "camera.position", camera.position)?;
+    check_point(&ctx, "camera.target", camera.target)?;
+    check_point(&ctx, "camera.up", camera.up)?;
     if (t - p).length() < 1e-9 {
         return Err(ctx.invalid("camera", "the target is where the camera is; move one of them"));
     }
@@ -842,12 +916,7 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
                         "give illuminance_lux, or preset = \"sun\", \"cloudy\" or \"full-moon\"",
                     )),
                 };
-                if !(lux.is_finite() && lux >= 0.0) {
-                    return Err(ctx.invalid(
-                        format!("{place}.illuminance_lux"),
-                        format!("{lux} is not a finite illuminance ≥ 0 lux"),
-                    ));
-                }
+                check_illuminance(&ctx, &place, lux)?;
                 let position = match (azimuth_deg, elevation_deg, site) {
                     (Some(_), _, Some(_)) | (_, Some(_), Some(_)) => {
                         return Err(ctx.invalid(
@@ -907,12 +976,7 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
                         ));
                     }
                 };
-                if !(lux.is_finite() && lux >= 0.0) {
-                    return Err(ctx.invalid(
-                        format!("{place}.illuminance_lux"),
-                        format!("{lux} is not a finite illuminance ≥ 0 lux"),
-                    ));
-                }
+                check_illuminance(&ctx, &place, lux)?;
                 ResolvedLight::Sky {
                     illuminance_lux: lux,
                     model: model.unwrap_or(preset_model),
@@ -990,6 +1054,26 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
     Ok(LoadedScene { camera, spectra, objects, lights, notes, file })
 }
 
+/// An illuminance (sun or sky): finite, ≥ 0 and at most [`MAX_ILLUMINANCE_LUX`].
+fn check_illuminance(ctx: &Ctx, place: &str, lux: f64) -> Result<()> {
+    if !(lux.is_finite() && lux >= 0.0) {
+        return Err(ctx.invalid(
+            format!("{place}.illuminance_lux"),
+            format!("{lux} is not a finite illuminance ≥ 0 lux"),
+        ));
+    }
+    if lux > MAX_ILLUMINANCE_LUX {
+        return Err(ctx.invalid(
+            format!("{place}.illuminance_lux"),
+            format!(
+                "{lux:e} lux is more than the {MAX_ILLUMINANCE_LUX:e} lux restauro accepts (full \
+                 sunlight is about 1e5 lux); give the illuminance in lux"
+            ),
+        ));
+    }
+    Ok(())
+}
+
 fn check_luminaire(
     ctx: &Ctx,
     place: &str,
@@ -997,19 +1081,25 @@ fn check_luminaire(
     intensity_cd: f64,
     aim: Option<[f64; 3]>,
 ) -> Result<()> {
-    if !finite3(position) {
-        return Err(ctx.invalid(format!("{place}.position"), "must be finite"));
-    }
+    check_point(ctx, &format!("{place}.position"), position)?;
     if !(intensity_cd.is_finite() && intensity_cd >= 0.0) {
         return Err(ctx.invalid(
             format!("{place}.intensity_cd"),
             format!("{intensity_cd} is not a luminous intensity; give candela ≥ 0"),
         ));
     }
+    if intensity_cd > MAX_INTENSITY_CD {
+        return Err(ctx.invalid(
+            format!("{place}.intensity_cd"),
+            format!(
+                "{intensity_cd:e} cd is more than the {MAX_INTENSITY_CD:e} cd restauro accepts (the \
+                 brightest searchlights reach about 1e9 cd); give the luminaire's intensity in \
+                 candela"
+            ),
+        ));
+    }
     if let Some(a) = aim {
-        if !finite3(a) {
-            return Err(ctx.invalid(format!("{place}.aim"), "must be finite"));
-        }
+        check_point(ctx, &format!("{place}.aim"), a)?;
         if (DVec3::from_array(a) - DVec3::from_array(position)).length() < 1e-9 {
             return Err(ctx
                 .invalid(format!("{place}.aim"), "the aim point is the luminaire's own position"));

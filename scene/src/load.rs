@@ -171,8 +171,86 @@ impl LoadedScene {
     }
 }
 
+/// The deepest nesting of arrays and inline tables a scene file may have. A scene needs three
+/// (`mix = [{ … }]` inside a table); the TOML parser and serde recurse once per level, so a few
+/// hundred kilobytes of `[[[[…` would overflow the stack of the thread that reads it (a worker's
+/// thread has 2 MiB) and abort the process, which no error can report.
+pub const MAX_TOML_NESTING: usize = 32;
+
+/// Refuse nesting deeper than [`MAX_TOML_NESTING`] before the TOML parser sees it: brackets and
+/// braces are counted outside strings and comments, a closer closing only the opener it matches
+/// (the fuzz harness found unclosed inline tables with stray `]` between them overflowing the
+/// parser, so a stray closer must not hide an opener).
+fn check_nesting(text: &str, path: &Path) -> Result<()> {
+    let (mut line, mut column) = (1usize, 0usize);
+    let mut open: Vec<char> = Vec::new();
+    let mut chars = text.chars().peekable();
+    // The closing quote of the string being read, and whether it is a multi-line one.
+    let mut string: Option<(char, bool)> = None;
+    let mut comment = false;
+    while let Some(c) = chars.next() {
+        column += 1;
+        if c == '\n' {
+            line += 1;
+            column = 0;
+            comment = false;
+            if string.is_some_and(|(_, multi)| !multi) {
+                string = None; // an unterminated string; the parser will say so
+            }
+            continue;
+        }
+        if comment {
+            continue;
+        }
+        let triple = |chars: &mut std::iter::Peekable<std::str::Chars>, q: char| {
+            let mut ahead = chars.clone();
+            if ahead.next() == Some(q) && ahead.next() == Some(q) {
+                chars.next();
+                chars.next();
+                true
+            } else {
+                false
+            }
+        };
+        match string {
+            Some((q, multi)) => {
+                if c == '\\' && q == '"' {
+                    chars.next(); // an escaped character, whatever it is
+                } else if c == q && (!multi || triple(&mut chars, q)) {
+                    string = None;
+                }
+            }
+            None => match c {
+                '#' => comment = true,
+                '"' | '\'' => string = Some((c, triple(&mut chars, c))),
+                '[' | '{' => {
+                    open.push(c);
+                    if open.len() > MAX_TOML_NESTING {
+                        return Err(SceneError::syntax(
+                            path,
+                            line,
+                            column,
+                            format!(
+                                "arrays and inline tables nested more than {MAX_TOML_NESTING} \
+                                 deep (or left open); a scene needs three at most, so this file \
+                                 is damaged or not a scene"
+                            ),
+                        ));
+                    }
+                }
+                ']' | '}' if open.last() == Some(&if c == ']' { '[' } else { '{' }) => {
+                    open.pop();
+                }
+                _ => {}
+            },
+        }
+    }
+    Ok(())
+}
+
 /// Parse the text of a scene file. TOML errors carry their line and column.
 pub fn parse_scene(text: &str, path: &Path) -> Result<SceneFile> {
+    check_nesting(text, path)?;
     let parsed = crate::guard::catch(|| toml::from_str::<SceneFile>(text))
         .map_err(|_| SceneError::invalid(path, "TOML", crate::guard::gave_up("TOML")))?;
     let file: SceneFile = parsed.map_err(|e| {

@@ -386,3 +386,31 @@ fn mesh_errors_name_the_mesh_by_its_path() {
     let full = f.canonical().join("meshes/north/wall.obj");
     assert_has(&e, &[&format!("{}: line 4: vertex index 9 is out of range", full.display())]);
 }
+
+// ---------------------------------------------------------------------------------------------
+// Found by the fuzz harness (tests/tests/fuzz_readers.rs)
+
+/// The fuzz harness repeated blocks of the demo's scenes a few thousand times, each copy opening
+/// an inline table it never closes, with a table header and a stray `]` between them: the TOML
+/// parser (toml 0.9) overflowed a 2 MiB thread stack (a worker's threads have that) and
+/// aborted the process. Reduced to its core, 3000 times.
+#[test]
+fn deeply_nested_toml_is_refused_before_it_overflows_the_stack() {
+    let f = Folder::new();
+    f.write("wall.obj", TRIANGLE_OBJ);
+    let block = "ials.board]\n[[objects]]\nmaterials = { travertine_found\0=";
+    let deep = format!("{}\n{}", scene("wall.obj", "", SUN), block.repeat(3000));
+    let path = f.write("scene.toml", &deep);
+    let e = std::thread::Builder::new()
+        .stack_size(2 << 20)
+        .spawn(move || load_scene(&path, &Limits::default()).map(|_| ()).unwrap_err().to_string())
+        .unwrap()
+        .join()
+        .unwrap();
+    assert_has(&e, &["scene.toml:", "nested more than 32 deep", "damaged"]);
+    // Brackets inside strings and comments are text, not nesting.
+    let text =
+        scene("wall.obj", "", SUN).replace("[camera]", &format!("# {}\n[camera]", "[".repeat(40)));
+    let text = text.replace("name = \"wall\"", &format!("name = \"{}\"", "{".repeat(40)));
+    assert!(load(&f, &text).is_ok());
+}

@@ -330,13 +330,108 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Mesh> {
     parse_limited(bytes, path, &Limits::default())
 }
 
+/// A GLB container's framing (glTF 2.0 §4.4), checked before the gltf crate splits it: it
+/// subtracts the 12-byte header from the stated length without checking that the length holds
+/// it (an overflow, a panic in builds with overflow checks).
+fn check_glb(bytes: &[u8], path: &Path) -> Result<()> {
+    let word =
+        |at: usize| bytes.get(at..at + 4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+    let refuse = |place: &str, problem: String| Err(SceneError::invalid(path, place, problem));
+    let (Some(version), Some(length)) = (word(4), word(8)) else {
+        return refuse(
+            "GLB header",
+            "the file ends inside the 12-byte GLB header; it is truncated".into(),
+        );
+    };
+    if version != 2 {
+        return refuse(
+            "GLB header",
+            format!("GLB version {version}; restauro reads glTF 2.0 (version 2)"),
+        );
+    }
+    if length < 12 || length as usize > bytes.len() {
+        return refuse(
+            "GLB header",
+            format!(
+                "the header gives a length of {length} bytes but the file has {}; it is truncated \
+                 or damaged",
+                bytes.len()
+            ),
+        );
+    }
+    let mut at = 12usize;
+    let mut chunk = 0;
+    while at < length as usize {
+        let (Some(chunk_length), Some(_)) = (word(at), word(at + 4)) else {
+            return refuse(
+                &format!("GLB chunk {chunk} (byte {at})"),
+                "the file ends inside a chunk header; it is truncated".into(),
+            );
+        };
+        let end = (at + 8).checked_add(chunk_length as usize);
+        if end.is_none_or(|end| end > length as usize) {
+            return refuse(
+                &format!("GLB chunk {chunk} (byte {at})"),
+                format!(
+                    "a chunk of {chunk_length} bytes runs past the end of the file ({length} bytes); \
+                     it is truncated or damaged"
+                ),
+            );
+        }
+        at = end.unwrap_or(usize::MAX);
+        chunk += 1;
+    }
+    Ok(())
+}
+
+/// Checks the gltf crate's validation takes for granted: its hook for a primitive's POSITION
+/// accessor indexes the accessors before the index itself is validated (a panic on an index out
+/// of range).
+fn check_references(doc: &gltf::json::Root, path: &Path) -> Result<()> {
+    let accessors = doc.accessors.len();
+    for (m, mesh) in doc.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let place = || format!("meshes[{m}].primitives[{p}]");
+            for (semantic, index) in &primitive.attributes {
+                if index.value() >= accessors {
+                    let name = match semantic {
+                        gltf::json::validation::Checked::Valid(s) => s.to_string(),
+                        gltf::json::validation::Checked::Invalid => "an attribute".into(),
+                    };
+                    return Err(SceneError::invalid(
+                        path,
+                        format!("{}.attributes.{name}", place()),
+                        format!(
+                            "refers to accessor {}, but the file has {accessors} accessors; the file \
+                             is damaged, re-export it",
+                            index.value()
+                        ),
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
 /// [`parse`] within `limits` (node instances, triangles).
 pub fn parse_limited(bytes: &[u8], path: &Path, limits: &Limits) -> Result<Mesh> {
-    let doc = guard::catch(|| gltf::Gltf::from_slice(bytes))
-        .map_err(|_| SceneError::invalid(path, "glTF", guard::gave_up("glTF")))?
-        .map_err(|e| {
-            SceneError::invalid(path, "glTF", format!("{e}; the file is not valid glTF 2.0"))
-        })?;
+    if bytes.starts_with(b"glTF") {
+        check_glb(bytes, path)?;
+    }
+    let gave_up = || SceneError::invalid(path, "glTF", guard::gave_up("glTF"));
+    let not_gltf = |e: gltf::Error| {
+        SceneError::invalid(path, "glTF", format!("{e}; the file is not valid glTF 2.0"))
+    };
+    let unchecked = guard::catch(|| gltf::Gltf::from_slice_without_validation(bytes))
+        .map_err(|_| gave_up())?
+        .map_err(not_gltf)?;
+    check_references(unchecked.document.as_json(), path)?;
+    let gltf::Gltf { document, blob } = unchecked;
+    let document = guard::catch(|| gltf::Document::from_json(document.into_json()))
+        .map_err(|_| gave_up())?
+        .map_err(not_gltf)?;
+    let doc = gltf::Gltf { document, blob };
     let buffers = buffers(&doc, path)?;
     let scene = doc
         .default_scene()

@@ -414,3 +414,27 @@ fn deeply_nested_toml_is_refused_before_it_overflows_the_stack() {
     let text = text.replace("name = \"wall\"", &format!("name = \"{}\"", "{".repeat(40)));
     assert!(load(&f, &text).is_ok());
 }
+
+/// The gltf crate's validation indexes a primitive's POSITION accessor before it checks the
+/// index (a panic); and it subtracts the GLB header from the stated length without checking
+/// (an overflow). Both found by the harness, from one changed number or byte.
+#[test]
+fn gltf_references_and_glb_framing_the_gltf_crate_trusts_are_checked() {
+    let json = gltf(5126, 5125, None, 36).replace(r#""POSITION":0"#, r#""POSITION":7"#);
+    let e = gltf_mesh::parse(json.as_bytes(), Path::new("arch.gltf")).unwrap_err().to_string();
+    assert_has(
+        &e,
+        &[
+            "arch.gltf",
+            "meshes[0].primitives[0].attributes.POSITION",
+            "refers to accessor 7",
+            "2 accessors",
+        ],
+    );
+    let mut glb = b"glTF".to_vec();
+    glb.extend_from_slice(&2u32.to_le_bytes());
+    glb.extend_from_slice(&5u32.to_le_bytes()); // shorter than the header itself
+    glb.extend_from_slice(&[0; 20]);
+    let e = gltf_mesh::parse(&glb, Path::new("arch.glb")).unwrap_err().to_string();
+    assert_has(&e, &["arch.glb", "GLB header", "length of 5 bytes", "truncated or damaged"]);
+}

@@ -157,6 +157,28 @@ fn locate_problem(text: &str, path: &Path, max_polygon_vertices: u64) -> Option<
     None
 }
 
+/// The text tobj is given: a library line first, so that tobj asks for the made-up library
+/// even when the file has none, and vertex colours (`v x y z r g b`) dropped. restauro does not
+/// use them, and tobj refuses a file where only some vertices have them ("face vertex color
+/// index out of bounds", found by the fuzz harness), which the OBJ format allows. Lines keep
+/// their numbers.
+fn for_tobj(text: &str) -> String {
+    let mut out = String::with_capacity(text.len() + 40);
+    out.push_str("mtllib restauro-usemtl-names.mtl\n");
+    for line in text.split_inclusive('\n') {
+        let mut words = line.split_whitespace();
+        if words.next() == Some("v") && line.split_whitespace().count() == 7 {
+            let xyz: Vec<&str> = words.take(3).collect();
+            out.push_str("v ");
+            out.push_str(&xyz.join(" "));
+            out.push('\n');
+        } else {
+            out.push_str(line);
+        }
+    }
+    out
+}
+
 /// Read an OBJ text. `path` names it in messages.
 pub fn parse(text: &str, path: &Path) -> Result<Mesh> {
     parse_limited(text, path, &Limits::default())
@@ -170,9 +192,8 @@ pub fn parse_limited(text: &str, path: &Path, limits: &Limits) -> Result<Mesh> {
         return Err(problem);
     }
     let names = usemtl_names(text);
-    // A library line first, so that tobj asks for the made-up library even when the file has
-    // none; a file's own `mtllib` lines get an empty library.
-    let with_library = format!("mtllib restauro-usemtl-names.mtl\n{text}");
+    // The file's own `mtllib` lines get an empty library.
+    let with_library = for_tobj(text);
     let first_library = std::cell::Cell::new(true);
     let loader = |_: &Path| -> tobj::MTLLoadResult {
         if !first_library.replace(false) {
@@ -251,6 +272,41 @@ mod tests {
         let mesh = parse("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\n", Path::new("b.obj")).unwrap();
         assert_eq!(mesh.groups[0].name, "default");
         assert_eq!(mesh.triangles, vec![[0, 1, 2]]);
+    }
+
+    /// Found by the fuzz harness: tobj refuses faces on vertices without colours once any vertex
+    /// has them; the OBJ format allows it, and restauro does not use the colours.
+    #[test]
+    fn vertex_colours_on_some_vertices_only_are_read() {
+        let text = "v 0 0 0\nv 1 0 0 0.2 0.3 0.4\nv 0 1 0\nf 1 2 3\n";
+        let mesh = parse(text, Path::new("c.obj")).unwrap();
+        assert_eq!(mesh.positions, vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
+    }
+
+    #[test]
+    fn polygons_and_references_are_checked_as_tobj_counts_them() {
+        // Indices refer to the lines above (tobj counts what it has read so far).
+        let err = parse("f 1 2 3\nv 0 0 0\nv 1 0 0\nv 0 1 0\n", Path::new("f.obj")).unwrap_err();
+        assert!(
+            err.to_string().contains("line 1: vertex index 1 is out of range: 0 come before"),
+            "{err}"
+        );
+        let err = parse("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/4 2/1 3/1\nvt 0 0\n", Path::new("t.obj"))
+            .unwrap_err();
+        assert!(
+            err.to_string().contains("line 4: texture coordinate index 4 is out of range"),
+            "{err}"
+        );
+        let err = parse("v 0 0\n", Path::new("v.obj")).unwrap_err();
+        assert!(err.to_string().contains("line 1: a vertex needs three numbers"), "{err}");
+        let limits = Limits { max_polygon_vertices: 3, ..Limits::default() };
+        let err = parse_limited(
+            "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n",
+            Path::new("p.obj"),
+            &limits,
+        )
+        .unwrap_err();
+        assert!(err.to_string().contains("polygon on line 5 is 4, over the limit of 3"), "{err}");
     }
 
     #[test]

@@ -17,8 +17,8 @@
 
 use std::cell::Cell;
 use std::panic::{AssertUnwindSafe, catch_unwind};
-use std::sync::Once;
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Mutex, Once};
 
 /// A guarded call panicked; the caller turns this into an error that names the file.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -31,6 +31,8 @@ thread_local! {
 
 static HOOK: Once = Once::new();
 static CAUGHT: AtomicU64 = AtomicU64::new(0);
+/// Where the last guarded panic happened and what it said: kept for tests, never printed.
+static LAST: Mutex<Option<String>> = Mutex::new(None);
 
 fn install_hook() {
     HOOK.call_once(|| {
@@ -38,6 +40,17 @@ fn install_hook() {
         std::panic::set_hook(Box::new(move |info| {
             if DEPTH.with(Cell::get) == 0 {
                 previous(info);
+                return;
+            }
+            let payload = info
+                .payload()
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| info.payload().downcast_ref::<String>().cloned())
+                .unwrap_or_default();
+            let location = info.location().map(ToString::to_string).unwrap_or_default();
+            if let Ok(mut last) = LAST.lock() {
+                *last = Some(format!("{location}: {payload}"));
             }
         }));
     });
@@ -82,6 +95,12 @@ pub fn panics_caught() -> u64 {
     CAUGHT.load(Ordering::Relaxed)
 }
 
+/// Where the last panic the guard caught happened and its message, for a test to report
+/// (users never see it).
+pub fn last_caught_panic() -> Option<String> {
+    LAST.lock().ok().and_then(|last| last.clone())
+}
+
 /// The words for a parser that gave up on a file: what happened and what to do. The parser's
 /// own panic message is not shown (it describes the parser, not the file).
 pub fn gave_up(format: &str) -> String {
@@ -100,7 +119,12 @@ mod tests {
         let before = panics_caught();
         let r: Result<(), Panicked> = catch(|| panic!("inside the parser"));
         assert_eq!(r, Err(Panicked));
-        assert_eq!(panics_caught(), before + 1);
+        assert!(panics_caught() > before);
+        assert!(
+            last_caught_panic().is_some_and(|p| p.contains("guard.rs")),
+            "{:?}",
+            last_caught_panic()
+        );
         assert_eq!(catch(|| 7), Ok(7));
         // The scope is left on unwinding: a later panic outside a guard is not hidden.
         assert_eq!(DEPTH.with(Cell::get), 0);

@@ -116,8 +116,9 @@ impl FolderAssets {
         let candidate = self.dir.join(reference);
         let resolved = candidate.canonicalize().map_err(|e| {
             invalid(format!(
-                "`{reference}` cannot be opened ({e}; looked for {})",
-                candidate.display()
+                "`{reference}` cannot be opened: looked for {}, and {}",
+                candidate.display(),
+                crate::error::io_problem(&e)
             ))
         })?;
         if !resolved.starts_with(&self.dir) {

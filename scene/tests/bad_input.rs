@@ -376,6 +376,15 @@ fn a_missing_file_is_reported_once() {
     assert_has(&text, &["/nonexistent/restauro/scene.toml", "does not exist", "check the path"]);
     assert!(text.matches("does not exist").count() == 1, "said twice: {text}");
     assert!(!text.contains("(os error 2)"), "{text}");
+    // A file the scene refers to: where it was looked for, in the same words.
+    let f = Folder::new();
+    let e = refused(&f, &scene("meshes/gone.obj", "", SUN));
+    let looked = f.canonical().join("meshes/gone.obj");
+    assert_has(
+        &e,
+        &["objects[0] (wall).mesh", &format!("looked for {}", looked.display()), "does not exist"],
+    );
+    assert!(!e.contains("os error"), "{e}");
 }
 
 #[test]

@@ -38,9 +38,16 @@ fn coverage(extrapolate: bool) -> Coverage {
     if extrapolate { Coverage::HoldEnds } else { Coverage::Require }
 }
 
+/// The most bytes a spectrum file may have; real ones are a few kB.
+const MAX_SPECTRUM_FILE_BYTES: u64 = 64 << 20;
+
 fn read_file(path: &Path, quantity: Quantity, extrapolate: bool) -> Result<LoadedSpectrum> {
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let bytes = restauro_scene::assets::read_regular_file(
+        path,
+        MAX_SPECTRUM_FILE_BYTES,
+        "a spectrum file is a few kB; check that this is the right file",
+    )?;
+    let text = restauro_scene::assets::utf8_text(bytes, path)?;
     Ok(load(&text, &path.display().to_string(), quantity, coverage(extrapolate))?)
 }
 

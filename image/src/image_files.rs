@@ -12,12 +12,26 @@ use std::path::{Path, PathBuf};
 /// Images larger than this are refused before their pixels are read (16384 × 16384).
 pub const MAX_PIXELS: usize = 1 << 28;
 
+/// Also refused before the pixels are read: more samples (pixels × channels) than this, 8 GiB
+/// of 32-bit values. A header costs a few bytes to write and says how much memory the reader
+/// must reserve, so it is checked first (restauro's own spectral images, 88 channels, stay under
+/// it up to about 4900 × 4900 pixels).
+pub const MAX_SAMPLES: usize = 1 << 31;
+
+/// What went wrong with an image file. The underlying error is worded into each message and not
+/// kept as the error's `source`, so that a caller printing the whole chain (`anyhow`'s `{:#}`)
+/// says it once.
 #[derive(Debug, thiserror::Error)]
 pub enum ImageFileError {
-    #[error("{}: {source}", path.display())]
-    Io { path: PathBuf, source: io::Error },
-    #[error("{}: not a readable OpenEXR file: {source}", path.display())]
-    Exr { path: PathBuf, source: exr::error::Error },
+    #[error("{}: {}", path.display(), restauro_scene::error::io_problem(error))]
+    Io { path: PathBuf, error: io::Error },
+    #[error("{}: not a readable OpenEXR file: {problem}", path.display())]
+    Exr { path: PathBuf, problem: String },
+    #[error(
+        "{}: not a regular file (a FIFO, a device or a folder); give the path of an OpenEXR file",
+        path.display()
+    )]
+    NotAFile { path: PathBuf },
     #[error(
         "{}: no colour channels; restauro reads X, Y, Z or R, G, B, and this file has {}",
         path.display(),
@@ -30,12 +44,38 @@ pub enum ImageFileError {
     )]
     TooLarge { path: PathBuf, width: usize, height: usize, max: usize },
     #[error(
+        "{}: {channels} channels of {width}×{height} pixels are more than the limit of {max} \
+         samples; keep fewer channels (e.g. drop the spectral layers) or crop the image",
+        path.display()
+    )]
+    TooManySamples { path: PathBuf, width: usize, height: usize, channels: usize, max: usize },
+    #[error(
         "{}: channel {channel} at pixel ({x}, {y}) is {value}; colour values must be finite",
         path.display()
     )]
     NotFinite { path: PathBuf, channel: String, x: usize, y: usize, value: f32 },
-    #[error("{}: cannot write the PNG: {source}", path.display())]
-    Png { path: PathBuf, source: png::EncodingError },
+    #[error("{}: cannot write the PNG: {error}", path.display())]
+    Png { path: PathBuf, error: png::EncodingError },
+}
+
+/// An error of the exr crate in plain words, with what to do.
+fn exr_problem(error: &exr::error::Error) -> String {
+    use exr::error::Error;
+    match error {
+        Error::Io(e) if e.kind() == io::ErrorKind::UnexpectedEof => {
+            "the file ends early (it is truncated); copy or export it again".into()
+        }
+        Error::Io(e) => restauro_scene::error::io_problem(e),
+        Error::Invalid(what) => format!(
+            "the file is damaged or not OpenEXR ({what}); check that it is the right file, or \
+             export it again"
+        ),
+        Error::NotSupported(what) => format!(
+            "it uses an OpenEXR feature restauro cannot read ({what}); save it again as a \
+             scanline or tiled image with ZIP, PIZ, RLE or no compression"
+        ),
+        Error::Aborted => "reading was cancelled".into(),
+    }
 }
 
 type Result<T> = std::result::Result<T, ImageFileError>;
@@ -55,12 +95,38 @@ pub struct XyzImage {
 /// converted with the file's `chromaticities` attribute (Rec. 709 primaries and D65, the
 /// OpenEXR default, when it has none).
 pub fn read_exr(path: &Path, max_pixels: usize) -> Result<XyzImage> {
-    let exr_err = |source| ImageFileError::Exr { path: path.to_owned(), source };
+    use std::io::{Seek, SeekFrom};
+    let exr_err = |e: exr::error::Error| ImageFileError::Exr {
+        path: path.to_owned(),
+        problem: exr_problem(&e),
+    };
+    // A FIFO would block the open itself, and a device never end: only regular files are opened.
+    let io_err = |error| ImageFileError::Io { path: path.to_owned(), error };
+    let not_a_file = || ImageFileError::NotAFile { path: path.to_owned() };
+    if !std::fs::metadata(path).map_err(io_err)?.is_file() {
+        return Err(not_a_file());
+    }
+    let file = std::fs::File::open(path).map_err(io_err)?;
+    if !file.metadata().map_err(io_err)?.is_file() {
+        return Err(not_a_file());
+    }
+    let mut reader = io::BufReader::new(file);
+    // The exr crate is fed hostile files too: it runs inside the panic guard, on this thread
+    // (`non_parallel`, so that a panic cannot happen on a worker thread outside the guard).
+    let gave_up = || ImageFileError::Exr {
+        path: path.to_owned(),
+        problem: restauro_scene::guard::gave_up("OpenEXR"),
+    };
     // The header first, so that an enormous image is refused before it is allocated.
-    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(exr_err)?;
-    if let Some(header) = meta.headers.first() {
+    let meta = restauro_scene::guard::catch(|| {
+        exr::meta::MetaData::read_from_buffered(&mut reader, false)
+    })
+    .map_err(|_| gave_up())?
+    .map_err(exr_err)?;
+    for header in &meta.headers {
         let (width, height) = (header.layer_size.width(), header.layer_size.height());
-        if width.checked_mul(height).is_none_or(|n| n > max_pixels) {
+        let pixels = width.checked_mul(height);
+        if pixels.is_none_or(|n| n > max_pixels) {
             return Err(ImageFileError::TooLarge {
                 path: path.to_owned(),
                 width,
@@ -68,15 +134,30 @@ pub fn read_exr(path: &Path, max_pixels: usize) -> Result<XyzImage> {
                 max: max_pixels,
             });
         }
+        let channels = header.channels.list.len();
+        if pixels.and_then(|n| n.checked_mul(channels)).is_none_or(|n| n > MAX_SAMPLES) {
+            return Err(ImageFileError::TooManySamples {
+                path: path.to_owned(),
+                width,
+                height,
+                channels,
+                max: MAX_SAMPLES,
+            });
+        }
     }
-    let image = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .first_valid_layer()
-        .all_attributes()
-        .from_file(path)
-        .map_err(exr_err)?;
+    reader.seek(SeekFrom::Start(0)).map_err(io_err)?;
+    let image = restauro_scene::guard::catch(|| {
+        read()
+            .no_deep_data()
+            .largest_resolution_level()
+            .all_channels()
+            .first_valid_layer()
+            .all_attributes()
+            .non_parallel()
+            .from_buffered(reader)
+    })
+    .map_err(|_| gave_up())?
+    .map_err(exr_err)?;
     let (width, height) = (image.layer_data.size.width(), image.layer_data.size.height());
     let channels = &image.layer_data.channel_data.list;
     let names: Vec<String> = channels.iter().map(|c| c.name.to_string()).collect();
@@ -173,7 +254,7 @@ pub fn write_exr(
         sort_header_attributes(&mut bytes);
         io::Write::write_all(w, &bytes)
     })
-    .map_err(|source| ImageFileError::Io { path: path.to_owned(), source })
+    .map_err(|error| ImageFileError::Io { path: path.to_owned(), error })
 }
 
 /// Puts the attributes of a single-part OpenEXR header in name order. The exr crate keeps them
@@ -305,7 +386,7 @@ pub fn write_png(
     pixels: &PngPixels,
     space: RgbSpace,
 ) -> Result<()> {
-    let png_err = |source| ImageFileError::Png { path: path.to_owned(), source };
+    let png_err = |error| ImageFileError::Png { path: path.to_owned(), error };
     let mut bytes = Vec::new();
     {
         let mut encoder = png::Encoder::new(&mut bytes, width as u32, height as u32);
@@ -343,7 +424,7 @@ pub fn write_png(
         writer.finish().map_err(png_err)?;
     }
     atomic_file::write(path, &bytes)
-        .map_err(|source| ImageFileError::Io { path: path.to_owned(), source })
+        .map_err(|error| ImageFileError::Io { path: path.to_owned(), error })
 }
 
 #[cfg(test)]
@@ -512,6 +593,62 @@ mod tests {
             err.contains("4×3 is larger than the limit of 10 pixels; crop or downscale it"),
             "{err}"
         );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// What `anyhow`'s `{:#}` prints: the message and each source's, joined by ": ".
+    fn chain(e: &(dyn std::error::Error + 'static)) -> String {
+        let mut out = e.to_string();
+        let mut source = e.source();
+        while let Some(s) = source {
+            out += &format!(": {s}");
+            source = s.source();
+        }
+        out
+    }
+
+    #[test]
+    fn a_damaged_exr_is_described_once_in_plain_words() {
+        let dir = scratch("damaged");
+        let good = dir.join("good.exr");
+        let image =
+            XyzImage { width: 8, height: 4, pixels: vec![[1.0, 2.0, 3.0]; 32], emitter: None };
+        write_xyz_exr(&good, &image, &[]).unwrap();
+        let bytes = std::fs::read(&good).unwrap();
+        let cut = dir.join("cut.exr");
+        std::fs::write(&cut, &bytes[..bytes.len() * 2 / 3]).unwrap();
+        let err = read_exr(&cut, MAX_PIXELS).unwrap_err();
+        let text = chain(&err);
+        assert!(
+            text.starts_with(&format!("{}: not a readable OpenEXR file: ", cut.display())),
+            "{text}"
+        );
+        assert!(text.contains("export it again"), "{text}");
+        // Said once: the first sentence of the problem does not come back through a `source`.
+        let problem = text.split(": not a readable OpenEXR file: ").nth(1).unwrap();
+        let first = &problem[..problem.find(';').unwrap_or(problem.len())];
+        assert_eq!(text.matches(first).count(), 1, "{text}");
+        let missing = read_exr(&dir.join("none.exr"), MAX_PIXELS).unwrap_err();
+        let text = chain(&missing);
+        assert!(text.contains("does not exist") && !text.contains("os error"), "{text}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_fifo_is_refused_not_waited_on() {
+        let dir = scratch("fifo");
+        let fifo = dir.join("pipe.exr");
+        assert!(std::process::Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+        let (send, receive) = std::sync::mpsc::channel();
+        let path = fifo.clone();
+        std::thread::spawn(move || {
+            let _ = send.send(read_exr(&path, MAX_PIXELS).map(|_| ()).unwrap_err().to_string());
+        });
+        let err = receive
+            .recv_timeout(std::time::Duration::from_secs(20))
+            .expect("read_exr on a FIFO did not return within 20 s");
+        assert!(err.starts_with(&format!("{}: not a regular file", fifo.display())), "{err}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

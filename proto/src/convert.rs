@@ -214,6 +214,8 @@ impl From<&Limits> for pb::SceneLimits {
             max_spectral_pixels: l.max_spectral_pixels,
             max_tiles: l.max_tiles,
             min_tile: l.min_tile,
+            max_instances: l.max_instances,
+            max_polygon_vertices: l.max_polygon_vertices,
         }
     }
 }
@@ -229,6 +231,8 @@ impl From<pb::SceneLimits> for Limits {
             max_spectral_pixels: l.max_spectral_pixels,
             max_tiles: l.max_tiles,
             min_tile: l.min_tile.max(1),
+            max_instances: l.max_instances,
+            max_polygon_vertices: l.max_polygon_vertices,
         }
     }
 }

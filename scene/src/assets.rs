@@ -13,6 +13,82 @@ pub trait Assets {
     fn read(&self, reference: &str, place: &str) -> Result<Vec<u8>>;
     /// The scene file, for messages.
     fn scene_path(&self) -> &Path;
+    /// How messages name the file the scene calls `reference`: its path, so that the user can
+    /// find it (the scene's folder joined with the reference, for a folder).
+    fn display_path(&self, reference: &str) -> PathBuf {
+        PathBuf::from(reference)
+    }
+}
+
+/// How to raise [`crate::load::Limits::max_file_bytes`].
+pub const MAX_FILE_FIX: &str = "simplify the file or raise the limit with --max-file-mb";
+
+/// Read the whole of the regular file at `path` (symbolic links followed), at most `max_bytes`;
+/// `fix` says how to raise that limit.
+///
+/// Anything else is refused before it is opened: opening a FIFO blocks until something writes
+/// to it, and a device such as `/dev/zero` never ends. The size is checked again while reading,
+/// so a file that grows after the check cannot exceed the limit either.
+pub fn read_regular_file(path: &Path, max_bytes: u64, fix: &str) -> Result<Vec<u8>> {
+    use std::io::Read;
+    let io = |error| SceneError::io(path, error);
+    let not_regular = || {
+        SceneError::invalid(
+            path,
+            "file type",
+            "not a regular file (a FIFO, a device or a folder); give the path of an ordinary \
+             file",
+        )
+    };
+    let too_big = |size: u64| SceneError::Limit {
+        path: path.to_owned(),
+        what: "the file size (bytes)".into(),
+        value: size,
+        limit: max_bytes,
+        fix: fix.into(),
+    };
+    let meta = std::fs::metadata(path).map_err(io)?;
+    if !meta.is_file() {
+        return Err(not_regular());
+    }
+    if meta.len() > max_bytes {
+        return Err(too_big(meta.len()));
+    }
+    let file = std::fs::File::open(path).map_err(io)?;
+    // The file opened may not be the one looked at (it was replaced in between).
+    if !file.metadata().map_err(io)?.is_file() {
+        return Err(not_regular());
+    }
+    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    file.take(max_bytes.saturating_add(1)).read_to_end(&mut bytes).map_err(io)?;
+    if bytes.len() as u64 > max_bytes {
+        return Err(too_big(bytes.len() as u64));
+    }
+    Ok(bytes)
+}
+
+/// The bytes of a text file as a string; where they are not UTF-8, the refusal gives the line,
+/// the column and the byte offset of the first bad byte.
+pub fn utf8_text(bytes: Vec<u8>, path: &Path) -> Result<String> {
+    String::from_utf8(bytes).map_err(|e| {
+        let bytes = e.as_bytes();
+        let at = e.utf8_error().valid_up_to();
+        let before = &bytes[..at];
+        let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+        let line_start = before.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
+        // Characters, as editors count columns; the prefix is valid UTF-8 by construction.
+        let column = String::from_utf8_lossy(&before[line_start..]).chars().count() + 1;
+        SceneError::syntax(
+            path,
+            line,
+            column,
+            format!(
+                "byte {at} (0x{:02x}) is not UTF-8 text; save the file as UTF-8 (or check that \
+                 it is the right file)",
+                bytes[at]
+            ),
+        )
+    })
 }
 
 /// The files of a scene folder. References are relative to the scene file and may not leave
@@ -25,8 +101,8 @@ pub struct FolderAssets {
 
 impl FolderAssets {
     pub fn new(scene_file: &Path, max_file_bytes: u64) -> Result<Self> {
-        let io = |source| SceneError::Io { path: scene_file.to_owned(), source };
-        let scene_file = scene_file.canonicalize().map_err(io)?;
+        let scene_file =
+            scene_file.canonicalize().map_err(|error| SceneError::io(scene_file, error))?;
         let dir = scene_file.parent().map(Path::to_owned).unwrap_or_else(|| PathBuf::from("/"));
         Ok(Self { scene_file, dir, max_file_bytes })
     }
@@ -40,8 +116,9 @@ impl FolderAssets {
         let candidate = self.dir.join(reference);
         let resolved = candidate.canonicalize().map_err(|e| {
             invalid(format!(
-                "`{reference}` cannot be opened ({e}; looked for {})",
-                candidate.display()
+                "`{reference}` cannot be opened: looked for {}, and {}",
+                candidate.display(),
+                crate::error::io_problem(&e)
             ))
         })?;
         if !resolved.starts_with(&self.dir) {
@@ -65,22 +142,15 @@ impl FolderAssets {
 impl Assets for FolderAssets {
     fn read(&self, reference: &str, place: &str) -> Result<Vec<u8>> {
         let path = self.resolve(reference, place)?;
-        let io = |source| SceneError::Io { path: path.clone(), source };
-        let size = std::fs::metadata(&path).map_err(io)?.len();
-        if size > self.max_file_bytes {
-            return Err(SceneError::Limit {
-                path: path.clone(),
-                what: "the file size (bytes)".into(),
-                value: size,
-                limit: self.max_file_bytes,
-                fix: "simplify the file or raise the limit with --max-file-mb".into(),
-            });
-        }
-        std::fs::read(&path).map_err(io)
+        read_regular_file(&path, self.max_file_bytes, MAX_FILE_FIX)
     }
 
     fn scene_path(&self) -> &Path {
         &self.scene_file
+    }
+
+    fn display_path(&self, reference: &str) -> PathBuf {
+        self.dir.join(reference)
     }
 }
 
@@ -119,6 +189,10 @@ impl Assets for BundleAssets<'_> {
 
     fn scene_path(&self) -> &Path {
         &self.name
+    }
+
+    fn display_path(&self, reference: &str) -> PathBuf {
+        self.name.join(reference)
     }
 }
 

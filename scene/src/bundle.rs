@@ -8,7 +8,7 @@
 
 use crate::assets::{Assets, BundleAssets, FolderAssets, extension};
 use crate::error::{Result, SceneError};
-use crate::load::{Limits, LoadedScene, load, parse_scene};
+use crate::load::{Limits, LoadedScene, load, read_scene_file};
 use crate::scene_file::{Light, SceneFile, SpectrumSource};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -24,9 +24,7 @@ pub struct Bundle {
 
 /// Bundle the scene file at `path` and everything it refers to.
 pub fn bundle_scene(path: &Path, limits: &Limits) -> Result<Bundle> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|source| SceneError::Io { path: path.to_owned(), source })?;
-    let mut scene = parse_scene(&text, path)?;
+    let mut scene = read_scene_file(path, limits)?;
     let assets = FolderAssets::new(path, limits.max_file_bytes)?;
     let mut files = BTreeMap::new();
     let mut add = |reference: &mut String, place: String| -> Result<()> {

@@ -5,9 +5,11 @@ use std::path::PathBuf;
 
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
-    /// A file that cannot be read at all.
-    #[error("{}: {source}", path.display())]
-    Io { path: PathBuf, source: std::io::Error },
+    /// A file that cannot be read at all. The I/O error is worded into the message (see
+    /// [`io_problem`]) and deliberately not exposed as the error's `source`: callers that print
+    /// the whole chain (`anyhow`'s `{:#}`) would otherwise say it twice.
+    #[error("{}: {}", path.display(), io_problem(error))]
+    Io { path: PathBuf, error: std::io::Error },
 
     /// A syntax error with a position (VRML97, IES, EULUMDAT, TOML).
     #[error("{}:{line}:{column}: {problem}", path.display())]
@@ -24,6 +26,10 @@ pub enum SceneError {
 }
 
 impl SceneError {
+    pub fn io(path: impl Into<PathBuf>, error: std::io::Error) -> Self {
+        SceneError::Io { path: path.into(), error }
+    }
+
     pub fn invalid(
         path: impl Into<PathBuf>,
         place: impl Into<String>,
@@ -39,6 +45,20 @@ impl SceneError {
         problem: impl Into<String>,
     ) -> Self {
         SceneError::Syntax { path: path.into(), line, column, problem: problem.into() }
+    }
+}
+
+/// An I/O error in plain words, with what to do: the operating system's own text (which
+/// carries its error number) only for the kinds without a better wording.
+pub fn io_problem(error: &std::io::Error) -> String {
+    use std::io::ErrorKind::*;
+    match error.kind() {
+        NotFound => "the file does not exist; check the path (and the current folder)".into(),
+        PermissionDenied => "permission denied; make the file readable".into(),
+        IsADirectory => "this is a folder, not a file; give the file inside it".into(),
+        UnexpectedEof => "the file ends early (it is truncated); copy it again".into(),
+        InvalidData => format!("{error}; save the file as UTF-8 text"),
+        _ => format!("cannot read the file ({error})"),
     }
 }
 

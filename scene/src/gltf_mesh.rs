@@ -8,9 +8,12 @@
 //! scene loader turns it Z-up.
 
 use crate::error::{Result, SceneError};
+use crate::guard;
+use crate::load::Limits;
 use crate::mesh::{Group, Mesh};
 use base64::Engine;
 use glam::{Mat4, Vec3};
+use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 use std::path::Path;
 
@@ -51,6 +54,89 @@ fn buffers(doc: &gltf::Gltf, path: &Path) -> Result<Vec<Vec<u8>>> {
         .collect()
 }
 
+/// Check an accessor before the gltf crate reads it: the gltf crate (1.4) trusts the file
+/// here — an index accessor of floats reaches an `unreachable!()`, a byte stride shorter than an
+/// element fails an assertion, and a count of 0 underflows. So: the component type and shape
+/// must be one of `allowed`, the values must lie in a buffer view that lies in its buffer, with
+/// a stride that holds an element. `Ok(false)` for an accessor of no elements (nothing to read).
+fn check_accessor(
+    accessor: &gltf::Accessor,
+    buffers: &[Vec<u8>],
+    path: &Path,
+    role: &str,
+    allowed: &[(DataType, Dimensions)],
+    expected: &str,
+) -> Result<bool> {
+    let place = format!("accessor {} ({role})", accessor.index());
+    let refuse = |problem: String| Err(SceneError::invalid(path, &place, problem));
+    let shape = (accessor.data_type(), accessor.dimensions());
+    if !allowed.contains(&shape) {
+        return refuse(format!(
+            "holds {:?} of {:?}, but {role} must be {expected}; re-export the model",
+            shape.1, shape.0
+        ));
+    }
+    if accessor.sparse().is_some() {
+        return refuse(
+            "is a sparse accessor, which restauro does not read; re-export the model without \
+             sparse accessors"
+                .into(),
+        );
+    }
+    if accessor.count() == 0 {
+        return Ok(false);
+    }
+    let Some(view) = accessor.view() else {
+        return refuse(
+            "has no buffer view (all its values would be zero); re-export the model with its \
+             data"
+                .into(),
+        );
+    };
+    let buffer_len = buffers.get(view.buffer().index()).map_or(0, Vec::len);
+    let view_end = view.offset().checked_add(view.length());
+    if view_end.is_none_or(|end| end > buffer_len) {
+        return refuse(format!(
+            "its buffer view {} (bytes {} to {}) runs past the end of buffer {}, which holds \
+             {buffer_len} bytes; the file is truncated or damaged",
+            view.index(),
+            view.offset(),
+            view.offset().saturating_add(view.length()),
+            view.buffer().index()
+        ));
+    }
+    let size = accessor.size();
+    let stride = view.stride().unwrap_or(size);
+    if stride < size {
+        return refuse(format!(
+            "its buffer view {} has a byte stride of {stride}, less than the {size} bytes of one \
+             element, so elements would overlap; fix the stride (or re-export the model)",
+            view.index()
+        ));
+    }
+    let end = stride
+        .checked_mul(accessor.count() - 1)
+        .and_then(|b| b.checked_add(size))
+        .and_then(|b| b.checked_add(accessor.offset()));
+    if end.is_none_or(|end| end > view.length()) {
+        return refuse(format!(
+            "{} elements of {size} bytes every {stride} from byte {} do not fit in buffer view \
+             {} of {} bytes; the counts or offsets are wrong",
+            accessor.count(),
+            accessor.offset(),
+            view.index(),
+            view.length()
+        ));
+    }
+    Ok(true)
+}
+
+/// The running totals of an import, against the limits.
+struct Totals<'a> {
+    limits: &'a Limits,
+    instances: u64,
+}
+
 fn add_node(
     node: gltf::Node,
     parent: Mat4,
@@ -58,9 +144,22 @@ fn add_node(
     mesh: &mut Mesh,
     path: &Path,
     depth: usize,
+    totals: &mut Totals,
 ) -> Result<()> {
     if depth > 256 {
         return Err(SceneError::invalid(path, "node hierarchy", "nested more than 256 deep"));
+    }
+    // Nodes may be listed as children more than once (the specification forbids it, the crate
+    // does not check), so a small file can stand for an exponential number of instances.
+    totals.instances += 1;
+    if totals.instances > totals.limits.max_instances {
+        return Err(SceneError::Limit {
+            path: path.to_owned(),
+            what: "the number of node instances (counting nodes listed more than once)".into(),
+            value: totals.instances,
+            limit: totals.limits.max_instances,
+            fix: "list each node once, or raise the limit with --max-instances".into(),
+        });
     }
     let local = Mat4::from_cols_array_2d(&node.transform().matrix());
     let world = parent * local;
@@ -82,16 +181,104 @@ fn add_node(
                     ),
                 ));
             }
+            let Some(position_accessor) = prim.get(&gltf::Semantic::Positions) else {
+                return Err(SceneError::invalid(
+                    path,
+                    place(),
+                    "no POSITION attribute; a triangle primitive needs its vertex positions",
+                ));
+            };
+            let has_positions = check_accessor(
+                &position_accessor,
+                buffers,
+                path,
+                "POSITION",
+                &[(DataType::F32, Dimensions::Vec3)],
+                "VEC3 of float (componentType 5126)",
+            )?;
+            let index_accessor = prim.indices();
+            let has_indices = match &index_accessor {
+                Some(a) => check_accessor(
+                    a,
+                    buffers,
+                    path,
+                    "indices",
+                    &[
+                        (DataType::U8, Dimensions::Scalar),
+                        (DataType::U16, Dimensions::Scalar),
+                        (DataType::U32, Dimensions::Scalar),
+                    ],
+                    "SCALAR of unsigned byte, short or int (componentType 5121, 5123 or 5125)",
+                )?,
+                None => false,
+            };
+            if !has_positions || (index_accessor.is_some() && !has_indices) {
+                continue; // no vertices or no triangles: nothing to draw
+            }
+            let count = position_accessor.count() as u64;
+            let new_triangles = match &index_accessor {
+                Some(a) => a.count() as u64 / 3,
+                None => count / 3,
+            };
+            let triangles = mesh.triangles.len() as u64 + new_triangles;
+            if triangles > totals.limits.max_triangles {
+                return Err(SceneError::Limit {
+                    path: path.to_owned(),
+                    what: format!(
+                        "the number of triangles (counting node instances) at {}",
+                        place()
+                    ),
+                    value: triangles,
+                    limit: totals.limits.max_triangles,
+                    fix: "simplify the model, or raise the limit with --max-triangles".into(),
+                });
+            }
+            // Vertices no triangle could use are not worth memory: at most three per triangle.
+            let vertices = mesh.positions.len() as u64 + count;
+            let max_vertices =
+                totals.limits.max_triangles.saturating_mul(3).min(u64::from(u32::MAX));
+            if vertices > max_vertices {
+                return Err(SceneError::Limit {
+                    path: path.to_owned(),
+                    what: format!(
+                        "the number of vertices (counting node instances) at {}",
+                        place()
+                    ),
+                    value: vertices,
+                    limit: max_vertices,
+                    fix: "simplify the model, or raise the triangle limit (three vertices each) \
+                          with --max-triangles"
+                        .into(),
+                });
+            }
             let reader = prim.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
-            let positions: Vec<[f32; 3]> = reader
-                .read_positions()
-                .ok_or_else(|| SceneError::invalid(path, place(), "no POSITION attribute"))?
-                .map(|p| world.transform_point3(Vec3::from(p)).to_array())
-                .collect();
+            let read = guard::catch(|| {
+                let positions: Option<Vec<[f32; 3]>> = reader.read_positions().map(|ps| {
+                    ps.map(|p| world.transform_point3(Vec3::from(p)).to_array()).collect()
+                });
+                let indices: Option<Vec<u32>> =
+                    reader.read_indices().map(|i| i.into_u32().collect());
+                (positions, indices)
+            })
+            .map_err(|_| SceneError::invalid(path, place(), guard::gave_up("glTF")))?;
+            let (Some(positions), indices) = read else {
+                return Err(SceneError::invalid(
+                    path,
+                    place(),
+                    "the POSITION values cannot be read from their buffer; the file is damaged",
+                ));
+            };
             let count = positions.len() as u32;
-            let indices: Vec<u32> = match reader.read_indices() {
-                Some(i) => i.into_u32().collect(),
-                None => (0..count).collect(),
+            let indices: Vec<u32> = match (indices, &index_accessor) {
+                (Some(i), _) => i,
+                (None, None) => (0..count).collect(),
+                (None, Some(_)) => {
+                    return Err(SceneError::invalid(
+                        path,
+                        place(),
+                        "the indices cannot be read from their buffer; the file is damaged",
+                    ));
+                }
             };
             if !indices.len().is_multiple_of(3) {
                 return Err(SceneError::invalid(
@@ -133,24 +320,127 @@ fn add_node(
         }
     }
     for child in node.children() {
-        add_node(child, world, buffers, mesh, path, depth + 1)?;
+        add_node(child, world, buffers, mesh, path, depth + 1, totals)?;
     }
     Ok(())
 }
 
 /// Read glTF bytes (JSON or GLB). `path` names the file in messages.
 pub fn parse(bytes: &[u8], path: &Path) -> Result<Mesh> {
-    let doc = gltf::Gltf::from_slice(bytes).map_err(|e| {
+    parse_limited(bytes, path, &Limits::default())
+}
+
+/// A GLB container's framing (glTF 2.0 §4.4), checked before the gltf crate splits it: it
+/// subtracts the 12-byte header from the stated length without checking that the length holds
+/// it (an overflow, a panic in builds with overflow checks).
+fn check_glb(bytes: &[u8], path: &Path) -> Result<()> {
+    let word =
+        |at: usize| bytes.get(at..at + 4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+    let refuse = |place: &str, problem: String| Err(SceneError::invalid(path, place, problem));
+    let (Some(version), Some(length)) = (word(4), word(8)) else {
+        return refuse(
+            "GLB header",
+            "the file ends inside the 12-byte GLB header; it is truncated".into(),
+        );
+    };
+    if version != 2 {
+        return refuse(
+            "GLB header",
+            format!("GLB version {version}; restauro reads glTF 2.0 (version 2)"),
+        );
+    }
+    if length < 12 || length as usize > bytes.len() {
+        return refuse(
+            "GLB header",
+            format!(
+                "the header gives a length of {length} bytes but the file has {}; it is truncated \
+                 or damaged",
+                bytes.len()
+            ),
+        );
+    }
+    let mut at = 12usize;
+    let mut chunk = 0;
+    while at < length as usize {
+        let (Some(chunk_length), Some(_)) = (word(at), word(at + 4)) else {
+            return refuse(
+                &format!("GLB chunk {chunk} (byte {at})"),
+                "the file ends inside a chunk header; it is truncated".into(),
+            );
+        };
+        let end = (at + 8).checked_add(chunk_length as usize);
+        if end.is_none_or(|end| end > length as usize) {
+            return refuse(
+                &format!("GLB chunk {chunk} (byte {at})"),
+                format!(
+                    "a chunk of {chunk_length} bytes runs past the end of the file ({length} bytes); \
+                     it is truncated or damaged"
+                ),
+            );
+        }
+        at = end.unwrap_or(usize::MAX);
+        chunk += 1;
+    }
+    Ok(())
+}
+
+/// Checks the gltf crate's validation takes for granted: its hook for a primitive's POSITION
+/// accessor indexes the accessors before the index itself is validated (a panic on an index out
+/// of range).
+fn check_references(doc: &gltf::json::Root, path: &Path) -> Result<()> {
+    let accessors = doc.accessors.len();
+    for (m, mesh) in doc.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let place = || format!("meshes[{m}].primitives[{p}]");
+            for (semantic, index) in &primitive.attributes {
+                if index.value() >= accessors {
+                    let name = match semantic {
+                        gltf::json::validation::Checked::Valid(s) => s.to_string(),
+                        gltf::json::validation::Checked::Invalid => "an attribute".into(),
+                    };
+                    return Err(SceneError::invalid(
+                        path,
+                        format!("{}.attributes.{name}", place()),
+                        format!(
+                            "refers to accessor {}, but the file has {accessors} accessors; the file \
+                             is damaged, re-export it",
+                            index.value()
+                        ),
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// [`parse`] within `limits` (node instances, triangles).
+pub fn parse_limited(bytes: &[u8], path: &Path, limits: &Limits) -> Result<Mesh> {
+    if bytes.starts_with(b"glTF") {
+        check_glb(bytes, path)?;
+    }
+    let gave_up = || SceneError::invalid(path, "glTF", guard::gave_up("glTF"));
+    let not_gltf = |e: gltf::Error| {
         SceneError::invalid(path, "glTF", format!("{e}; the file is not valid glTF 2.0"))
-    })?;
+    };
+    let unchecked = guard::catch(|| gltf::Gltf::from_slice_without_validation(bytes))
+        .map_err(|_| gave_up())?
+        .map_err(not_gltf)?;
+    check_references(unchecked.document.as_json(), path)?;
+    let gltf::Gltf { document, blob } = unchecked;
+    let document = guard::catch(|| gltf::Document::from_json(document.into_json()))
+        .map_err(|_| gave_up())?
+        .map_err(not_gltf)?;
+    let doc = gltf::Gltf { document, blob };
     let buffers = buffers(&doc, path)?;
     let scene = doc
         .default_scene()
         .or_else(|| doc.scenes().next())
         .ok_or_else(|| SceneError::invalid(path, "scenes", "the file has no scene"))?;
     let mut mesh = Mesh::default();
+    let mut totals = Totals { limits, instances: 0 };
     for node in scene.nodes() {
-        add_node(node, Mat4::IDENTITY, &buffers, &mut mesh, path, 0)?;
+        add_node(node, Mat4::IDENTITY, &buffers, &mut mesh, path, 0, &mut totals)?;
     }
     Ok(mesh)
 }

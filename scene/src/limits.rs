@@ -14,6 +14,8 @@
 //! | samples per pixel | 65 536 | `--max-spp` |
 //! | bounces of a path | 64 | `--max-depth` |
 //! | a file of the scene | 2048 MiB | `--max-file-mb` |
+//! | node instances of one mesh file (VRML97 `USE`, reused glTF nodes) | 20 000 000 | `--max-instances` |
+//! | vertices of one polygon | 10 000 | `--max-polygon-vertices` |
 
 /// The limits. `Default` gives the values of the table above.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -29,6 +31,13 @@ pub struct Limits {
     pub max_tiles: u32,
     /// The smallest tile edge in pixels (an image narrower than this is one tile wide).
     pub min_tile: u32,
+    /// The most node instances one mesh file may expand to, counting every `USE` (VRML97) and
+    /// every reuse of a node (glTF): a file of a few hundred bytes whose groups each use the
+    /// one before twice stands for 2^40 instances.
+    pub max_instances: u64,
+    /// The most vertices of one polygon (OBJ, PLY, VRML97 faces): more is a corrupt file, not
+    /// a building.
+    pub max_polygon_vertices: u64,
 }
 
 impl Default for Limits {
@@ -44,6 +53,8 @@ impl Default for Limits {
             max_spectral_pixels: 2048 * 2048,
             max_tiles: 65_536,
             min_tile: 8,
+            max_instances: 20_000_000,
+            max_polygon_vertices: 10_000,
         }
     }
 }
@@ -77,6 +88,13 @@ pub struct LimitArgs {
     /// The most bounces of a path.
     #[arg(long, default_value_t = Limits::default().max_depth)]
     pub max_depth: u32,
+    /// The most node instances one mesh file may expand to (VRML97 `USE` copies, glTF nodes
+    /// used more than once).
+    #[arg(long, default_value_t = Limits::default().max_instances)]
+    pub max_instances: u64,
+    /// The most vertices of one polygon of a mesh.
+    #[arg(long, default_value_t = Limits::default().max_polygon_vertices)]
+    pub max_polygon_vertices: u64,
 }
 
 #[cfg(feature = "cli")]
@@ -93,6 +111,8 @@ impl LimitArgs {
             ("--max-file-mb", self.max_file_mb.to_string()),
             ("--max-spp", self.max_spp.to_string()),
             ("--max-depth", self.max_depth.to_string()),
+            ("--max-instances", self.max_instances.to_string()),
+            ("--max-polygon-vertices", self.max_polygon_vertices.to_string()),
         ]
         .into_iter()
         .flat_map(|(flag, value)| [flag.to_owned(), value])
@@ -112,6 +132,8 @@ impl From<&LimitArgs> for Limits {
             max_spectral_pixels: a.max_spectral_pixels,
             max_tiles: a.max_tiles,
             min_tile: a.min_tile.max(1),
+            max_instances: a.max_instances,
+            max_polygon_vertices: a.max_polygon_vertices,
         }
     }
 }

@@ -4,7 +4,7 @@
 //! resolved (the sun's position computed), and the limits that protect the machine enforced.
 //! Nothing renders until all of it has passed.
 
-use crate::assets::{Assets, FolderAssets, extension};
+use crate::assets::{Assets, FolderAssets, extension, utf8_text};
 use crate::error::{Result, SceneError};
 use crate::mesh::Mesh;
 use crate::photometric::{self, Photometry};
@@ -21,6 +21,18 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 pub use crate::limits::Limits;
+
+/// The largest coordinate (m, each of x, y and z, after placement) of a vertex, the camera or
+/// a light. Survey coordinates run to millions of metres (UTM northings reach 10⁷ m); beyond
+/// 10⁹ m a scene is a mistake of units or scale, and the tracer's 32-bit floats (and its BVH
+/// builder, which fails on non-finite bounds) are no longer safe.
+pub const MAX_COORDINATE_M: f64 = 1e9;
+/// The most luminous intensity a luminaire may have (cd): the brightest searchlights reach
+/// about 10⁹ cd; more would overflow the 32-bit radiance once multiplied by the spectrum.
+pub const MAX_INTENSITY_CD: f64 = 1e9;
+/// The most illuminance a sun or sky may give (lux): the sun gives about 1.3 × 10⁵ lx at the
+/// top of the atmosphere.
+pub const MAX_ILLUMINANCE_LUX: f64 = 1e6;
 
 /// The camera in world coordinates.
 #[derive(Clone, Debug, PartialEq)]
@@ -130,9 +142,89 @@ impl LoadedScene {
     }
 }
 
+/// The deepest nesting of arrays and inline tables a scene file may have. A scene needs three
+/// (`mix = [{ … }]` inside a table); the TOML parser and serde recurse once per level, so a few
+/// hundred kilobytes of `[[[[…` would overflow the stack of the thread that reads it (a worker's
+/// thread has 2 MiB) and abort the process, which no error can report.
+pub const MAX_TOML_NESTING: usize = 32;
+
+/// Refuse nesting deeper than [`MAX_TOML_NESTING`] before the TOML parser sees it: brackets and
+/// braces are counted outside strings and comments, a closer closing only the opener it matches
+/// (the fuzz harness found unclosed inline tables with stray `]` between them overflowing the
+/// parser, so a stray closer must not hide an opener).
+fn check_nesting(text: &str, path: &Path) -> Result<()> {
+    let (mut line, mut column) = (1usize, 0usize);
+    let mut open: Vec<char> = Vec::new();
+    let mut chars = text.chars().peekable();
+    // The closing quote of the string being read, and whether it is a multi-line one.
+    let mut string: Option<(char, bool)> = None;
+    let mut comment = false;
+    while let Some(c) = chars.next() {
+        column += 1;
+        if c == '\n' {
+            line += 1;
+            column = 0;
+            comment = false;
+            if string.is_some_and(|(_, multi)| !multi) {
+                string = None; // an unterminated string; the parser will say so
+            }
+            continue;
+        }
+        if comment {
+            continue;
+        }
+        let triple = |chars: &mut std::iter::Peekable<std::str::Chars>, q: char| {
+            let mut ahead = chars.clone();
+            if ahead.next() == Some(q) && ahead.next() == Some(q) {
+                chars.next();
+                chars.next();
+                true
+            } else {
+                false
+            }
+        };
+        match string {
+            Some((q, multi)) => {
+                if c == '\\' && q == '"' {
+                    chars.next(); // an escaped character, whatever it is
+                } else if c == q && (!multi || triple(&mut chars, q)) {
+                    string = None;
+                }
+            }
+            None => match c {
+                '#' => comment = true,
+                '"' | '\'' => string = Some((c, triple(&mut chars, c))),
+                '[' | '{' => {
+                    open.push(c);
+                    if open.len() > MAX_TOML_NESTING {
+                        return Err(SceneError::syntax(
+                            path,
+                            line,
+                            column,
+                            format!(
+                                "arrays and inline tables nested more than {MAX_TOML_NESTING} \
+                                 deep (or left open); a scene needs three at most, so this file \
+                                 is damaged or not a scene"
+                            ),
+                        ));
+                    }
+                }
+                ']' | '}' if open.last() == Some(&if c == ']' { '[' } else { '{' }) => {
+                    open.pop();
+                }
+                _ => {}
+            },
+        }
+    }
+    Ok(())
+}
+
 /// Parse the text of a scene file. TOML errors carry their line and column.
 pub fn parse_scene(text: &str, path: &Path) -> Result<SceneFile> {
-    let file: SceneFile = toml::from_str(text).map_err(|e| {
+    check_nesting(text, path)?;
+    let parsed = crate::guard::catch(|| toml::from_str::<SceneFile>(text))
+        .map_err(|_| SceneError::invalid(path, "TOML", crate::guard::gave_up("TOML")))?;
+    let file: SceneFile = parsed.map_err(|e| {
         let (line, column) = e
             .span()
             .map(|s| {
@@ -160,11 +252,18 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<SceneFile> {
 
 /// Load and check the scene file at `path`.
 pub fn load_scene(path: &Path, limits: &Limits) -> Result<LoadedScene> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|source| SceneError::Io { path: path.to_owned(), source })?;
-    let file = parse_scene(&text, path)?;
+    let file = read_scene_file(path, limits)?;
     let assets = FolderAssets::new(path, limits.max_file_bytes)?;
     load(file, &assets, limits)
+}
+
+/// Read and parse the scene file at `path`: a regular file (not a FIFO or a device, which would
+/// block or never end), within the file size limit, UTF-8.
+pub fn read_scene_file(path: &Path, limits: &Limits) -> Result<SceneFile> {
+    let bytes =
+        crate::assets::read_regular_file(path, limits.max_file_bytes, crate::assets::MAX_FILE_FIX)?;
+    let text = crate::assets::utf8_text(bytes, path)?;
+    parse_scene(&text, path)
 }
 
 /// "unknown X `name` (did you mean …?); the scene defines …".
@@ -247,12 +346,16 @@ impl Ctx<'_> {
             }
             SpectrumSource::File { file, extrapolate } => {
                 let bytes = self.assets.read(file, &spectrum_place)?;
-                let text = String::from_utf8(bytes).map_err(|_| {
-                    self.invalid(&spectrum_place, format!("`{file}` is not UTF-8 text"))
-                })?;
+                let shown = self.assets.display_path(file);
+                let text = utf8_text(bytes, &shown)?;
                 let coverage = if *extrapolate { Coverage::HoldEnds } else { Coverage::Require };
-                let loaded = load_csv(&text, file, Quantity::RelativePower, coverage)
-                    .map_err(|e| self.invalid(&spectrum_place, e.to_string()))?;
+                let loaded = load_csv(
+                    &text,
+                    &shown.display().to_string(),
+                    Quantity::RelativePower,
+                    coverage,
+                )
+                .map_err(|e| self.invalid(&spectrum_place, e.to_string()))?;
                 self.notes.extend(
                     loaded.notes.iter().map(|n| format!("spectrum `{name}` ({file}): {n}")),
                 );
@@ -369,24 +472,26 @@ fn check_surface(
     Ok(())
 }
 
-/// Import a mesh by its reference's extension; also returns VRML viewpoints.
+/// Import a mesh by its reference's extension; also returns VRML viewpoints. Messages about the
+/// mesh's content name the mesh file by its path.
 fn import_mesh(
     ctx: &Ctx,
     reference: &str,
     place: &str,
+    limits: &Limits,
 ) -> Result<(Mesh, Vec<vrml::Viewpoint>, UpAxis)> {
     let bytes = ctx.assets.read(reference, place)?;
-    let name = PathBuf::from(reference);
-    let text = || {
-        String::from_utf8(bytes.clone())
-            .map_err(|_| ctx.invalid(place, format!("`{reference}` is not UTF-8 text")))
-    };
+    let name = ctx.assets.display_path(reference);
     Ok(match extension(reference).as_str() {
-        "obj" => (obj::parse(&text()?, &name)?, Vec::new(), UpAxis::Z),
-        "ply" => (ply::parse(&bytes, &name)?, Vec::new(), UpAxis::Z),
-        "gltf" | "glb" => (gltf_mesh::parse(&bytes, &name)?, Vec::new(), UpAxis::Y),
+        "obj" => {
+            let text = utf8_text(bytes, &name)?;
+            (obj::parse_limited(&text, &name, limits)?, Vec::new(), UpAxis::Z)
+        }
+        "ply" => (ply::parse_limited(&bytes, &name, limits)?, Vec::new(), UpAxis::Z),
+        "gltf" | "glb" => (gltf_mesh::parse_limited(&bytes, &name, limits)?, Vec::new(), UpAxis::Y),
         "wrl" => {
-            let scene = vrml::parse(&text()?, &name)?;
+            let text = utf8_text(bytes, &name)?;
+            let scene = vrml::parse_limited(&text, &name, limits)?;
             (scene.mesh, scene.viewpoints, UpAxis::Y)
         }
         other => {
@@ -465,6 +570,42 @@ fn check_mesh(ctx: &mut Ctx, mesh: &mut Mesh, place: &str, reference: &str) -> R
     Ok(())
 }
 
+/// Whether a world coordinate is one the tracer can hold: finite, and within
+/// [`MAX_COORDINATE_M`] (so finite as a 32-bit float too).
+fn placeable(x: f64) -> bool {
+    x.is_finite() && x.abs() <= MAX_COORDINATE_M
+}
+
+/// "must be finite and within ±1e9 m" for a point field.
+fn check_point(ctx: &Ctx, place: &str, p: [f64; 3]) -> Result<()> {
+    if p.iter().all(|&x| placeable(x)) {
+        return Ok(());
+    }
+    Err(ctx.invalid(
+        place,
+        format!(
+            "{p:?} is out of range; every coordinate must be finite and within ±{MAX_COORDINATE_M:e} m \
+             (check the units: restauro works in metres)"
+        ),
+    ))
+}
+
+/// Every vertex of a placed mesh within [`MAX_COORDINATE_M`]: a huge scale or translation
+/// must be refused here, by `scene check`, not by the tracer's BVH builder.
+fn check_placed(ctx: &Ctx, mesh: &Mesh, place: &str, reference: &str) -> Result<()> {
+    match mesh.positions.iter().position(|p| !p.iter().all(|&x| placeable(f64::from(x)))) {
+        None => Ok(()),
+        Some(i) => Err(ctx.invalid(
+            format!("{place}.transform"),
+            format!(
+                "vertex {i} of `{reference}` lands at {:?} m once placed, beyond ±{MAX_COORDINATE_M:e} m; \
+                 check the transform's scale and translate (and the file's units)",
+                mesh.positions[i]
+            ),
+        )),
+    }
+}
+
 fn transform_mesh(mesh: &mut Mesh, m: DMat4) {
     for p in &mut mesh.positions {
         *p = m.transform_point3(DVec3::from_array(p.map(f64::from))).as_vec3().to_array();
@@ -489,8 +630,8 @@ fn transform_mesh(mesh: &mut Mesh, m: DMat4) {
 fn photometry(ctx: &Ctx, reference: &Option<String>, place: &str) -> Result<Option<Photometry>> {
     let Some(reference) = reference else { return Ok(None) };
     let bytes = ctx.assets.read(reference, place)?;
-    let text = String::from_utf8_lossy(&bytes);
-    let name = PathBuf::from(reference);
+    let text = photometric::decode_text(bytes);
+    let name = ctx.assets.display_path(reference);
     Ok(Some(match extension(reference).as_str() {
         "ies" => photometric::parse_ies(&text, &name)?,
         "ldt" => photometric::parse_ldt(&text, &name)?,
@@ -597,7 +738,8 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
                 "every number must be finite, and a scale not 0",
             ));
         }
-        let (mut mesh, vps, file_up) = import_mesh(&ctx, &o.mesh, &format!("{place}.mesh"))?;
+        let (mut mesh, vps, file_up) =
+            import_mesh(&ctx, &o.mesh, &format!("{place}.mesh"), limits)?;
         check_mesh(&mut ctx, &mut mesh, &place, &o.mesh)?;
         triangles += mesh.triangles.len() as u64;
         if triangles > limits.max_triangles {
@@ -610,6 +752,7 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
         }
         let matrix = object_matrix(o, file_up);
         transform_mesh(&mut mesh, matrix);
+        check_placed(&ctx, &mesh, &place, &o.mesh)?;
         viewpoints.insert(o.name.clone(), (vps, matrix));
         // Bind each part to a scene material.
         for key in o.materials.keys() {
@@ -735,9 +878,9 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
         DVec3::from_array(camera.target),
         DVec3::from_array(camera.up),
     );
-    if !(finite3(camera.position) && finite3(camera.target) && finite3(camera.up)) {
-        return Err(ctx.invalid("camera", "position, target and up must be finite"));
-    }
+    check_point(&ctx, "camera.position", camera.position)?;
+    check_point(&ctx, "camera.target", camera.target)?;
+    check_point(&ctx, "camera.up", camera.up)?;
     if (t - p).length() < 1e-9 {
         return Err(ctx.invalid("camera", "the target is where the camera is; move one of them"));
     }
@@ -822,12 +965,7 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
                         "give illuminance_lux, or preset = \"sun\", \"cloudy\" or \"full-moon\"",
                     )),
                 };
-                if !(lux.is_finite() && lux >= 0.0) {
-                    return Err(ctx.invalid(
-                        format!("{place}.illuminance_lux"),
-                        format!("{lux} is not a finite illuminance ≥ 0 lux"),
-                    ));
-                }
+                check_illuminance(&ctx, &place, lux)?;
                 let position = match (azimuth_deg, elevation_deg, site) {
                     (Some(_), _, Some(_)) | (_, Some(_), Some(_)) => {
                         return Err(ctx.invalid(
@@ -887,12 +1025,7 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
                         ));
                     }
                 };
-                if !(lux.is_finite() && lux >= 0.0) {
-                    return Err(ctx.invalid(
-                        format!("{place}.illuminance_lux"),
-                        format!("{lux} is not a finite illuminance ≥ 0 lux"),
-                    ));
-                }
+                check_illuminance(&ctx, &place, lux)?;
                 ResolvedLight::Sky {
                     illuminance_lux: lux,
                     model: model.unwrap_or(preset_model),
@@ -970,6 +1103,26 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
     Ok(LoadedScene { camera, spectra, objects, lights, notes, file })
 }
 
+/// An illuminance (sun or sky): finite, ≥ 0 and at most [`MAX_ILLUMINANCE_LUX`].
+fn check_illuminance(ctx: &Ctx, place: &str, lux: f64) -> Result<()> {
+    if !(lux.is_finite() && lux >= 0.0) {
+        return Err(ctx.invalid(
+            format!("{place}.illuminance_lux"),
+            format!("{lux} is not a finite illuminance ≥ 0 lux"),
+        ));
+    }
+    if lux > MAX_ILLUMINANCE_LUX {
+        return Err(ctx.invalid(
+            format!("{place}.illuminance_lux"),
+            format!(
+                "{lux:e} lux is more than the {MAX_ILLUMINANCE_LUX:e} lux restauro accepts (full \
+                 sunlight is about 1e5 lux); give the illuminance in lux"
+            ),
+        ));
+    }
+    Ok(())
+}
+
 fn check_luminaire(
     ctx: &Ctx,
     place: &str,
@@ -977,19 +1130,25 @@ fn check_luminaire(
     intensity_cd: f64,
     aim: Option<[f64; 3]>,
 ) -> Result<()> {
-    if !finite3(position) {
-        return Err(ctx.invalid(format!("{place}.position"), "must be finite"));
-    }
+    check_point(ctx, &format!("{place}.position"), position)?;
     if !(intensity_cd.is_finite() && intensity_cd >= 0.0) {
         return Err(ctx.invalid(
             format!("{place}.intensity_cd"),
             format!("{intensity_cd} is not a luminous intensity; give candela ≥ 0"),
         ));
     }
+    if intensity_cd > MAX_INTENSITY_CD {
+        return Err(ctx.invalid(
+            format!("{place}.intensity_cd"),
+            format!(
+                "{intensity_cd:e} cd is more than the {MAX_INTENSITY_CD:e} cd restauro accepts (the \
+                 brightest searchlights reach about 1e9 cd); give the luminaire's intensity in \
+                 candela"
+            ),
+        ));
+    }
     if let Some(a) = aim {
-        if !finite3(a) {
-            return Err(ctx.invalid(format!("{place}.aim"), "must be finite"));
-        }
+        check_point(ctx, &format!("{place}.aim"), a)?;
         if (DVec3::from_array(a) - DVec3::from_array(position)).length() < 1e-9 {
             return Err(ctx
                 .invalid(format!("{place}.aim"), "the aim point is the luminaire's own position"));

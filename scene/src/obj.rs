@@ -8,6 +8,8 @@
 //! errors carry no position, and it takes a two-vertex face for a degenerate triangle).
 
 use crate::error::{Result, SceneError};
+use crate::guard;
+use crate::load::Limits;
 use crate::mesh::{Group, Mesh};
 use std::collections::{BTreeSet, HashMap};
 use std::path::Path;
@@ -27,61 +29,171 @@ fn usemtl_names(text: &str) -> Vec<String> {
     names
 }
 
-/// Find the first face line that tobj would refuse, for a message with a line number.
-fn locate_face_problem(text: &str, path: &Path) -> Option<SceneError> {
-    let vertices = text.lines().filter(|l| l.trim_start().starts_with("v ")).count() as i64;
+/// Find the first line that tobj would refuse (or that would make a polygon beyond
+/// `max_polygon_vertices`), for a message with its line number. tobj's own errors carry no
+/// position, so every check it makes is made here first, the same way: words split at
+/// whitespace, numbers as 32-bit floats, indices against the vertices defined *before* the line.
+fn locate_problem(text: &str, path: &Path, max_polygon_vertices: u64) -> Option<SceneError> {
+    let (mut positions, mut texcoords, mut normals) = (0i64, 0i64, 0i64);
     for (i, line) in text.lines().enumerate() {
-        let Some(rest) = line.trim_start().strip_prefix("f ") else { continue };
-        let corners: Vec<&str> = rest.split_whitespace().collect();
-        let place = format!("line {}", i + 1);
-        if corners.len() < 3 {
-            return Some(SceneError::invalid(
-                path,
-                place,
-                format!(
-                    "a face with {} vertices; a polygon needs at least 3 (delete the line or add \
-                     the missing corners)",
-                    corners.len()
-                ),
-            ));
-        }
-        for c in corners {
-            let index = c.split('/').next().and_then(|v| v.parse::<i64>().ok());
-            match index {
-                Some(k) if k != 0 && k.abs() <= vertices => {}
-                Some(k) => {
-                    return Some(SceneError::invalid(
-                        path,
-                        place,
-                        format!(
-                            "vertex index {k} is out of range: the file has {vertices} vertices \
-                             (OBJ indices start at 1; negative ones count back from the last)"
-                        ),
+        let place = || format!("line {}", i + 1);
+        let refuse = |problem: String| Some(SceneError::invalid(path, place(), problem));
+        let mut words = line.split_whitespace();
+        let Some(keyword) = words.next() else { continue };
+        let rest: Vec<&str> = words.collect();
+        let floats =
+            |n: usize| rest.len() >= n && rest[..n].iter().all(|w| w.parse::<f32>().is_ok());
+        match keyword {
+            "v" => {
+                if !floats(3) {
+                    return refuse(
+                        "a vertex needs three numbers `v x y z` (then optionally w, or r g b); \
+                         fix the line"
+                            .into(),
+                    );
+                }
+                match rest.len() {
+                    3 | 6 => {}
+                    4 => match rest[3].parse::<f32>() {
+                        Ok(w) if w != 0.0 => {}
+                        Ok(_) => {
+                            return refuse(
+                                "the vertex weight w is 0; use 1 or leave it out".into(),
+                            );
+                        }
+                        Err(_) => {
+                            return refuse(format!(
+                                "`{}` is not a number (the vertex weight w)",
+                                rest[3]
+                            ));
+                        }
+                    },
+                    n => {
+                        return refuse(format!(
+                            "a vertex with {n} numbers; give x y z, x y z w, or x y z r g b"
+                        ));
+                    }
+                }
+                positions += 1;
+            }
+            "vt" => {
+                if !floats(2) {
+                    return refuse(
+                        "a texture coordinate needs two numbers `vt u v`; fix the line".into(),
+                    );
+                }
+                texcoords += 1;
+            }
+            "vn" => {
+                if !floats(3) {
+                    return refuse("a normal needs three numbers `vn x y z`; fix the line".into());
+                }
+                normals += 1;
+            }
+            "usemtl" if line.split_once(' ').is_none_or(|(_, n)| n.trim().is_empty()) => {
+                return refuse(
+                    "`usemtl` without a material name after a space; name the material".into(),
+                );
+            }
+            "f" | "l" => {
+                if keyword == "f" && rest.len() < 3 {
+                    return refuse(format!(
+                        "a face with {} vertices; a polygon needs at least 3 (delete the line or \
+                         add the missing corners)",
+                        rest.len()
                     ));
                 }
-                None => {
-                    return Some(SceneError::invalid(
-                        path,
-                        place,
-                        format!("`{c}` is not a vertex reference like 7, 7/2 or 7/2/5"),
-                    ));
+                if rest.len() as u64 > max_polygon_vertices {
+                    return Some(SceneError::Limit {
+                        path: path.to_owned(),
+                        what: format!("the number of vertices of the polygon on line {}", i + 1),
+                        value: rest.len() as u64,
+                        limit: max_polygon_vertices,
+                        fix: "split the polygon into smaller faces, or raise the limit with \
+                              --max-polygon-vertices"
+                            .into(),
+                    });
+                }
+                for corner in &rest {
+                    let mut parts = corner.split('/');
+                    for (k, (what, defined)) in [
+                        ("vertex", positions),
+                        ("texture coordinate", texcoords),
+                        ("normal", normals),
+                    ]
+                    .into_iter()
+                    .enumerate()
+                    {
+                        let Some(part) = parts.next() else { break };
+                        if part.is_empty() && k > 0 {
+                            continue;
+                        }
+                        match part.parse::<i64>() {
+                            Ok(index) if index != 0 && index.abs() <= defined => {}
+                            Ok(index) => {
+                                return refuse(format!(
+                                    "{what} index {index} is out of range: {defined} come before \
+                                     this line (OBJ indices start at 1 and refer to lines above; \
+                                     negative ones count back from the last)"
+                                ));
+                            }
+                            Err(_) => {
+                                return refuse(format!(
+                                    "`{corner}` is not a vertex reference like 7, 7/2, 7//5 or 7/2/5"
+                                ));
+                            }
+                        }
+                    }
+                    if parts.next().is_some() {
+                        return refuse(format!(
+                            "`{corner}` is not a vertex reference like 7, 7/2, 7//5 or 7/2/5"
+                        ));
+                    }
                 }
             }
+            _ => {}
         }
     }
     None
 }
 
+/// The text tobj is given: a library line first, so that tobj asks for the made-up library
+/// even when the file has none, and vertex colours (`v x y z r g b`) dropped. restauro does not
+/// use them, and tobj refuses a file where only some vertices have them ("face vertex color
+/// index out of bounds", found by the fuzz harness), which the OBJ format allows. Lines keep
+/// their numbers.
+fn for_tobj(text: &str) -> String {
+    let mut out = String::with_capacity(text.len() + 40);
+    out.push_str("mtllib restauro-usemtl-names.mtl\n");
+    for line in text.split_inclusive('\n') {
+        let mut words = line.split_whitespace();
+        if words.next() == Some("v") && line.split_whitespace().count() == 7 {
+            let xyz: Vec<&str> = words.take(3).collect();
+            out.push_str("v ");
+            out.push_str(&xyz.join(" "));
+            out.push('\n');
+        } else {
+            out.push_str(line);
+        }
+    }
+    out
+}
+
 /// Read an OBJ text. `path` names it in messages.
 pub fn parse(text: &str, path: &Path) -> Result<Mesh> {
-    // tobj accepts two-vertex faces (as degenerate triangles), so faces are checked first.
-    if let Some(problem) = locate_face_problem(text, path) {
+    parse_limited(text, path, &Limits::default())
+}
+
+/// [`parse`] within `limits` (the vertices of one polygon).
+pub fn parse_limited(text: &str, path: &Path, limits: &Limits) -> Result<Mesh> {
+    // tobj's errors carry no line, and it takes a two-vertex face for a degenerate triangle, so
+    // every line it would refuse is found first.
+    if let Some(problem) = locate_problem(text, path, limits.max_polygon_vertices) {
         return Err(problem);
     }
     let names = usemtl_names(text);
-    // A library line first, so that tobj asks for the made-up library even when the file has
-    // none; a file's own `mtllib` lines get an empty library.
-    let with_library = format!("mtllib restauro-usemtl-names.mtl\n{text}");
+    // The file's own `mtllib` lines get an empty library.
+    let with_library = for_tobj(text);
     let first_library = std::cell::Cell::new(true);
     let loader = |_: &Path| -> tobj::MTLLoadResult {
         if !first_library.replace(false) {
@@ -96,16 +208,17 @@ pub fn parse(text: &str, path: &Path) -> Result<Mesh> {
     };
     let options =
         tobj::LoadOptions { triangulate: true, single_index: false, ..Default::default() };
-    let (models, _) =
-        tobj::load_obj_buf(&mut with_library.as_bytes(), &options, loader).map_err(|e| {
-            locate_face_problem(text, path).unwrap_or_else(|| {
-                SceneError::invalid(
-                    path,
-                    "OBJ",
-                    format!("{e}; check the file against the OBJ format"),
-                )
-            })
-        })?;
+    let (models, _) = guard::catch(|| {
+        tobj::load_obj_buf(&mut with_library.as_bytes(), &options, loader)
+    })
+    .map_err(|_| SceneError::invalid(path, "OBJ", guard::gave_up("OBJ")))?
+    .map_err(|e| {
+        SceneError::invalid(
+            path,
+            "OBJ",
+            format!("the OBJ reader refused the file ({e}); check the file against the OBJ format"),
+        )
+    })?;
     let mut mesh = Mesh::default();
     for model in &models {
         let m = &model.mesh;
@@ -120,13 +233,11 @@ pub fn parse(text: &str, path: &Path) -> Result<Mesh> {
         let count = m.positions.len() / 3;
         for t in m.indices.chunks_exact(3) {
             if t.iter().any(|&i| i as usize >= count) {
-                return Err(locate_face_problem(text, path).unwrap_or_else(|| {
-                    SceneError::invalid(
-                        path,
-                        format!("part {}", model.name),
-                        "a face index is out of range",
-                    )
-                }));
+                return Err(SceneError::invalid(
+                    path,
+                    format!("part {}", model.name),
+                    "a face index is out of range; check the file's `f` lines",
+                ));
             }
             mesh.triangles.push([base + t[0], base + t[1], base + t[2]]);
             mesh.triangle_group.push(group);
@@ -163,6 +274,41 @@ mod tests {
         assert_eq!(mesh.triangles, vec![[0, 1, 2]]);
     }
 
+    /// Found by the fuzz harness: tobj refuses faces on vertices without colours once any vertex
+    /// has them; the OBJ format allows it, and restauro does not use the colours.
+    #[test]
+    fn vertex_colours_on_some_vertices_only_are_read() {
+        let text = "v 0 0 0\nv 1 0 0 0.2 0.3 0.4\nv 0 1 0\nf 1 2 3\n";
+        let mesh = parse(text, Path::new("c.obj")).unwrap();
+        assert_eq!(mesh.positions, vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
+    }
+
+    #[test]
+    fn polygons_and_references_are_checked_as_tobj_counts_them() {
+        // Indices refer to the lines above (tobj counts what it has read so far).
+        let err = parse("f 1 2 3\nv 0 0 0\nv 1 0 0\nv 0 1 0\n", Path::new("f.obj")).unwrap_err();
+        assert!(
+            err.to_string().contains("line 1: vertex index 1 is out of range: 0 come before"),
+            "{err}"
+        );
+        let err = parse("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/4 2/1 3/1\nvt 0 0\n", Path::new("t.obj"))
+            .unwrap_err();
+        assert!(
+            err.to_string().contains("line 4: texture coordinate index 4 is out of range"),
+            "{err}"
+        );
+        let err = parse("v 0 0\n", Path::new("v.obj")).unwrap_err();
+        assert!(err.to_string().contains("line 1: a vertex needs three numbers"), "{err}");
+        let limits = Limits { max_polygon_vertices: 3, ..Limits::default() };
+        let err = parse_limited(
+            "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n",
+            Path::new("p.obj"),
+            &limits,
+        )
+        .unwrap_err();
+        assert!(err.to_string().contains("polygon on line 5 is 4, over the limit of 3"), "{err}");
+    }
+
     #[test]
     fn bad_faces_are_refused_with_their_line() {
         let err = parse("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n", Path::new("bad.obj"))
@@ -170,7 +316,7 @@ mod tests {
             .to_string();
         assert!(
             err.starts_with(
-                "bad.obj: line 4: vertex index 9 is out of range: the file has 3 vertices"
+                "bad.obj: line 4: vertex index 9 is out of range: 3 come before this line"
             ),
             "{err}"
         );

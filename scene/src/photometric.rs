@@ -52,7 +52,6 @@
 //! [`SceneError`] naming the file, the line and column (or the field) and what to do.
 
 use std::f64::consts::PI;
-use std::io::Read;
 use std::path::Path;
 
 use crate::{Result, SceneError};
@@ -305,28 +304,18 @@ pub fn load(path: &std::path::Path) -> crate::Result<Photometry> {
             ));
         }
     };
-    let io = |source| SceneError::Io { path: path.to_path_buf(), source };
-    let file = std::fs::File::open(path).map_err(io)?;
-    let mut bytes = Vec::new();
-    file.take(MAX_FILE_BYTES + 1).read_to_end(&mut bytes).map_err(io)?;
-    if bytes.len() as u64 > MAX_FILE_BYTES {
-        return Err(SceneError::Limit {
-            path: path.to_path_buf(),
-            what: "file size in bytes".into(),
-            value: bytes.len() as u64,
-            limit: MAX_FILE_BYTES,
-            fix: "a photometric file is a few hundred kB at most; check that this is the right \
-                  file"
-                .into(),
-        });
-    }
+    let bytes = crate::assets::read_regular_file(
+        path,
+        MAX_FILE_BYTES,
+        "a photometric file is a few hundred kB at most; check that this is the right file",
+    )?;
     let text = decode_text(bytes);
     parse(&text, path)
 }
 
 /// UTF-8 if the bytes are UTF-8, else Latin-1 (each byte one character), which is what
 /// EULUMDAT and older IES files written on Windows mostly are; the numbers are ASCII either way.
-fn decode_text(bytes: Vec<u8>) -> String {
+pub(crate) fn decode_text(bytes: Vec<u8>) -> String {
     match String::from_utf8(bytes) {
         Ok(text) => text,
         Err(e) => e.into_bytes().iter().map(|&b| char::from(b)).collect(),

@@ -3,7 +3,10 @@
 //! fans. PLY has no materials, so the whole mesh is one part, named after the file.
 
 use crate::error::{Result, SceneError};
+use crate::guard;
+use crate::load::Limits;
 use crate::mesh::{Group, Mesh};
+use crate::ply_layout;
 use ply_rs::parser::Parser;
 use ply_rs::ply::{DefaultElement, Property};
 use std::path::Path;
@@ -36,16 +39,29 @@ fn list(p: &Property) -> Option<Vec<i64>> {
 
 /// Read PLY bytes. `path` names the file in messages and, by its stem, the mesh's one part.
 pub fn parse(bytes: &[u8], path: &Path) -> Result<Mesh> {
+    parse_limited(bytes, path, &Limits::default())
+}
+
+/// [`parse`] within `limits` (faces, vertices of one polygon).
+pub fn parse_limited(bytes: &[u8], path: &Path, limits: &Limits) -> Result<Mesh> {
+    // Everything ply-rs would refuse, panic on or loop over is refused first, in words.
+    let header = ply_layout::read_header(bytes, path)?;
+    ply_layout::check_body(&header, bytes, path, limits)?;
     let parser = Parser::<DefaultElement>::new();
     let mut reader = bytes;
-    // ply-rs reports truncated and malformed files as errors; the unwind guard keeps a defect
-    // in it from taking the program down on hostile input.
-    let ply = std::panic::catch_unwind(move || parser.read_ply(&mut reader))
-        .map_err(|_| {
-            SceneError::invalid(path, "PLY", "the file is malformed (the reader gave up)")
-        })?
+    let ply = guard::catch(move || parser.read_ply(&mut reader))
+        .map_err(|_| SceneError::invalid(path, "PLY", guard::gave_up("PLY")))?
         .map_err(|e| {
-            SceneError::invalid(path, "PLY", format!("{e}; the file may be truncated or not PLY"))
+            // Not expected after the checks above; its first line only (the rest is a dump of
+            // ply-rs's parser state).
+            let first = e.to_string().lines().next().unwrap_or("").to_owned();
+            SceneError::invalid(
+                path,
+                "PLY",
+                format!(
+                    "the PLY reader refused the file ({first}); check it with another PLY tool"
+                ),
+            )
         })?;
     let vertices = ply.payload.get("vertex").ok_or_else(|| {
         SceneError::invalid(
@@ -143,7 +159,8 @@ mod tests {
         let full = binary();
         for cut in [full.len() - 1, full.len() - 5, full.len() - 20, 40] {
             let err = parse(&full[..cut], Path::new("cut.ply")).unwrap_err().to_string();
-            assert!(err.starts_with("cut.ply: "), "{err}");
+            assert!(err.starts_with("cut.ply:"), "{err}");
+            assert!(err.contains("truncated"), "{err}");
         }
         let err = parse(ASCII.replace("4 0 1 2 3", "4 0 1 2 7").as_bytes(), Path::new("i.ply"))
             .unwrap_err()

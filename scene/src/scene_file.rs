@@ -48,6 +48,7 @@
 //! state = "degraded"
 //! ```
 
+use serde::de::{self, Deserializer, SeqAccess, Visitor};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -80,12 +81,12 @@ pub struct SceneFile {
 #[serde(deny_unknown_fields)]
 pub struct Camera {
     /// Where the eye is (m). With `viewpoint`, taken from the mesh instead.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "vec3::opt_position")]
     pub position: Option<[f64; 3]>,
     /// The point looked at (m).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "vec3::opt_target")]
     pub target: Option<[f64; 3]>,
-    #[serde(default = "default_up")]
+    #[serde(default = "default_up", deserialize_with = "vec3::up")]
     pub up: [f64; 3],
     /// The vertical field of view, degrees.
     #[serde(default = "default_fov")]
@@ -249,21 +250,49 @@ pub struct SurfaceOverride {
 #[derive(Clone, Debug, PartialEq, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Transform {
-    #[serde(default)]
+    #[serde(default, deserialize_with = "vec3::opt_translate")]
     pub translate: Option<[f64; 3]>,
     /// Rotations about X, then Y, then Z (degrees).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "vec3::opt_rotate_deg")]
     pub rotate_deg: Option<[f64; 3]>,
     /// A uniform scale, or one per axis.
     #[serde(default)]
     pub scale: Option<Scale>,
 }
 
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize)]
 #[serde(untagged)]
 pub enum Scale {
     Uniform(f64),
     PerAxis([f64; 3]),
+}
+
+/// A number, or exactly three; any other length is refused with the field's name (serde's
+/// derived untagged form would say only that no variant matched).
+impl<'de> Deserialize<'de> for Scale {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct ScaleVisitor;
+        impl<'de> Visitor<'de> for ScaleVisitor {
+            type Value = Scale;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a number, or 3 numbers [x, y, z]")
+            }
+            fn visit_f64<E: de::Error>(self, v: f64) -> Result<Scale, E> {
+                Ok(Scale::Uniform(v))
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<Scale, E> {
+                Ok(Scale::Uniform(v as f64))
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<Scale, E> {
+                Ok(Scale::Uniform(v as f64))
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<Scale, A::Error> {
+                vec3::exactly_three(seq, "scale", "give one number, or exactly 3 [x, y, z]")
+                    .map(Scale::PerAxis)
+            }
+        }
+        d.deserialize_any(ScaleVisitor)
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -332,21 +361,24 @@ pub enum Light {
     /// A luminaire radiating from a point: total luminous intensity in candela, optionally
     /// shaped by an IES or EULUMDAT file (then `intensity_cd` scales the file's peak).
     Point {
+        #[serde(deserialize_with = "vec3::position")]
         position: [f64; 3],
         intensity_cd: f64,
         spectrum: String,
         #[serde(default)]
         ies: Option<String>,
         /// The point the luminaire's nadir (photometric γ = 0) aims at.
-        #[serde(default)]
+        #[serde(default, deserialize_with = "vec3::opt_aim")]
         aim: Option<[f64; 3]>,
     },
     /// A point luminaire with a cone: full intensity inside `cone_deg`, falling to zero at
     /// `cone_deg + falloff_deg` (half-angles).
     Spot {
+        #[serde(deserialize_with = "vec3::position")]
         position: [f64; 3],
         intensity_cd: f64,
         spectrum: String,
+        #[serde(deserialize_with = "vec3::aim")]
         aim: [f64; 3],
         cone_deg: f64,
         #[serde(default)]
@@ -431,4 +463,130 @@ impl Variant {
 
 fn default_state() -> String {
     "base".to_owned()
+}
+
+/// Deserialisers for `[x, y, z]` fields that refuse any other number of elements, naming the
+/// field. serde's own `[f64; 3]` takes the first three numbers of a longer TOML array and drops
+/// the rest without a word, so `position = [1, 2, 3, 4]` would load as `[1, 2, 3]`.
+mod vec3 {
+    use super::*;
+
+    /// Three numbers from a sequence, or an error naming `field` and what to give.
+    pub(super) fn exactly_three<'de, A: SeqAccess<'de>>(
+        mut seq: A,
+        field: &str,
+        fix: &str,
+    ) -> Result<[f64; 3], A::Error> {
+        let mut out = [0.0; 3];
+        let mut count = 0usize;
+        while let Some(v) = seq.next_element::<f64>()? {
+            if let Some(slot) = out.get_mut(count) {
+                *slot = v;
+            }
+            count += 1;
+        }
+        if count == 3 {
+            Ok(out)
+        } else {
+            Err(de::Error::custom(format!(
+                "`{field}` has {count} number{}; {fix}",
+                if count == 1 { "" } else { "s" }
+            )))
+        }
+    }
+
+    struct Three(&'static str);
+
+    impl<'de> Visitor<'de> for Three {
+        type Value = [f64; 3];
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            write!(f, "3 numbers [x, y, z] for `{}`", self.0)
+        }
+        fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<[f64; 3], A::Error> {
+            exactly_three(seq, self.0, "give exactly 3, [x, y, z]")
+        }
+    }
+
+    /// A present optional field: `null` (how a bundle's JSON writes an absent one) or three.
+    struct MaybeThree(&'static str);
+
+    impl<'de> Visitor<'de> for MaybeThree {
+        type Value = Option<[f64; 3]>;
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            write!(f, "3 numbers [x, y, z] for `{}`", self.0)
+        }
+        fn visit_none<E: de::Error>(self) -> Result<Self::Value, E> {
+            Ok(None)
+        }
+        fn visit_unit<E: de::Error>(self) -> Result<Self::Value, E> {
+            Ok(None)
+        }
+        fn visit_some<D: Deserializer<'de>>(self, d: D) -> Result<Self::Value, D::Error> {
+            d.deserialize_seq(Three(self.0)).map(Some)
+        }
+        fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<Self::Value, A::Error> {
+            Three(self.0).visit_seq(seq).map(Some)
+        }
+    }
+
+    macro_rules! fields {
+        ($($name:ident, $opt:ident => $field:literal;)*) => {$(
+            #[allow(dead_code)]
+            pub(super) fn $name<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 3], D::Error> {
+                d.deserialize_seq(Three($field))
+            }
+            #[allow(dead_code)]
+            pub(super) fn $opt<'de, D: Deserializer<'de>>(
+                d: D,
+            ) -> Result<Option<[f64; 3]>, D::Error> {
+                d.deserialize_option(MaybeThree($field))
+            }
+        )*};
+    }
+
+    fields! {
+        position, opt_position => "position";
+        target, opt_target => "target";
+        up, opt_up => "up";
+        aim, opt_aim => "aim";
+        translate, opt_translate => "translate";
+        rotate_deg, opt_rotate_deg => "rotate_deg";
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn camera(position: &str) -> Result<Camera, String> {
+        toml::from_str(&format!(
+            "position = {position}\ntarget = [0, 0, 0]\nwidth = 1\nheight = 1\n"
+        ))
+        .map_err(|e| e.message().to_owned())
+    }
+
+    /// serde's own `[f64; 3]` would take the first three of four numbers without a word.
+    #[test]
+    fn vectors_of_any_other_length_are_refused_with_the_field() {
+        assert_eq!(camera("[1, 2, 3]").unwrap().position, Some([1.0, 2.0, 3.0]));
+        assert_eq!(
+            camera("[1, 2, 3, 4]").unwrap_err(),
+            "`position` has 4 numbers; give exactly 3, [x, y, z]"
+        );
+        assert_eq!(
+            camera("[1]").unwrap_err(),
+            "`position` has 1 number; give exactly 3, [x, y, z]"
+        );
+        let t: Result<Transform, _> = toml::from_str("scale = [1, 2]");
+        assert_eq!(
+            t.unwrap_err().message(),
+            "`scale` has 2 numbers; give one number, or exactly 3 [x, y, z]"
+        );
+        let t: Transform = toml::from_str("scale = 2").unwrap();
+        assert_eq!(t.scale, Some(Scale::Uniform(2.0)));
+        // A bundle's JSON writes absent vectors as null, and reads them back.
+        let c = Camera { position: None, ..camera("[1, 2, 3]").unwrap() };
+        let back: Camera = serde_json::from_str(&serde_json::to_string(&c).unwrap()).unwrap();
+        assert_eq!(back, c);
+    }
 }

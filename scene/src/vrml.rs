@@ -36,6 +36,7 @@ use std::path::Path;
 use std::rc::Rc;
 
 use crate::error::SceneError;
+use crate::load::Limits;
 use crate::mesh::{Group, Mesh};
 
 /// A camera of the file (§6.53), in the file's root coordinate system.
@@ -60,11 +61,10 @@ pub struct VrmlScene {
 /// The deepest nesting of nodes accepted (nodes inside nodes, counting `USE` expansions), so
 /// that neither parsing nor walking the scene can exhaust the stack.
 pub const MAX_DEPTH: usize = 256;
-/// The most triangles one file may produce (about 4 GB of mesh), counting `USE` copies.
-pub const MAX_TRIANGLES: u64 = 50_000_000;
-/// The most node instances walked (counting `USE` copies), against `DEF`/`USE` chains that
-/// double at every level while drawing nothing.
-pub const MAX_INSTANCES: u64 = 20_000_000;
+// The triangles, node instances and polygon vertices one file may expand to, counting `USE`
+// copies, are the scene's [`Limits`] (`max_triangles`, `max_instances`,
+// `max_polygon_vertices`): they are counted before anything is built (see `Census`), so a file
+// that stands for 2^40 instances is refused at once instead of walked.
 /// Polygons with more vertices than this are fanned even when `convex FALSE`: ear clipping is
 /// quadratic to cubic in the vertex count.
 const MAX_EAR_CLIP_VERTICES: usize = 512;
@@ -74,19 +74,22 @@ const MAX_SMOOTHED_FACES: usize = 256;
 
 /// Read the file at `path` and [`parse`] it.
 pub fn load(path: &Path) -> crate::Result<VrmlScene> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|source| SceneError::Io { path: path.to_path_buf(), source })?;
-    parse(&text, path)
+    let bytes = crate::assets::read_regular_file(
+        path,
+        crate::load::Limits::default().max_file_bytes,
+        crate::assets::MAX_FILE_FIX,
+    )?;
+    parse(&crate::assets::utf8_text(bytes, path)?, path)
 }
 
 /// Parse the text of a VRML97 file; `path` names the file in error messages.
 pub fn parse(text: &str, path: &Path) -> crate::Result<VrmlScene> {
-    parse_limited(text, path, MAX_TRIANGLES)
+    parse_limited(text, path, &Limits::default())
 }
 
-/// [`parse`] with a chosen triangle limit (so the limit can be tested without 50 million
-/// triangles).
-fn parse_limited(text: &str, path: &Path, max_triangles: u64) -> crate::Result<VrmlScene> {
+/// [`parse`] within `limits` (triangles, node instances and polygon vertices, counting `USE`
+/// copies).
+pub fn parse_limited(text: &str, path: &Path, limits: &Limits) -> crate::Result<VrmlScene> {
     // Parsing, walking and dropping the node tree recurse once per nesting level (at most
     // MAX_DEPTH levels, a few frames each): more than a 2 MB thread stack holds in a debug
     // build, so the work runs on a thread whose stack is known to suffice.
@@ -94,10 +97,10 @@ fn parse_limited(text: &str, path: &Path, max_triangles: u64) -> crate::Result<V
         let worker = std::thread::Builder::new()
             .name("vrml97".to_string())
             .stack_size(STACK_BYTES)
-            .spawn_scoped(scope, || parse_here(text, path, max_triangles));
+            .spawn_scoped(scope, || parse_here(text, path, limits));
         match worker {
             Ok(handle) => handle.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic)),
-            Err(_) => parse_here(text, path, max_triangles),
+            Err(_) => parse_here(text, path, limits),
         }
     })
 }
@@ -105,13 +108,13 @@ fn parse_limited(text: &str, path: &Path, max_triangles: u64) -> crate::Result<V
 /// The stack of the parsing thread (reserved, not committed, until used).
 const STACK_BYTES: usize = 64 << 20;
 
-fn parse_here(text: &str, path: &Path, max_triangles: u64) -> crate::Result<VrmlScene> {
+fn parse_here(text: &str, path: &Path, limits: &Limits) -> crate::Result<VrmlScene> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     check_header(text, path)?;
     let mut parser = Parser::new(text, path)?;
     let roots = parser.parse_file()?;
-    let mut builder = Builder::new(path);
-    builder.max_triangles = max_triangles;
+    Census::new(path).check(&roots, limits)?;
+    let mut builder = Builder::new(path, limits);
     for root in &roots {
         builder.walk(root, &IDENTITY, None, 1)?;
     }
@@ -874,6 +877,8 @@ struct Builder<'a> {
     viewpoints: Vec<Viewpoint>,
     instances: u64,
     max_triangles: u64,
+    max_instances: u64,
+    max_polygon_vertices: u64,
     /// The triangulation of each IndexedFaceSet node walked, by node address (the nodes live
     /// as long as the builder).
     cache: HashMap<usize, Rc<Local>>,
@@ -889,13 +894,15 @@ fn place(field: &Field, node: &Node) -> String {
 }
 
 impl Builder<'_> {
-    fn new(path: &Path) -> Builder<'_> {
+    fn new<'a>(path: &'a Path, limits: &Limits) -> Builder<'a> {
         Builder {
             path,
             mesh: Mesh { normals: Some(Vec::new()), ..Mesh::default() },
             viewpoints: Vec::new(),
             instances: 0,
-            max_triangles: MAX_TRIANGLES,
+            max_triangles: limits.max_triangles,
+            max_instances: limits.max_instances,
+            max_polygon_vertices: limits.max_polygon_vertices,
             cache: HashMap::new(),
         }
     }
@@ -971,15 +978,10 @@ impl Builder<'_> {
                     .to_string(),
             });
         }
+        // The census has counted these already; this is the backstop.
         self.instances += 1;
-        if self.instances > MAX_INSTANCES {
-            return Err(SceneError::Limit {
-                path: self.path.to_path_buf(),
-                what: "the number of node instances (counting USE copies)".to_string(),
-                value: self.instances,
-                limit: MAX_INSTANCES,
-                fix: "use fewer nested USEs of large groups".to_string(),
-            });
+        if self.instances > self.max_instances {
+            return Err(instances_limit(self.path, self.instances, self.max_instances));
         }
         let group_name = node.def.as_deref().or(name);
         match node.kind.as_str() {
@@ -1076,6 +1078,105 @@ impl Builder<'_> {
     }
 }
 
+const TRIANGLES_FIX: &str = "simplify the model or split it into several files, or raise the \
+                             limit with --max-triangles";
+
+fn instances_limit(path: &Path, value: u64, limit: u64) -> SceneError {
+    SceneError::Limit {
+        path: path.to_path_buf(),
+        what: "the number of node instances (counting USE copies)".to_string(),
+        value,
+        limit,
+        fix: "use fewer nested USEs of large groups, or raise the limit with --max-instances"
+            .to_string(),
+    }
+}
+
+/// How much a node expands to, counting every `USE` copy, worked out once per node (a `USE`
+/// shares the node it names): the instances the walk will visit and an upper bound on the
+/// triangles it will make (a face of n corners makes at most n − 2). A few hundred bytes of
+/// `DEF`/`USE` can stand for 2^40 instances; counting first refuses such a file at once, where
+/// walking it would take hours.
+struct Census<'a> {
+    path: &'a Path,
+    counted: HashMap<usize, (u64, u64)>,
+}
+
+impl<'a> Census<'a> {
+    fn new(path: &'a Path) -> Self {
+        Self { path, counted: HashMap::new() }
+    }
+
+    fn check(&mut self, roots: &[Rc<Node>], limits: &Limits) -> crate::Result<()> {
+        let (mut instances, mut triangles) = (0u64, 0u64);
+        for root in roots {
+            let (i, t) = self.count(root, 1)?;
+            instances = instances.saturating_add(i);
+            triangles = triangles.saturating_add(t);
+        }
+        if instances > limits.max_instances {
+            return Err(instances_limit(self.path, instances, limits.max_instances));
+        }
+        if triangles > limits.max_triangles {
+            return Err(SceneError::Limit {
+                path: self.path.to_path_buf(),
+                what: "the number of triangles (counting USE copies)".to_string(),
+                value: triangles,
+                limit: limits.max_triangles,
+                fix: TRIANGLES_FIX.to_string(),
+            });
+        }
+        Ok(())
+    }
+
+    /// Instances and triangles of one node and what the walk descends into below it.
+    fn count(&mut self, node: &Rc<Node>, depth: usize) -> crate::Result<(u64, u64)> {
+        let key = Rc::as_ptr(node) as usize;
+        if let Some(&counted) = self.counted.get(&key) {
+            return Ok(counted);
+        }
+        if depth > MAX_DEPTH {
+            return Err(SceneError::Limit {
+                path: self.path.to_path_buf(),
+                what: format!(
+                    "the nesting depth of nodes (with USE copies) at {}:{}",
+                    node.pos.line, node.pos.column
+                ),
+                value: depth as u64,
+                limit: MAX_DEPTH as u64,
+                fix: "flatten the scene graph (fewer nested Transforms, Groups and USEs)"
+                    .to_string(),
+            });
+        }
+        let below: Vec<Rc<Node>> = match node.kind.as_str() {
+            "Transform" | "Group" | "Anchor" | "Billboard" | "Collision" => {
+                node.nodes("children").to_vec()
+            }
+            // Whichever choice is drawn, at most all of them.
+            "Switch" => node.nodes("choice").to_vec(),
+            "LOD" => node.nodes("level").first().cloned().into_iter().collect(),
+            _ => Vec::new(),
+        };
+        let (mut instances, mut triangles) = (1u64, 0u64);
+        if node.kind == "Shape"
+            && let Some(geometry) = node.first_node("geometry")
+            && geometry.kind == "IndexedFaceSet"
+            && let Some(Value::Nums(index, _)) = geometry.field("coordIndex").map(|f| &f.value)
+        {
+            let ends = index.iter().filter(|&&n| n == -1.0).count() as u64;
+            let corners = index.len() as u64 - ends;
+            triangles = corners.saturating_sub(2 * ends);
+        }
+        for child in &below {
+            let (i, t) = self.count(child, depth + 1)?;
+            instances = instances.saturating_add(i);
+            triangles = triangles.saturating_add(t);
+        }
+        self.counted.insert(key, (instances, triangles));
+        Ok((instances, triangles))
+    }
+}
+
 /// An IndexedFaceSet triangulated in its own coordinates (what every `USE` of it shares).
 struct Local {
     /// Point and unit normal of each vertex.
@@ -1154,7 +1255,7 @@ impl Builder<'_> {
                 what: format!("the number of triangles (counting USE copies) with shape `{name}`"),
                 value: total,
                 limit: self.max_triangles,
-                fix: "simplify the model or split it into several files".to_string(),
+                fix: TRIANGLES_FIX.to_string(),
             });
         }
         let end = self.mesh.positions.len() as u64 + local.vertices.len() as u64;
@@ -1262,7 +1363,7 @@ impl Builder<'_> {
                         what: format!("the number of triangles of shape `{name}`"),
                         value: self.max_triangles + 1,
                         limit: self.max_triangles,
-                        fix: "simplify the model or split it into several files".to_string(),
+                        fix: TRIANGLES_FIX.to_string(),
                     });
                 }
                 let mut tri = [0u32; 3];
@@ -1367,6 +1468,23 @@ impl Builder<'_> {
                     ));
                 }
                 faces.corners.push(n as u32);
+            }
+            if (faces.corners.len() - start) as u64 > self.max_polygon_vertices {
+                let pos = face_start_pos;
+                return Err(SceneError::Limit {
+                    path: self.path.to_path_buf(),
+                    what: format!(
+                        "the number of vertices of face {} of shape `{name}` at {}:{}",
+                        faces.spans.len(),
+                        pos.line,
+                        pos.column
+                    ),
+                    value: (faces.corners.len() - start) as u64,
+                    limit: self.max_polygon_vertices,
+                    fix: "split the polygon into smaller faces, or raise the limit with \
+                          --max-polygon-vertices"
+                        .to_string(),
+                });
             }
             if end_of_face || i + 1 == nums.len() {
                 let len = faces.corners.len() - start;
@@ -1894,7 +2012,8 @@ Transform { translation 0 0 1 children [ USE hidden ] }
             1,
         ) + "}\nDEF q2 Group { children [ USE q USE q ] }\nUSE q2\n";
         assert_eq!(ok(&text).mesh.triangles.len(), 10);
-        let e = match parse_limited(&text, Path::new(PATH), 5) {
+        let five = Limits { max_triangles: 5, ..Limits::default() };
+        let e = match parse_limited(&text, Path::new(PATH), &five) {
             Err(e) => e.to_string(),
             Ok(_) => panic!("limit not applied"),
         };

@@ -23,6 +23,13 @@ pub enum Quantity {
 /// carbon-black spectra do); a value of −0.05 is an offset error, not noise.
 pub const NEGATIVE_NOISE_TOLERANCE: f64 = 0.01;
 
+/// The largest value a spectrum file may hold. A relative spectral power may be on any scale,
+/// but it is multiplied by the colour-matching functions (≤ 2.2), K_m = 683 lm/W and Δλ = 5 nm
+/// and summed over 81 bands in 32-bit floats: 10²⁵ × 2.2 × 683 × 5 × 81 ≈ 6 × 10³⁰ stays far
+/// inside f32's 3.4 × 10³⁸, while files in photons per second and square metre (about 10¹⁹ for
+/// sunlight) still read.
+pub const MAX_VALUE: f64 = 1e25;
+
 /// A spectrum file as read: the data, its `#` comment lines (provenance), and notes on what the
 /// reader changed.
 #[derive(Clone, Debug)]
@@ -128,6 +135,9 @@ pub fn parse(text: &str, file: &str, quantity: Quantity) -> Result<SpectrumFile>
         }
         if quantity == Quantity::Reflectance && value > 1.0 {
             return Err(err(SpectrumProblem::AboveOne { value }));
+        }
+        if value > MAX_VALUE {
+            return Err(err(SpectrumProblem::TooLarge { value, max: MAX_VALUE }));
         }
         wavelengths.push(wavelength);
         values.push(value);
@@ -274,6 +284,18 @@ mod tests {
         // A relative power distribution may exceed 1 but not be negative.
         assert!(parse("380,10\n385,120\n", "s.csv", Quantity::RelativePower).is_ok());
         assert!(parse("380,10\n385,-5\n", "s.csv", Quantity::RelativePower).is_err());
+    }
+
+    #[test]
+    fn refuses_values_whose_products_would_overflow() {
+        // 1e300 is finite as f64, but not as the f32 of a spectrum, nor once multiplied by the
+        // colour-matching functions: refused with the bound, on its line.
+        let (line, p, msg) = problem("380,1e300\n780,1e300\n", Quantity::RelativePower);
+        assert_eq!(line, Some(1));
+        assert!(matches!(p, SpectrumProblem::TooLarge { .. }), "{p:?}");
+        assert!(msg.contains("larger than the 1e25 restauro accepts"), "{msg}");
+        // Photon-count scales still read.
+        assert!(parse("380,4e18\n780,2e19\n", "s.csv", Quantity::RelativePower).is_ok());
     }
 
     #[test]

@@ -29,6 +29,9 @@ pub enum SpectrumProblem {
     TooFewPoints { found: usize },
     /// The data do not reach across 380–780 nm.
     DoesNotCover { first_nm: f64, last_nm: f64 },
+    /// A value so large that products with the colour-matching functions and K_m would overflow
+    /// 32-bit floats.
+    TooLarge { value: f64, max: f64 },
     /// A value that every band of the spectrum must exceed, e.g. a zero at 555 nm where the
     /// photometric normalisation divides by it.
     Degenerate { what: String },
@@ -91,6 +94,12 @@ impl fmt::Display for SpectrumProblem {
                 "the data cover {first_nm}–{last_nm} nm but restauro renders 380–780 nm; add \
                  measurements that reach 380 and 780 nm, or allow extrapolation (`--extrapolate` \
                  on the command line) to hold the end values constant, which is then reported"
+            ),
+            TooLarge { value, max } => write!(
+                f,
+                "the value {value:e} is larger than the {max:e} restauro accepts (beyond it, \
+                 colour and radiance sums overflow 32-bit floats); give the spectrum on a smaller \
+                 scale, e.g. relative to 100 at 555 nm"
             ),
             Degenerate { what } => write!(f, "{what}"),
         }

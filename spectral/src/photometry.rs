@@ -44,6 +44,12 @@ pub fn relative_to_555(spd: &Spectrum, source: &str) -> Result<Spectrum> {
     Ok(*spd * (100.0 / p555))
 }
 
+/// The largest relative spectral power S_e(λ) (100 at 555 nm) a light may have: 10⁹, a band
+/// 10⁷ times as strong as 555 nm (a 500 K blackbody reaches 5 × 10⁵; low-pressure sodium
+/// about 10³). The radiance is S_e(λ) × photometric value ÷ Σ K S_e Δλ ≥ 3.4 × 10⁵, so
+/// with the lights' own bounds (10⁹ cd, 10⁶ lx) it stays far inside 32-bit floats.
+pub const MAX_RELATIVE_POWER: f64 = 1e9;
+
 /// A light source's spectral shape, ready for photometric scaling: the relative spectral power
 /// S_e(λ) (Eq. 2) and its luminous integral. Built once per light; the per-ray work is one
 /// multiply of [`LuminousSpectrum::per_lumen`].
@@ -69,6 +75,30 @@ impl LuminousSpectrum {
             });
         }
         let relative = relative_to_555(spd, source)?;
+        // Eq. 2 divides by the power at 555 nm: a source that emits almost nothing there would
+        // have an enormous relative spectrum, and its radiance would overflow 32-bit floats.
+        let (peak_band, peak) = relative
+            .0
+            .iter()
+            .copied()
+            .enumerate()
+            .fold((0, 0.0f32), |a, (i, v)| if v > a.1 { (i, v) } else { a });
+        if !(relative.is_finite() && f64::from(peak) <= MAX_RELATIVE_POWER) {
+            return Err(Error::Spectrum {
+                file: source.to_owned(),
+                line: None,
+                problem: SpectrumProblem::Degenerate {
+                    what: format!(
+                        "the spectral power at {} nm is {:e} times that at 555 nm; restauro \
+                         accepts at most {:e} times (beyond, the radiance overflows 32-bit \
+                         floats), so a light must emit noticeably at 555 nm",
+                        crate::grid::wavelength_nm(peak_band),
+                        f64::from(peak) / 100.0,
+                        MAX_RELATIVE_POWER / 100.0
+                    ),
+                },
+            });
+        }
         let integral = luminous_integral(&relative);
         Ok(Self { relative, per_lumen: relative * (1.0 / integral) as f32 })
     }
@@ -147,6 +177,23 @@ mod tests {
         let rel = relative_to_555(&d65, "D65").unwrap();
         assert!((rel[band_of(555.0).unwrap()] - 100.0).abs() < 1e-4);
         assert!(relative_to_555(&only_at(&[(450.0, 1.0)]), "blue").is_err());
+    }
+
+    /// A source with next to nothing at 555 nm: Eq. 2's division makes its relative spectrum
+    /// overflow (1e20 × 100 / 1e-20 = 1e42 > f32's 3.4e38), or nearly; refused with the bound.
+    #[test]
+    fn a_light_that_barely_emits_at_555_is_refused() {
+        for (blue, green) in [(1e20, 1e-20), (1.0, 1e-9)] {
+            let err = LuminousSpectrum::new(&only_at(&[(450.0, blue), (555.0, green)]), "lamp.csv")
+                .unwrap_err()
+                .to_string();
+            assert!(err.starts_with("lamp.csv: the spectral power at 450 nm is"), "{err}");
+            assert!(err.contains("at most 1e7 times"), "{err}");
+        }
+        // A thousand times the 555 nm power, like low-pressure sodium's 589 nm line, is fine.
+        let s =
+            LuminousSpectrum::new(&only_at(&[(590.0, 1000.0), (555.0, 1.0)]), "sodium").unwrap();
+        assert!(s.per_lumen.is_finite());
     }
 
     /// Hand-computed: all power in the 555 nm band (V = 1). Σ K S Δλ = 683 · 100 · 5 = 341 500.

@@ -90,8 +90,9 @@ pub fn parse_limited(bytes: &[u8], path: &Path, limits: &Limits) -> Result<Mesh>
         };
         mesh.positions.push([coord("x")?, coord("y")?, coord("z")?]);
     }
-    let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("ply").to_owned();
-    let group = mesh.group_index(Group::named(stem));
+    // One part, named as an OBJ's part without groups: not after the file, whose name a
+    // bundle replaces by its hash.
+    let group = mesh.group_index(Group::named("default"));
     let n = mesh.positions.len() as i64;
     for (i, f) in faces.iter().enumerate() {
         let indices =
@@ -147,7 +148,7 @@ mod tests {
     fn reads_ascii_and_binary() {
         let mesh = parse(ASCII.as_bytes(), Path::new("scan.ply")).unwrap();
         assert_eq!(mesh.triangles, vec![[0, 1, 2], [0, 2, 3]]);
-        assert_eq!(mesh.groups[0].name, "scan");
+        assert_eq!(mesh.groups[0].name, "default");
         assert_eq!(mesh.bounds().unwrap().max, [2.0, 3.0, 1.0]);
         let mesh = parse(&binary(), Path::new("b.ply")).unwrap();
         assert_eq!(mesh.triangles.len(), 1);

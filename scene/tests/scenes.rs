@@ -148,6 +148,22 @@ material = "stone"
     assert!(near(survey.min, [5.0, 0.0, 0.0]) && near(survey.max, [6.0, 0.0, 1.0]), "{survey:?}");
 }
 
+/// A PLY file has one part, `default` (as an OBJ without groups): its name must not depend on
+/// the file's name, which a bundle replaces by the file's hash — a scene that binds the part
+/// loads the same from its folder and from its bundle (on the coordinator and the workers).
+#[test]
+fn a_ply_part_bound_by_name_loads_from_its_bundle_too() {
+    let f = Folder::new();
+    f.write("meshes/scan.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 0 1\n3 0 1 2\n");
+    let objects = "[[objects]]\nname = \"scan\"\nmesh = \"meshes/scan.ply\"\nmaterials = { default = \"stone\" }\n";
+    let path = f.write("scene.toml", scene_toml(objects, ""));
+    let from_folder = load_scene(&path, &Limits::default()).unwrap();
+    assert_eq!(from_folder.objects[0].mesh.groups[0].name, "default");
+    let bundle = bundle_scene(&path, &Limits::default()).unwrap();
+    let from_bundle = bundle.load(&Limits::default()).unwrap();
+    assert_eq!(from_bundle.objects[0].group_materials, ["stone"]);
+}
+
 #[test]
 fn files_outside_the_folder_and_the_scene_itself_are_refused() {
     let f = Folder::new();

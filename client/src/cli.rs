@@ -221,7 +221,12 @@ pub struct RetinexArgs {
     /// N: the least number of path samples per pixel.
     #[arg(long, default_value_t = 20)]
     pub paths: u32,
-    /// L: steps per path (default: eight image diagonals).
+    /// How far the paths reach, as the RMS distance (in image diagonals) from where a path
+    /// starts to where it samples: 2 (the default) adapts to the whole image; below about 0.5
+    /// the adaptation is local.
+    #[arg(long, default_value_t = restauro_spectral::retinex::DEFAULT_REACH)]
+    pub reach: f64,
+    /// L: steps per path (default: the length that gives the reach).
     #[arg(long)]
     pub length: Option<u32>,
     /// Log-ratio threshold below which a step is ignored (smooth illumination gradients).
@@ -234,11 +239,16 @@ pub struct RetinexArgs {
     /// lms-bradford, rgb (linear sRGB), rgb-p3 or rgb-rec2020.
     #[arg(long, default_value = "lms")]
     pub space: restauro_spectral::appearance::ChannelSpace,
-    /// The reference white: paper (the brightest area, as the paper), percentile[:P] (values
-    /// above the P-th percentile, 99 by default, count as white), or emitters (pixels the
-    /// file's `emitter` channel marks are excluded).
-    #[arg(long, default_value = "paper")]
+    /// What may be the white: area (default: a bright area of at least a 2×2 block or most of
+    /// a 3×3 window, after averaging the image's own noise, so a firefly, a glint or Monte Carlo
+    /// noise is not the white) or paper (the brightest pixel a path crosses, as the paper).
+    #[arg(long, default_value = "area")]
     pub white: String,
+    /// Light sources in view: pass (default: the pixels the file's `emitter` channel marks — the
+    /// sky, a lamp — are passed over by the paths, neither white nor an edge) or keep (they are
+    /// surfaces like any other).
+    #[arg(long, default_value = "pass")]
+    pub light_sources: String,
     /// Also write the result as OpenEXR (XYZ relative to a D65 white, Y = 1).
     #[arg(long)]
     pub exr: Option<PathBuf>,

@@ -17,24 +17,21 @@ use std::time::Instant;
 /// Images with at least this many pixels get a progress bar.
 const PROGRESS_FROM_PIXELS: usize = 1 << 20;
 
-/// `--white paper | percentile[:P] | emitters`.
-pub fn parse_white(text: &str, image: &XyzImage, input: &Path) -> Result<WhiteReference> {
-    let lower = text.to_ascii_lowercase();
-    match lower.as_str() {
+/// `--white area | paper`.
+pub fn parse_white(text: &str) -> Result<WhiteReference> {
+    match text.to_ascii_lowercase().as_str() {
+        "area" => Ok(WhiteReference::Area),
         "paper" => Ok(WhiteReference::Paper),
-        "percentile" => Ok(WhiteReference::Percentile(99.0)),
-        "emitters" => match &image.emitter {
-            Some(mask) => Ok(WhiteReference::ExcludeEmitters(mask.clone())),
-            None => bail!(
-                "{}: --white emitters needs an `emitter` channel marking the light sources, and \
-                 this file has none; use --white percentile instead",
-                input.display()
-            ),
-        },
-        _ => match lower.strip_prefix("percentile:").map(str::parse::<f64>) {
-            Some(Ok(p)) => Ok(WhiteReference::Percentile(p)),
-            _ => bail!("--white `{text}`: use paper, percentile, percentile:<50–100> or emitters"),
-        },
+        _ => bail!("--white `{text}`: use area (the default) or paper"),
+    }
+}
+
+/// `--light-sources pass | keep`: the mask of the pixels the paths pass over.
+pub fn parse_light_sources(text: &str, image: &XyzImage) -> Result<Option<Vec<bool>>> {
+    match text.to_ascii_lowercase().as_str() {
+        "pass" => Ok(image.emitter.clone()),
+        "keep" => Ok(None),
+        _ => bail!("--light-sources `{text}`: use pass (the default) or keep"),
     }
 }
 
@@ -65,10 +62,12 @@ pub fn run(args: &RetinexArgs) -> Result<String> {
     let image = read_exr(&args.input, MAX_PIXELS)?;
     let params = RetinexParams {
         paths: args.paths,
+        reach: args.reach,
         length: args.length,
         threshold: args.threshold,
         seed: args.seed,
-        white: parse_white(&args.white, &image, &args.input)?,
+        white: parse_white(&args.white)?,
+        emitters: parse_light_sources(&args.light_sources, &image)?,
     };
     let bar = if image.pixels.len() >= PROGRESS_FROM_PIXELS {
         let bar = ProgressBar::with_draw_target(Some(0), ProgressDrawTarget::stderr());

@@ -57,17 +57,21 @@ fn retinex_writes_png_and_exr_deterministically() {
     );
     let (w, h, depth, _) = png_info(&png_a);
     assert_eq!((w, h, depth), (96, 64, png::BitDepth::Eight));
-    // The EXR holds XYZ relative to a D65 white: no cone channel has a lightness above 1, and
-    // the brightest areas are near 1 (not exactly: the card's light is shaded, and a path that
-    // climbs a gradient in steps below the threshold does not reset).
+    // The EXR holds XYZ relative to a D65 white: the brightest areas are near 1 in every cone
+    // channel (not exactly: the card's light is shaded, and a path that climbs a gradient in
+    // steps below the threshold does not reset), and almost nothing is above it (only what
+    // the cleaned image smoothed away can be: here the edges between patches a few % apart).
     let result = read_exr(&exr, MAX_PIXELS).unwrap();
     let space = ChannelSpace::default();
     let white = d65_white();
     let white_lms = space.from_xyz(&[[white.x as f32, white.y as f32, white.z as f32]])[0];
     let lms = space.from_xyz(&result.pixels);
     for c in 0..3 {
-        let max = lms.iter().map(|p| p[c] / white_lms[c]).fold(0.0f32, f32::max);
-        assert!(max <= 1.0 + 1e-4 && max > 0.95, "channel {c}: {max}");
+        let mut values: Vec<f32> = lms.iter().map(|p| p[c] / white_lms[c]).collect();
+        values.sort_by(f32::total_cmp);
+        let (p99, max) = (values[values.len() * 99 / 100], values[values.len() - 1]);
+        assert!(p99 <= 1.0 + 1e-3, "channel {c}: 99th percentile {p99}");
+        assert!(max > 0.95 && max < 1.05, "channel {c}: {max}");
     }
 }
 
@@ -109,8 +113,8 @@ fn an_rgb_exr_with_emitters_and_the_white_options() {
     let input = dir.path().join("lamp.exr");
     write_xyz_exr(&input, &img, &[]).unwrap();
     let inp = input.to_str().unwrap();
-    let mid = |white: &str| {
-        let exr = dir.path().join(format!("{}.exr", white.replace(':', "_")));
+    let mid = |light_sources: &str| {
+        let exr = dir.path().join(format!("{light_sources}.exr"));
         let png = dir.path().join("x.png");
         ok(&[
             "retinex",
@@ -119,15 +123,17 @@ fn an_rgb_exr_with_emitters_and_the_white_options() {
             png.to_str().unwrap(),
             "--exr",
             exr.to_str().unwrap(),
-            "--white",
-            white,
+            "--light-sources",
+            light_sources,
         ]);
         read_exr(&exr, MAX_PIXELS).unwrap().pixels[15 * w + 20][1]
     };
-    assert!(mid("paper") < 0.1, "the lamp is the white");
-    assert!((mid("emitters") - 0.5).abs() < 0.05, "the card is the white");
-    assert!(mid("percentile:80") > 0.9, "above the 80th percentile is white");
-    // A file without the emitter channel cannot exclude emitters.
+    // Kept, the lamp is an area like any other and the paths that reach it take it as white.
+    assert!(mid("keep") < 0.25, "the lamp is the white");
+    // Passed over (the file marks it), the card is the white.
+    let pass = mid("pass");
+    assert!((pass - 0.5).abs() < 0.05, "the card is the white: {pass}");
+    // A file without the emitter channel has nothing to pass over, and works.
     let plain = dir.path().join("plain.exr");
     write_exr(
         &plain,
@@ -138,15 +144,6 @@ fn an_rgb_exr_with_emitters_and_the_white_options() {
     )
     .unwrap();
     let png = dir.path().join("p.png");
-    let err = refused(&[
-        "retinex",
-        plain.to_str().unwrap(),
-        "--out",
-        png.to_str().unwrap(),
-        "--white",
-        "emitters",
-    ]);
-    assert!(err.contains("needs an `emitter` channel"), "{err}");
     // An RGB file works.
     ok(&["retinex", plain.to_str().unwrap(), "--out", png.to_str().unwrap()]);
 }
@@ -165,9 +162,11 @@ fn bad_input_is_refused_with_a_clear_message() {
     let err = refused(&["retinex", inp, "--out", o, "--paths", "0"]);
     assert!(err.contains("Retinex paths = 0 is out of range: 1 to 4096"), "{err}");
     let err = refused(&["retinex", inp, "--out", o, "--white", "brightest"]);
-    assert!(err.contains("use paper, percentile"), "{err}");
-    let err = refused(&["retinex", inp, "--out", o, "--white", "percentile:20"]);
-    assert!(err.contains("a percentile from 50 to 100"), "{err}");
+    assert!(err.contains("use area (the default) or paper"), "{err}");
+    let err = refused(&["retinex", inp, "--out", o, "--reach", "0"]);
+    assert!(err.contains("Retinex reach = 0 is out of range: 0.01 to 4 image diagonals"), "{err}");
+    let err = refused(&["retinex", inp, "--out", o, "--light-sources", "hide"]);
+    assert!(err.contains("use pass (the default) or keep"), "{err}");
     let err = refused(&["display", inp, "--out", o, "--exposure", "absolute:-3"]);
     assert!(err.contains("-3 cd/m²: use a luminance above 0"), "{err}");
     let missing = dir.path().join("missing.exr");

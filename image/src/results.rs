@@ -62,6 +62,11 @@ pub fn write_results(
     // `emitter` channel, and kept from being the Retinex's white (a bright sky in view would
     // otherwise darken the building to a silhouette).
     let emitter = frame.sky.as_ref().map(|c| c.iter().map(|&f| f >= 0.5).collect::<Vec<bool>>());
+    // For the Retinex a pixel is a light source already when a tenth of its samples saw the
+    // sky: the mixed pixels along a skyline are bright and blue, and as candidates for the white
+    // they would give the whole building a yellow cast.
+    let retinex_emitters =
+        frame.sky.as_ref().map(|c| c.iter().map(|&f| f >= 0.1).collect::<Vec<bool>>());
     let image = XyzImage { width, height, pixels: frame.xyz, emitter: emitter.clone() };
     let attrs = [
         ("restauroRender", options.info),
@@ -82,21 +87,23 @@ pub fn write_results(
     if let Some(params) = &options.retinex {
         let started = Instant::now();
         let mut params = params.clone();
-        if let (Some(mask), WhiteReference::Paper) = (&emitter, &params.white) {
-            params.white = WhiteReference::ExcludeEmitters(mask.clone());
+        if params.emitters.is_none() {
+            params.emitters = retinex_emitters.clone();
         }
         let (perceived, stats) =
             retinex_xyz(&image.pixels, width, height, &params, ChannelSpace::default(), &|_, _| {})
                 .map_err(|e| ResultsError::Retinex(e.to_string()))?;
         retinex_s = started.elapsed().as_secs_f64();
-        let white = match &params.white {
-            WhiteReference::Paper => "paper".to_owned(),
-            WhiteReference::Percentile(p) => format!("percentile:{p}"),
-            WhiteReference::ExcludeEmitters(_) => "sky-excluded".to_owned(),
+        let white = match params.white {
+            WhiteReference::Area => "area",
+            WhiteReference::Paper => "paper",
         };
+        let sky = if params.emitters.is_some() { "passed-over" } else { "none" };
         let settings = format!(
-            "paths={} length={} threshold={} seed={} space={} white={white}",
+            "paths={} reach={} length={} threshold={} seed={} space={} white={white} \
+             light-sources={sky}",
             params.paths,
+            params.reach,
             stats.length,
             params.threshold,
             params.seed,

@@ -1,0 +1,233 @@
+//! The path function and the two phases that give every pixel its samples.
+//!
+//! Along a path, per channel, the paper's ratio–product–reset with threshold (Marini & Rizzi
+//! 2000, Eq. 1–3):
+//!
+//! ```text
+//!   s ← min(0, s + δ·log(W_{k+1} / W_k)),   δ = 0 where |log ratio| ≤ threshold, else 1,
+//! ```
+//!
+//! on the cleaned log image W (see `white`). At each pixel the path is in, its sample is the
+//! *white* it has found there, log w = log W_here − s: the brightest area crossed, reached
+//! through the chain of ratios (with smooth gradients, below the threshold, discounted). Light
+//! sources are passed over: a step onto one changes nothing, and the next surface is compared
+//! with the last surface before it; a path samples nothing before it has met its first surface.
+//! The lightness of a pixel is then its own value relative to the geometric mean of its
+//! samples' whites (in `mod.rs`).
+//!
+//! **Shared paths.** A path's running white at every pixel it crosses is itself a sample for a
+//! path ending there, so one path serves every pixel it visits once it is past a burn-in of L/4
+//! steps. Phase 1 starts enough paths at uniformly random pixels to give each pixel about 2N
+//! samples; phase 2 gives every pixel still short of N its own paths ending exactly there, with
+//! lengths drawn from the same L/4..L.
+//!
+//! **Exactness and determinism.** The whole path function runs in integers; every random
+//! number is a function of (seed, phase, path); samples are summed as integers, whose addition
+//! is associative. The output is bit-identical for any number of threads and any order of work.
+
+use super::walk::{Turning, Walk};
+use super::white::EMITTER;
+use crate::keyed_random::KeyedRng;
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// The samples of one pixel: the sums of the three channels' log whites (fixed point, each
+/// clamped to ±2¹⁵) and the count. Sums wrap rather than overflow, and wrapping addition is
+/// associative, so the result is the same in any order; a pixel would need 65 536 samples to
+/// wrap (N ≤ 4096 gives about 2N).
+pub(super) type Sums = [i32; 4];
+
+/// The samples' accumulators of phase 1 may hold at most this many bytes together; beyond it
+/// fewer tasks run in parallel (each has its own image of sums).
+const ACCUMULATOR_BYTES: usize = 2 << 30;
+const MAX_ACCUMULATOR_IMAGES: usize = 8;
+
+/// Everything a path needs to know about the image.
+pub(super) struct Walker<'a> {
+    pub logs: &'a [[i16; 4]],
+    pub width: usize,
+    pub height: usize,
+    pub turning: Turning,
+    /// Per channel (lane 3 unused), the threshold in fixed point.
+    pub threshold: [i32; 4],
+}
+
+/// The state of a path: per channel the running s, and the logs of the last surface crossed.
+#[derive(Clone, Copy)]
+struct State {
+    s: [i32; 4],
+    last: [i16; 4],
+    on_surface: bool,
+}
+
+impl State {
+    fn new() -> Self {
+        State { s: [0; 4], last: [0; 4], on_surface: false }
+    }
+
+    /// One step onto a pixel with logs `to`.
+    #[inline]
+    fn step(&mut self, to: [i16; 4], threshold: [i32; 4]) {
+        if to[3] == EMITTER {
+            return;
+        }
+        if self.on_surface {
+            // Four lanes (the fourth is the emitter flag, 0 here on both sides, so its lane
+            // stays 0) so that the compiler does the three channels in one vector operation.
+            for c in 0..4 {
+                let r = i32::from(to[c]) - i32::from(self.last[c]);
+                // A select, not a branch: whether a step crosses an edge is unpredictable.
+                let delta = if r.abs() > threshold[c] { r } else { 0 };
+                self.s[c] = (self.s[c] + delta).min(0);
+            }
+        }
+        self.last = to;
+        self.on_surface = true;
+    }
+
+    /// The white found: log w = log W_last − s, per channel.
+    #[inline]
+    fn white(&self) -> [i32; 4] {
+        std::array::from_fn(|c| i32::from(self.last[c]) - self.s[c])
+    }
+}
+
+#[inline]
+fn add(sums: &mut Sums, white: [i32; 4]) {
+    for c in 0..4 {
+        let v = if c == 3 { 1 } else { white[c].clamp(-32768, 32767) };
+        sums[c] = sums[c].wrapping_add(v);
+    }
+}
+
+pub(super) fn count(sums: &Sums) -> u32 {
+    sums[3] as u32
+}
+
+impl Walker<'_> {
+    /// Walks `steps` steps from `start` and calls `visit(pixel, white)` after each step
+    /// k = `from`..=steps at which the path has met a surface.
+    #[inline]
+    fn run(
+        &self,
+        rng: &mut KeyedRng,
+        start: usize,
+        steps: u32,
+        from: u32,
+        mut visit: impl FnMut(usize, [i32; 4]),
+    ) {
+        let mut walk = Walk::new(rng, self.width, self.height, start, self.turning);
+        let mut state = State::new();
+        state.step(self.logs[start], self.threshold);
+        for k in 1..=steps {
+            let pixel = walk.step();
+            state.step(self.logs[pixel], self.threshold);
+            if k >= from && state.on_surface {
+                visit(pixel, state.white());
+            }
+        }
+    }
+
+    /// Phase 1: `paths` shared paths of `steps` steps from uniformly random starts, split into
+    /// contiguous ranges, one accumulator image each, summed at the end.
+    pub(super) fn shared(
+        &self,
+        seed: u64,
+        paths: u64,
+        steps: u32,
+        burn_in: u32,
+        progress: &(dyn Fn(u64, u64) + Sync),
+    ) -> Vec<Sums> {
+        let n = self.logs.len();
+        let by_memory = (ACCUMULATOR_BYTES / (n * std::mem::size_of::<Sums>())).max(1);
+        let tasks = rayon::current_num_threads().clamp(1, MAX_ACCUMULATOR_IMAGES).min(by_memory);
+        let tasks = tasks as u64;
+        let done = AtomicU64::new(0);
+        const CHUNK: u64 = 256;
+        let partials: Vec<Vec<Sums>> = (0..tasks)
+            .into_par_iter()
+            .map(|task| {
+                let mut sums = vec![[0i32; 4]; n];
+                let (first, end) = (paths * task / tasks, paths * (task + 1) / tasks);
+                for path in first..end {
+                    let mut rng = KeyedRng::from_parts(&[seed, 1, path]);
+                    let start = rng.below(n as u32) as usize;
+                    self.run(&mut rng, start, steps, burn_in, |p, w| add(&mut sums[p], w));
+                    if (path - first + 1) % CHUNK == 0 || path + 1 == end {
+                        let step = (path - first) % CHUNK + 1;
+                        progress(done.fetch_add(step, Ordering::Relaxed) + step, paths);
+                    }
+                }
+                sums
+            })
+            .collect();
+        let mut partials = partials.into_iter();
+        let mut sums = partials.next().unwrap_or_else(|| vec![[0i32; 4]; n]);
+        for partial in partials {
+            sums.par_iter_mut().zip(partial.par_iter()).for_each(|(a, b)| {
+                for c in 0..4 {
+                    a[c] = a[c].wrapping_add(b[c]);
+                }
+            });
+        }
+        sums
+    }
+
+    /// Phase 2: every pixel with fewer than `least` samples gets its own paths ending there,
+    /// `least − count` of them. A path ending at p is walked from p outwards and read
+    /// backwards (the walk is reversible), so its value at p is that of a path from the far end
+    /// to p. Returns the paths and steps added.
+    pub(super) fn top_up(
+        &self,
+        sums: &mut [Sums],
+        seed: u64,
+        least: u32,
+        steps: u32,
+        burn_in: u32,
+    ) -> (u64, u64) {
+        let short: Vec<(usize, u32)> = sums
+            .par_iter()
+            .enumerate()
+            .filter_map(|(p, s)| (count(s) < least).then(|| (p, least - count(s))))
+            .collect();
+        let paths: u64 = short.iter().map(|&(_, d)| u64::from(d)).sum();
+        let top_ups: Vec<(usize, Sums, u64)> = short
+            .par_iter()
+            .map_init(
+                || Vec::with_capacity(steps as usize + 1),
+                |trail, &(pixel, deficit)| {
+                    let mut total = [0i32; 4];
+                    let mut walked = 0;
+                    for j in 0..deficit {
+                        let mut rng = KeyedRng::from_parts(&[seed, 2, pixel as u64, u64::from(j)]);
+                        let k = burn_in + rng.below(steps - burn_in + 1);
+                        trail.clear();
+                        trail.push(pixel);
+                        let mut walk =
+                            Walk::new(&mut rng, self.width, self.height, pixel, self.turning);
+                        for _ in 0..k {
+                            trail.push(walk.step());
+                        }
+                        let mut state = State::new();
+                        for &p in trail.iter().rev() {
+                            state.step(self.logs[p], self.threshold);
+                        }
+                        if state.on_surface {
+                            add(&mut total, state.white());
+                        }
+                        walked += u64::from(k);
+                    }
+                    (pixel, total, walked)
+                },
+            )
+            .collect();
+        let mut walked = 0;
+        for (pixel, extra, k) in top_ups {
+            for c in 0..4 {
+                sums[pixel][c] = sums[pixel][c].wrapping_add(extra[c]);
+            }
+            walked += k;
+        }
+        (paths, walked)
+    }
+}

@@ -235,9 +235,10 @@ pub struct RetinexArgs {
     /// The seed of the random paths; the same seed gives the same image.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// The channels: lms (Hunt–Pointer–Estévez cones, the paper's l, m, s), lms-cat02,
-    /// lms-bradford, rgb (linear sRGB), rgb-p3 or rgb-rec2020.
-    #[arg(long, default_value = "lms")]
+    /// The channels: lms-cat02 (default: the CAT02 cone space, which predicts Breneman's
+    /// corresponding colours best), lms (= lms-hpe: Hunt–Pointer–Estévez cones, the paper's
+    /// l, m, s), lms-bradford, rgb (linear sRGB), rgb-p3 or rgb-rec2020.
+    #[arg(long, default_value = "lms-cat02")]
     pub space: restauro_spectral::appearance::ChannelSpace,
     /// What may be the white: area (default: a bright area of at least a 2×2 block or most of
     /// a 3×3 window, after averaging the image's own noise, so a firefly, a glint or Monte Carlo

@@ -136,3 +136,194 @@ fn a_firefly_does_not_become_the_white() {
         |img: &[[f32; 3]]| img.iter().map(|p| f64::from(p[1])).sum::<f64>() / img.len() as f64;
     assert!(mean(&darkened) < 0.1 * mean(&before), "{} vs {}", mean(&darkened), mean(&before));
 }
+
+/// A neutral tile (reflectance 0.8) and a travertine tile on grey ground, one pair in the sun
+/// and one in the sky-lit shadow of a long wall, seen from above: absolute XYZ, and for each
+/// tile the pixels well inside it, in the order neutral-sun, travertine-sun, neutral-shadow,
+/// travertine-shadow.
+fn two_lights() -> (Vec<[f32; 3]>, usize, usize, Vec<Vec<usize>>) {
+    let (w, h) = (120u32, 120u32);
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("neutral.csv"), "380,0.8\n780,0.8\n").unwrap();
+    std::fs::write(d.join("grey.csv"), "380,0.3\n780,0.3\n").unwrap();
+    let quad = |x0: f32, y0: f32, x1: f32, y1: f32, z: f32| {
+        format!("v {x0} {y0} {z}\nv {x1} {y0} {z}\nv {x1} {y1} {z}\nv {x0} {y1} {z}\nf 1 2 3 4\n")
+    };
+    std::fs::write(d.join("ground.obj"), quad(-30.0, -30.0, 30.0, 30.0, 0.0)).unwrap();
+    std::fs::write(d.join("wall.obj"), "v -30 0 0\nv 30 0 0\nv 30 0 4\nv -30 0 4\nf 1 2 3 4\n")
+        .unwrap();
+    // Tiles 1.6 m square centred at x = ∓1.3, y = ∓2.6 (y < 0 in the sun, y > 0 in shadow).
+    let tiles = [(-1.3f32, -2.6f32), (1.3, -2.6), (-1.3, 2.6), (1.3, 2.6)];
+    for (i, (x, y)) in tiles.iter().enumerate() {
+        std::fs::write(
+            d.join(format!("tile{i}.obj")),
+            quad(x - 0.8, y - 0.8, x + 0.8, y + 0.8, 0.005),
+        )
+        .unwrap();
+    }
+    let objects: String = (0..4)
+        .map(|i| {
+            let material = if i % 2 == 0 { "neutral" } else { "travertine" };
+            format!("[[objects]]\nname = \"tile{i}\"\nmesh = \"tile{i}.obj\"\nmaterial = \"{material}\"\n")
+        })
+        .collect();
+    let toml = format!(
+        r#"format = 1
+[camera]
+position = [0.0, 0.0, 14.0]
+target = [0.0, 0.0, 0.0]
+up = [0.0, 1.0, 0.0]
+vertical_fov_deg = 46.0
+width = {w}
+height = {h}
+[render]
+integrator = "path"
+samples_per_pixel = 16
+max_depth = 4
+seed = 3
+[spectra]
+neutral = {{ file = "neutral.csv" }}
+grey = {{ file = "grey.csv" }}
+travertine = "travertine_tufa_solid__eco_ward73"
+sunlight = {{ illuminant = "D55" }}
+skylight = {{ illuminant = "daylight:12000" }}
+[materials.neutral]
+model = "lambert"
+reflectance = "neutral"
+[materials.travertine]
+model = "lambert"
+reflectance = "travertine"
+[materials.grey]
+model = "lambert"
+reflectance = "grey"
+[[objects]]
+name = "ground"
+mesh = "ground.obj"
+material = "grey"
+[[objects]]
+name = "wall"
+mesh = "wall.obj"
+material = "grey"
+{objects}
+[[lights]]
+kind = "sun"
+illuminance_lux = 80000.0
+azimuth_deg = 180.0
+elevation_deg = 35.0
+spectrum = "sunlight"
+[[lights]]
+kind = "sky"
+illuminance_lux = 15000.0
+model = "uniform"
+spectrum = "skylight"
+"#
+    );
+    std::fs::write(d.join("scene.toml"), toml).unwrap();
+    let loaded = load_scene(&d.join("scene.toml"), &Limits::default()).unwrap();
+    let r = &loaded.file.render;
+    let settings = Settings {
+        integrator: r.integrator,
+        samples_per_pixel: r.samples_per_pixel,
+        max_depth: r.max_depth,
+        seed: r.seed,
+    };
+    let prepared = PreparedScene::new(&loaded, None, settings).unwrap();
+    let xyz = render_tile(&prepared, Rect { x: 0, y: 0, width: w, height: h }, false).xyz;
+    // Each pixel's point on the ground, from its centre ray.
+    let inside: Vec<Vec<usize>> = tiles
+        .iter()
+        .map(|&(tx, ty)| {
+            (0..(w * h) as usize)
+                .filter(|&p| {
+                    let (dir, _) =
+                        restauro_render::tile::camera_ray(&prepared, p as u32 % w, p as u32 / w, 0);
+                    let o = prepared.camera.origin;
+                    let g = o + dir * (-o.z / dir.z);
+                    (g.x - tx).abs() < 0.55 && (g.y - ty).abs() < 0.55
+                })
+                .collect()
+        })
+        .collect();
+    (xyz, w as usize, h as usize, inside)
+}
+
+fn mean_lab(img: &[[f32; 3]], pixels: &[usize]) -> restauro_spectral::Lab {
+    let n = pixels.len() as f64;
+    let s = pixels.iter().fold([0.0; 3], |s, &p| {
+        [s[0] + f64::from(img[p][0]), s[1] + f64::from(img[p][1]), s[2] + f64::from(img[p][2])]
+    });
+    let white = restauro_spectral::appearance::d65_white();
+    restauro_spectral::Lab::from_xyz(
+        restauro_spectral::Xyz::new(s[0] / n, s[1] / n, s[2] / n),
+        white,
+    )
+}
+
+/// Under sun and sky, the Retinex sees the neutral tile as neutral in the sun and in the
+/// shadow of the wall (C* < 3), and the travertine keeps its hue (within 10° of its hue under
+/// D65) in both.
+///
+/// Not yet met (issue 16, item 2), so not run by default: `cargo test -p restauro-render --test
+/// retinex_rendered -- --ignored --nocapture` prints the figures. Measured: with the paper's
+/// white (every pixel, the paper's threshold) the travertine in the sun keeps its hue (79° against
+/// 79.9°), but the cleaning that makes the white robust to noise (the default) moves it to 99°,
+/// because the render's 7 % noise forces a threshold that also discards the travertine's 7 %
+/// step against the ground in S; and with global adaptation (reach 3) the neutral in the shadow
+/// is seen relative to the sunlit white: C* 17 (blue). Local adaptation (reach 0.3) would
+/// help the shadow but shifts a D65 Mondrian by 6.5 ΔE00 (see `DEFAULT_REACH`).
+#[test]
+#[ignore = "issue 16 item 2: local adaptation under two lights is open"]
+fn two_lights_a_neutral_stays_neutral_in_sun_and_shadow() {
+    let (img, w, h, tiles) = two_lights();
+    assert!(tiles.iter().all(|t| t.len() > 100), "premise: every tile is in view");
+    let luminance =
+        |t: &[usize]| t.iter().map(|&p| f64::from(img[p][1])).sum::<f64>() / t.len() as f64;
+    assert!(luminance(&tiles[0]) > 4.0 * luminance(&tiles[2]), "premise: the shadow is a shadow");
+    let travertine =
+        restauro_spectral::library::load_reflectance("travertine_tufa_solid__eco_ward73")
+            .unwrap()
+            .spectrum;
+    let d65 = "D65".parse::<restauro_spectral::Illuminant>().unwrap().spd().unwrap();
+    let white = restauro_spectral::appearance::d65_white();
+    let under_d65 = restauro_spectral::Lab::from_xyz(
+        restauro_spectral::colorimetry::relative_xyz(
+            &travertine,
+            &d65,
+            restauro_spectral::Observer::Cie1931TwoDegree,
+        )
+        .scale(0.01),
+        white,
+    );
+    let params = RetinexParams { seed: 4, ..Default::default() };
+    let (seen, _) = retinex_xyz(&img, w, h, &params, ChannelSpace::default(), &|_, _| {}).unwrap();
+    let labs: Vec<_> = tiles.iter().map(|t| mean_lab(&seen, t)).collect();
+    let hue_difference = |a: f64, b: f64| ((a - b + 540.0) % 360.0 - 180.0).abs();
+    eprintln!(
+        "travertine under D65: L* {:.1} C* {:.1} h {:.1}°",
+        under_d65.l,
+        under_d65.chroma(),
+        under_d65.hue_deg()
+    );
+    for (label, lab) in ["neutral, sun", "travertine, sun", "neutral, shadow", "travertine, shadow"]
+        .iter()
+        .zip(&labs)
+    {
+        eprintln!(
+            "{label:<20} L* {:5.1}  C* {:5.1}  h {:6.1}°",
+            lab.l,
+            lab.chroma(),
+            lab.hue_deg()
+        );
+    }
+    for (i, half) in [(0, "sun"), (2, "shadow")] {
+        assert!(labs[i].chroma() < 3.0, "the neutral in the {half}: C* {:.1}", labs[i].chroma());
+        let dh = hue_difference(labs[i + 1].hue_deg(), under_d65.hue_deg());
+        assert!(
+            dh < 10.0,
+            "the travertine in the {half}: hue {:.1}° against {:.1}°",
+            labs[i + 1].hue_deg(),
+            under_d65.hue_deg()
+        );
+    }
+}

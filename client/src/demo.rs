@@ -814,8 +814,8 @@ fn analyse(
         captions,
         cell_width: crop,
         footer: vec![
-            "Each light gives the board 1000 lux from above. Rendered: exposed for the white tile,".into(),
-            "shown on a D65 display without adaptation. Seen: after the Retinex.".into(),
+            "Each light gives the board 1000 lux from above. Rendered: the white tile is the reference".into(),
+            "white (70 % of the display's), on a D65 display without adaptation. Seen: after the Retinex.".into(),
             "dE: CIEDE2000 to the same sample in the D65 render (Lab relative to the white tile, D65 white).".into(),
             "As found = stone + 30 % soot-proxy mixture (derived, not measured).".into(),
         ],

@@ -264,8 +264,10 @@ pub struct DisplayArgs {
     /// The PNG to write.
     #[arg(long)]
     pub out: PathBuf,
-    /// auto[:KEY] (the log-average luminance at KEY of white, 0.18 by default),
-    /// absolute:<cd/m²> (that luminance is white), or relative (Y = 1 is white).
+    /// auto[:KEY] (the log-average luminance at KEY of the reference white, 0.18 by default,
+    /// the 99th percentile at most at it), absolute:<cd/m²> (that luminance is the reference
+    /// white), or relative (Y = 1 is the reference white). The reference white is shown at 0.7
+    /// of the display's white; brighter luminances are compressed, not clipped.
     #[arg(long, default_value = "auto")]
     pub exposure: String,
     #[command(flatten)]

@@ -17,7 +17,9 @@
 //! tile) and expressed in CIELAB with the D65 display white: what a camera balanced for daylight
 //! and exposed for the white card shows. The Retinex output is already relative XYZ with a D65
 //! white. The reference is the D65 render; the paper's claim is that, under another light, the
-//! Retinex output comes closer to it than the unfiltered render does.
+//! Retinex output comes closer to it than the unfiltered render does. The Retinex output is also
+//! compared with the D65 render's own Retinex output: what an observer sees under the light
+//! against what they see in daylight.
 //!
 //! The facade's CIEDE2000 map compares the as-found and cleaned renders pixel by pixel in CIELAB
 //! relative to the luminance of a perfect white horizontal surface under the same light (E_h/π)
@@ -37,6 +39,7 @@ use restauro_scene::job::{JobName, JobSpec};
 use restauro_scene::load::{Limits, LoadedScene, ResolvedLight, load_scene};
 use restauro_scene::plan::RenderOptions;
 use restauro_scene::samples::{self, PixelRect, SAMPLES, WHITE_REFLECTANCE};
+use restauro_scene::scene_file::Integrator;
 use restauro_spectral::Lab;
 use restauro_spectral::appearance::d65_white;
 use restauro_spectral::ciede2000::ciede2000;
@@ -125,7 +128,8 @@ struct RenderRecord {
     scene: String,
     variant: Option<String>,
     lights: Vec<String>,
-    integrator: String,
+    /// The scene file's keyword (`path`, `whitted`); the Markdown shows its name.
+    integrator: Integrator,
     width: u32,
     height: u32,
     samples_per_pixel: u32,
@@ -151,8 +155,13 @@ struct Measured {
     lab: [f64; 3],
     /// The colour shown on an sRGB display.
     srgb_hex: String,
-    /// ΔE00 to the same square of the D65 render (unfiltered).
+    /// ΔE00 to the same square of the D65 render as rendered (unfiltered).
     delta_e00_to_d65: f64,
+    /// After the Retinex only: ΔE00 to the same square of the D65 render as seen (its Retinex
+    /// output) — how far what an observer sees under this light is from what they see under
+    /// daylight.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    delta_e00_to_d65_seen: Option<f64>,
 }
 
 #[derive(Serialize)]
@@ -274,11 +283,13 @@ pub fn run(args: &DemoArgs) -> Result<String> {
         if stone.illuminant == "A" && stone.stone != "white reference" {
             let _ = writeln!(
                 s,
-                "  under CIE A, {} {}: ΔE00 to the D65 render {:.1} unfiltered, {:.1} after the Retinex",
+                "  under CIE A, {} {}: ΔE00 to the D65 render {:.1} unfiltered, {:.1} after the \
+                 Retinex ({:.1} to the D65 render as seen)",
                 stone.stone,
                 stone.state,
                 stone.before_retinex.delta_e00_to_d65,
-                stone.after_retinex.delta_e00_to_d65
+                stone.after_retinex.delta_e00_to_d65,
+                stone.after_retinex.delta_e00_to_d65_seen.unwrap_or(f64::NAN)
             );
         }
     }
@@ -412,7 +423,7 @@ async fn render_all(
                     Kind::Samples { .. } => None,
                 },
                 lights: loaded.lights.iter().map(ToString::to_string).collect(),
-                integrator: format!("{:?}", render.integrator).to_lowercase(),
+                integrator: render.integrator,
                 width: plan.width,
                 height: plan.height,
                 samples_per_pixel: job.spp,
@@ -779,16 +790,18 @@ fn analyse(
         let white_y = mean(&pair.rendered, rect(white_sample)).y;
         for (row, s) in SAMPLES.iter().enumerate() {
             let reference = lab_rendered(d65, s).1;
+            let reference_seen = lab_seen(d65, s).1;
             let (before_xyz, before) = lab_rendered(pair, s);
             let (after_xyz, after) = lab_seen(pair, s);
-            let measured = |xyz: Xyz, lab: Lab| Measured {
+            let measured = |xyz: Xyz, lab: Lab, seen: Option<Lab>| Measured {
                 xyz: xyz.to_array(),
                 lab: [lab.l, lab.a, lab.b],
                 srgb_hex: hex(lab),
                 delta_e00_to_d65: ciede2000(reference, lab),
+                delta_e00_to_d65_seen: seen.map(|seen| ciede2000(seen, lab)),
             };
-            let before_m = measured(before_xyz, before);
-            let after_m = measured(after_xyz, after);
+            let before_m = measured(before_xyz, before, None);
+            let after_m = measured(after_xyz, after, Some(reference_seen));
             // The squares as shown: the render exposed for the white tile, and the Retinex output.
             let r = samples::pixel_rect(s, sw, sh, 0.9);
             let exposure = Exposure::Absolute { white_cd_m2: white_y.max(1e-12) };
@@ -814,8 +827,8 @@ fn analyse(
         captions,
         cell_width: crop,
         footer: vec![
-            "Each light gives the board 1000 lux from above. Rendered: exposed for the white tile,".into(),
-            "shown on a D65 display without adaptation. Seen: after the Retinex.".into(),
+            "Each light gives the board 1000 lux from above. Rendered: the white tile is the reference".into(),
+            "white (70 % of the display's), on a D65 display without adaptation. Seen: after the Retinex.".into(),
             "dE: CIEDE2000 to the same sample in the D65 render (Lab relative to the white tile, D65 white).".into(),
             "As found = stone + 30 % soot-proxy mixture (derived, not measured).".into(),
         ],
@@ -880,6 +893,17 @@ fn crop_picture(image: &XyzImage, r: PixelRect, exposure: Exposure) -> Rgb8 {
     picture(&cropped, exposure)
 }
 
+/// "travertine (as found)", and the white tile by its name alone (its state is `reference`).
+fn sample_name(stone: &str, state: &str) -> String {
+    if state == "reference" { stone.to_owned() } else { format!("{stone} ({state})") }
+}
+
+/// L* a* b* to one decimal, without the "-0.0" of a value that rounds to zero from below.
+fn lab_text(lab: [f64; 3]) -> String {
+    let [l, a, b] = lab.map(|v| (v * 10.0).round() / 10.0 + 0.0);
+    format!("{l:.1} {a:.1} {b:.1}")
+}
+
 fn markdown(r: &Report) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "# restauro demo\n");
@@ -932,34 +956,33 @@ fn markdown(r: &Report) -> String {
         "Mean over the inner {:.0} % of each square. *Before*: CIELAB of the render relative to \
          its white tile ({:.0} % reflectance), D65 white — what a camera balanced for daylight \
          shows. *After*: CIELAB of the Retinex output (D65 white). ΔE00 to the same square in the \
-         D65 render. *As found* is derived: {:.0} % of the surface covered by a soot proxy.\n",
+         D65 render as rendered (before and after) and, after the Retinex, also as seen (the D65 \
+         render's Retinex output: what an observer sees in daylight). *As found* is derived: \
+         {:.0} % of the surface covered by a soot proxy.\n",
         INNER_FRACTION * 100.0,
         r.white_reflectance * 100.0,
         r.soot_fraction * 100.0
     );
     let _ = writeln!(
         s,
-        "| sample | light | before: L* a* b* | sRGB | ΔE00 to D65 | after: L* a* b* | sRGB | ΔE00 to D65 |"
+        "| sample | light | before: L* a* b* | sRGB | before: ΔE00 to D65 rendered | after: L* a* b* \
+         | sRGB | after: ΔE00 to D65 rendered | after: ΔE00 to D65 seen |"
     );
-    let _ = writeln!(s, "|---|---|---|---|---:|---|---|---:|");
+    let _ = writeln!(s, "|---|---|---|---|---:|---|---|---:|---:|");
     for c in &r.stones {
         let (b, a) = (&c.before_retinex, &c.after_retinex);
         let _ = writeln!(
             s,
-            "| {} ({}) | {} | {:.1} {:.1} {:.1} | `{}` | {:.2} | {:.1} {:.1} {:.1} | `{}` | {:.2} |",
-            c.stone,
-            c.state,
+            "| {} | CIE {} | {} | `{}` | {:.2} | {} | `{}` | {:.2} | {:.2} |",
+            sample_name(c.stone, c.state),
             c.illuminant,
-            b.lab[0],
-            b.lab[1],
-            b.lab[2],
+            lab_text(b.lab),
             b.srgb_hex,
             b.delta_e00_to_d65,
-            a.lab[0],
-            a.lab[1],
-            a.lab[2],
+            lab_text(a.lab),
             a.srgb_hex,
-            a.delta_e00_to_d65
+            a.delta_e00_to_d65,
+            a.delta_e00_to_d65_seen.unwrap_or(f64::NAN)
         );
     }
     let _ = writeln!(s, "\n## What cleaning changes on the facade\n");

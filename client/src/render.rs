@@ -130,7 +130,7 @@ pub fn run(args: &RenderArgs) -> Result<String> {
     };
     let _ = writeln!(
         s,
-        "rendered {} ({}×{}, {:?}, {} spp, {} tiles) through {where_} in {:.2} s (job {})",
+        "rendered {} ({}×{}, {}, {} spp, {} tiles) through {where_} in {:.2} s (job {})",
         args.scene.display(),
         plan.width,
         plan.height,
@@ -180,7 +180,7 @@ fn run_in_process(args: &RenderArgs) -> Result<String> {
     let render_s = render_started.elapsed().as_secs_f64();
     let mean_y = frame.xyz.iter().map(|p| f64::from(p[1])).sum::<f64>() / frame.xyz.len() as f64;
     let name = spec.name.file_stem();
-    let integrator = format!("{:?}", plan.integrator).to_lowercase();
+    let integrator = plan.integrator.keyword();
     let info = format!(
         "variant={} integrator={integrator} spp={} max_depth={} seed={}",
         plan.variant.as_deref().unwrap_or("base"),

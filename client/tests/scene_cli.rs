@@ -13,6 +13,9 @@ fn aosta_writes_a_scene_that_checks_and_bundles() {
     let text = String::from_utf8(run.stdout).unwrap();
     assert!(text.contains("aosta.toml: valid"), "{text}");
     assert!(text.contains("sun: 100000 lux, azimuth"), "{text}");
+    // The sky by its name, not its enum's (`Uniform distribution`).
+    assert!(text.contains("uniform sky: 15000 lux on the horizontal"), "{text}");
+    assert!(!text.contains("Uniform") && !text.contains("distribution"), "{text}");
     assert!(text.contains("variants: as-found, cleaned"), "{text}");
     let scene = out.join("aosta.toml");
     let s = scene.to_str().unwrap();
@@ -75,6 +78,8 @@ fn render_writes_exr_with_spectral_layers_and_png() {
         "16",
     ]);
     assert!(text.contains("wrote") && text.contains("aosta-cleaned.exr"), "{text}");
+    // The scene's integrator (`path`) by its name, not its enum's (`Path`).
+    assert!(text.contains("(48×27, path tracing, 1 spp,"), "{text}");
     let image =
         restauro_image::image_files::read_exr(&results.join("aosta-cleaned.exr"), 1 << 20).unwrap();
     assert_eq!((image.width, image.height), (48, 27));

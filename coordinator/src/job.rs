@@ -178,7 +178,7 @@ impl JobRecord {
         format!(
             "variant={} integrator={} spp={} max_depth={} seed={}",
             p.variant.as_deref().unwrap_or("base"),
-            format!("{:?}", p.integrator).to_lowercase(),
+            p.integrator.keyword(),
             p.samples_per_pixel,
             p.max_depth,
             p.seed

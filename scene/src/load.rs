@@ -108,10 +108,9 @@ impl std::fmt::Display for ResolvedLight {
             ResolvedLight::Spot { position, intensity_cd, cone_deg, .. } => {
                 write!(f, "spot at {position:?}: {intensity_cd} cd, cone {cone_deg}°")
             }
-            ResolvedLight::Sky { illuminance_lux, model, spectrum } => write!(
-                f,
-                "sky: {illuminance_lux} lux on the horizontal, {model:?} distribution, spectrum {spectrum}"
-            ),
+            ResolvedLight::Sky { illuminance_lux, model, spectrum } => {
+                write!(f, "{model}: {illuminance_lux} lux on the horizontal, spectrum {spectrum}")
+            }
         }
     }
 }

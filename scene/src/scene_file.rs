@@ -125,6 +125,27 @@ pub enum Integrator {
     Path,
 }
 
+impl Integrator {
+    /// The word for it in a scene file and on the command line (`whitted`, `path`), as the
+    /// files' headers record it.
+    pub fn keyword(self) -> &'static str {
+        match self {
+            Integrator::Whitted => "whitted",
+            Integrator::Path => "path",
+        }
+    }
+}
+
+/// What a person reads: "Whitted ray tracing", "path tracing".
+impl std::fmt::Display for Integrator {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.pad(match self {
+            Integrator::Whitted => "Whitted ray tracing",
+            Integrator::Path => "path tracing",
+        })
+    }
+}
+
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Render {
@@ -436,6 +457,16 @@ pub enum SkyModel {
     /// L(θ) = L_z (1 + 2 cos θ) / 3, three times brighter at the zenith than at the horizon,
     /// with E_h = 7π L_z / 9.
     CieOvercast,
+}
+
+/// What a person reads, a name for the sky: "uniform sky", "CIE overcast sky".
+impl std::fmt::Display for SkyModel {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.pad(match self {
+            SkyModel::Uniform => "uniform sky",
+            SkyModel::CieOvercast => "CIE overcast sky",
+        })
+    }
 }
 
 /// A restoration hypothesis: which state each object (or each part of an object) is in.

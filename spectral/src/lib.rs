@@ -21,7 +21,8 @@
 //! | [`keyed_random`] | random numbers that are pure functions of a key |
 //! | [`retinex`] | the Marini–Rizzi Brownian-path Retinex |
 //! | [`appearance`] | the Retinex in cone (LMS) or RGB space, from XYZ to what an observer sees |
-//! | [`display`] | XYZ to display code values: exposure, gamut mapping, encoding |
+//! | [`display`] | XYZ to display code values: exposure, tone curve, gamut mapping, encoding |
+//! | [`tone`] | the display's tone curve: the reference white at 0.7, a linear part, a shoulder |
 
 pub mod adaptation;
 pub mod appearance;
@@ -42,6 +43,7 @@ pub mod retinex;
 pub mod rgb_space;
 pub mod spectrum;
 pub mod tabulated;
+pub mod tone;
 
 pub use colorimetry::{Chromaticity, Observer, Xyz};
 pub use error::{Error, Result};

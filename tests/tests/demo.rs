@@ -1,9 +1,12 @@
 //! `restauro demo --quick`, the README's first command at its smallest, through the embedded
 //! cluster: every image it lists exists and decodes, the sample board obeys ρ·E/π, and under CIE
 //! A the Retinex brings each stone closer to its D65 render than the unfiltered render is — the
-//! paper's claim (Rossi, Marini & Rizzi 2004, Fig. 12), measured here from the EXR files.
+//! paper's claim (Rossi, Marini & Rizzi 2004, Fig. 12), measured here from the EXR files — the
+//! report gives the "after" difference to the D65 render as rendered and as seen, and it and the
+//! command's output name things for people, not by their enums' Debug names.
 
 use restauro_image::image_files::{XyzImage, read_exr};
+use restauro_scene::scene_file::{Integrator, SkyModel};
 use restauro_spectral::Lab;
 use restauro_spectral::appearance::d65_white;
 use restauro_spectral::ciede2000::ciede2000;
@@ -38,6 +41,28 @@ fn mean(image: &XyzImage, rect: &Value) -> (Xyz, f64) {
     let m = sum.map(|v| v / n);
     let variance = (sum_y2 / n - m[1] * m[1]).max(0.0);
     (Xyz::from_array(m), variance.sqrt() / m[1])
+}
+
+/// The words of `text` that look like a Rust enum variant's Debug name: two or more capitalised
+/// parts run together (`CieOvercast`, `SummerAfternoon`), or, for the given single-word
+/// variants (`Path`, `Uniform`), the word itself, alone or lower-cased, as a whole table cell.
+fn debug_names<'a>(text: &'a str, single: &[String]) -> Vec<&'a str> {
+    let mut found = Vec::new();
+    for word in text.split(|c: char| !c.is_alphanumeric()) {
+        let chars: Vec<char> = word.chars().collect();
+        let camel = chars.first().is_some_and(|c| c.is_uppercase())
+            && chars.windows(2).any(|w| w[0].is_lowercase() && w[1].is_uppercase());
+        // OpenEXR is the file format's name.
+        if (camel && word != "OpenEXR") || single.iter().any(|s| s == word) {
+            found.push(word);
+        }
+    }
+    for cell in text.split('|').map(str::trim) {
+        if single.iter().any(|s| s.to_lowercase() == cell) {
+            found.push(cell);
+        }
+    }
+    found
 }
 
 #[test]
@@ -127,4 +152,64 @@ fn the_quick_demo_writes_what_it_lists_and_the_retinex_adapts() {
         checked += 1;
     }
     assert_eq!(checked, 4);
+
+    // "After" is measured against the D65 render as rendered and as seen (its Retinex output),
+    // in both forms of the report. Under D65 the seen square is compared with itself: 0.
+    assert!(markdown.contains("| after: ΔE00 to D65 rendered |"), "{markdown}");
+    assert!(markdown.contains("| after: ΔE00 to D65 seen |"), "{markdown}");
+    let d65_seen = seen("samples-D65");
+    let stones = report["stones"].as_array().unwrap();
+    assert_eq!(stones.len(), 4 * samples.len());
+    for c in stones {
+        assert!(c["before_retinex"].get("delta_e00_to_d65_seen").is_none(), "{c}");
+        let after = c["after_retinex"]["delta_e00_to_d65_seen"].as_f64().unwrap();
+        assert!(after.is_finite() && after >= 0.0, "{c}");
+        if c["illuminant"] == "D65" {
+            assert_eq!(after, 0.0, "{c}");
+        }
+        if c["illuminant"] == "A" {
+            // From the EXR files: the square of the A render's Retinex output against the same
+            // square of the D65 render's.
+            let s = samples
+                .iter()
+                .find(|s| s["stone"] == c["stone"] && s["state"] == c["state"])
+                .unwrap();
+            let expect = ciede2000(
+                lab(mean(&d65_seen, &s["rect"]).0, 1.0),
+                lab(mean(&a_seen, &s["rect"]).0, 1.0),
+            );
+            assert!((after - expect).abs() < 1e-6, "{c}: {after} vs {expect} from the files");
+        }
+    }
+
+    // Names for people: the integrators and skies by their names, no Debug names anywhere.
+    let single: Vec<String> = [Integrator::Whitted, Integrator::Path]
+        .iter()
+        .map(|i| format!("{i:?}"))
+        .chain([SkyModel::Uniform, SkyModel::CieOvercast].iter().map(|m| format!("{m:?}")))
+        .filter(|name| !name.chars().skip(1).any(char::is_uppercase))
+        .filter(|name| name != "Whitted")
+        .collect();
+    assert!(single.contains(&"Path".to_string()) && single.contains(&"Uniform".to_string()));
+    let output = text(&o);
+    for (what, body) in [("report.md", &markdown), ("the output", &output)] {
+        let found = debug_names(body, &single);
+        assert!(found.is_empty(), "{what} names {found:?}");
+    }
+    // Whitted is a name as well as a variant: it is only ever "Whitted ray tracing".
+    assert!(!markdown.contains("| whitted |") && !markdown.contains("| Whitted |"));
+    for r in renders {
+        let integrator = match r["integrator"].as_str().unwrap() {
+            "path" => "path tracing",
+            "whitted" => "Whitted ray tracing",
+            other => panic!("integrator {other}"),
+        };
+        let row = markdown
+            .lines()
+            .find(|l| l.starts_with(&format!("| {} |", r["job"].as_str().unwrap())))
+            .unwrap();
+        assert!(row.contains(&format!("| {integrator} |")), "{row}");
+    }
+    assert!(markdown.contains("CIE overcast sky: 10000 lux on the horizontal"), "{markdown}");
+    assert!(markdown.contains("uniform sky: 15000 lux on the horizontal"), "{markdown}");
 }

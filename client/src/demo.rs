@@ -428,7 +428,7 @@ async fn render_all(
                 height: plan.height,
                 samples_per_pixel: job.spp,
                 max_depth: render.max_depth,
-                retinex: "Brownian paths, 20 per pixel, lms (Hunt–Pointer–Estévez), seed 0".into(),
+                retinex: "Brownian paths, 20 per pixel, CAT02 cone space (lms-cat02), the white an area, the sky passed over, seed 0".into(),
                 render_s,
                 files: files.iter().map(|f| relative(out, f)).collect(),
             },
@@ -639,7 +639,7 @@ fn analyse(
             "Summer afternoon: the sun at 15:30 CEST on 15 July at 45.74 N 7.32 E, and a clear sky of 15 000 lux.".into(),
             "Overcast: the CIE standard overcast sky, 10 000 lux. Each light's two renders share one exposure.".into(),
             "As found = stone + 30 % soot-proxy mixture (derived, not measured).".into(),
-            "As seen: Marini-Rizzi Brownian-path Retinex on l, m, s cone responses; the sky is kept from being the white.".into(),
+            "As seen: Marini-Rizzi Brownian-path Retinex on CAT02 l, m, s cone responses; the paths pass over the sky.".into(),
         ],
     }
     .render();

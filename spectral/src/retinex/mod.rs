@@ -210,24 +210,6 @@ fn check(pixels: &[[f32; 3]], width: usize, height: usize, params: &RetinexParam
     Ok(())
 }
 
-/// A step counts when its ratio is above the threshold and above what the cleaned image's own
-/// noise makes of a step: NOISE_STEPS times its robust step σ. Each step of noise that counts
-/// raises a path's white (a step up resets it, the step back down is then a ratio below it), so
-/// on a noisy flat field a threshold within the noise lowers the lightness (measured at 3 %
-/// noise, `tests/retinex_artefacts.rs`: by 4.5 % with the paper's threshold alone, 1.5 % at
-/// 4σ); at 5σ such steps are rare enough that it stays within 1 %. On an image without noise
-/// or gradients the step σ is 0 and the threshold is the paper's (as it always is with
-/// [`WhiteReference::Paper`]).
-const NOISE_STEPS: f32 = 5.0;
-
-fn thresholds(threshold: f32, white: &white::WhiteImage, area: bool) -> [i32; 4] {
-    std::array::from_fn(|c| {
-        let noise = if area && c < 3 { NOISE_STEPS * white.step_noise[c] } else { 0.0 };
-        let t = threshold.max(noise);
-        (t * LOG_SCALE).round() as i32
-    })
-}
-
 /// A pixel's lightness from its samples: its value relative to its cleaned value (the detail
 /// the cleaning took out: noise, a firefly) times the cleaned value relative to the mean white
 /// found. A light source is its value relative to the white found where the paths left the
@@ -292,7 +274,7 @@ pub fn retinex(
         width,
         height,
         turning: Turning::with_persistence(persistence),
-        threshold: thresholds(params.threshold, &white, params.white == WhiteReference::Area),
+        threshold: [(params.threshold * LOG_SCALE).round() as i32; 4],
     };
     let samples_per_path = u64::from(steps - burn_in + 1);
     let shared_paths = (2 * u64::from(params.paths) * n as u64).div_ceil(samples_per_path);

@@ -260,21 +260,9 @@ fn mean_lab(img: &[[f32; 3]], pixels: &[usize]) -> restauro_spectral::Lab {
     )
 }
 
-/// Under sun and sky, the Retinex sees the neutral tile as neutral in the sun and in the
-/// shadow of the wall (C* < 3), and the travertine keeps its hue (within 10° of its hue under
-/// D65) in both.
-///
-/// Not yet met (issue 16, item 2), so not run by default: `cargo test -p restauro-render --test
-/// retinex_rendered -- --ignored --nocapture` prints the figures. Measured: with the paper's
-/// white (every pixel) the travertine in the sun keeps its hue (79° against 79.9°); the cleaning
-/// that makes the white robust to noise (the default) moves it to 93° (the render's 7 % noise is
-/// averaged with neighbours within 3σ_n, which blurs the travertine's 7 % step against the
-/// ground in S, and a blurred step is partly below the threshold); and with global adaptation
-/// (reach 3) the neutral in the shadow is seen relative to the sunlit white: C* 18 (blue). Local adaptation (reach 0.3) would
-/// help the shadow but shifts a D65 Mondrian by 6.5 ΔE00 (see `DEFAULT_REACH`).
-#[test]
-#[ignore = "issue 16 item 2: local adaptation under two lights is open"]
-fn two_lights_a_neutral_stays_neutral_in_sun_and_shadow() {
+/// The Retinex's view of the four tiles of [`two_lights`] (Lab, D65 white), and the
+/// travertine's colour under D65.
+fn seen_tiles() -> (Vec<restauro_spectral::Lab>, restauro_spectral::Lab) {
     let (img, w, h, tiles) = two_lights();
     assert!(tiles.iter().all(|t| t.len() > 100), "premise: every tile is in view");
     let luminance =
@@ -298,17 +286,14 @@ fn two_lights_a_neutral_stays_neutral_in_sun_and_shadow() {
     let params = RetinexParams { seed: 4, ..Default::default() };
     let (seen, _) = retinex_xyz(&img, w, h, &params, ChannelSpace::default(), &|_, _| {}).unwrap();
     let labs: Vec<_> = tiles.iter().map(|t| mean_lab(&seen, t)).collect();
-    let hue_difference = |a: f64, b: f64| ((a - b + 540.0) % 360.0 - 180.0).abs();
     eprintln!(
         "travertine under D65: L* {:.1} C* {:.1} h {:.1}°",
         under_d65.l,
         under_d65.chroma(),
         under_d65.hue_deg()
     );
-    for (label, lab) in ["neutral, sun", "travertine, sun", "neutral, shadow", "travertine, shadow"]
-        .iter()
-        .zip(&labs)
-    {
+    let names = ["neutral, sun", "travertine, sun", "neutral, shadow", "travertine, shadow"];
+    for (label, lab) in names.iter().zip(&labs) {
         eprintln!(
             "{label:<20} L* {:5.1}  C* {:5.1}  h {:6.1}°",
             lab.l,
@@ -316,14 +301,47 @@ fn two_lights_a_neutral_stays_neutral_in_sun_and_shadow() {
             lab.hue_deg()
         );
     }
-    for (i, half) in [(0, "sun"), (2, "shadow")] {
-        assert!(labs[i].chroma() < 3.0, "the neutral in the {half}: C* {:.1}", labs[i].chroma());
-        let dh = hue_difference(labs[i + 1].hue_deg(), under_d65.hue_deg());
-        assert!(
-            dh < 10.0,
-            "the travertine in the {half}: hue {:.1}° against {:.1}°",
-            labs[i + 1].hue_deg(),
-            under_d65.hue_deg()
-        );
-    }
+    (labs, under_d65)
+}
+
+fn hue_difference(a: f64, b: f64) -> f64 {
+    ((a - b + 540.0) % 360.0 - 180.0).abs()
+}
+
+/// The tiles of one half (0: sun, 2: shadow): the neutral has C* < 3 and the travertine's hue
+/// is within 10° of its hue under D65.
+fn check_half(labs: &[restauro_spectral::Lab], under_d65: restauro_spectral::Lab, i: usize) {
+    let half = if i == 0 { "sun" } else { "shadow" };
+    assert!(labs[i].chroma() < 3.0, "the neutral in the {half}: C* {:.1}", labs[i].chroma());
+    let dh = hue_difference(labs[i + 1].hue_deg(), under_d65.hue_deg());
+    assert!(
+        dh < 10.0,
+        "the travertine in the {half}: hue {:.1}° against {:.1}°",
+        labs[i + 1].hue_deg(),
+        under_d65.hue_deg()
+    );
+}
+
+/// Under sun and sky, in the sunlit half the Retinex sees the neutral tile as neutral
+/// (C* < 3) and the travertine with its hue under D65 (within 10°), though the noise of the
+/// render (7 %) is as large as the travertine's step against the grey ground in the S cones.
+/// Measured: neutral C* 0.8, travertine 83.9° against 79.9° (with the bilateral's cut at 3σ_n
+/// instead of 2σ_n, 93°).
+#[test]
+fn two_lights_in_the_sun_a_neutral_is_neutral_and_a_travertine_keeps_its_hue() {
+    let (labs, under_d65) = seen_tiles();
+    check_half(&labs, under_d65, 0);
+}
+
+/// The same in the sky-lit shadow of the wall. Not yet met (issue 16, item 2), so not run by
+/// default: `cargo test -p restauro-render --test retinex_rendered -- --ignored --nocapture`
+/// prints the figures. Measured: with global adaptation (reach 3) the neutral in the shadow is
+/// seen relative to the sunlit white, C* 18.6 (blue). Local adaptation (reach 0.3) would help
+/// the shadow but shifts a D65 Mondrian by 6.5 ΔE00 (see `DEFAULT_REACH`): the Retinex needs to
+/// tell frameworks of illumination apart, not a smaller reach.
+#[test]
+#[ignore = "issue 16 item 2: local adaptation under two lights is open"]
+fn two_lights_in_the_shadow_a_neutral_is_neutral_and_a_travertine_keeps_its_hue() {
+    let (labs, under_d65) = seen_tiles();
+    check_half(&labs, under_d65, 2);
 }

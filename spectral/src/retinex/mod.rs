@@ -74,13 +74,13 @@ pub struct RetinexParams {
 
 /// The default reach, in image diagonals: global adaptation. Measured on the test Mondrian
 /// (`tests/retinex_mondrian.rs`, one white patch in forty, D65, chroma-only mean ΔE00 of the
-/// Retinex output against the image): reach 0.3 → 6.5, 0.5 → 3.3–5.0, 1 → 1.0–2.9, 2 and
-/// 3 → 0.63 (the old lattice walk, eight diagonals long: 0.8). A longer path covers more of the
-/// image, which matters for a small white: 3 finds a white card of 3 % of the image from 96 %
-/// of the paths.
-/// With a reach below the image, each neighbourhood's brightest area in each channel is its
-/// white, and where those are different surfaces (a yellow's L and M, a blue's S) a D65 scene
-/// takes a cast no observer sees; the paths must reach the scene's white.
+/// Retinex output against the image, in Hunt–Pointer–Estévez channels): reach 0.3 → 6.5,
+/// 0.5 → 3.3–5.0, 1 → 1.0–2.9, 2 and 3 → 0.63 (the old lattice walk, eight diagonals long:
+/// 0.8); at 3 in the CAT02 channels now used, 0.54. A longer path covers more of the image,
+/// which matters for a small white: 3 finds a white card of 3 % of the image from 96 % of the
+/// paths. With a reach below the image, each neighbourhood's brightest area in each channel is
+/// its white, and where those are different surfaces (a yellow's L and M, a blue's S) a D65
+/// scene takes a cast no observer sees; the paths must reach the scene's white.
 pub const DEFAULT_REACH: f64 = 3.0;
 /// The walk's persistence length as a share of the reach: short, so that a path covers the
 /// area it reaches (a straighter walk of the same reach crosses fewer areas: at persistence

@@ -61,12 +61,13 @@ pub fn write_results(
     // A pixel most of whose camera samples saw the sky is a light source: marked in the EXR's
     // `emitter` channel, and kept from being the Retinex's white (a bright sky in view would
     // otherwise darken the building to a silhouette).
-    let emitter = frame.sky.as_ref().map(|c| c.iter().map(|&f| f >= 0.5).collect::<Vec<bool>>());
+    let sky_at_least =
+        |share: f32| frame.sky.as_ref().map(|c| c.iter().map(|&f| f >= share).collect::<Vec<_>>());
+    let emitter = sky_at_least(0.5);
     // For the Retinex a pixel is a light source already when a tenth of its samples saw the
     // sky: the mixed pixels along a skyline are bright and blue, and as candidates for the white
     // they would give the whole building a yellow cast.
-    let retinex_emitters =
-        frame.sky.as_ref().map(|c| c.iter().map(|&f| f >= 0.1).collect::<Vec<bool>>());
+    let retinex_emitters = sky_at_least(0.1);
     let image = XyzImage { width, height, pixels: frame.xyz, emitter: emitter.clone() };
     let attrs = [
         ("restauroRender", options.info),

@@ -9,6 +9,21 @@ use restauro_spectral::retinex::RetinexParams;
 const W: u32 = 96;
 const H: u32 = 64;
 
+/// The scene `toml` written into `dir` (beside its files), loaded and prepared with its own
+/// render settings.
+fn prepare(dir: &std::path::Path, toml: &str) -> PreparedScene {
+    std::fs::write(dir.join("scene.toml"), toml).unwrap();
+    let loaded = load_scene(&dir.join("scene.toml"), &Limits::default()).unwrap();
+    let r = &loaded.file.render;
+    let settings = Settings {
+        integrator: r.integrator,
+        samples_per_pixel: r.samples_per_pixel,
+        max_depth: r.max_depth,
+        seed: r.seed,
+    };
+    PreparedScene::new(&loaded, None, settings).unwrap()
+}
+
 /// A grey ground, a white tile and a wall under a summer sun and a clear sky, path traced at 4
 /// samples per pixel (so with Monte Carlo noise), in absolute XYZ.
 fn render() -> Vec<[f32; 3]> {
@@ -75,16 +90,7 @@ model = "uniform"
 spectrum = "daylight"
 "#
     );
-    std::fs::write(d.join("scene.toml"), toml).unwrap();
-    let loaded = load_scene(&d.join("scene.toml"), &Limits::default()).unwrap();
-    let r = &loaded.file.render;
-    let settings = Settings {
-        integrator: r.integrator,
-        samples_per_pixel: r.samples_per_pixel,
-        max_depth: r.max_depth,
-        seed: r.seed,
-    };
-    let prepared = PreparedScene::new(&loaded, None, settings).unwrap();
+    let prepared = prepare(d, &toml);
     render_tile(&prepared, Rect { x: 0, y: 0, width: W, height: H }, false).xyz
 }
 
@@ -219,16 +225,7 @@ model = "uniform"
 spectrum = "skylight"
 "#
     );
-    std::fs::write(d.join("scene.toml"), toml).unwrap();
-    let loaded = load_scene(&d.join("scene.toml"), &Limits::default()).unwrap();
-    let r = &loaded.file.render;
-    let settings = Settings {
-        integrator: r.integrator,
-        samples_per_pixel: r.samples_per_pixel,
-        max_depth: r.max_depth,
-        seed: r.seed,
-    };
-    let prepared = PreparedScene::new(&loaded, None, settings).unwrap();
+    let prepared = prepare(d, &toml);
     let xyz = render_tile(&prepared, Rect { x: 0, y: 0, width: w, height: h }, false).xyz;
     // Each pixel's point on the ground, from its centre ray.
     let inside: Vec<Vec<usize>> = tiles

@@ -274,7 +274,7 @@ pub fn retinex(
         width,
         height,
         turning: Turning::with_persistence(persistence),
-        threshold: [(params.threshold * LOG_SCALE).round() as i32; 4],
+        threshold: (params.threshold * LOG_SCALE).round() as i32,
     };
     let samples_per_path = u64::from(steps - burn_in + 1);
     let shared_paths = (2 * u64::from(params.paths) * n as u64).div_ceil(samples_per_path);

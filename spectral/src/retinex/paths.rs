@@ -48,8 +48,8 @@ pub(super) struct Walker<'a> {
     pub width: usize,
     pub height: usize,
     pub turning: Turning,
-    /// Per channel (lane 3 unused), the threshold in fixed point.
-    pub threshold: [i32; 4],
+    /// The threshold in fixed point.
+    pub threshold: i32,
 }
 
 /// The state of a path: per channel the running s, and the logs of the last surface crossed.
@@ -67,17 +67,18 @@ impl State {
 
     /// One step onto a pixel with logs `to`.
     #[inline]
-    fn step(&mut self, to: [i16; 4], threshold: [i32; 4]) {
+    fn step(&mut self, to: [i16; 4], threshold: i32) {
         if to[3] == EMITTER {
             return;
         }
         if self.on_surface {
             // Four lanes (the fourth is the emitter flag, 0 here on both sides, so its lane
             // stays 0) so that the compiler does the three channels in one vector operation.
+            #[allow(clippy::needless_range_loop)] // the lanes of three arrays at once
             for c in 0..4 {
                 let r = i32::from(to[c]) - i32::from(self.last[c]);
                 // A select, not a branch: whether a step crosses an edge is unpredictable.
-                let delta = if r.abs() > threshold[c] { r } else { 0 };
+                let delta = if r.abs() > threshold { r } else { 0 };
                 self.s[c] = (self.s[c] + delta).min(0);
             }
         }
@@ -97,6 +98,13 @@ fn add(sums: &mut Sums, white: [i32; 4]) {
     for c in 0..4 {
         let v = if c == 3 { 1 } else { white[c].clamp(-32768, 32767) };
         sums[c] = sums[c].wrapping_add(v);
+    }
+}
+
+/// `b`'s samples added to `a`'s (wrapping, so in any order).
+fn merge(a: &mut Sums, b: &Sums) {
+    for c in 0..4 {
+        a[c] = a[c].wrapping_add(b[c]);
     }
 }
 
@@ -164,11 +172,7 @@ impl Walker<'_> {
         let mut partials = partials.into_iter();
         let mut sums = partials.next().unwrap_or_else(|| vec![[0i32; 4]; n]);
         for partial in partials {
-            sums.par_iter_mut().zip(partial.par_iter()).for_each(|(a, b)| {
-                for c in 0..4 {
-                    a[c] = a[c].wrapping_add(b[c]);
-                }
-            });
+            sums.par_iter_mut().zip(partial.par_iter()).for_each(|(a, b)| merge(a, b));
         }
         sums
     }
@@ -223,9 +227,7 @@ impl Walker<'_> {
             .collect();
         let mut walked = 0;
         for (pixel, extra, k) in top_ups {
-            for c in 0..4 {
-                sums[pixel][c] = sums[pixel][c].wrapping_add(extra[c]);
-            }
+            merge(&mut sums[pixel], &extra);
             walked += k;
         }
         (paths, walked)

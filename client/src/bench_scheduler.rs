@@ -13,6 +13,7 @@ use crate::bench_tracer::process_cpu_seconds;
 use crate::cli::BenchArgs;
 use crate::cluster::{self, LocalCluster};
 use anyhow::{Context, Result, anyhow, bail};
+use restauro_image::framebuffer::TileLayout;
 use restauro_proto::pb::work_client::WorkClient;
 use restauro_proto::{self as pb, Credentials, PROTOCOL_VERSION};
 use restauro_scene::bundle::bundle_scene;
@@ -55,11 +56,17 @@ pub fn bench(args: &BenchArgs) -> Result<String> {
     let scene =
         crate::scene_cmd::write_aosta(dir.path(), args.width as u32, args.height as u32, 1)?.sunny;
     let bundle = bundle_scene(&scene, &Limits::default())?;
-    // The tiles' layout: with a sky, each pixel carries its sky coverage too.
-    let sky = restauro_scene::load::load_scene(&scene, &Limits::default())?
-        .lights
-        .iter()
-        .any(|l| matches!(l, restauro_scene::load::ResolvedLight::Sky { .. }));
+    // The tiles' layout: with a sky, each pixel carries its sky coverage too, and with a sun
+    // its mask of lights.
+    let lights = restauro_scene::load::load_scene(&scene, &Limits::default())?.lights;
+    let is_sky = |l: &restauro_scene::load::ResolvedLight| {
+        matches!(l, restauro_scene::load::ResolvedLight::Sky { .. })
+    };
+    let layout = TileLayout {
+        spectral: false,
+        sky: lights.iter().any(is_sky),
+        lit: lights.iter().any(|l| !is_sky(l)),
+    };
     let cluster = LocalCluster::start_with(0, None, &["--no-retinex"])?;
     let runtime = cluster::runtime()?;
     let workers = args.workers.max(1);
@@ -102,7 +109,7 @@ pub fn bench(args: &BenchArgs) -> Result<String> {
         let started = Instant::now();
         let mut tasks = tokio::task::JoinSet::new();
         for (client, session) in registered {
-            tasks.spawn(simulated_worker(client, session, sky, counts.clone(), stop.clone()));
+            tasks.spawn(simulated_worker(client, session, layout, counts.clone(), stop.clone()));
         }
         let deadline = Instant::now() + Duration::from_secs(600);
         while counts.accepted.load(Ordering::Relaxed) < total_tiles {
@@ -188,7 +195,7 @@ async fn register(url: &str, token: &str, index: usize) -> Result<(Worker, pb::W
 async fn simulated_worker(
     mut client: Worker,
     session: pb::WorkerSession,
-    sky: bool,
+    layout: TileLayout,
     counts: Arc<Counts>,
     stop: Arc<AtomicBool>,
 ) -> Result<()> {
@@ -204,7 +211,7 @@ async fn simulated_worker(
         counts.leases.fetch_add(reply.leases.len() as u64, Ordering::Relaxed);
         for lease in reply.leases {
             let rect = restauro_scene::plan::Rect::from(lease.rect.unwrap_or_default());
-            let (bytes, _) = restauro_image::framebuffer::tile_sizes(&rect, false, sky);
+            let (bytes, _) = restauro_image::framebuffer::tile_sizes(&rect, layout);
             let header = pb::TileHeader {
                 session: Some(session.clone()),
                 lease: Some(lease),

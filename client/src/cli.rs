@@ -222,8 +222,8 @@ pub struct RetinexArgs {
     #[arg(long, default_value_t = 20)]
     pub paths: u32,
     /// How far the paths reach, as the RMS distance (in image diagonals) from where a path
-    /// starts to where it samples: 2 (the default) adapts to the whole image; below about 0.5
-    /// the adaptation is local.
+    /// starts to where it samples: 3 (the default) adapts to the whole image; below about 0.5
+    /// the adaptation is local (and a uniformly lit scene takes casts: prefer frameworks).
     #[arg(long, default_value_t = restauro_spectral::retinex::DEFAULT_REACH)]
     pub reach: f64,
     /// L: steps per path (default: the length that gives the reach).
@@ -250,6 +250,16 @@ pub struct RetinexArgs {
     /// surfaces like any other).
     #[arg(long, default_value = "pass")]
     pub light_sources: String,
+    /// Frameworks of illumination: lights (default: the pixels the file's `lit_by` channel says
+    /// are lit by the same lights — the sunlit stone, the sky-lit shadow — are adapted to their
+    /// own light; a file without the channel is one framework) or none (one white for all).
+    #[arg(long, default_value = "lights")]
+    pub frameworks: String,
+    /// The weight (0–1) of a surface's own framework in its lightness; the rest is the whole
+    /// image's white. 1: a shadow is as light as the sun; 0: as dark as it is against the sun's
+    /// white. Colours are adapted to their own framework's light whatever the weight.
+    #[arg(long, default_value_t = restauro_spectral::retinex::DEFAULT_FRAMEWORK_WEIGHT)]
+    pub framework_weight: f32,
     /// Also write the result as OpenEXR (XYZ relative to a D65 white, Y = 1).
     #[arg(long)]
     pub exr: Option<PathBuf>,

@@ -428,7 +428,12 @@ async fn render_all(
                 height: plan.height,
                 samples_per_pixel: job.spp,
                 max_depth: render.max_depth,
-                retinex: "Brownian paths, 20 per pixel, CAT02 cone space (lms-cat02), the white an area, the sky passed over, seed 0".into(),
+                retinex: format!(
+                    "Brownian paths, 20 per pixel, CAT02 cone space (lms-cat02), the white an \
+                     area, the sky passed over, sunlit and shadowed surfaces adapted as \
+                     frameworks of their own (weight {}), seed 0",
+                    restauro_spectral::retinex::DEFAULT_FRAMEWORK_WEIGHT
+                ),
                 render_s,
                 files: files.iter().map(|f| relative(out, f)).collect(),
             },
@@ -639,7 +644,7 @@ fn analyse(
             "Summer afternoon: the sun at 15:30 CEST on 15 July at 45.74 N 7.32 E, and a clear sky of 15 000 lux.".into(),
             "Overcast: the CIE standard overcast sky, 10 000 lux. Each light's two renders share one exposure.".into(),
             "As found = stone + 30 % soot-proxy mixture (derived, not measured).".into(),
-            "As seen: Marini-Rizzi Brownian-path Retinex on CAT02 l, m, s cone responses; the paths pass over the sky.".into(),
+            "As seen: Marini-Rizzi Brownian-path Retinex on CAT02 l, m, s cone responses; the paths pass over the sky; sun and shadow adapted apart.".into(),
         ],
     }
     .render();
@@ -771,12 +776,7 @@ fn analyse(
     };
     let hex = |lab: Lab| -> String {
         let xyz = lab.to_xyz(d65_white());
-        let image = XyzImage {
-            width: 1,
-            height: 1,
-            pixels: vec![[xyz.x as f32, xyz.y as f32, xyz.z as f32]],
-            emitter: None,
-        };
+        let image = XyzImage::new(1, 1, vec![[xyz.x as f32, xyz.y as f32, xyz.z as f32]]);
         let p = picture(&image, Exposure::Relative);
         format!("#{:02x}{:02x}{:02x}", p.data[0], p.data[1], p.data[2])
     };
@@ -889,6 +889,7 @@ fn crop_picture(image: &XyzImage, r: PixelRect, exposure: Exposure) -> Rgb8 {
         height: (r.y1 - r.y0) as usize,
         pixels,
         emitter: None,
+        lit_by: None,
     };
     picture(&cropped, exposure)
 }

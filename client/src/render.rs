@@ -7,7 +7,7 @@ use crate::cli::{IntegratorArg, RenderArgs};
 use crate::cluster::{self, LocalCluster};
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use restauro_image::framebuffer::{Framebuffer, encode_tile};
+use restauro_image::framebuffer::{Framebuffer, TileExtras, TileLayout, encode_tile};
 use restauro_image::results::{ResultOptions, write_results};
 use restauro_proto as pb;
 use restauro_render::prepared::PreparedScene;
@@ -163,14 +163,15 @@ fn run_in_process(args: &RenderArgs) -> Result<String> {
         )
         .context("progress template")?,
     );
-    let mut frame = Framebuffer::new(plan.width, plan.height, plan.spectral, plan.sky);
+    let mut frame = Framebuffer::new(plan.width, plan.height, TileLayout::from(&plan));
     let render_started = Instant::now();
     for (index, rect) in plan.tiles().enumerate() {
         let tile = render_tile(&prepared, rect, plan.spectral);
         // The same bytes a worker sends: the in-process image is the cluster's, bit for bit.
+        let extras = TileExtras { sky: tile.sky.as_deref(), lit_by: tile.lit_by.as_deref() };
         let data = encode_tile(
             &tile.xyz,
-            tile.sky.as_deref(),
+            extras,
             tile.spectral.as_ref().map(|s| s.iter().map(|p| &p.0[..])),
         );
         frame.place(index as u32, &rect, &data)?;

@@ -35,6 +35,15 @@ pub fn parse_light_sources(text: &str, image: &XyzImage) -> Result<Option<Vec<bo
     }
 }
 
+/// `--frameworks lights | none`: the keys of the frameworks of illumination.
+pub fn parse_frameworks(text: &str, image: &XyzImage) -> Result<Option<Vec<u32>>> {
+    match text.to_ascii_lowercase().as_str() {
+        "lights" => Ok(image.lit_by.clone()),
+        "none" => Ok(None),
+        _ => bail!("--frameworks `{text}`: use lights (the default) or none"),
+    }
+}
+
 /// `--exposure auto[:KEY] | absolute:<cd/m²> | relative`.
 pub fn parse_exposure(text: &str) -> Result<Exposure> {
     text.parse().map_err(|e| anyhow::anyhow!("--{e}"))
@@ -68,6 +77,8 @@ pub fn run(args: &RetinexArgs) -> Result<String> {
         seed: args.seed,
         white: parse_white(&args.white)?,
         emitters: parse_light_sources(&args.light_sources, &image)?,
+        frameworks: parse_frameworks(&args.frameworks, &image)?,
+        framework_weight: args.framework_weight,
     };
     let bar = if image.pixels.len() >= PROGRESS_FROM_PIXELS {
         let bar = ProgressBar::with_draw_target(Some(0), ProgressDrawTarget::stderr());
@@ -107,26 +118,38 @@ pub fn run(args: &RetinexArgs) -> Result<String> {
     let _ = writeln!(
         text,
         "retinex of {} ({}×{}) in {seconds:.2} s: {} samples per pixel at least ({} at most), \
-         paths of {} steps, channels {}",
+         paths of {} steps, channels {}, {} framework{} of illumination",
         args.input.display(),
         image.width,
         image.height,
         stats.min_samples,
         stats.max_samples,
         stats.length,
-        args.space
+        args.space,
+        stats.frameworks,
+        if stats.frameworks == 1 { "" } else { "s" },
     );
     let _ = writeln!(text, "wrote {}", args.out.display());
     if let Some(exr) = &args.exr {
         let settings = format!(
-            "paths={} length={} threshold={} seed={} space={} white={}",
-            params.paths, stats.length, params.threshold, params.seed, args.space, args.white
+            "paths={} reach={} length={} threshold={} seed={} space={} white={} frameworks={} \
+             framework-weight={}",
+            params.paths,
+            params.reach,
+            stats.length,
+            params.threshold,
+            params.seed,
+            args.space,
+            args.white,
+            stats.frameworks,
+            params.framework_weight,
         );
         let result = XyzImage {
             width: image.width,
             height: image.height,
             pixels: out,
             emitter: image.emitter,
+            lit_by: image.lit_by,
         };
         write_xyz_exr(
             exr,

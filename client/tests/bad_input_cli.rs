@@ -73,7 +73,7 @@ fn retinex_refuses_a_fifo_instead_of_waiting_on_it() {
 fn a_truncated_exr_is_described_once() {
     let dir = tempfile::tempdir().unwrap();
     let good = dir.path().join("good.exr");
-    let image = XyzImage { width: 8, height: 4, pixels: vec![[1.0, 2.0, 3.0]; 32], emitter: None };
+    let image = XyzImage::new(8, 4, vec![[1.0, 2.0, 3.0]; 32]);
     write_xyz_exr(&good, &image, &[]).unwrap();
     let bytes = std::fs::read(&good).unwrap();
     let cut = dir.path().join("cut.exr");

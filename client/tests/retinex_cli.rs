@@ -22,7 +22,12 @@ fn card(dir: &Path) -> PathBuf {
     let (w, h) = (96, 64);
     let pixels = mondrian(w, h, 3);
     let path = dir.join("card.exr");
-    write_xyz_exr(&path, &XyzImage { width: w, height: h, pixels, emitter: None }, &[]).unwrap();
+    write_xyz_exr(
+        &path,
+        &XyzImage { width: w, height: h, pixels, emitter: None, lit_by: None },
+        &[],
+    )
+    .unwrap();
     path
 }
 
@@ -92,6 +97,68 @@ fn display_modes_and_sixteen_bits() {
     assert!(png_info(&out).3.iter().all(|&v| v == 255));
 }
 
+/// A render's `lit_by` channel makes the sunlit and the shadowed half frameworks of their own:
+/// a white card in the blue shadow is seen white (`--frameworks lights`, the default), blue with
+/// one white for all (`none`).
+#[test]
+fn the_light_mask_of_a_render_makes_frameworks() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (80usize, 40usize);
+    let shadow = [0.3f32, 0.35, 0.6];
+    let mut img = XyzImage {
+        width: w,
+        height: h,
+        pixels: Vec::with_capacity(w * h),
+        emitter: None,
+        lit_by: Some(Vec::with_capacity(w * h)),
+    };
+    for p in 0..w * h {
+        let (x, y) = (p % w, p / w);
+        let sunlit = x < w / 2;
+        // A large card: the paths that miss a small one take the whites of other surfaces, a
+        // different one per channel, in the shadow as anywhere.
+        let inside = (10..30).contains(&(x % (w / 2))) && (10..30).contains(&y);
+        let reflectance = if inside { 0.9 } else { 0.3 };
+        let light = if sunlit { [1.0; 3] } else { shadow };
+        // The lights as factors on the CAT02 cone responses of a D65 white.
+        let cones = [light.map(|l| l * reflectance)];
+        let xyz = ChannelSpace::default().to_xyz(&cones)[0];
+        img.pixels.push(xyz.map(|v| 100.0 * v));
+        img.lit_by.as_mut().unwrap().push(u32::from(sunlit));
+    }
+    let input = dir.path().join("render.exr");
+    write_xyz_exr(&input, &img, &[]).unwrap();
+    let card = |frameworks: &str| {
+        let exr = dir.path().join(format!("{frameworks}.exr"));
+        let png = dir.path().join("x.png");
+        let text = ok(&[
+            "retinex",
+            input.to_str().unwrap(),
+            "--out",
+            png.to_str().unwrap(),
+            "--exr",
+            exr.to_str().unwrap(),
+            "--frameworks",
+            frameworks,
+        ]);
+        let xyz = read_exr(&exr, MAX_PIXELS).unwrap().pixels[20 * w + w / 2 + 20];
+        (text, xyz[2] / xyz[0])
+    };
+    let (text, apart) = card("lights");
+    assert!(text.contains("2 frameworks of illumination"), "{text}");
+    let (text, together) = card("none");
+    assert!(text.contains("1 framework of illumination"), "{text}");
+    // D65's Z/X is 1.146; the shadow's light makes it half as much again with one white.
+    let d65 = d65_white().z / d65_white().x;
+    assert!((f64::from(apart) / d65 - 1.0).abs() < 0.03, "apart, the card is white: Z/X {apart}");
+    assert!(f64::from(together) / d65 > 1.5, "with one white, the card is blue: Z/X {together}");
+    let e = refused(&["retinex", input.to_str().unwrap(), "--out", "x.png", "--frameworks", "all"]);
+    assert!(e.contains("--frameworks `all`: use lights"), "{e}");
+    let e =
+        refused(&["retinex", input.to_str().unwrap(), "--out", "x.png", "--framework-weight", "2"]);
+    assert!(e.contains("framework weight"), "{e}");
+}
+
 #[test]
 fn an_rgb_exr_with_emitters_and_the_white_options() {
     let dir = tempfile::tempdir().unwrap();
@@ -102,6 +169,7 @@ fn an_rgb_exr_with_emitters_and_the_white_options() {
         height: h,
         pixels: vec![[50.0; 3]; w * h],
         emitter: Some(vec![false; w * h]),
+        lit_by: None,
     };
     for y in 0..6 {
         for x in 0..6 {

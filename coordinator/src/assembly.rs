@@ -6,7 +6,7 @@
 use crate::farm::Farm;
 use crate::ids::JobId;
 use crate::job::JobRecord;
-use restauro_image::framebuffer::Framebuffer;
+use restauro_image::framebuffer::{Framebuffer, TileLayout};
 use restauro_image::results::{ResultOptions, write_results};
 use restauro_spectral::retinex::RetinexParams;
 use std::sync::Arc;
@@ -47,7 +47,7 @@ enum Outcome {
 fn files(farm: &Arc<Farm>, record: &JobRecord) -> Result<Vec<String>, Outcome> {
     let id = &record.id;
     let plan = &record.plan;
-    let mut frame = Framebuffer::new(plan.width, plan.height, plan.spectral, plan.sky);
+    let mut frame = Framebuffer::new(plan.width, plan.height, TileLayout::from(plan));
     for (index, rect) in plan.tiles().enumerate() {
         let data = farm
             .store

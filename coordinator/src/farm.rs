@@ -22,7 +22,7 @@ use crate::lease::{LeaseClaim, LeaseSigner};
 use crate::metrics::Metrics;
 use crate::scheduler::{self, Completion, Failure, Scheduler};
 use crate::store::Store;
-use restauro_image::framebuffer::check_tile;
+use restauro_image::framebuffer::{TileLayout, check_tile};
 use restauro_proto as pb;
 use restauro_scene::bundle::Bundle;
 use restauro_scene::job::{JobSpec, check_label, printable};
@@ -113,7 +113,7 @@ pub enum Expected {
     /// The lease is not the tile's current one (expired, job cancelled): drop the result.
     Stale,
     /// The tile's pixels, in this layout, are wanted.
-    Tile { rect: Rect, spectral: bool, sky: bool },
+    Tile { rect: Rect, layout: TileLayout },
 }
 
 /// How a tile report ended.
@@ -653,7 +653,7 @@ impl Farm {
             return Ok(Expected::Stale);
         }
         match r.plan.tile_rect(claim.tile) {
-            Some(rect) => Ok(Expected::Tile { rect, spectral: r.plan.spectral, sky: r.plan.sky }),
+            Some(rect) => Ok(Expected::Tile { rect, layout: TileLayout::from(&r.plan) }),
             None => Ok(Expected::Stale),
         }
     }
@@ -669,21 +669,19 @@ impl Farm {
         render_s: f64,
         data: Vec<u8>,
     ) -> Result<Reported> {
-        let (rect, spectral, sky) = match self.expect_report(session, claim)? {
+        let (rect, layout) = match self.expect_report(session, claim)? {
             Expected::UnknownSession => return Ok(Reported::UnknownSession),
             Expected::Stale => return Ok(Reported::Stale),
-            Expected::Tile { rect, spectral, sky } => (rect, spectral, sky),
+            Expected::Tile { rect, layout } => (rect, layout),
         };
         let tile = claim.tile;
         // A large tile (spectral layers) is checked on the blocking pool, a small one here.
         let (checked, data) = if data.len() < 1 << 20 {
-            (check_tile(tile, &rect, spectral, sky, &data), data)
+            (check_tile(tile, &rect, layout, &data), data)
         } else {
-            tokio::task::spawn_blocking(move || {
-                (check_tile(tile, &rect, spectral, sky, &data), data)
-            })
-            .await
-            .map_err(|e| CoordinatorError::Internal(e.to_string()))?
+            tokio::task::spawn_blocking(move || (check_tile(tile, &rect, layout, &data), data))
+                .await
+                .map_err(|e| CoordinatorError::Internal(e.to_string()))?
         };
         if let Err(e) = checked {
             let reason = format!("sent pixels no tracer produces: {e}");

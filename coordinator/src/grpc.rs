@@ -298,13 +298,12 @@ impl pb::work_server::Work for WorkService {
         span.record("tile", claim.tile);
         span.record("worker", session.worker.0);
         // Decided before the pixels are read: a stale or unknown report is answered at once.
-        let (rect, spectral, sky) = match self.0.expect_report(&session, &claim)? {
+        let (rect, layout) = match self.0.expect_report(&session, &claim)? {
             Expected::UnknownSession => return Ok(reply(false, false)),
             Expected::Stale => return Ok(reply(false, true)),
-            Expected::Tile { rect, spectral, sky } => (rect, spectral, sky),
+            Expected::Tile { rect, layout } => (rect, layout),
         };
-        let (image_bytes, spectral_bytes) =
-            restauro_image::framebuffer::tile_sizes(&rect, spectral, sky);
+        let (image_bytes, spectral_bytes) = restauro_image::framebuffer::tile_sizes(&rect, layout);
         let tile_error = |problem: String| CoordinatorError::TileData {
             job: claim.job.clone(),
             tile: claim.tile,

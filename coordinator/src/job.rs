@@ -214,6 +214,7 @@ impl JobRecord {
             seed: 0,
             spectral: false,
             sky: false,
+            lit: false,
             tile: 1,
         };
         let was_final = matches!(
@@ -268,6 +269,7 @@ mod tests {
             seed: 0,
             spectral: false,
             sky: false,
+            lit: false,
             tile: 8,
         };
         JobRecord::new(JobId::from("j"), JobSpec::default(), "{}".into(), plan, 0)

@@ -1,15 +1,18 @@
 //! The image a job assembles from its tiles, and the wire form of one tile's pixels.
 //!
-//! A tile travels and is stored as little-endian f32: first X, Y, Z of every pixel (row-major
-//! within the tile), then, when the scene has a sky, each pixel's sky coverage (the fraction of
-//! its camera samples that saw the sky), then, when the job keeps spectra, the 81 bands of every
-//! pixel. The first two make the tile's image part, the last its spectral part.
+//! A tile travels and is stored as little-endian words: first X, Y, Z of every pixel (f32,
+//! row-major within the tile), then, when the scene has a sky, each pixel's sky coverage (f32,
+//! the fraction of its camera samples that saw the sky), then, when it has point or distant
+//! lights, each pixel's mask of the lights that light it (u32, [`LIT_BITS`] bits), then, when the
+//! job keeps spectra, the 81 bands of every pixel (f32). All but the last make the tile's image
+//! part, the last its spectral part.
 //!
-//! Every value must be a radiometric quantity a tracer can produce: finite and not negative
-//! (X, Y, Z and spectral radiance), and a coverage between 0 and 1. [`check_tile`] refuses
-//! anything else, so a broken or hostile worker cannot put NaN or ∞ into an image.
+//! Every value must be one a tracer can produce: radiometric quantities (X, Y, Z and spectral
+//! radiance) finite and not negative, a coverage between 0 and 1, a mask within its bits.
+//! [`check_tile`] refuses anything else, so a broken or hostile worker cannot put NaN or ∞ into
+//! an image.
 
-use restauro_scene::plan::Rect;
+use restauro_scene::plan::{LIT_BITS, Plan, Rect};
 use restauro_spectral::grid::BANDS;
 
 #[derive(Debug, thiserror::Error)]
@@ -21,19 +24,73 @@ pub struct TileDataError {
     pub problem: String,
 }
 
-/// The byte sizes of a tile's two parts: the image (XYZ, and sky coverage when `sky`) and the
+/// What a job's tiles carry besides XYZ.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TileLayout {
+    /// The 81 bands of every pixel.
+    pub spectral: bool,
+    /// Each pixel's sky coverage.
+    pub sky: bool,
+    /// Each pixel's mask of the lights that light it.
+    pub lit: bool,
+}
+
+impl From<&Plan> for TileLayout {
+    fn from(plan: &Plan) -> Self {
+        TileLayout { spectral: plan.spectral, sky: plan.sky, lit: plan.lit }
+    }
+}
+
+impl TileLayout {
+    /// The 4-byte words per pixel of the image part.
+    fn image_words(self) -> usize {
+        3 + usize::from(self.sky) + usize::from(self.lit)
+    }
+}
+
+/// The byte sizes of a tile's two parts: the image (XYZ, sky coverage, light masks) and the
 /// spectra.
-pub fn tile_sizes(rect: &Rect, spectral: bool, sky: bool) -> (usize, usize) {
+pub fn tile_sizes(rect: &Rect, layout: TileLayout) -> (usize, usize) {
     let pixels = rect.width as usize * rect.height as usize;
-    (pixels * (3 + usize::from(sky)) * 4, if spectral { pixels * BANDS * 4 } else { 0 })
+    (pixels * layout.image_words() * 4, if layout.spectral { pixels * BANDS * 4 } else { 0 })
+}
+
+/// The parts of a tile's bytes, by where they start.
+struct Parts {
+    sky: usize,
+    lit: usize,
+    spectral: usize,
+}
+
+impl Parts {
+    fn of(rect: &Rect, layout: TileLayout) -> Self {
+        let pixels = rect.width as usize * rect.height as usize;
+        let sky = pixels * 12;
+        let lit = sky + if layout.sky { pixels * 4 } else { 0 };
+        let spectral = lit + if layout.lit { pixels * 4 } else { 0 };
+        Parts { sky, lit, spectral }
+    }
+
+    /// The part a byte offset lies in, the pixel, and whether its value is in range.
+    fn check(&self, at: usize, word: [u8; 4]) -> (&'static str, usize, bool) {
+        let v = f32::from_le_bytes(word);
+        let radiometric = v.is_finite() && v >= 0.0;
+        match at {
+            a if a < self.sky => ("XYZ", a / 12, radiometric),
+            a if a < self.lit => ("sky coverage", (a - self.sky) / 4, (0.0..=1.0).contains(&v)),
+            a if a < self.spectral => {
+                ("light mask", (a - self.lit) / 4, u32::from_le_bytes(word) >> LIT_BITS == 0)
+            }
+            a => ("spectral radiance", (a - self.spectral) / (BANDS * 4), radiometric),
+        }
+    }
 }
 
 /// Checks a tile's wire bytes: the size its rectangle and layout give, and every value in range.
 pub fn check_tile(
     index: u32,
     rect: &Rect,
-    spectral: bool,
-    sky: bool,
+    layout: TileLayout,
     data: &[u8],
 ) -> Result<(), TileDataError> {
     let refuse = |problem: String| TileDataError {
@@ -42,7 +99,7 @@ pub fn check_tile(
         height: rect.height,
         problem,
     };
-    let (image_bytes, spectral_bytes) = tile_sizes(rect, spectral, sky);
+    let (image_bytes, spectral_bytes) = tile_sizes(rect, layout);
     if data.len() != image_bytes + spectral_bytes {
         return Err(refuse(format!(
             "{} bytes of pixel data, expected {}",
@@ -50,25 +107,21 @@ pub fn check_tile(
             image_bytes + spectral_bytes
         )));
     }
-    let xyz_bytes = rect.width as usize * rect.height as usize * 12;
-    let value =
-        |at: usize| f32::from_le_bytes([data[at], data[at + 1], data[at + 2], data[at + 3]]);
-    let part = |at: usize| match at {
-        a if a < xyz_bytes => ("XYZ", a / 12),
-        a if a < image_bytes => ("sky coverage", (a - xyz_bytes) / 4),
-        a => ("spectral radiance", (a - image_bytes) / (BANDS * 4)),
-    };
-    for at in (0..data.len()).step_by(4) {
-        let v = value(at);
-        let in_range = if (xyz_bytes..image_bytes).contains(&at) {
-            (0.0..=1.0).contains(&v)
-        } else {
-            v.is_finite() && v >= 0.0
-        };
+    let parts = Parts::of(rect, layout);
+    for (i, word) in data.chunks_exact(4).enumerate() {
+        let word = [word[0], word[1], word[2], word[3]];
+        let (what, pixel, in_range) = parts.check(4 * i, word);
         if !in_range {
-            let (what, pixel) = part(at);
-            let expected = if what == "sky coverage" { "0 to 1" } else { "finite and ≥ 0" };
-            return Err(refuse(format!("pixel {pixel} has {what} {v}, which must be {expected}")));
+            let (value, expected) = match what {
+                "sky coverage" => (f32::from_le_bytes(word).to_string(), "0 to 1"),
+                "light mask" => {
+                    (format!("{:#x}", u32::from_le_bytes(word)), "a mask of at most 24 lights")
+                }
+                _ => (f32::from_le_bytes(word).to_string(), "finite and ≥ 0"),
+            };
+            return Err(refuse(format!(
+                "pixel {pixel} has {what} {value}, which must be {expected}"
+            )));
         }
     }
     Ok(())
@@ -83,24 +136,35 @@ pub struct Framebuffer {
     pub spectral: Option<Vec<Vec<f32>>>,
     /// The fraction of each pixel's camera samples that saw the sky, when the scene has one.
     pub sky: Option<Vec<f32>>,
+    /// Which lights light each pixel, when the scene has point or distant lights.
+    pub lit_by: Option<Vec<u32>>,
 }
 
 impl Framebuffer {
-    pub fn new(width: u32, height: u32, spectral: bool, sky: bool) -> Self {
+    pub fn new(width: u32, height: u32, layout: TileLayout) -> Self {
         let n = width as usize * height as usize;
         Self {
             width,
             height,
             xyz: vec![[0.0; 3]; n],
-            spectral: spectral.then(|| vec![vec![0.0; n]; BANDS]),
-            sky: sky.then(|| vec![0.0; n]),
+            spectral: layout.spectral.then(|| vec![vec![0.0; n]; BANDS]),
+            sky: layout.sky.then(|| vec![0.0; n]),
+            lit_by: layout.lit.then(|| vec![0; n]),
+        }
+    }
+
+    pub fn layout(&self) -> TileLayout {
+        TileLayout {
+            spectral: self.spectral.is_some(),
+            sky: self.sky.is_some(),
+            lit: self.lit_by.is_some(),
         }
     }
 
     /// Places tile `index` at `rect` from its wire bytes, refusing data of the wrong size.
     pub fn place(&mut self, index: u32, rect: &Rect, data: &[u8]) -> Result<(), TileDataError> {
-        let (xyz_bytes, _) = tile_sizes(rect, self.spectral.is_some(), self.sky.is_some());
-        check_tile(index, rect, self.spectral.is_some(), self.sky.is_some(), data)?;
+        let layout = self.layout();
+        check_tile(index, rect, layout, data)?;
         if rect.x + rect.width > self.width || rect.y + rect.height > self.height {
             return Err(TileDataError {
                 tile: index,
@@ -109,24 +173,30 @@ impl Framebuffer {
                 problem: format!("lies outside the {}×{} image", self.width, self.height),
             });
         }
-        let floats = |bytes: &[u8]| -> Vec<f32> {
-            bytes.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect()
+        let words = |bytes: &[u8]| -> Vec<[u8; 4]> {
+            bytes.chunks_exact(4).map(|b| [b[0], b[1], b[2], b[3]]).collect()
         };
-        let pixels = rect.width as usize * rect.height as usize;
-        let xyz = floats(&data[..pixels * 12]);
-        let coverage = floats(&data[pixels * 12..xyz_bytes]);
-        let spectral = floats(&data[xyz_bytes..]);
+        let floats = |bytes: &[u8]| -> Vec<f32> {
+            words(bytes).into_iter().map(f32::from_le_bytes).collect()
+        };
+        let parts = Parts::of(rect, layout);
+        let xyz = floats(&data[..parts.sky]);
         let w = rect.width as usize;
         for (i, p) in xyz.chunks_exact(3).enumerate() {
             self.xyz[at(self.width, rect, i, w)] = [p[0], p[1], p[2]];
         }
         if let Some(sky) = &mut self.sky {
-            for (i, &c) in coverage.iter().enumerate() {
+            for (i, c) in floats(&data[parts.sky..parts.lit]).into_iter().enumerate() {
                 sky[at(self.width, rect, i, w)] = c;
             }
         }
+        if let Some(lit) = &mut self.lit_by {
+            for (i, word) in words(&data[parts.lit..parts.spectral]).into_iter().enumerate() {
+                lit[at(self.width, rect, i, w)] = u32::from_le_bytes(word);
+            }
+        }
         if let Some(planes) = &mut self.spectral {
-            for (i, bands) in spectral.chunks_exact(BANDS).enumerate() {
+            for (i, bands) in floats(&data[parts.spectral..]).chunks_exact(BANDS).enumerate() {
                 let a = at(self.width, rect, i, w);
                 for (plane, &v) in planes.iter_mut().zip(bands) {
                     plane[a] = v;
@@ -142,15 +212,25 @@ fn at(image_width: u32, rect: &Rect, i: usize, w: usize) -> usize {
     (rect.y as usize + i / w) * image_width as usize + rect.x as usize + i % w
 }
 
-/// The wire bytes of a tile: XYZ, the sky coverage when given, then the spectra when given
-/// (each pixel's 81 bands).
+/// A tile's per-pixel data besides XYZ and spectra, as rendered.
+#[derive(Clone, Copy, Default)]
+pub struct TileExtras<'a> {
+    pub sky: Option<&'a [f32]>,
+    pub lit_by: Option<&'a [u32]>,
+}
+
+/// The wire bytes of a tile: XYZ, the sky coverage and light masks when given, then the
+/// spectra when given (each pixel's 81 bands).
 pub fn encode_tile<'a>(
     xyz: &[[f32; 3]],
-    sky: Option<&[f32]>,
+    extras: TileExtras<'_>,
     spectral: Option<impl Iterator<Item = &'a [f32]>>,
 ) -> Vec<u8> {
-    let mut out = Vec::with_capacity(xyz.len() * 16);
-    for v in xyz.iter().flatten().chain(sky.into_iter().flatten()) {
+    let mut out = Vec::with_capacity(xyz.len() * 20);
+    for v in xyz.iter().flatten().chain(extras.sky.into_iter().flatten()) {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
+    for v in extras.lit_by.into_iter().flatten() {
         out.extend_from_slice(&v.to_le_bytes());
     }
     if let Some(pixels) = spectral {
@@ -167,18 +247,24 @@ pub fn encode_tile<'a>(
 mod tests {
     use super::*;
 
+    const ALL: TileLayout = TileLayout { spectral: true, sky: true, lit: true };
+
     #[test]
     fn tiles_land_where_their_rectangle_says() {
-        let mut fb = Framebuffer::new(5, 4, true, true);
+        let mut fb = Framebuffer::new(5, 4, ALL);
         let rect = Rect { x: 3, y: 1, width: 2, height: 3 };
         let xyz: Vec<[f32; 3]> = (0..6).map(|i| [i as f32, 10.0 + i as f32, 20.0]).collect();
         let sky: Vec<f32> = (0..6).map(|i| i as f32 / 8.0).collect();
+        let lit: Vec<u32> = (0..6).map(|i| i % 3).collect();
         let spectra: Vec<Vec<f32>> = (0..6).map(|i| vec![i as f32 * 0.5; BANDS]).collect();
-        let data = encode_tile(&xyz, Some(&sky), Some(spectra.iter().map(Vec::as_slice)));
+        let extras = TileExtras { sky: Some(&sky), lit_by: Some(&lit) };
+        let data = encode_tile(&xyz, extras, Some(spectra.iter().map(Vec::as_slice)));
         fb.place(7, &rect, &data).unwrap();
         // Pixel 3 of the 2-wide tile is its second row, second column: image (4, 2).
         assert_eq!(fb.xyz[2 * 5 + 4], [3.0, 13.0, 20.0]);
         assert_eq!(fb.sky.as_ref().unwrap()[2 * 5 + 4], 3.0 / 8.0);
+        assert_eq!(fb.lit_by.as_ref().unwrap()[2 * 5 + 4], 0);
+        assert_eq!(fb.lit_by.as_ref().unwrap()[2 * 5 + 3], 2);
         assert_eq!(fb.spectral.as_ref().unwrap()[40][2 * 5 + 4], 1.5);
         assert_eq!(fb.xyz[0], [0.0; 3]);
         let err = fb.place(7, &rect, &data[..data.len() - 4]).unwrap_err();
@@ -187,30 +273,42 @@ mod tests {
         assert!(fb.place(8, &outside, &data).is_err());
     }
 
-    /// NaN, ∞ and negative radiance, and a coverage outside 0–1, are refused wherever they sit.
+    /// NaN, ∞ and negative radiance, a coverage outside 0–1 and a mask of lights the renderer
+    /// cannot name are refused wherever they sit.
     #[test]
     fn values_a_tracer_cannot_produce_are_refused() {
         let rect = Rect { x: 0, y: 0, width: 2, height: 2 };
         let xyz = vec![[1.0f32, 2.0, 3.0]; 4];
         let sky = vec![0.5f32; 4];
+        let lit = vec![1u32 << 23; 4];
         let spectra = vec![vec![0.25f32; BANDS]; 4];
-        let good = encode_tile(&xyz, Some(&sky), Some(spectra.iter().map(Vec::as_slice)));
-        check_tile(0, &rect, true, true, &good).unwrap();
-        let image_bytes = 4 * 16;
+        let extras = TileExtras { sky: Some(&sky), lit_by: Some(&lit) };
+        let good = encode_tile(&xyz, extras, Some(spectra.iter().map(Vec::as_slice)));
+        check_tile(0, &rect, ALL, &good).unwrap();
+        let image_bytes = 4 * 20;
         for (at, bad, what) in [
-            (4, f32::NAN, "XYZ"),
-            (40, f32::INFINITY, "XYZ"),
-            (0, -1.0, "XYZ"),
-            (48 + 4, 1.5, "sky coverage"),
-            (image_bytes + 81 * 4 * 3 + 8, f32::NAN, "spectral radiance"),
-            (image_bytes, -0.5, "spectral radiance"),
+            (4, f32::NAN.to_le_bytes(), "XYZ"),
+            (40, f32::INFINITY.to_le_bytes(), "XYZ"),
+            (0, (-1.0f32).to_le_bytes(), "XYZ"),
+            (48 + 4, 1.5f32.to_le_bytes(), "sky coverage"),
+            (64 + 8, (1u32 << 24).to_le_bytes(), "light mask"),
+            (image_bytes + 81 * 4 * 3 + 8, f32::NAN.to_le_bytes(), "spectral radiance"),
+            (image_bytes, (-0.5f32).to_le_bytes(), "spectral radiance"),
         ] {
             let mut data = good.clone();
-            data[at..at + 4].copy_from_slice(&bad.to_le_bytes());
-            let e = check_tile(3, &rect, true, true, &data).unwrap_err().to_string();
+            data[at..at + 4].copy_from_slice(&bad);
+            let e = check_tile(3, &rect, ALL, &data).unwrap_err().to_string();
             assert!(e.contains(what) && e.starts_with("tile 3"), "{e}");
         }
-        let e = check_tile(3, &rect, true, true, &good[..good.len() - 4]).unwrap_err();
+        let e = check_tile(3, &rect, ALL, &good[..good.len() - 4]).unwrap_err();
         assert!(e.to_string().contains("expected"), "{e}");
+        // Without a sky the masks follow XYZ directly.
+        let no_sky = TileLayout { sky: false, ..ALL };
+        let data = encode_tile(
+            &xyz,
+            TileExtras { sky: None, lit_by: Some(&lit) },
+            Some(spectra.iter().map(Vec::as_slice)),
+        );
+        check_tile(0, &rect, no_sky, &data).unwrap();
     }
 }

@@ -89,6 +89,17 @@ pub struct XyzImage {
     pub pixels: Vec<[f32; 3]>,
     /// Pixels marked as light sources (a channel named `emitter`, nonzero for emitters).
     pub emitter: Option<Vec<bool>>,
+    /// Which of the scene's lights light each pixel (a channel named `lit_by`: bit k for light k,
+    /// the sky not counted, as an integer below 2²⁴ so that f32 holds it exactly). Pixels with
+    /// the same mask are the Retinex's frameworks of illumination.
+    pub lit_by: Option<Vec<u32>>,
+}
+
+impl XyzImage {
+    /// An image without light-source or light masks.
+    pub fn new(width: usize, height: usize, pixels: Vec<[f32; 3]>) -> Self {
+        XyzImage { width, height, pixels, emitter: None, lit_by: None }
+    }
 }
 
 /// Read an OpenEXR file as XYZ. Channels X, Y, Z are taken as they are; otherwise R, G, B are
@@ -206,7 +217,15 @@ pub fn read_exr(path: &Path, max_pixels: usize) -> Result<XyzImage> {
         .collect();
     let emitter = find("emitter")
         .map(|i| channels[i].sample_data.values_as_f32().map(|v| v != 0.0).collect());
-    Ok(XyzImage { width, height, pixels, emitter })
+    // A mask is a whole number below 2²⁴; anything else (NaN, negative, a fraction from a
+    // resampling tool) is no mask, and its pixel is put with the unlit ones.
+    let lit_by = find("lit_by").map(|i| {
+        let mask = |v: f32| {
+            if v.fract() == 0.0 && (0.0..16_777_216.0).contains(&v) { v as u32 } else { 0 }
+        };
+        channels[i].sample_data.values_as_f32().map(mask).collect()
+    });
+    Ok(XyzImage { width, height, pixels, emitter, lit_by })
 }
 
 /// The RGB → XYZ matrix (rows) of arbitrary primaries and white, as restauro's display spaces
@@ -313,7 +332,8 @@ fn sort_header_attributes(bytes: &mut [u8]) {
 }
 
 /// Write an XYZ image as OpenEXR: channels X, Y, Z and linear sRGB-primaries R, G, B preview
-/// channels (so ordinary viewers show it), plus the `emitter` mask when there is one.
+/// channels (so ordinary viewers show it), plus the `emitter` and `lit_by` masks when there are
+/// any.
 pub fn write_xyz_exr(path: &Path, image: &XyzImage, attributes: &[(&str, &str)]) -> Result<()> {
     write_xyz_exr_with(path, image, Vec::new(), attributes)
 }
@@ -343,6 +363,10 @@ fn write_xyz_exr_with(
     if let Some(mask) = &image.emitter {
         channels
             .push(("emitter".to_owned(), mask.iter().map(|&e| f32::from(u8::from(e))).collect()));
+    }
+    if let Some(masks) = &image.lit_by {
+        // Exact: a mask has at most 24 bits.
+        channels.push(("lit_by".to_owned(), masks.iter().map(|&m| m as f32).collect()));
     }
     channels.extend(extra);
     write_exr(path, image.width, image.height, channels, attributes)
@@ -453,6 +477,8 @@ mod tests {
                 [9.0, 8.0, 7.0],
             ],
             emitter: Some(vec![false, false, false, true, false, false]),
+            // The largest mask is exact in f32.
+            lit_by: Some(vec![0, 1, 3, 0, (1 << 24) - 1, 1 << 23]),
         };
         let path = dir.join("a.exr");
         write_xyz_exr(&path, &image, &[("restauroNote", "test")]).unwrap();
@@ -470,6 +496,7 @@ mod tests {
             height: 1,
             pixels: vec![[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]],
             emitter: Some(vec![false, true]),
+            lit_by: None,
         };
         let attributes: Vec<(String, String)> =
             (0..8).map(|i| (format!("restauroNote{i}"), format!("value {i}"))).collect();
@@ -501,8 +528,7 @@ mod tests {
         assert_eq!(spectral_channel_name(557.5), "S0.557,500000nm");
         let dir = scratch("spectral");
         let path = dir.join("s.exr");
-        let image =
-            XyzImage { width: 1, height: 2, pixels: vec![[1.0, 2.0, 3.0]; 2], emitter: None };
+        let image = XyzImage::new(1, 2, vec![[1.0, 2.0, 3.0]; 2]);
         write_spectral_exr(
             &path,
             &image,
@@ -611,8 +637,7 @@ mod tests {
     fn a_damaged_exr_is_described_once_in_plain_words() {
         let dir = scratch("damaged");
         let good = dir.join("good.exr");
-        let image =
-            XyzImage { width: 8, height: 4, pixels: vec![[1.0, 2.0, 3.0]; 32], emitter: None };
+        let image = XyzImage::new(8, 4, vec![[1.0, 2.0, 3.0]; 32]);
         write_xyz_exr(&good, &image, &[]).unwrap();
         let bytes = std::fs::read(&good).unwrap();
         let cut = dir.join("cut.exr");

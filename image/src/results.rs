@@ -68,7 +68,16 @@ pub fn write_results(
     // sky: the mixed pixels along a skyline are bright and blue, and as candidates for the white
     // they would give the whole building a yellow cast.
     let retinex_emitters = sky_at_least(0.1);
-    let image = XyzImage { width, height, pixels: frame.xyz, emitter: emitter.clone() };
+    // Which lights light each pixel: the frameworks of illumination the Retinex adapts to
+    // apart (the sunlit stone, the sky-lit shadow); kept in the EXR's `lit_by` channel.
+    let lit_by = frame.lit_by;
+    let image = XyzImage {
+        width,
+        height,
+        pixels: frame.xyz,
+        emitter: emitter.clone(),
+        lit_by: lit_by.clone(),
+    };
     let attrs = [
         ("restauroRender", options.info),
         ("restauroXyzUnits", "absolute: Y in cd/m2 (K_m = 683 lm/W)"),
@@ -91,6 +100,9 @@ pub fn write_results(
         if params.emitters.is_none() {
             params.emitters = retinex_emitters.clone();
         }
+        if params.frameworks.is_none() {
+            params.frameworks = lit_by.clone();
+        }
         let (perceived, stats) =
             retinex_xyz(&image.pixels, width, height, &params, ChannelSpace::default(), &|_, _| {})
                 .map_err(|e| ResultsError::Retinex(e.to_string()))?;
@@ -102,15 +114,17 @@ pub fn write_results(
         let sky = if params.emitters.is_some() { "passed-over" } else { "none" };
         let settings = format!(
             "paths={} reach={} length={} threshold={} seed={} space={} white={white} \
-             light-sources={sky}",
+             light-sources={sky} frameworks={} framework-weight={}",
             params.paths,
             params.reach,
             stats.length,
             params.threshold,
             params.seed,
-            ChannelSpace::default()
+            ChannelSpace::default(),
+            stats.frameworks,
+            params.framework_weight,
         );
-        let perceived = XyzImage { width, height, pixels: perceived, emitter };
+        let perceived = XyzImage { width, height, pixels: perceived, emitter, lit_by };
         let exr = format!("{name}-retinex.exr");
         let png = format!("{name}-retinex.png");
         write_xyz_exr(

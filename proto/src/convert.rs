@@ -176,6 +176,7 @@ impl From<&Plan> for pb::Plan {
             seed: p.seed,
             spectral: p.spectral,
             sky: p.sky,
+            lit: p.lit,
             tile: p.tile,
         }
     }
@@ -198,6 +199,7 @@ impl TryFrom<pb::Plan> for Plan {
             seed: p.seed,
             spectral: p.spectral,
             sky: p.sky,
+            lit: p.lit,
             tile: p.tile,
         })
     }
@@ -308,6 +310,7 @@ mod tests {
             seed: 11,
             spectral: false,
             sky: true,
+            lit: true,
             tile: 16,
         };
         assert_eq!(Plan::try_from(pb::Plan::from(&plan)).unwrap(), plan);

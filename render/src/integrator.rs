@@ -23,6 +23,35 @@ use glam::Vec3A;
 use restauro_scene::scene_file::Integrator;
 use restauro_spectral::Spectrum;
 
+pub use restauro_scene::plan::LIT_BITS;
+/// A light lights a point when it gives at least this share of the direct illuminance there
+/// from the scene's point and distant lights (the sky not counted): a faint lamp far off does
+/// not make a framework of its own.
+const LIT_SHARE: f32 = 0.1;
+
+/// What a camera sample saw besides its radiance.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Seen {
+    /// The ray escaped to the sky (so saw it, if there is one).
+    pub sky: bool,
+    /// Bit k: light k (in the scene's order, the sky not counted) lights the camera ray's first
+    /// hit, unoccluded, with at least a tenth of the direct illuminance there. Points lit by the
+    /// same lights share their illumination: the Retinex's frameworks (Gilchrist et al., "An
+    /// anchoring theory of lightness perception", Psychological Review 106, 1999).
+    pub lit_by: u32,
+}
+
+/// The direct illuminance (lux) each light gives the first hit, by bit of [`Seen::lit_by`].
+type LitLux = [f32; LIT_BITS];
+
+fn lit_mask(lux: &LitLux) -> u32 {
+    let total: f32 = lux.iter().sum();
+    lux.iter()
+        .enumerate()
+        .filter(|&(_, &e)| e > 0.0 && e >= LIT_SHARE * total)
+        .fold(0, |mask, (k, _)| mask | 1 << k)
+}
+
 /// A local frame around a normal (Duff et al., "Building an orthonormal basis, revisited",
 /// JCGT 6(1), 2017).
 #[derive(Clone, Copy)]
@@ -92,7 +121,8 @@ impl Weight<'_> {
 /// Adds the direct light at a vertex to `out`: Σ f(wo, wi) · E⊥(λ) · cos θi over the visible
 /// sources, times `weight`. With f = ρ(λ)·a + b and E⊥ = s·S(λ), each source adds
 /// S(λ)·(ρ(λ)·a·s·cos + b·s·cos) in one pass over the bands, with no temporary spectrum. The
-/// sky, when there is one, adds one sample of its reflected radiance.
+/// sky, when there is one, adds one sample of its reflected radiance. At the camera's hit,
+/// `lit` collects each light's illuminance.
 #[inline]
 fn add_direct(
     scene: &PreparedScene,
@@ -101,12 +131,13 @@ fn add_direct(
     sampler: &mut PixelSampler,
     rays: &mut u64,
     out: &mut Spectrum,
+    mut lit: Option<&mut LitLux>,
 ) {
     let hit = v.hit;
     let origin = lift(hit);
     let bsdf = &scene.materials[hit.material as usize];
     add_sky(scene, v, origin, weight, sampler, rays, out);
-    for light in &scene.lights {
+    for (i, light) in scene.lights.iter().enumerate() {
         let Some(inc) = light.incident(hit.point) else { continue };
         let cos = inc.direction.dot(hit.normal);
         if cos <= 0.0 {
@@ -124,6 +155,9 @@ fn add_direct(
         }
         let k = inc.scale * cos;
         weight.add(out, inc.spectrum, bsdf.rho(), a * k, b * k);
+        if let Some(lux) = lit.as_deref_mut() {
+            lux[i.min(LIT_BITS - 1)] += inc.illuminance_lux * cos;
+        }
     }
 }
 
@@ -175,8 +209,8 @@ pub fn radiance(
     out
 }
 
-/// [`radiance`], added to `out`: a pixel sums its samples in place. Returns whether the camera
-/// ray escaped to the sky (so saw it, if there is one).
+/// [`radiance`], added to `out`: a pixel sums its samples in place. Returns what the camera
+/// ray saw besides: the sky, or the lights of its first hit.
 pub fn add_radiance(
     scene: &PreparedScene,
     origin: Vec3A,
@@ -184,7 +218,8 @@ pub fn add_radiance(
     sampler: &mut PixelSampler,
     rays: &mut u64,
     out: &mut Spectrum,
-) -> bool {
+) -> Seen {
+    let mut lux: LitLux = [0.0; LIT_BITS];
     // Whitted's bounces are neutral (Fresnel of a dielectric); the path tracer's become spectral
     // at its first bounce.
     let mut neutral = 1.0f32;
@@ -198,7 +233,7 @@ pub fn add_radiance(
                 if let Some(sky) = &scene.sky {
                     out.add_scaled(&sky.per_nit, sky.luminance_cd_m2(direction));
                 }
-                return true;
+                return Seen { sky: true, lit_by: 0 };
             }
             break;
         };
@@ -208,7 +243,8 @@ pub fn add_radiance(
             Some(t) => Weight::Spectral(t),
             None => Weight::Neutral(neutral),
         };
-        add_direct(scene, &Vertex { hit: &hit, frame, wo }, weight, sampler, rays, out);
+        let lit = (depth == 0).then_some(&mut lux);
+        add_direct(scene, &Vertex { hit: &hit, frame, wo }, weight, sampler, rays, out, lit);
         if depth + 1 == max_depth {
             break;
         }
@@ -242,5 +278,5 @@ pub fn add_radiance(
         }
         origin = lift(&hit);
     }
-    false
+    Seen { sky: false, lit_by: lit_mask(&lux) }
 }

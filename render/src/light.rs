@@ -40,8 +40,9 @@ pub enum Light {
     /// A point luminaire: `per_cd` is S_e(λ)/Σ K S_e Δλ, the spectral radiant intensity of one
     /// candela (W·sr⁻¹·nm⁻¹).
     Point { position: Vec3A, intensity_cd: f32, per_cd: Spectrum, distribution: Distribution },
-    /// A distant source: `direction` towards it, `irradiance` E⊥(λ) on a surface facing it.
-    Distant { direction: Vec3A, irradiance: Spectrum },
+    /// A distant source: `direction` towards it, `irradiance` E⊥(λ) on a surface facing it,
+    /// whose illuminance is `illuminance_lux`.
+    Distant { direction: Vec3A, irradiance: Spectrum, illuminance_lux: f32 },
 }
 
 /// The sky dome: its luminance over directions above the horizon (nothing comes from below it:
@@ -82,12 +83,13 @@ impl Sky {
 
 /// A light's contribution at a point: the direction towards it, the distance (∞ for distant
 /// lights) and the spectral irradiance on a surface facing it, `scale · spectrum` (kept apart so
-/// that no spectrum is built per shadow ray).
+/// that no spectrum is built per shadow ray), whose illuminance is `illuminance_lux`.
 pub struct Incident<'a> {
     pub direction: Vec3A,
     pub distance: f32,
     pub scale: f32,
     pub spectrum: &'a Spectrum,
+    pub illuminance_lux: f32,
 }
 
 impl Incident<'_> {
@@ -153,18 +155,21 @@ impl Light {
                 let r = r2.sqrt();
                 let direction = d / r;
                 let intensity = intensity_cd * distribution.factor(-direction);
+                // `per_cd` is normalised to one lumen per steradian, so E_v = I_v / r².
                 (intensity > 0.0).then(|| Incident {
                     direction,
                     distance: r,
                     scale: intensity / r2,
                     spectrum: per_cd,
+                    illuminance_lux: intensity / r2,
                 })
             }
-            Light::Distant { direction, irradiance } => Some(Incident {
+            Light::Distant { direction, irradiance, illuminance_lux } => Some(Incident {
                 direction: *direction,
                 distance: f32::INFINITY,
                 scale: 1.0,
                 spectrum: irradiance,
+                illuminance_lux: *illuminance_lux,
             }),
         }
     }

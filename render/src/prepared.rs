@@ -326,6 +326,7 @@ fn light(scene: &LoadedScene, l: &ResolvedLight) -> Result<Light, TraceError> {
         ResolvedLight::Sun { direction, illuminance_lux, spectrum, .. } => Light::Distant {
             direction: Vec3A::from(direction.map(|v| v as f32)).normalize(),
             irradiance: luminous(scene, spectrum)? * (*illuminance_lux as f32),
+            illuminance_lux: *illuminance_lux as f32,
         },
         ResolvedLight::Sky { .. } => {
             return Err(TraceError::Scene("the sky is not a delta light".into()));

@@ -3,7 +3,7 @@
 //! pixel's sum runs in a fixed order from samples keyed by (seed, pixel, sample), so the result
 //! is bit-identical whatever the tile size, the thread count or the worker.
 
-use crate::integrator::add_radiance;
+use crate::integrator::{LIT_BITS, add_radiance};
 use crate::prepared::PreparedScene;
 use crate::sampler::{PixelKey, PixelSampler};
 use glam::Vec3A;
@@ -35,6 +35,9 @@ pub struct TileResult {
     pub spectral: Option<Vec<Spectrum>>,
     /// When the scene has a sky: the fraction of each pixel's camera samples that saw it.
     pub sky: Option<Vec<f32>>,
+    /// When the scene has point or distant lights: which light each pixel's first hits, for
+    /// most of its samples (a bit per light, as [`crate::integrator::Seen::lit_by`]).
+    pub lit_by: Option<Vec<u32>>,
     /// The rays traced for the tile.
     pub rays: u64,
 }
@@ -65,24 +68,28 @@ fn keyed_camera_ray(
     (scene.camera.direction(x as f32 + dx, y as f32 + dy), sampler)
 }
 
-/// The sum of the spectral radiance of pixel (x, y)'s samples, and how many saw the sky.
+/// The sum of the spectral radiance of pixel (x, y)'s samples, how many saw the sky, and the
+/// lights that light the first hits of more than half of them.
 #[inline]
-fn pixel_sum(scene: &PreparedScene, x: u32, y: u32, rays: &mut u64) -> (Spectrum, u32) {
+fn pixel_sum(scene: &PreparedScene, x: u32, y: u32, rays: &mut u64) -> (Spectrum, u32, u32) {
     let key = PixelKey::new(scene.settings.seed, x, y);
     let mut sum = Spectrum::ZERO;
     let mut sky = 0;
-    for s in 0..scene.settings.samples_per_pixel.max(1) {
+    let mut lit = [0u32; LIT_BITS];
+    let samples = scene.settings.samples_per_pixel.max(1);
+    for s in 0..samples {
         let (direction, mut sampler) = keyed_camera_ray(scene, key, x, y, s);
-        sky += u32::from(add_radiance(
-            scene,
-            scene.camera.origin,
-            direction,
-            &mut sampler,
-            rays,
-            &mut sum,
-        ));
+        let seen =
+            add_radiance(scene, scene.camera.origin, direction, &mut sampler, rays, &mut sum);
+        sky += u32::from(seen.sky);
+        let mut bits = seen.lit_by;
+        while bits != 0 {
+            lit[bits.trailing_zeros() as usize] += 1;
+            bits &= bits - 1;
+        }
     }
-    (sum, sky)
+    let lit_by = (0..LIT_BITS).filter(|&k| 2 * lit[k] > samples).fold(0, |m, k| m | 1 << k);
+    (sum, sky, lit_by)
 }
 
 /// [`pixel`], counting the rays traced.
@@ -93,8 +100,9 @@ pub fn pixel_counted(scene: &PreparedScene, x: u32, y: u32, rays: &mut u64) -> S
 /// Renders `rect`: absolute XYZ per pixel, and the spectral radiance too when `spectral` is set
 /// (kept only then: a row of spectra is 81 times the size of its XYZ).
 pub fn render_tile(scene: &PreparedScene, rect: Rect, spectral: bool) -> TileResult {
-    type Row = (Vec<[f32; 3]>, Option<Vec<Spectrum>>, Option<Vec<f32>>, u64);
+    type Row = (Vec<[f32; 3]>, Option<Vec<Spectrum>>, Option<Vec<f32>>, Option<Vec<u32>>, u64);
     let has_sky = scene.sky.is_some();
+    let has_lights = !scene.lights.is_empty();
     let rows: Vec<Row> = (rect.y..rect.y + rect.height)
         .into_par_iter()
         .map(|y| {
@@ -103,10 +111,11 @@ pub fn render_tile(scene: &PreparedScene, rect: Rect, spectral: bool) -> TileRes
             let mut xyz = Vec::with_capacity(width);
             let mut spectra = spectral.then(|| Vec::with_capacity(width));
             let mut sky = has_sky.then(|| Vec::with_capacity(width));
+            let mut lit = has_lights.then(|| Vec::with_capacity(width));
             let mean = 1.0 / scene.settings.samples_per_pixel.max(1) as f32;
             for x in rect.x..rect.x + rect.width {
                 // The film is linear: the XYZ of the sum, scaled, is the XYZ of the mean.
-                let (sum, saw_sky) = pixel_sum(scene, x, y, &mut rays);
+                let (sum, saw_sky, lit_by) = pixel_sum(scene, x, y, &mut rays);
                 xyz.push(film_xyz(&sum).map(|v| v * mean));
                 if let Some(s) = &mut spectra {
                     s.push(sum * mean);
@@ -114,16 +123,20 @@ pub fn render_tile(scene: &PreparedScene, rect: Rect, spectral: bool) -> TileRes
                 if let Some(s) = &mut sky {
                     s.push(saw_sky as f32 * mean);
                 }
+                if let Some(l) = &mut lit {
+                    l.push(lit_by);
+                }
             }
-            (xyz, spectra, sky, rays)
+            (xyz, spectra, sky, lit, rays)
         })
         .collect();
-    let rays = rows.iter().map(|r| r.3).sum();
+    let rays = rows.iter().map(|r| r.4).sum();
     let pixels = rect.width as usize * rect.height as usize;
     let mut xyz = Vec::with_capacity(pixels);
     let mut spectra = spectral.then(|| Vec::with_capacity(pixels));
     let mut sky = has_sky.then(|| Vec::with_capacity(pixels));
-    for (row_xyz, row_spectra, row_sky, _) in rows {
+    let mut lit_by = has_lights.then(|| Vec::with_capacity(pixels));
+    for (row_xyz, row_spectra, row_sky, row_lit, _) in rows {
         xyz.extend(row_xyz);
         if let (Some(all), Some(row)) = (&mut spectra, row_spectra) {
             all.extend(row);
@@ -131,6 +144,9 @@ pub fn render_tile(scene: &PreparedScene, rect: Rect, spectral: bool) -> TileRes
         if let (Some(all), Some(row)) = (&mut sky, row_sky) {
             all.extend(row);
         }
+        if let (Some(all), Some(row)) = (&mut lit_by, row_lit) {
+            all.extend(row);
+        }
     }
-    TileResult { rect, xyz, spectral: spectra, sky, rays }
+    TileResult { rect, xyz, spectral: spectra, sky, lit_by, rays }
 }

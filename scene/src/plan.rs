@@ -47,9 +47,20 @@ pub struct Plan {
     /// of its camera samples that saw the sky), so the Retinex can keep the sky from becoming
     /// the white.
     pub sky: bool,
+    /// Whether the scene has point or distant lights. Its tiles then carry which of them light
+    /// each pixel (a mask of [`LIT_BITS`] bits), so the Retinex can adapt to each framework of
+    /// illumination (the sunlit stone, the sky-lit shadow) apart. Absent in plans stored
+    /// before it existed: their images are adapted as one framework.
+    #[serde(default)]
+    pub lit: bool,
     /// The tile edge in pixels; the tiles follow from it and the image size ([`Plan::tile`]).
     pub tile: u32,
 }
+
+/// The lights with a bit of their own in a pixel's mask of the lights that light it (in the
+/// scene's order, the sky not counted); lights beyond the last share its bit. 24, so that a
+/// mask is an exact integer in an f32 image channel.
+pub const LIT_BITS: usize = 24;
 
 /// A tile edge that gives an image of `width × height` about 48 tiles or more (so each of
 /// several workers gets several, and a lost worker costs little), a multiple of 16 between 16
@@ -125,6 +136,7 @@ impl Plan {
             seed: render.seed,
             spectral: options.spectral,
             sky: scene.lights.iter().any(|l| matches!(l, crate::load::ResolvedLight::Sky { .. })),
+            lit: scene.lights.iter().any(|l| !matches!(l, crate::load::ResolvedLight::Sky { .. })),
             tile: options.tile.unwrap_or_else(|| auto_tile(width, height)),
         };
         plan.check(limits, path)?;

@@ -2,6 +2,7 @@
 //! caller against a real coordinator process: they send what the real client and worker never
 //! would (another worker's lease, a forged ticket, NaN pixels, a name with terminal escapes).
 
+use restauro_image::framebuffer::{TileExtras, TileLayout, encode_tile};
 use restauro_proto::pb::render_client::RenderClient;
 use restauro_proto::pb::work_client::WorkClient;
 use restauro_proto::{self as pb, CHUNK_BYTES, Credentials, PROTOCOL_VERSION};
@@ -131,20 +132,19 @@ pub async fn lease(work: &mut Work, session: &pb::WorkerSession, max: u32) -> Ve
     panic!("no lease in 30 s")
 }
 
-/// The bytes of a tile of `rect` whose every value is `value` (XYZ, and sky coverage 0 when
-/// the scene has a sky).
-pub fn tile_data(rect: &Rect, sky: bool, value: f32) -> Vec<u8> {
+/// The tiles of the demo's facade (`aosta`): XYZ, sky coverage (it has a sky) and light masks
+/// (it has a sun), no spectra.
+pub const AOSTA_TILES: TileLayout = TileLayout { spectral: false, sky: true, lit: true };
+
+/// The bytes of a tile of `rect` whose every XYZ value is `value`, with sky coverage 0 and no
+/// light as the layout asks.
+pub fn tile_data(rect: &Rect, layout: TileLayout, value: f32) -> Vec<u8> {
     let pixels = rect.width as usize * rect.height as usize;
-    let mut out = Vec::with_capacity(pixels * 16);
-    for _ in 0..pixels * 3 {
-        out.extend_from_slice(&value.to_le_bytes());
-    }
-    if sky {
-        for _ in 0..pixels {
-            out.extend_from_slice(&0f32.to_le_bytes());
-        }
-    }
-    out
+    let xyz = vec![[value; 3]; pixels];
+    let (sky, lit) = (vec![0f32; pixels], vec![0u32; pixels]);
+    let extras =
+        TileExtras { sky: layout.sky.then_some(&sky[..]), lit_by: layout.lit.then_some(&lit[..]) };
+    encode_tile(&xyz, extras, None::<std::iter::Empty<&[f32]>>)
 }
 
 /// Reports `data` for `lease` with `session`.

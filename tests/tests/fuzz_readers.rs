@@ -507,6 +507,7 @@ fn exr_image(width: usize, height: usize) -> XyzImage {
         height,
         pixels,
         emitter: Some((0..width * height).map(|i| i % 5 == 0).collect()),
+        lit_by: None,
     }
 }
 

@@ -54,7 +54,7 @@ async fn a_worker_cannot_write_a_tile_it_was_not_leased_nor_act_as_another() {
     let lease = wire::lease(&mut holder, &holder_session, 1).await.remove(0);
     let mut thief = wire::work_client(&coordinator.url).await;
     let thief_session = wire::register(&mut thief, "thief").await;
-    let bright = wire::tile_data(&rect(&lease), true, 1e6);
+    let bright = wire::tile_data(&rect(&lease), wire::AOSTA_TILES, 1e6);
 
     // The holder's lease, reported with the thief's own session.
     let e = wire::report(&mut thief, &thief_session, &lease, bright.clone()).await.unwrap_err();
@@ -99,7 +99,7 @@ async fn non_finite_or_negative_pixels_are_refused_and_count_against_the_worker(
         let session = wire::register(&mut work, name).await;
         for &bad in values {
             let lease = wire::lease(&mut work, &session, 1).await.remove(0);
-            let data = wire::tile_data(&rect(&lease), true, bad);
+            let data = wire::tile_data(&rect(&lease), wire::AOSTA_TILES, bad);
             let e = wire::report(&mut work, &session, &lease, data).await.unwrap_err();
             assert_eq!(e.code(), Code::InvalidArgument, "{e:?}");
             assert!(e.message().contains(&format!("XYZ {bad}")), "{}", e.message());
@@ -281,10 +281,14 @@ async fn a_late_report_after_the_job_ended_stores_nothing() {
     let worker = Worker::start(d, &coordinator.url, "honest", &[]);
     let end = wire::wait_end(&mut client, &job.job_id, Duration::from_secs(120)).await;
     assert_eq!(end.state, pb::JobState::Done as i32, "{end:?}");
-    let reply =
-        wire::report(&mut late, &session, &lease, wire::tile_data(&rect(&lease), true, 5.0))
-            .await
-            .unwrap();
+    let reply = wire::report(
+        &mut late,
+        &session,
+        &lease,
+        wire::tile_data(&rect(&lease), wire::AOSTA_TILES, 5.0),
+    )
+    .await
+    .unwrap();
     assert!(reply.known && !reply.accepted, "{reply:?}");
     drop(worker);
     coordinator.child.kill().unwrap();

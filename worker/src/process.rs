@@ -15,6 +15,7 @@ use crate::failure::{JobError, retryable};
 use crate::metrics::WorkerMetrics;
 use crate::scene_cache::SceneCache;
 use anyhow::{Context, Result, anyhow, bail};
+use restauro_image::framebuffer::{TileExtras, TileLayout, encode_tile, tile_sizes};
 use restauro_ops::signal::stop_signal;
 use restauro_ops::token::read_token;
 use restauro_proto::pb::work_client::WorkClient;
@@ -417,13 +418,18 @@ impl Worker {
         self.metrics.tiles_rendered.inc();
         self.metrics.tile_render_seconds.observe(render_s);
         debug!(render_s, rays = tile.rays, "tile rendered");
-        let data = restauro_image::framebuffer::encode_tile(
+        // What the plan asks for: a plan from before the light masks carries none.
+        let layout = TileLayout::from(&job.plan);
+        let extras = TileExtras {
+            sky: tile.sky.as_deref().filter(|_| layout.sky),
+            lit_by: tile.lit_by.as_deref().filter(|_| layout.lit),
+        };
+        let data = encode_tile(
             &tile.xyz,
-            tile.sky.as_deref(),
+            extras,
             tile.spectral.as_ref().map(|s| s.iter().map(|p| &p.0[..])),
         );
-        let (image_bytes, spectral_bytes) =
-            restauro_image::framebuffer::tile_sizes(&rect, job.plan.spectral, job.plan.sky);
+        let (image_bytes, spectral_bytes) = tile_sizes(&rect, layout);
         let header = pb::TileHeader {
             session: None,
             lease: Some(lease),

@@ -72,8 +72,8 @@ impl State {
             return;
         }
         if self.on_surface {
-            // Four lanes (the fourth is the emitter flag, 0 here on both sides, so its lane
-            // stays 0) so that the compiler does the three channels in one vector operation.
+            // Four lanes so that the compiler does the three channels in one vector operation;
+            // the fourth (a surface's framework) is never read.
             #[allow(clippy::needless_range_loop)] // the lanes of three arrays at once
             for c in 0..4 {
                 let r = i32::from(to[c]) - i32::from(self.last[c]);

@@ -22,6 +22,13 @@
 //!    noise it takes nothing from the other side, and on a noise-free image (σ_n = 0) it is the
 //!    median itself.
 //!
+//! With frameworks of illumination (see `frameworks`), each is cleaned by itself: its noise
+//! is its own (a Monte Carlo render is noisier in the sky-lit shadow, lit by sampled sky and
+//! bounced light, than in the sun, and a noise σ of the whole image, set by the sunlit stone,
+//! left the shadow's noise in place: the maxima of its noise became its white, a different
+//! one in each channel, and the shadow of the demo's facade turned olive), and the bilateral
+//! mean takes no neighbour from another framework.
+//!
 //! Pixels marked as light sources (the sky or an emitter seen by the camera) take no part:
 //! they are left out of both filters and flagged, and the paths pass over them (see
 //! `paths`), so a bright sky is neither the white of the building nor a wall across the
@@ -36,8 +43,8 @@ use rayon::prelude::*;
 pub(super) const LOG_SCALE: f32 = 1024.0;
 /// The floor of the relative logs, in natural-log units.
 pub(super) const LOG_FLOOR: f32 = -20.0;
-/// Lane 3 of a pixel's logs: 1 for a light source, 0 for a surface.
-pub(super) const EMITTER: i16 = 1;
+/// Lane 3 of a pixel's logs for a light source; a surface's is its framework, 0 or more.
+pub(super) const EMITTER: i16 = -1;
 
 /// The bilateral mean's spatial σ, in pixels, and its window's half-width.
 const SPATIAL_SIGMA_PX: f32 = 1.25;
@@ -53,14 +60,15 @@ const RANGE_SIGMAS: f32 = 2.0;
 
 /// The cleaned image, as the paths read it.
 pub(super) struct WhiteImage {
-    /// Per pixel, the fixed-point logs of the three channels; lane 3 is [`EMITTER`] or 0.
+    /// Per pixel, the fixed-point logs of the three channels; lane 3 is [`EMITTER`] or 0 (a
+    /// surface, whose framework the caller may write there).
     pub logs: Vec<[i16; 4]>,
     /// Per pixel, the cleaned natural logs themselves (not relative, not floored).
     pub cleaned: Vec<[f32; 3]>,
     /// Per channel, the natural log of the brightest cleaned value (the logs' zero).
     pub zero: [f64; 3],
-    /// Per channel, the noise σ estimated (natural-log units).
-    pub noise: [f32; 3],
+    /// Per framework and channel, the noise σ estimated (natural-log units).
+    pub noise: Vec<[f32; 3]>,
 }
 
 /// `ln v`, with 0 as −∞. The lightness divides by the cleaned value with the same function,
@@ -138,16 +146,23 @@ fn opening(logs: &[f32], emitter: &[bool], width: usize, height: usize) -> Vec<f
         .collect()
 }
 
-/// The robust noise σ of one channel's logs: 1.4826 · median |ℓ(x+1) − ℓ(x)| / √2 over
-/// horizontal pairs of surface pixels with finite logs.
-fn noise_sigma(logs: &[f32], emitter: &[bool], width: usize) -> f32 {
-    let mut differences: Vec<f32> = logs
-        .par_chunks(width)
-        .zip(emitter.par_chunks(width))
-        .flat_map_iter(|(row, mask)| {
-            row.windows(2).zip(mask.windows(2)).filter_map(|(v, m)| {
-                let d = (v[1] - v[0]).abs();
-                (!m[0] && !m[1] && d.is_finite()).then_some(d)
+/// What the filters need to know of a pixel besides its logs: whether it is a light source
+/// (`None`) or a surface of which framework.
+fn region(emitter: &[bool], frameworks: &[u8], p: usize) -> Option<u8> {
+    (!emitter[p]).then(|| frameworks[p])
+}
+
+/// The robust noise σ of one channel's logs in framework `f`: 1.4826 · median
+/// |ℓ(x+1) − ℓ(x)| / √2 over horizontal pairs of its surface pixels with finite logs.
+fn noise_sigma(logs: &[f32], emitter: &[bool], frameworks: &[u8], width: usize, f: u8) -> f32 {
+    let mut differences: Vec<f32> = (0..logs.len() / width)
+        .into_par_iter()
+        .flat_map_iter(|y| {
+            (y * width..(y + 1) * width - 1).filter_map(move |p| {
+                let d = (logs[p + 1] - logs[p]).abs();
+                let same = region(emitter, frameworks, p) == Some(f)
+                    && region(emitter, frameworks, p + 1) == Some(f);
+                (same && d.is_finite()).then_some(d)
             })
         })
         .collect();
@@ -166,11 +181,11 @@ fn noise_sigma(logs: &[f32], emitter: &[bool], width: usize) -> f32 {
 fn bilateral(
     channels: &[Vec<f32>; 3],
     emitter: &[bool],
-    width: usize,
-    height: usize,
-    noise: [f32; 3],
+    frameworks: &[u8],
+    (width, height): (usize, usize),
+    noise: &[[f32; 3]],
 ) -> [Vec<f32>; 3] {
-    let cut = noise.map(|n| RANGE_SIGMAS * n);
+    let cuts: Vec<[f32; 3]> = noise.iter().map(|n| n.map(|n| RANGE_SIGMAS * n)).collect();
     let weight = |dx: i32, dy: i32| {
         (-((dx * dx + dy * dy) as f32) / (2.0 * SPATIAL_SIGMA_PX * SPATIAL_SIGMA_PX)).exp()
     };
@@ -182,7 +197,9 @@ fn bilateral(
         .into_par_iter()
         .map(|p| {
             let centre: [f32; 3] = std::array::from_fn(|c| channels[c][p]);
-            if emitter[p] || centre.iter().any(|v| !v.is_finite()) || cut.contains(&0.0) {
+            let Some(own) = region(emitter, frameworks, p) else { return centre };
+            let cut = cuts[usize::from(own)];
+            if centre.iter().any(|v| !v.is_finite()) || cut.contains(&0.0) {
                 return centre;
             }
             let (x, y) = ((p % width) as i32, (p / width) as i32);
@@ -195,7 +212,9 @@ fn bilateral(
                     }
                     let q = qy as usize * width + qx as usize;
                     let v: [f32; 3] = std::array::from_fn(|c| channels[c][q]);
-                    if emitter[q] || (0..3).any(|c| (v[c] - centre[c]).abs() > cut[c]) {
+                    if region(emitter, frameworks, q) != Some(own)
+                        || (0..3).any(|c| (v[c] - centre[c]).abs() > cut[c])
+                    {
                         continue;
                     }
                     let k = kernel[((dy + RADIUS) * side as i32 + dx + RADIUS) as usize];
@@ -211,18 +230,20 @@ fn bilateral(
     std::array::from_fn(|c| out.iter().map(|v| v[c]).collect())
 }
 
-/// The cleaned image of `pixels` (non-negative, finite), with `emitter` marking light sources.
-/// `area` false gives the paper's image: every pixel as it is.
+/// The cleaned image of `pixels` (non-negative, finite), with `emitter` marking light sources
+/// and `frameworks` each surface's framework (0..count). `area` false gives the paper's image:
+/// every pixel as it is.
 pub(super) fn white_image(
     pixels: &[[f32; 3]],
     emitter: &[bool],
+    (frameworks, count): (&[u8], usize),
     width: usize,
     height: usize,
     area: bool,
 ) -> WhiteImage {
     let logs: [Vec<f32>; 3] =
         std::array::from_fn(|c| pixels.par_iter().map(|p| ln(p[c])).collect());
-    let mut noise = [0f32; 3];
+    let mut noise = vec![[0f32; 3]; count];
     let cleaned: [Vec<f32>; 3] = if area {
         let mut medians: [Vec<f32>; 3] = std::array::from_fn(|c| {
             let open = opening(&logs[c], emitter, width, height);
@@ -234,9 +255,11 @@ pub(super) fn white_image(
             });
             m
         });
-        noise = std::array::from_fn(|c| noise_sigma(&logs[c], emitter, width));
+        noise = (0..count as u8)
+            .map(|f| std::array::from_fn(|c| noise_sigma(&logs[c], emitter, frameworks, width, f)))
+            .collect();
         for _ in 0..BILATERAL_PASSES {
-            medians = bilateral(&medians, emitter, width, height, noise);
+            medians = bilateral(&medians, emitter, frameworks, (width, height), &noise);
         }
         medians
     } else {
@@ -261,7 +284,7 @@ pub(super) fn white_image(
                 // −∞ (a black pixel) is at the floor.
                 out[c] = (relative.clamp(LOG_FLOOR, 0.0) * LOG_SCALE).round() as i16;
             }
-            out[3] = if emitter[p] { EMITTER } else { 0 };
+            out[3] = if emitter[p] { EMITTER } else { i16::from(frameworks[p]) };
             out
         })
         .collect();
@@ -285,7 +308,7 @@ mod tests {
         let (w, h) = (9, 9);
         let mut pixels = vec![[0.5f32; 3]; w * h];
         pixels[40] = [500.0; 3];
-        let white = white_image(&pixels, &vec![false; w * h], w, h, true);
+        let white = white_image(&pixels, &vec![false; w * h], (&vec![0; w * h], 1), w, h, true);
         assert!(white.logs.iter().all(|l| l[..3] == [0, 0, 0]), "the firefly survived");
         assert!((white.zero[0] - 0.5f64.ln()).abs() < 1e-6);
     }
@@ -296,7 +319,7 @@ mod tests {
         let (w, h) = (12, 6);
         let pixels: Vec<[f32; 3]> =
             (0..w * h).map(|i| if i % w < 5 { [1.0; 3] } else { [(-2.0f32).exp(); 3] }).collect();
-        let white = white_image(&pixels, &vec![false; w * h], w, h, true);
+        let white = white_image(&pixels, &vec![false; w * h], (&vec![0; w * h], 1), w, h, true);
         for (i, l) in white.logs.iter().enumerate() {
             let expect = if i % w < 5 { 0 } else { -2048 };
             assert_eq!(l[0], expect, "pixel {i}");
@@ -314,8 +337,8 @@ mod tests {
                 [1.0 + 0.03 * g; 3]
             })
             .collect();
-        let white = white_image(&pixels, &vec![false; w * h], w, h, true);
-        assert!((white.noise[0] / 0.03 - 1.0).abs() < 0.15, "σ_n {}", white.noise[0]);
+        let white = white_image(&pixels, &vec![false; w * h], (&vec![0; w * h], 1), w, h, true);
+        assert!((white.noise[0][0] / 0.03 - 1.0).abs() < 0.15, "σ_n {}", white.noise[0][0]);
         let values: Vec<f32> = white.logs.iter().map(|l| f32::from(l[0]) / LOG_SCALE).collect();
         let mean = values.iter().sum::<f32>() / values.len() as f32;
         let sd =
@@ -334,7 +357,7 @@ mod tests {
             pixels[p] = [1000.0; 3];
             emitter[p] = true;
         }
-        let white = white_image(&pixels, &emitter, w, h, true);
+        let white = white_image(&pixels, &emitter, (&vec![0; w * h], 1), w, h, true);
         assert!((white.zero[0] - 0.2f64.ln()).abs() < 1e-6, "{:?}", white.zero);
         assert!(white.logs[..w].iter().all(|l| l[3] == EMITTER));
         assert!(white.logs[w..].iter().all(|l| l[..] == [0, 0, 0, 0]));

@@ -180,6 +180,8 @@ fn run(threads: usize, wall_s: f64, cpu_s: f64, rays: u64, samples: u64) -> Run 
 
 pub fn bench(args: &BenchArgs) -> Result<String> {
     let (w, h) = (args.width, args.height);
+    let say = |what: String| crate::progress::say(&format!("bench tracer: {what}"));
+    say(format!("loading the {:?} scene at {w}×{h}, {} samples per pixel", args.scene, args.spp));
     let (scene, _dir) = load(args.scene, w, h)?;
     let base = Settings {
         integrator: Integrator::Whitted,
@@ -191,6 +193,7 @@ pub fn bench(args: &BenchArgs) -> Result<String> {
     let samples = (w * h) as u64 * u64::from(args.spp);
     let full = Rect { x: 0, y: 0, width: w as u32, height: h as u32 };
 
+    say("collecting the camera and shadow rays of every Whitted sample".into());
     // The rays of every Whitted sample, collected once.
     let mut camera = Vec::with_capacity(samples as usize);
     for y in 0..h as u32 {
@@ -234,7 +237,9 @@ pub fn bench(args: &BenchArgs) -> Result<String> {
     // The BVH alone and whole samples alternate, and the ratio is taken pair by pair: the load
     // of a shared machine drifts over seconds, and a ratio of runs far apart would carry it.
     let mut pairs = Vec::new();
-    for _ in 0..args.repeats.max(1) {
+    let repeats = args.repeats.max(1);
+    for i in 0..repeats {
+        say(format!("the BVH alone against whole Whitted samples, pair {} of {repeats}", i + 1));
         let bvh = bvh_pass()?;
         let (tile, wall, cpu) = timed(1, || render_tile(&whitted, full, false))?;
         let whole = run(1, wall, cpu, tile.rays, samples);
@@ -244,11 +249,12 @@ pub fn bench(args: &BenchArgs) -> Result<String> {
     let ratios: Vec<f64> = pairs.iter().map(|p| p.0).collect();
     let (ratio, bvh_only) = pairs.swap_remove(pairs.len() / 2);
 
-    let render_runs = |prepared: &PreparedScene| -> Result<Vec<Run>> {
+    let render_runs = |prepared: &PreparedScene, name: &str| -> Result<Vec<Run>> {
         let mut runs = Vec::new();
         for threads in [1, 2] {
             let mut best: Option<Run> = None;
-            for _ in 0..args.repeats.max(1) {
+            for i in 0..repeats {
+                say(format!("{name} on {threads} thread(s), run {} of {repeats}", i + 1));
                 let (tile, wall, cpu) = timed(threads, || render_tile(prepared, full, false))?;
                 let r = run(threads, wall, cpu, tile.rays, samples);
                 if best.as_ref().is_none_or(|b| r.wall_s < b.wall_s) {
@@ -259,11 +265,11 @@ pub fn bench(args: &BenchArgs) -> Result<String> {
         }
         Ok(runs)
     };
-    let whitted_runs = render_runs(&whitted)?;
+    let whitted_runs = render_runs(&whitted, "Whitted")?;
     let path_settings =
         Settings { integrator: Integrator::Path, max_depth: scene.file.render.max_depth, ..base };
     let path = PreparedScene::new(&scene, None, path_settings)?;
-    let path_runs = render_runs(&path)?;
+    let path_runs = render_runs(&path, "path tracing")?;
     let report = TracerBench {
         benchmark: "tracer",
         scene: format!("{:?}", args.scene).to_lowercase(),

@@ -16,6 +16,10 @@ spectral rendering from measured stone reflectances and photometric light source
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
+    /// How long commands show their progress on standard error: auto (a bar on a terminal,
+    /// plain lines every 10 s otherwise: a log file, nohup, CI), bar, plain or none.
+    #[arg(long, global = true, value_enum, default_value_t = crate::progress::ProgressMode::Auto)]
+    pub progress: crate::progress::ProgressMode,
 }
 
 #[derive(Debug, Subcommand)]
@@ -66,8 +70,10 @@ pub enum SceneCommand {
         /// The folder to write `aosta.toml`, `aosta-overcast.toml` and `meshes/facade.obj` into.
         #[arg(long, default_value = "out/aosta")]
         out: PathBuf,
+        /// The camera's image width, in pixels.
         #[arg(long, default_value_t = 1280)]
         width: u32,
+        /// The camera's image height, in pixels.
         #[arg(long, default_value_t = 720)]
         height: u32,
         /// The seed of the block pattern.
@@ -76,12 +82,14 @@ pub enum SceneCommand {
     },
     /// Validate a scene file and everything it refers to, and summarise it.
     Check {
+        /// The scene file (`.toml`) to check.
         scene: PathBuf,
         #[command(flatten)]
         limits: LimitArgs,
     },
     /// Bundle a scene with its files by content hash, and print the bundle's identity.
     Bundle {
+        /// The scene file (`.toml`) to bundle.
         scene: PathBuf,
         #[command(flatten)]
         limits: LimitArgs,
@@ -197,6 +205,7 @@ pub struct JobArgs {
 
 #[derive(Debug, Args)]
 pub struct FetchArgs {
+    /// The job id (printed by `submit`).
     pub job: String,
     /// The folder for the files.
     #[arg(long, default_value = "out")]
@@ -461,5 +470,28 @@ mod tests {
     fn the_command_line_is_consistent() {
         use clap::CommandFactory;
         super::Cli::command().debug_assert();
+    }
+
+    /// `--help` explains every argument of every subcommand (hidden ones aside).
+    #[test]
+    fn every_argument_has_help() {
+        use clap::CommandFactory;
+        fn walk(command: &clap::Command, path: &str, missing: &mut Vec<String>) {
+            for arg in command.get_arguments() {
+                let id = arg.get_id().as_str();
+                if arg.is_hide_set() || id == "help" || id == "version" {
+                    continue;
+                }
+                if arg.get_help().is_none() && arg.get_long_help().is_none() {
+                    missing.push(format!("{path} {id}"));
+                }
+            }
+            for sub in command.get_subcommands() {
+                walk(sub, &format!("{path} {}", sub.get_name()), missing);
+            }
+        }
+        let mut missing = Vec::new();
+        walk(&super::Cli::command(), "restauro", &mut missing);
+        assert!(missing.is_empty(), "arguments without help: {missing:#?}");
     }
 }

@@ -2,8 +2,8 @@
 //! bar, fetch the results — and starting an embedded local cluster: a coordinator and workers
 //! as real processes of this same executable, on loopback, that end with this process.
 
+use crate::progress::Progress;
 use anyhow::{Context, Result, anyhow, bail};
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use restauro_image::atomic_file;
 use restauro_proto::pb::render_client::RenderClient;
 use restauro_proto::{self as pb, CHUNK_BYTES, Credentials, PROTOCOL_VERSION};
@@ -129,16 +129,14 @@ const WATCH_PATIENCE: Duration = Duration::from_secs(600);
 /// watch resumes where it was.
 pub async fn watch(client: &mut Client, job_id: &str, show: bool) -> Result<pb::JobStatus> {
     let bar = if show {
-        let bar = ProgressBar::with_draw_target(Some(0), ProgressDrawTarget::stderr());
-        bar.set_style(
-            ProgressStyle::with_template(
-                "{msg:>16} {bar:40} {pos}/{len} tiles, {per_sec}, {elapsed} elapsed, eta {eta}",
-            )
-            .context("progress template")?,
-        );
-        bar
+        Progress::new(
+            "render",
+            "tiles",
+            Some(0),
+            "{msg:>16} {bar:40} {pos}/{len} tiles, {per_sec}, {elapsed} elapsed, eta {eta}",
+        )?
     } else {
-        ProgressBar::hidden()
+        Progress::hidden()
     };
     let mut backoff = Duration::from_millis(100);
     let mut unreachable_since: Option<Instant> = None;

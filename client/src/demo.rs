@@ -27,10 +27,11 @@
 
 use crate::cli::DemoArgs;
 use crate::cluster::{self, Client, LocalCluster};
+use crate::progress::Progress;
 use crate::scene_cmd::write_aosta;
 use crate::sheet::{Grid, Rgb8, colour_bar, colour_map};
 use anyhow::{Context, Result, anyhow, bail};
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use indicatif::{ProgressBar, ProgressStyle};
 use restauro_image::atomic_file;
 use restauro_image::image_files::{PngPixels, XyzImage, read_exr, write_png};
 use restauro_proto as pb;
@@ -218,8 +219,12 @@ pub fn run(args: &DemoArgs) -> Result<String> {
     let out = &args.out;
     let size = Size::new(args.quick);
     let workers = args.workers.max(1);
-    let bar = ProgressBar::with_draw_target(Some(1), ProgressDrawTarget::stderr());
-    bar.set_style(bar_style("{msg:>12} {bar:40} {pos}/{len} {elapsed} elapsed, eta {eta}")?);
+    let bar = Progress::new(
+        "demo",
+        "tiles",
+        Some(1),
+        "{msg:>12} {bar:40} {pos}/{len} {elapsed} elapsed, eta {eta}",
+    )?;
     bar.enable_steady_tick(Duration::from_millis(200));
 
     // The cluster starts first: its processes come up while the scenes are written.

@@ -9,6 +9,7 @@ pub mod cluster;
 pub mod color;
 pub mod demo;
 pub mod jobs_cmd;
+pub mod progress;
 pub mod render;
 pub mod retinex;
 pub mod scene_cmd;

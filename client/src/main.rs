@@ -5,6 +5,7 @@ use std::process::ExitCode;
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    restauro::progress::set_mode(cli.progress);
     let result = match &cli.command {
         Command::Color(args) => restauro::color::run(args),
         Command::Demo(args) => restauro::demo::run(args),

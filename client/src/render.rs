@@ -5,8 +5,8 @@
 
 use crate::cli::{IntegratorArg, RenderArgs};
 use crate::cluster::{self, LocalCluster};
+use crate::progress::Progress;
 use anyhow::{Context, Result};
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use restauro_image::framebuffer::{Framebuffer, TileExtras, TileLayout, encode_tile};
 use restauro_image::results::{ResultOptions, write_results};
 use restauro_proto as pb;
@@ -155,14 +155,12 @@ fn run_in_process(args: &RenderArgs) -> Result<String> {
     let started = Instant::now();
     let prepared = PreparedScene::for_plan(&scene, &plan)?;
     let prepare_s = started.elapsed().as_secs_f64();
-    let bar =
-        ProgressBar::with_draw_target(Some(plan.tile_count().into()), ProgressDrawTarget::stderr());
-    bar.set_style(
-        ProgressStyle::with_template(
-            "render {bar:40} {pos}/{len} tiles, {elapsed} elapsed, eta {eta}",
-        )
-        .context("progress template")?,
-    );
+    let bar = Progress::new(
+        "render",
+        "tiles",
+        Some(plan.tile_count().into()),
+        "render {bar:40} {pos}/{len} tiles, {elapsed} elapsed, eta {eta}",
+    )?;
     let mut frame = Framebuffer::new(plan.width, plan.height, TileLayout::from(&plan));
     let render_started = Instant::now();
     for (index, rect) in plan.tiles().enumerate() {

@@ -2,8 +2,8 @@
 //! person standing there sees, and to a display.
 
 use crate::cli::{DisplayArgs, DisplayTarget, RetinexArgs};
+use crate::progress::Progress;
 use anyhow::{Context, Result, bail};
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use restauro_image::image_files::{
     MAX_PIXELS, PngPixels, XyzImage, read_exr, write_png, write_xyz_exr,
 };
@@ -81,14 +81,9 @@ pub fn run(args: &RetinexArgs) -> Result<String> {
         framework_weight: args.framework_weight,
     };
     let bar = if image.pixels.len() >= PROGRESS_FROM_PIXELS {
-        let bar = ProgressBar::with_draw_target(Some(0), ProgressDrawTarget::stderr());
-        bar.set_style(
-            ProgressStyle::with_template("retinex {bar:40} {percent}% paths, eta {eta}")
-                .context("progress bar template")?,
-        );
-        bar
+        Progress::new("retinex", "paths", Some(0), "retinex {bar:40} {percent}% paths, eta {eta}")?
     } else {
-        ProgressBar::hidden()
+        Progress::hidden()
     };
     let started = Instant::now();
     let (out, stats) = retinex_xyz(

@@ -56,6 +56,9 @@ pub enum Command {
     Retinex(RetinexArgs),
     /// Show an XYZ or RGB OpenEXR image on a display: exposure, gamut mapping, encoding to PNG.
     Display(DisplayArgs),
+    /// How two images differ as a person judges colour: a CIEDE2000 map with its scale and
+    /// statistics, side-by-side and split images, and a JSON summary.
+    Compare(CompareArgs),
     /// Scenes: generate the Aosta theatre, check a scene, bundle it.
     #[command(subcommand)]
     Scene(SceneCommand),
@@ -98,7 +101,7 @@ pub enum SceneCommand {
 
 pub use restauro_scene::limits::LimitArgs;
 
-#[derive(Debug, Args)]
+#[derive(Clone, Debug, Args)]
 pub struct RenderArgs {
     /// The scene file.
     pub scene: PathBuf,
@@ -108,6 +111,11 @@ pub struct RenderArgs {
     /// The restoration hypothesis (a variant of the scene).
     #[arg(long)]
     pub variant: Option<String>,
+    /// Render each of these variants (comma-separated, e.g. as-found,cleaned) and compare the
+    /// first with each other one: a ΔE00 map, side-by-side and split images and a JSON summary,
+    /// as rendered and as seen, in `<out>/compare-<first>-vs-<other>/`.
+    #[arg(long, value_delimiter = ',', conflicts_with = "variant")]
+    pub variants: Vec<String>,
     /// Override the scene's integrator.
     #[arg(long, value_enum)]
     pub integrator: Option<IntegratorArg>,
@@ -152,7 +160,7 @@ pub struct RenderArgs {
 
 /// Where the coordinator is and the client token; without a coordinator, `render` starts an
 /// embedded one.
-#[derive(Debug, Args)]
+#[derive(Clone, Debug, Args)]
 pub struct OptionalConnectArgs {
     /// The coordinator's URL (else RESTAURO_COORDINATOR; else an embedded local cluster).
     #[arg(long, env = "RESTAURO_COORDINATOR")]
@@ -218,6 +226,25 @@ pub struct FetchArgs {
 pub enum IntegratorArg {
     Whitted,
     Path,
+}
+
+#[derive(Debug, Args)]
+pub struct CompareArgs {
+    /// The reference image: an OpenEXR file (XYZ or RGB, linear).
+    pub a: PathBuf,
+    /// The image compared with it, of the same size.
+    pub b: PathBuf,
+    /// The folder for delta-e.png, side-by-side.png, split.png and compare.json.
+    #[arg(long, default_value = "out/compare")]
+    pub out: PathBuf,
+    /// The reference white of CIELAB (and the exposure of the pictures): auto (the display's
+    /// for A), absolute:<cd/m²> (for a render: E_h/π of a white horizontal surface), or
+    /// relative (Y = 1: images after the Retinex).
+    #[arg(long, default_value = "auto")]
+    pub white: String,
+    /// The ΔE00 above which a pixel counts as changed (about 2 is just noticeable side by side).
+    #[arg(long, default_value_t = 2.0)]
+    pub threshold: f64,
 }
 
 #[derive(Debug, Args)]

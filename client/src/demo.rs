@@ -29,7 +29,7 @@ use crate::cli::DemoArgs;
 use crate::cluster::{self, Client, LocalCluster};
 use crate::progress::Progress;
 use crate::scene_cmd::write_aosta;
-use crate::sheet::{Grid, Rgb8, colour_bar, colour_map};
+use crate::sheet::{Grid, Rgb8, colour_bar};
 use anyhow::{Context, Result, anyhow, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use restauro_image::atomic_file;
@@ -664,52 +664,24 @@ fn analyse(
         let scene = &scenes[&job.scene];
         let white_cd_m2 = horizontal_illuminance_lux(scene) / std::f64::consts::PI;
         let white = d65_white().scale(white_cd_m2);
-        let sky = found.rendered.emitter.as_deref();
-        let values: Vec<f32> = found
-            .rendered
-            .pixels
-            .iter()
-            .zip(&cleaned.rendered.pixels)
-            .enumerate()
-            .map(|(i, (a, b))| {
-                if sky.is_some_and(|m| m[i]) {
-                    f32::NAN
-                } else {
-                    ciede2000(Lab::from_xyz(xyz(*a), white), Lab::from_xyz(xyz(*b), white)) as f32
-                }
-            })
-            .collect();
-        let mut finite: Vec<f32> = values.iter().copied().filter(|v| v.is_finite()).collect();
-        finite.sort_by(f32::total_cmp);
-        let mean = finite.iter().map(|&v| f64::from(v)).sum::<f64>() / finite.len().max(1) as f64;
-        let p95 = finite.get(finite.len() * 95 / 100).copied().unwrap_or(0.0);
+        // The two share the scene's geometry, so their skies (left out) are the same pixels.
+        let map = crate::compare::delta_e_map(&found.rendered, &cleaned.rendered, white, 2.0);
         cleaning.push(CleaningDifference {
             light,
             white_cd_m2,
-            mean_delta_e00: mean,
-            p95_delta_e00: f64::from(p95),
-            pixels: finite.len(),
+            mean_delta_e00: map.stats.mean,
+            p95_delta_e00: map.stats.p95,
+            pixels: map.stats.pixels,
         });
-        maps.push(values);
+        maps.push(map);
     }
-    let p99 = {
-        let mut all: Vec<f32> = maps.iter().flatten().copied().filter(|v| v.is_finite()).collect();
-        all.sort_by(f32::total_cmp);
-        f64::from(all.get(all.len() * 99 / 100).copied().unwrap_or(1.0))
-    };
-    // A round top for the scale: 5, 10, 15, … ΔE00.
-    let scale_max = ((p99 / 5.0).ceil() * 5.0).max(5.0);
+    let all: Vec<f32> = maps.iter().flat_map(|m| m.values.iter().copied()).collect();
+    let scale_max = crate::compare::scale_max(&all);
     let cells = vec![
         maps.iter()
-            .map(|values| {
-                let mut map = colour_map(values, w, h, scale_max);
-                for (i, v) in values.iter().enumerate() {
-                    if v.is_nan() {
-                        let p = &mut map.data[i * 3..i * 3 + 3];
-                        p.copy_from_slice(&[70, 70, 70]);
-                    }
-                }
-                Some(map.resized_to_width(size.sheet_cell))
+            .map(|map| {
+                let picture = crate::compare::map_picture(map, w as usize, h as usize, scale_max);
+                Some(picture.resized_to_width(size.sheet_cell))
             })
             .collect(),
     ];
@@ -875,10 +847,6 @@ fn analyse(
         "contact sheet: the whole sample board under each illuminant, rendered and seen",
     )?);
     Ok(Analysis { images, stones: table, cleaning })
-}
-
-fn xyz(p: [f32; 3]) -> Xyz {
-    Xyz::from_array(p.map(f64::from))
 }
 
 /// The sRGB picture of the pixels of `r`.

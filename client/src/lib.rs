@@ -7,6 +7,7 @@ pub mod bench_tracer;
 pub mod cli;
 pub mod cluster;
 pub mod color;
+pub mod compare;
 pub mod demo;
 pub mod jobs_cmd;
 pub mod progress;

@@ -8,6 +8,7 @@ use crate::cluster::{self, LocalCluster};
 use crate::progress::Progress;
 use anyhow::{Context, Result};
 use restauro_image::framebuffer::{Framebuffer, TileExtras, TileLayout, encode_tile};
+use restauro_image::image_files::{MAX_PIXELS, read_exr};
 use restauro_image::results::{ResultOptions, write_results};
 use restauro_proto as pb;
 use restauro_render::prepared::PreparedScene;
@@ -77,6 +78,9 @@ pub fn checked_bundle(args: &RenderArgs) -> Result<(Bundle, Plan)> {
 }
 
 pub fn run(args: &RenderArgs) -> Result<String> {
+    if !args.variants.is_empty() {
+        return run_variants(args);
+    }
     if args.in_process {
         return run_in_process(args);
     }
@@ -144,6 +148,43 @@ pub fn run(args: &RenderArgs) -> Result<String> {
         let _ = writeln!(s, "wrote {}", f.display());
     }
     Ok(s)
+}
+
+/// `--variants a,b,…`: each variant rendered as `--variant` renders it, then the first compared
+/// with each other, as rendered (the white the display chooses for the first) and as seen
+/// (after the Retinex, relative to its white).
+fn run_variants(args: &RenderArgs) -> Result<String> {
+    let mut text = String::new();
+    let mut stems = Vec::new();
+    for variant in &args.variants {
+        let one =
+            RenderArgs { variant: Some(variant.clone()), variants: Vec::new(), ..args.clone() };
+        text.push_str(&run(&one)?);
+        stems.push((variant.as_str(), job_spec(&one, 0)?.name.file_stem()));
+    }
+    let read = |stem: &str, suffix: &str| {
+        let path = args.out.join(format!("{stem}{suffix}.exr"));
+        read_exr(&path, MAX_PIXELS).with_context(|| format!("reading {}", path.display()))
+    };
+    let Some(((first, first_stem), others)) = stems.split_first() else { return Ok(text) };
+    for (variant, stem) in others {
+        let dir = args.out.join(format!("compare-{first}-vs-{variant}"));
+        for (suffix, what, white) in
+            [("", "rendered", Exposure::default()), ("-retinex", "seen", Exposure::Relative)]
+        {
+            let (a, b) = (read(first_stem, suffix)?, read(stem, suffix)?);
+            let white_text = if suffix.is_empty() { "auto" } else { "relative" };
+            let names = (format!("{first}, {what}"), format!("{variant}, {what}"));
+            text.push_str(&crate::compare::compare_images(
+                (&a, &names.0),
+                (&b, &names.1),
+                (white, white_text),
+                2.0,
+                &dir.join(what),
+            )?);
+        }
+    }
+    Ok(text)
 }
 
 fn run_in_process(args: &RenderArgs) -> Result<String> {

@@ -99,6 +99,8 @@ fn every_readme_command_runs_in_order() {
         "out/render/aosta-as-found.exr",
         "out/cleaned/aosta-cleaned.exr",
         "out/as-found/aosta-as-found.exr",
+        "out/hypotheses/compare-as-found-vs-cleaned/seen/compare.json",
+        "out/compare/delta-e.png",
     ] {
         assert!(dir.path().join(file).is_file(), "{file} was not written");
     }

@@ -1,0 +1,281 @@
+//! `restauro compare A.exr B.exr --out DIR`: how two restoration hypotheses differ, pixel by
+//! pixel, as a person would judge the difference of two colours — CIEDE2000 (CIE 142-2001) in
+//! CIELAB relative to one reference white for both images.
+//!
+//! It writes into DIR:
+//! * `delta-e.png` — the ΔE00 map (viridis, light sources in grey) with its colour scale and
+//!   statistics;
+//! * `side-by-side.png` — A and B as the display shows them, with one exposure (the white);
+//! * `split.png` — one image, A on the left and B on the right of a line down the middle;
+//! * `compare.json` (schema `restauro.compare/1`) — the files, the white, and the statistics:
+//!   mean, median, 95th percentile and maximum ΔE00, and the share of the pixels above the
+//!   threshold.
+//!
+//! The white: `--white` takes the display's exposure syntax. `auto` (the default) is the
+//! reference white the display would choose for A (so the map measures what the PNGs show);
+//! `absolute:<cd/m²>` a luminance (for a render, E_h/π of a perfect white horizontal surface
+//! is the natural one); `relative` Y = 1, for images after the Retinex. Either image's light
+//! sources (its `emitter` channel: the sky) are left out.
+
+use crate::cli::CompareArgs;
+use crate::sheet::{BACKGROUND, Grid, INK, Rgb8, colour_bar, colour_map};
+use anyhow::{Context, Result, bail};
+use restauro_image::image_files::{MAX_PIXELS, PngPixels, XyzImage, read_exr, write_png};
+use restauro_spectral::appearance::d65_white;
+use restauro_spectral::ciede2000::ciede2000;
+use restauro_spectral::display::{DisplayParams, Exposure, encode, exposure_scale, to_u8};
+use restauro_spectral::rgb_space::RgbSpace;
+use restauro_spectral::{Lab, Xyz};
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// The ΔE00 map of two images and its statistics.
+pub struct DeltaEMap {
+    /// Per pixel; NaN where either image shows a light source.
+    pub values: Vec<f32>,
+    pub stats: DeltaEStats,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct DeltaEStats {
+    /// The pixels compared (light sources left out).
+    pub pixels: usize,
+    pub mean: f64,
+    pub median: f64,
+    pub p95: f64,
+    pub max: f64,
+    /// ΔE00 above which a pixel counts as changed.
+    pub threshold: f64,
+    /// The share (0–1) of the compared pixels above the threshold.
+    pub share_above_threshold: f64,
+}
+
+/// ΔE00 between `a` and `b` (the same size) pixel by pixel, in CIELAB relative to `white`.
+pub fn delta_e_map(a: &XyzImage, b: &XyzImage, white: Xyz, threshold: f64) -> DeltaEMap {
+    let light = |image: &XyzImage, i: usize| image.emitter.as_ref().is_some_and(|m| m[i]);
+    let xyz = |p: [f32; 3]| Xyz::from_array(p.map(f64::from));
+    let values: Vec<f32> = (0..a.pixels.len())
+        .map(|i| {
+            if light(a, i) || light(b, i) {
+                f32::NAN
+            } else {
+                let (la, lb) = (
+                    Lab::from_xyz(xyz(a.pixels[i]), white),
+                    Lab::from_xyz(xyz(b.pixels[i]), white),
+                );
+                ciede2000(la, lb) as f32
+            }
+        })
+        .collect();
+    let mut finite: Vec<f64> =
+        values.iter().filter(|v| v.is_finite()).map(|&v| f64::from(v)).collect();
+    finite.sort_by(f64::total_cmp);
+    let n = finite.len();
+    // The value below which a share q of the pixels lie (the nearest rank, ⌊q·n⌋).
+    let at = |q: f64| if n == 0 { 0.0 } else { finite[((n as f64 * q) as usize).min(n - 1)] };
+    let stats = DeltaEStats {
+        pixels: n,
+        mean: finite.iter().sum::<f64>() / n.max(1) as f64,
+        median: at(0.5),
+        p95: at(0.95),
+        max: finite.last().copied().unwrap_or(0.0),
+        threshold,
+        share_above_threshold: finite.iter().filter(|&&v| v > threshold).count() as f64
+            / n.max(1) as f64,
+    };
+    DeltaEMap { values, stats }
+}
+
+/// The map as an image: viridis up to `scale_max`, light sources grey.
+pub fn map_picture(map: &DeltaEMap, width: usize, height: usize, scale_max: f64) -> Rgb8 {
+    let mut picture = colour_map(&map.values, width as u32, height as u32, scale_max);
+    for (i, v) in map.values.iter().enumerate() {
+        if v.is_nan() {
+            picture.data[i * 3..i * 3 + 3].copy_from_slice(&[70, 70, 70]);
+        }
+    }
+    picture
+}
+
+/// A round top for a ΔE00 scale: the 99th percentile up to the next multiple of 5 (at least 5).
+pub fn scale_max(values: &[f32]) -> f64 {
+    let mut finite: Vec<f32> = values.iter().copied().filter(|v| v.is_finite()).collect();
+    finite.sort_by(f32::total_cmp);
+    let p99 = f64::from(finite.get(finite.len() * 99 / 100).copied().unwrap_or(1.0));
+    ((p99 / 5.0).ceil() * 5.0).max(5.0)
+}
+
+fn picture(image: &XyzImage, exposure: Exposure) -> Rgb8 {
+    let encoded = encode(&image.pixels, &DisplayParams { space: RgbSpace::Srgb, exposure });
+    Rgb8 { width: image.width as u32, height: image.height as u32, data: to_u8(&encoded) }
+}
+
+fn write(dir: &Path, name: &str, image: &Rgb8) -> Result<()> {
+    let path = dir.join(name);
+    let pixels = PngPixels::Eight(image.data.clone());
+    write_png(&path, image.width as usize, image.height as usize, &pixels, RgbSpace::Srgb)
+        .with_context(|| format!("writing {}", path.display()))
+}
+
+#[derive(Serialize)]
+struct Summary<'a> {
+    schema: &'static str,
+    a: String,
+    b: String,
+    width: usize,
+    height: usize,
+    /// The reference white's luminance in the images' units (cd/m² for a render, 1 relative).
+    white_luminance: f64,
+    white: &'a str,
+    delta_e00: &'a DeltaEStats,
+    files: Vec<&'static str>,
+}
+
+/// The reference white's luminance for `image` under `--white`.
+fn white_luminance(image: &XyzImage, white: Exposure) -> f64 {
+    1.0 / exposure_scale(&image.pixels, white)
+}
+
+/// Compares two images already read; writes the files into `out` and returns the summary text.
+pub fn compare_images(
+    (a, a_name): (&XyzImage, &str),
+    (b, b_name): (&XyzImage, &str),
+    (white, white_text): (Exposure, &str),
+    threshold: f64,
+    out: &Path,
+) -> Result<String> {
+    if (a.width, a.height) != (b.width, b.height) {
+        bail!(
+            "{a_name} is {}×{} and {b_name} {}×{}: compare images of one size (render both \
+             with the same --width and --height)",
+            a.width,
+            a.height,
+            b.width,
+            b.height
+        );
+    }
+    if !(threshold.is_finite() && threshold >= 0.0) {
+        bail!(
+            "--threshold {threshold}: use a ΔE00 of 0 or more (2 is about a just noticeable difference)"
+        );
+    }
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let luminance = white_luminance(a, white);
+    let map = delta_e_map(a, b, d65_white().scale(luminance), threshold);
+    let s = &map.stats;
+    let top = scale_max(&map.values);
+    let caption = format!(
+        "mean {:.2}, median {:.2}, 95th percentile {:.2}, max {:.1}; {:.1} % above {}",
+        s.mean,
+        s.median,
+        s.p95,
+        s.max,
+        100.0 * s.share_above_threshold,
+        s.threshold
+    );
+    let cell = (a.width as u32).clamp(240, 960);
+    let grid = Grid {
+        title: "CIEDE2000 between A and B, pixel by pixel",
+        column_labels: vec![format!("A: {a_name}; B: {b_name}")],
+        row_labels: vec!["ΔE00".into()],
+        cells: vec![vec![Some(map_picture(&map, a.width, a.height, top).resized_to_width(cell))]],
+        captions: vec![vec![caption.clone()]],
+        cell_width: cell,
+        footer: vec![format!(
+            "CIELAB relative to a D65 white of luminance {luminance:.4} ({white_text}); light \
+             sources in grey."
+        )],
+    }
+    .render();
+    let cell_h = (f64::from(cell) * a.height as f64 / a.width as f64).round() as u32;
+    let bar = colour_bar(top, 6, 0, "ΔE00", cell_h);
+    let mut sheet =
+        Rgb8::new(grid.width + bar.width + 24, grid.height.max(bar.height + 60), BACKGROUND);
+    sheet.blit(0, 0, &grid);
+    sheet.blit(i64::from(grid.width), 56, &bar);
+    write(out, "delta-e.png", &sheet)?;
+
+    // One exposure for both: the white.
+    let exposure = Exposure::Absolute { white_cd_m2: luminance };
+    let (pa, pb) = (picture(a, exposure), picture(b, exposure));
+    let side = Grid {
+        title: "A and B, one exposure",
+        column_labels: vec![format!("A: {a_name}"), format!("B: {b_name}")],
+        row_labels: vec![String::new()],
+        cells: vec![vec![Some(pa.resized_to_width(cell)), Some(pb.resized_to_width(cell))]],
+        captions: Vec::new(),
+        cell_width: cell,
+        footer: Vec::new(),
+    }
+    .render();
+    write(out, "side-by-side.png", &side)?;
+    let mut split = pa.clone();
+    let half = split.width / 2;
+    for y in 0..split.height {
+        for x in half..split.width {
+            split.put(x, y, pb.get(x, y));
+        }
+        split.put(half, y, INK);
+    }
+    write(out, "split.png", &split)?;
+
+    let files = vec!["delta-e.png", "side-by-side.png", "split.png", "compare.json"];
+    let summary = Summary {
+        schema: "restauro.compare/1",
+        a: a_name.to_owned(),
+        b: b_name.to_owned(),
+        width: a.width,
+        height: a.height,
+        white_luminance: luminance,
+        white: white_text,
+        delta_e00: s,
+        files: files.clone(),
+    };
+    let json = out.join("compare.json");
+    std::fs::write(&json, serde_json::to_string_pretty(&summary)? + "\n")
+        .with_context(|| format!("writing {}", json.display()))?;
+    let mut text = format!("ΔE00 between {a_name} and {b_name}: {caption}\n");
+    for f in files {
+        let _ = writeln!(text, "wrote {}", out.join(f).display());
+    }
+    Ok(text)
+}
+
+pub fn run(args: &CompareArgs) -> Result<String> {
+    let white: Exposure = args.white.parse().map_err(|e| anyhow::anyhow!("--white: {e}"))?;
+    let a = read_exr(&args.a, MAX_PIXELS)?;
+    let b = read_exr(&args.b, MAX_PIXELS)?;
+    let (an, bn) = (args.a.display().to_string(), args.b.display().to_string());
+    compare_images((&a, &an), (&b, &bn), (white, &args.white), args.threshold, &args.out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two greys of known CIELAB: L* 50 against L* 55 is ΔE00 4.56 (Sharma, Wu & Dalal's
+    /// formula for a pure lightness step at L̄* = 52.5: ΔL/S_L with S_L = 1 + 0.015(L̄−50)²/√(20 +
+    /// (L̄−50)²)).
+    #[test]
+    fn a_lightness_step_has_the_published_difference() {
+        let white = d65_white();
+        let grey = |l: f64| {
+            let xyz = Lab { l, a: 0.0, b: 0.0 }.to_xyz(white);
+            [xyz.x as f32, xyz.y as f32, xyz.z as f32]
+        };
+        let a = XyzImage::new(2, 1, vec![grey(50.0); 2]);
+        let mut b = XyzImage::new(2, 1, vec![grey(55.0), grey(50.0)]);
+        let map = delta_e_map(&a, &b, white, 2.0);
+        let (lbar, dl) = (52.5f64, 5.0f64);
+        let sl = 1.0 + 0.015 * (lbar - 50.0).powi(2) / (20.0 + (lbar - 50.0).powi(2)).sqrt();
+        assert!((f64::from(map.values[0]) - dl / sl).abs() < 1e-3, "{:?}", map.values);
+        assert_eq!(map.values[1], 0.0);
+        assert_eq!((map.stats.pixels, map.stats.share_above_threshold), (2, 0.5));
+        // A light source in either image is left out.
+        b.emitter = Some(vec![true, false]);
+        let map = delta_e_map(&a, &b, white, 2.0);
+        assert!(map.values[0].is_nan());
+        assert_eq!(map.stats.pixels, 1);
+    }
+}

@@ -85,15 +85,20 @@ pub enum SceneCommand {
     },
     /// Validate a scene file and everything it refers to, and summarise it.
     Check {
-        /// The scene file (`.toml`) to check.
+        /// The scene file (`.toml`), or a bundle archive (`.tar`), to check.
         scene: PathBuf,
         #[command(flatten)]
         limits: LimitArgs,
     },
-    /// Bundle a scene with its files by content hash, and print the bundle's identity.
+    /// Bundle a scene with its files by content hash, and print the bundle's identity; with
+    /// --out, write it as one archive to share.
     Bundle {
         /// The scene file (`.toml`) to bundle.
         scene: PathBuf,
+        /// Write the bundle as one file (a .tar holding the scene, every file it names and its
+        /// identity), which `scene check`, `render` and `submit` take in place of the scene.
+        #[arg(long)]
+        out: Option<PathBuf>,
         #[command(flatten)]
         limits: LimitArgs,
     },

@@ -103,13 +103,29 @@ pub fn run(command: &SceneCommand) -> Result<String> {
             let loaded = load_scene(scene, &limits.into())?;
             Ok(summary(scene, &loaded))
         }
-        SceneCommand::Bundle { scene, limits } => {
+        SceneCommand::Bundle { scene, out, limits } => {
             let bundle = bundle_scene(scene, &limits.into())?;
             bundle.load(&limits.into())?;
             let mut s = String::new();
             let _ = writeln!(s, "bundle {}", bundle.id());
             for (hash, bytes) in &bundle.files {
                 let _ = writeln!(s, "  {hash}  {} bytes", bytes.len());
+            }
+            if let Some(out) = out {
+                if !restauro_scene::archive::is_archive(out) {
+                    anyhow::bail!(
+                        "--out {}: a bundle archive is a .tar file; name it e.g. scene.tar",
+                        out.display()
+                    );
+                }
+                restauro_scene::archive::write_archive(&bundle, out)?;
+                let bytes = std::fs::metadata(out).map_or(0, |m| m.len());
+                let _ = writeln!(
+                    s,
+                    "wrote {} ({bytes} bytes): `scene check`, `render` and `submit` take it as \
+                     they take the scene",
+                    out.display()
+                );
             }
             Ok(s)
         }

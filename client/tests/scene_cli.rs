@@ -95,3 +95,50 @@ fn render_writes_exr_with_spectral_layers_and_png() {
     let err = refused(&["render", s, "--out", r, "--spp", "0"]);
     assert!(err.contains("--spp: 0; use at least 1"), "{err}");
 }
+
+/// `scene bundle --out FILE.tar` writes one file to share; `scene check` and `render` take it as
+/// they take the scene, and render the same image bit for bit. A changed or foreign archive is
+/// refused with what is wrong.
+#[test]
+fn a_bundle_archive_is_a_scene_to_share() {
+    use restauro_image::image_files::{MAX_PIXELS, read_exr};
+    let dir = tempfile::tempdir().unwrap();
+    let folder = dir.path().join("aosta");
+    ok(&["scene", "aosta", "--out", folder.to_str().unwrap(), "--width", "96", "--height", "54"]);
+    let scene = folder.join("aosta.toml");
+    let archive = dir.path().join("share").join("aosta.tar");
+    std::fs::create_dir_all(archive.parent().unwrap()).unwrap();
+    let text =
+        ok(&["scene", "bundle", scene.to_str().unwrap(), "--out", archive.to_str().unwrap()]);
+    assert!(text.contains(&format!("wrote {}", archive.display())), "{text}");
+    // Shared: the scene's own folder is gone.
+    std::fs::remove_dir_all(&folder).unwrap();
+    let a = archive.to_str().unwrap();
+    assert!(ok(&["scene", "check", a]).contains("triangles in 1 objects"));
+    let render = |scene: &str, out: &std::path::Path| {
+        let o = out.to_str().unwrap();
+        ok(&["render", scene, "--in-process", "--spp", "1", "--variant", "cleaned", "--out", o]);
+        read_exr(&out.join("aosta-cleaned.exr"), MAX_PIXELS).unwrap().pixels
+    };
+    let from_archive = render(a, &dir.path().join("from-archive"));
+    // The same scene, written again, from its folder.
+    ok(&["scene", "aosta", "--out", folder.to_str().unwrap(), "--width", "96", "--height", "54"]);
+    let from_folder = render(scene.to_str().unwrap(), &dir.path().join("from-folder"));
+    assert!(from_archive == from_folder, "the archive renders another image");
+
+    // One byte changed in a file it holds (the mesh is the last entry): refused.
+    let mut bytes = std::fs::read(&archive).unwrap();
+    let at = bytes.len() - 2048;
+    let changed = dir.path().join("changed.tar");
+    bytes[at - 100] ^= 0x20;
+    std::fs::write(&changed, &bytes).unwrap();
+    let e = refused(&["scene", "check", changed.to_str().unwrap()]);
+    assert!(e.contains("changed.tar") && (e.contains("corrupt") || e.contains("changed")), "{e}");
+    // Not an archive at all.
+    let foreign = dir.path().join("notes.tar");
+    std::fs::write(&foreign, "these are my notes, not a tar file\n".repeat(40)).unwrap();
+    let e = refused(&["scene", "check", foreign.to_str().unwrap()]);
+    assert!(e.contains("notes.tar") && e.contains("tar"), "{e}");
+    let e = refused(&["scene", "bundle", scene.to_str().unwrap(), "--out", "x.zip"]);
+    assert!(e.contains(".tar"), "{e}");
+}

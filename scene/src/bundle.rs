@@ -22,8 +22,12 @@ pub struct Bundle {
     pub files: BTreeMap<String, Vec<u8>>,
 }
 
-/// Bundle the scene file at `path` and everything it refers to.
+/// Bundle the scene file at `path` and everything it refers to (or read the bundle an archive
+/// at `path` holds, see `archive`).
 pub fn bundle_scene(path: &Path, limits: &Limits) -> Result<Bundle> {
+    if crate::archive::is_archive(path) {
+        return crate::archive::read_archive(path, limits);
+    }
     let mut scene = read_scene_file(path, limits)?;
     let assets = FolderAssets::new(path, limits.max_file_bytes)?;
     let mut files = BTreeMap::new();

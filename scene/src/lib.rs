@@ -10,6 +10,7 @@ pub use error::{Result, SceneError};
 pub use mesh::{Bounds, Group, Mesh};
 /// Spectrum files are read by restauro-spectral's reader.
 pub use restauro_spectral::csv as spectrum_csv;
+pub mod archive;
 pub mod assets;
 pub mod bundle;
 pub mod gltf_mesh;

@@ -251,6 +251,9 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<SceneFile> {
 
 /// Load and check the scene file at `path`.
 pub fn load_scene(path: &Path, limits: &Limits) -> Result<LoadedScene> {
+    if crate::archive::is_archive(path) {
+        return crate::archive::read_archive(path, limits)?.load(limits);
+    }
     let file = read_scene_file(path, limits)?;
     let assets = FolderAssets::new(path, limits.max_file_bytes)?;
     load(file, &assets, limits)

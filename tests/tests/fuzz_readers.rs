@@ -511,6 +511,20 @@ fn exr_image(width: usize, height: usize) -> XyzImage {
     }
 }
 
+/// A bundle archive of a small Aosta facade (`scene bundle --out`).
+fn archive_seeds(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let aosta = restauro_scene::aosta::generate(16, 9, 1);
+    let folder = dir.join("archive-seed");
+    std::fs::create_dir_all(folder.join("meshes")).unwrap();
+    std::fs::write(folder.join("aosta.toml"), &aosta.scene_toml).unwrap();
+    std::fs::write(folder.join("meshes/facade.obj"), &aosta.facade_obj).unwrap();
+    let limits = restauro_scene::limits::Limits::default();
+    let bundle = restauro_scene::bundle::bundle_scene(&folder.join("aosta.toml"), &limits).unwrap();
+    let path = dir.join("aosta.tar");
+    restauro_scene::archive::write_archive(&bundle, &path).unwrap();
+    vec![("aosta.tar".into(), std::fs::read(&path).unwrap())]
+}
+
 fn exr_seeds(dir: &Path) -> Vec<(String, Vec<u8>)> {
     let mut out = Vec::new();
     let path = dir.join("spectral.exr");
@@ -705,6 +719,7 @@ fn readers() -> Vec<Reader> {
 
     let exr_dir = tempfile::tempdir().unwrap();
     let exr = exr_seeds(exr_dir.path());
+    let archive = archive_seeds(exr_dir.path());
 
     vec![
         Reader {
@@ -776,6 +791,14 @@ fn readers() -> Vec<Reader> {
                 }
                 Ok(())
             },
+            names_file: names_own_file,
+        },
+        Reader {
+            name: "archive",
+            file: "input.tar",
+            seeds: archive,
+            bench: Bench::new(&[]),
+            run: |folder| load_and_trace(&folder.join("input.tar")),
             names_file: names_own_file,
         },
         Reader {

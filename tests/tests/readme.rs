@@ -101,6 +101,7 @@ fn every_readme_command_runs_in_order() {
         "out/as-found/aosta-as-found.exr",
         "out/hypotheses/compare-as-found-vs-cleaned/seen/compare.json",
         "out/compare/delta-e.png",
+        "out/aosta.tar",
     ] {
         assert!(dir.path().join(file).is_file(), "{file} was not written");
     }

@@ -20,6 +20,15 @@ pub trait Assets {
     }
 }
 
+/// The reference of a file that the file `reference` names by the relative path `relative`
+/// (a glTF's buffer `model.bin` beside `meshes/model.gltf` is `meshes/model.bin`).
+pub fn sibling(reference: &str, relative: &str) -> String {
+    match Path::new(reference).parent().filter(|p| !p.as_os_str().is_empty()) {
+        Some(folder) => folder.join(relative).to_string_lossy().into_owned(),
+        None => relative.to_owned(),
+    }
+}
+
 /// How to raise [`crate::load::Limits::max_file_bytes`].
 pub const MAX_FILE_FIX: &str = "simplify the file or raise the limit with --max-file-mb";
 

@@ -32,7 +32,13 @@ pub fn bundle_scene(path: &Path, limits: &Limits) -> Result<Bundle> {
     let assets = FolderAssets::new(path, limits.max_file_bytes)?;
     let mut files = BTreeMap::new();
     let mut add = |reference: &mut String, place: String| -> Result<()> {
-        let bytes = assets.read(reference, &place)?;
+        let mut bytes = assets.read(reference, &place)?;
+        if extension(reference) == "gltf" {
+            // One file in the bundle: the model with its separate buffers embedded.
+            let beside = |uri: &str| assets.read(&crate::assets::sibling(reference, uri), &place);
+            let shown = assets.display_path(reference);
+            bytes = crate::gltf_mesh::embed_buffers(&bytes, &shown, &beside)?;
+        }
         let hash = blake3::hash(&bytes).to_hex().to_string();
         *reference = format!("blake3:{hash}.{}", extension(reference));
         files.insert(hash, bytes);

@@ -1,11 +1,14 @@
-//! glTF 2.0 meshes (`.glb`, or `.gltf` with its buffers embedded as base64 `data:` URIs), read
-//! with the gltf crate: the triangles of every mesh instance in the default scene, with each
-//! node's transform applied down the hierarchy (glTF 2.0 §5.25, column-major matrices). Parts
-//! are named by the primitive's material name (or `material<index>`, or `default`).
+//! glTF 2.0 meshes (`.glb`, or `.gltf` with its buffers embedded as base64 `data:` URIs or in
+//! separate files beside it), read with the gltf crate: the triangles of every mesh instance in
+//! the default scene, with each node's transform applied down the hierarchy (glTF 2.0 §5.25,
+//! column-major matrices). Parts are named by the primitive's material name (or
+//! `material<index>`, or `default`).
 //!
-//! Buffers in separate files are refused rather than looked up: a scene's assets must each be
-//! one self-contained file so that an asset bundle carries them by hash. glTF is Y-up; the
-//! scene loader turns it Z-up.
+//! A `.gltf`'s separate buffers (`model.bin`, by a relative URI, percent-decoded as glTF 2.0
+//! §3.3 has it) are read from the scene's folder, never outside it. A bundle carries each file
+//! by its hash, so when a scene is bundled its `.gltf` gets its buffers embedded
+//! ([`embed_buffers`]): one self-contained file, the same triangles. glTF is Y-up; the scene
+//! loader turns it Z-up.
 
 use crate::error::{Result, SceneError};
 use crate::guard;
@@ -17,7 +20,27 @@ use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 use std::path::Path;
 
-fn buffers(doc: &gltf::Gltf, path: &Path) -> Result<Vec<Vec<u8>>> {
+/// Reads a file that a glTF names by a relative URI (already percent-decoded), from the
+/// scene's folder.
+pub type External<'a> = &'a dyn Fn(&str) -> Result<Vec<u8>>;
+
+/// The path a glTF's buffer URI names, relative to the glTF's own folder: a relative URI,
+/// percent-decoded; anything else (a scheme, an absolute path) is refused.
+fn external_path(uri: &str, path: &Path, index: usize) -> Result<String> {
+    let decoded = percent_encoding::percent_decode_str(uri).decode_utf8_lossy().into_owned();
+    if decoded.contains("://") || decoded.starts_with('/') || decoded.contains(':') {
+        return Err(SceneError::invalid(
+            path,
+            format!("buffer {index}"),
+            format!(
+                "refers to `{uri}`, which is not a file beside the model; keep the buffer in                  the scene's folder and refer to it by a relative path"
+            ),
+        ));
+    }
+    Ok(decoded)
+}
+
+fn buffers(doc: &gltf::Gltf, path: &Path, external: External<'_>) -> Result<Vec<Vec<u8>>> {
     doc.buffers()
         .map(|b| match b.source() {
             gltf::buffer::Source::Bin => doc.blob.clone().ok_or_else(|| {
@@ -40,14 +63,15 @@ fn buffers(doc: &gltf::Gltf, path: &Path) -> Result<Vec<Vec<u8>>> {
                             format!("bad base64 data: {e}"),
                         )
                     }),
-                    None => Err(SceneError::invalid(
+                    None if doc.blob.is_some() => Err(SceneError::invalid(
                         path,
                         format!("buffer {}", b.index()),
                         format!(
-                            "refers to the separate file `{uri}`; save the model as .glb (or \
-                             with embedded buffers) so that it is one file"
+                            "refers to the separate file `{uri}`; a .glb keeps its buffers in \
+                             its binary chunk: export it again, or as .gltf with its .bin"
                         ),
                     )),
+                    None => external(&external_path(uri, path, b.index())?),
                 }
             }
         })
@@ -325,9 +349,16 @@ fn add_node(
     Ok(())
 }
 
-/// Read glTF bytes (JSON or GLB). `path` names the file in messages.
+/// Read glTF bytes (JSON or GLB) that need no other file. `path` names the file in messages.
 pub fn parse(bytes: &[u8], path: &Path) -> Result<Mesh> {
-    parse_limited(bytes, path, &Limits::default())
+    let no_folder = |uri: &str| {
+        Err(SceneError::invalid(
+            path,
+            "buffers",
+            format!("refers to the separate file `{uri}`, and there is no folder to read it from"),
+        ))
+    };
+    parse_limited(bytes, path, &Limits::default(), &no_folder)
 }
 
 /// A GLB container's framing (glTF 2.0 §4.4), checked before the gltf crate splits it: it
@@ -414,8 +445,14 @@ fn check_references(doc: &gltf::json::Root, path: &Path) -> Result<()> {
     Ok(())
 }
 
-/// [`parse`] within `limits` (node instances, triangles).
-pub fn parse_limited(bytes: &[u8], path: &Path, limits: &Limits) -> Result<Mesh> {
+/// [`parse`] within `limits` (node instances, triangles); `external` reads the buffers a
+/// `.gltf` keeps in separate files.
+pub fn parse_limited(
+    bytes: &[u8],
+    path: &Path,
+    limits: &Limits,
+    external: External<'_>,
+) -> Result<Mesh> {
     if bytes.starts_with(b"glTF") {
         check_glb(bytes, path)?;
     }
@@ -432,7 +469,7 @@ pub fn parse_limited(bytes: &[u8], path: &Path, limits: &Limits) -> Result<Mesh>
         .map_err(|_| gave_up())?
         .map_err(not_gltf)?;
     let doc = gltf::Gltf { document, blob };
-    let buffers = buffers(&doc, path)?;
+    let buffers = buffers(&doc, path, external)?;
     let scene = doc
         .default_scene()
         .or_else(|| doc.scenes().next())
@@ -443,6 +480,33 @@ pub fn parse_limited(bytes: &[u8], path: &Path, limits: &Limits) -> Result<Mesh>
         add_node(node, Mat4::IDENTITY, &buffers, &mut mesh, path, 0, &mut totals)?;
     }
     Ok(mesh)
+}
+
+/// A `.gltf` with the buffers it keeps in separate files embedded as base64 `data:` URIs, so
+/// that it is one file (for a bundle); a model with none (or a `.glb`) is returned as it is.
+pub fn embed_buffers(bytes: &[u8], path: &Path, external: External<'_>) -> Result<Vec<u8>> {
+    if bytes.starts_with(b"glTF") {
+        return Ok(bytes.to_vec());
+    }
+    let not_json = |e: serde_json::Error| {
+        SceneError::invalid(path, "glTF", format!("{e}; the file is not valid glTF 2.0 JSON"))
+    };
+    let mut json: serde_json::Value = serde_json::from_slice(bytes).map_err(not_json)?;
+    let Some(buffers) = json.get_mut("buffers").and_then(|b| b.as_array_mut()) else {
+        return Ok(bytes.to_vec());
+    };
+    let mut changed = false;
+    for (index, buffer) in buffers.iter_mut().enumerate() {
+        let Some(uri) = buffer.get("uri").and_then(|u| u.as_str()) else { continue };
+        if uri.starts_with("data:") {
+            continue;
+        }
+        let data = external(&external_path(uri, path, index)?)?;
+        let encoded = base64::engine::general_purpose::STANDARD.encode(&data);
+        buffer["uri"] = format!("data:application/octet-stream;base64,{encoded}").into();
+        changed = true;
+    }
+    Ok(if changed { serde_json::to_vec(&json).map_err(not_json)? } else { bytes.to_vec() })
 }
 
 #[cfg(test)]
@@ -499,12 +563,38 @@ mod tests {
     }
 
     #[test]
-    fn external_buffers_and_bad_indices_are_refused() {
-        let ext =
-            two_instances().replacen("data:application/octet-stream;base64,", "meshes.bin#", 1);
-        let err = parse(ext.as_bytes(), Path::new("e.gltf")).unwrap_err().to_string();
-        assert!(err.contains("refers to the separate file"), "{err}");
-        assert!(err.contains("save the model as .glb"), "{err}");
+    fn external_buffers_are_read_and_embedded() {
+        let embedded = two_instances();
+        let (head, rest) = embedded.split_once("data:application/octet-stream;base64,").unwrap();
+        let (data, tail) = rest.split_once('"').unwrap();
+        let bin = base64::engine::general_purpose::STANDARD.decode(data).unwrap();
+        // The same model with its buffer in `mesh data.bin` beside it (a percent-encoded URI).
+        let separate = format!("{head}mesh%20data.bin\"{tail}");
+        let files = |uri: &str| -> Result<Vec<u8>> {
+            assert_eq!(uri, "mesh data.bin");
+            Ok(bin.clone())
+        };
+        let path = Path::new("s.gltf");
+        let limits = Limits::default();
+        let from_files = parse_limited(separate.as_bytes(), path, &limits, &files).unwrap();
+        let reference = parse(embedded.as_bytes(), path).unwrap();
+        assert_eq!(from_files.positions, reference.positions);
+        // Embedded for a bundle: one file, the same triangles.
+        let one = embed_buffers(separate.as_bytes(), path, &files).unwrap();
+        assert_eq!(parse(&one, path).unwrap().positions, reference.positions);
+        assert_eq!(embed_buffers(embedded.as_bytes(), path, &files).unwrap(), embedded.as_bytes());
+        // Without a folder, or outside it, a separate file is refused.
+        let err = parse(separate.as_bytes(), path).unwrap_err().to_string();
+        assert!(err.contains("mesh data.bin"), "{err}");
+        for uri in ["https://example.org/m.bin", "/etc/m.bin", "C:%5Cm.bin"] {
+            let far = format!("{head}{uri}\"{tail}");
+            let err = parse_limited(far.as_bytes(), path, &limits, &files).unwrap_err();
+            assert!(err.to_string().contains("not a file beside the model"), "{uri}: {err}");
+        }
+    }
+
+    #[test]
+    fn bad_json_is_refused() {
         let err = parse(b"{not json", Path::new("j.gltf")).unwrap_err().to_string();
         assert!(err.starts_with("j.gltf: glTF: "), "{err}");
     }

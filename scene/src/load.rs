@@ -490,7 +490,11 @@ fn import_mesh(
             (obj::parse_limited(&text, &name, limits)?, Vec::new(), UpAxis::Z)
         }
         "ply" => (ply::parse_limited(&bytes, &name, limits)?, Vec::new(), UpAxis::Z),
-        "gltf" | "glb" => (gltf_mesh::parse_limited(&bytes, &name, limits)?, Vec::new(), UpAxis::Y),
+        "gltf" | "glb" => {
+            let beside =
+                |uri: &str| ctx.assets.read(&crate::assets::sibling(reference, uri), place);
+            (gltf_mesh::parse_limited(&bytes, &name, limits, &beside)?, Vec::new(), UpAxis::Y)
+        }
         "wrl" => {
             let text = utf8_text(bytes, &name)?;
             let scene = vrml::parse_limited(&text, &name, limits)?;

@@ -164,6 +164,50 @@ fn a_ply_part_bound_by_name_loads_from_its_bundle_too() {
     assert_eq!(from_bundle.objects[0].group_materials, ["stone"]);
 }
 
+/// A `.gltf` with its `.bin` beside it, as most exporters write it: read from the scene's folder,
+/// embedded in the bundle (one file, by hash), the same triangles both ways; a buffer outside the
+/// folder is refused.
+#[test]
+fn a_gltf_with_its_bin_beside_it_loads_and_bundles() {
+    let f = Folder::new();
+    // One triangle: three f32 VEC3 positions and three u16 indices.
+    let mut bin: Vec<u8> = [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    bin.extend([0u16, 1, 2].iter().flat_map(|i| i.to_le_bytes()));
+    std::fs::create_dir_all(f.dir.path().join("meshes")).unwrap();
+    std::fs::write(f.dir.path().join("meshes/wall.bin"), &bin).unwrap();
+    let gltf = |uri: &str| {
+        format!(
+            r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
+            "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1}}]}}],
+            "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+                         {{"bufferView":1,"componentType":5123,"count":3,"type":"SCALAR"}}],
+            "bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":6}}],
+            "buffers":[{{"byteLength":42,"uri":"{uri}"}}]}}"#
+        )
+    };
+    f.write("meshes/wall.gltf", gltf("wall.bin"));
+    let objects =
+        "[[objects]]\nname = \"wall\"\nmesh = \"meshes/wall.gltf\"\nmaterial = \"stone\"\n";
+    let path = f.write("scene.toml", scene_toml(objects, ""));
+    let from_folder = load_scene(&path, &Limits::default()).unwrap();
+    assert_eq!(from_folder.objects[0].mesh.triangles.len(), 1);
+    let bundle = bundle_scene(&path, &Limits::default()).unwrap();
+    assert_eq!(bundle.files.len(), 1, "the model and its buffer are one file in the bundle");
+    let from_bundle = bundle.load(&Limits::default()).unwrap();
+    assert_eq!(from_bundle.objects[0].mesh.positions, from_folder.objects[0].mesh.positions);
+    // A buffer outside the scene's folder is refused, as any file outside it.
+    f.write("meshes/wall.gltf", gltf("../../wall.bin"));
+    let err = load_scene(&path, &Limits::default()).unwrap_err().to_string();
+    assert!(err.contains("leaves the scene's folder") || err.contains("cannot be opened"), "{err}");
+    // A missing buffer names the file looked for.
+    f.write("meshes/wall.gltf", gltf("gone.bin"));
+    let err = load_scene(&path, &Limits::default()).unwrap_err().to_string();
+    assert!(err.contains("meshes/gone.bin"), "{err}");
+}
+
 #[test]
 fn files_outside_the_folder_and_the_scene_itself_are_refused() {
     let f = Folder::new();

@@ -83,6 +83,9 @@ pub enum SceneCommand {
         #[arg(long, default_value_t = 1)]
         seed: u64,
     },
+    /// Write a starter scene for your own model: its parts bound to a placeholder stone, a
+    /// camera framing it, the sun of the site and a sky; it renders at once.
+    New(SceneNewArgs),
     /// Validate a scene file and everything it refers to, and summarise it.
     Check {
         /// The scene file (`.toml`), or a bundle archive (`.tar`), to check.
@@ -105,6 +108,23 @@ pub enum SceneCommand {
 }
 
 pub use restauro_scene::limits::LimitArgs;
+
+#[derive(Debug, Args)]
+pub struct SceneNewArgs {
+    /// Your model: .obj, .gltf (with its .bin), .glb, .ply or .wrl.
+    #[arg(long)]
+    pub mesh: PathBuf,
+    /// The site, `LAT,LON` in degrees (north and east positive), for the sun of a summer
+    /// afternoon there; without it the sun is set by direction.
+    #[arg(long)]
+    pub site: Option<String>,
+    /// The scene's folder (default: the model's own); the model is copied into its `meshes/`.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Write over a scene file of the same name.
+    #[arg(long)]
+    pub force: bool,
+}
 
 #[derive(Clone, Debug, Args)]
 pub struct RenderArgs {

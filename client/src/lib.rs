@@ -14,4 +14,5 @@ pub mod progress;
 pub mod render;
 pub mod retinex;
 pub mod scene_cmd;
+pub mod scene_new;
 pub mod sheet;

@@ -99,6 +99,7 @@ pub fn run(command: &SceneCommand) -> Result<String> {
             }
             Ok(s)
         }
+        SceneCommand::New(args) => crate::scene_new::run(args),
         SceneCommand::Check { scene, limits } => {
             let loaded = load_scene(scene, &limits.into())?;
             Ok(summary(scene, &loaded))

@@ -142,3 +142,49 @@ fn a_bundle_archive_is_a_scene_to_share() {
     let e = refused(&["scene", "bundle", scene.to_str().unwrap(), "--out", "x.zip"]);
     assert!(e.contains(".tar"), "{e}");
 }
+
+/// `scene new --mesh` writes a starter scene for a user's own model that checks and renders at
+/// once, with every part listed.
+#[test]
+fn scene_new_writes_a_starter_scene_that_renders() {
+    let dir = tempfile::tempdir().unwrap();
+    let survey = dir.path().join("survey");
+    std::fs::create_dir_all(&survey).unwrap();
+    // A wall 8 m wide, 4 m high, with its plinth as a second part.
+    let obj = "v -4 0 0\nv 4 0 0\nv 4 0 4\nv -4 0 4\nv -4 0 0.5\nv 4 0 0.5\n\
+               g wall\nf 5 6 3 4\ng plinth\nf 1 2 6 5\n";
+    let mesh = survey.join("chapel wall.obj");
+    std::fs::write(&mesh, obj).unwrap();
+    let m = mesh.to_str().unwrap();
+    let text = ok(&["scene", "new", "--mesh", m, "--site", "45.737,7.323"]);
+    assert!(text.contains("2 parts: wall, plinth"), "{text}");
+    let scene = survey.join("chapel wall.toml");
+    let toml = std::fs::read_to_string(&scene).unwrap();
+    assert!(toml.contains("materials = { wall = \"stone\", plinth = \"stone\" }"), "{toml}");
+    assert!(toml.contains("latitude_deg = 45.737"), "{toml}");
+    let s = scene.to_str().unwrap();
+    assert!(ok(&["scene", "check", s]).contains("valid"));
+    let out = dir.path().join("render");
+    let o = out.to_str().unwrap();
+    ok(&["render", s, "--in-process", "--spp", "1", "--width", "64", "--height", "36", "--out", o]);
+    // The wall is in view: the render is not black.
+    let image = restauro_image::image_files::read_exr(
+        &out.join("chapel_wall.exr"),
+        restauro_image::image_files::MAX_PIXELS,
+    )
+    .unwrap();
+    let lit = image.pixels.iter().filter(|p| p[1] > 0.0).count();
+    assert!(lit > image.pixels.len() / 4, "only {lit} pixels see the model");
+    // Written again: refused unless --force; elsewhere, the model is copied beside the scene.
+    let e = refused(&["scene", "new", "--mesh", m]);
+    assert!(e.contains("--force"), "{e}");
+    let elsewhere = dir.path().join("project");
+    ok(&["scene", "new", "--mesh", m, "--out", elsewhere.to_str().unwrap()]);
+    assert!(elsewhere.join("meshes/chapel wall.obj").is_file());
+    assert!(
+        ok(&["scene", "check", elsewhere.join("chapel wall.toml").to_str().unwrap()])
+            .contains("valid")
+    );
+    let e = refused(&["scene", "new", "--mesh", m, "--site", "north", "--force"]);
+    assert!(e.contains("--site"), "{e}");
+}

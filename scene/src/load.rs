@@ -233,7 +233,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<SceneFile> {
                 (line, column)
             })
             .unwrap_or((0, 0));
-        SceneError::syntax(path, line, column, e.message().to_owned())
+        SceneError::syntax(path, line, column, plain_message(e.message()))
     })?;
     if file.format != scene_file::FORMAT {
         return Err(SceneError::invalid(
@@ -247,6 +247,19 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<SceneFile> {
         ));
     }
     Ok(file)
+}
+
+/// The TOML reader's message in the user's words where serde's would name a Rust type: a
+/// spectrum that is none of the four forms (an unknown or misspelt key in its inline table).
+fn plain_message(message: &str) -> String {
+    if message.contains("untagged enum SpectrumSource") {
+        return "a spectrum is a shipped name (\"travertine_tufa_solid__eco_ward73\"), \
+                { file = \"…csv\", extrapolate = true|false }, { illuminant = \"D65\" } or \
+                { mix = [{ spectrum = \"…\", weight = … }, …] }, with no other keys: check the \
+                keys of this table"
+            .to_owned();
+    }
+    message.to_owned()
 }
 
 /// Load and check the scene file at `path`.

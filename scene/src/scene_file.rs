@@ -182,7 +182,7 @@ impl Default for Render {
 
 /// Where a spectrum comes from.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(untagged)]
+#[serde(untagged, deny_unknown_fields)]
 pub enum SpectrumSource {
     /// A shipped spectrum by file stem (`restauro color --list`).
     Library(String),

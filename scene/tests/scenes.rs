@@ -239,6 +239,15 @@ fn each_class_of_bad_scene_is_refused_with_place_and_fix() {
     let cases: Vec<(String, &str)> = vec![
         (good.replace("width = 64", "width = 64\nlens = 35"), "unknown field `lens`"),
         (good.replace("format = 1", "format = 9"), "format = 9, but this restauro reads format 1"),
+        // A misspelt key in a spectrum's inline table, and two forms in one.
+        (
+            good.replace("{ illuminant = \"D65\" }", "{ illuminant = \"D65\", extrapolat = true }"),
+            "with no other keys",
+        ),
+        (
+            good.replace("{ illuminant = \"D65\" }", "{ illuminant = \"D65\", file = \"d.csv\" }"),
+            "a spectrum is a shipped name",
+        ),
         (good.replace("width = 64", "width = \"wide\""), "invalid type"),
         (
             good.replace("stone = \"stone\", joint", "stone = \"ston\", joint"),

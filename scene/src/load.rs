@@ -1004,6 +1004,7 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
                         let az = az.or(el.map(|_| 180.0));
                         match (az, el) {
                             (Some(az), Some(el)) if az.is_finite() && el.is_finite() && (-90.0..=90.0).contains(&el) => SunPosition { azimuth_deg: az, elevation_deg: el },
+                            (Some(az), Some(_)) if !az.is_finite() => return Err(ctx.invalid(format!("{place}.azimuth_deg"), format!("{az} is not a direction; give degrees from north towards east (0 north, 90 east, 180 south)"))),
                             (Some(_), Some(el)) => return Err(ctx.invalid(format!("{place}.elevation_deg"), format!("{el} is out of range; use −90 to 90 degrees"))),
                             _ => return Err(ctx.invalid(&place, "give azimuth_deg and elevation_deg, or a site with latitude, longitude and date-time")),
                         }

@@ -269,6 +269,7 @@ fn each_class_of_bad_scene_is_refused_with_place_and_fix() {
             good.replace("elevation_deg = 50.0", "elevation_deg = -10.0"),
             "the sun is below the horizon",
         ),
+        (good.replace("azimuth_deg = 180.0", "azimuth_deg = nan"), "lights[0].azimuth_deg"),
         (
             good.replace("reflectance = \"dirty\"", "reflectance = \"sunlight\""),
             "is used as a reflectance, which cannot exceed 1",

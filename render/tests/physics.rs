@@ -85,13 +85,17 @@ fn lambertian_plane_under_the_sun() {
 /// Below a point luminaire of I cd at height h the illuminance follows I·cos α / r² (inverse
 /// square and cosine laws): the plane's luminance is ρ/π of it — relative error below 1e-4 for
 /// an isotropic source; for an IES file tabulating I0·cos γ every 2.5°, below 2.5e-4, the
-/// error of interpolating cos γ linearly between its samples (at most Δγ²/8 = 2.4e-4).
+/// error of interpolating cos γ linearly between its samples (at most Δγ²/8 = 2.4e-4). Without
+/// `intensity_cd` the file is rendered at its own absolute photometry: its table says 1000 cd at
+/// the nadir, so the image is the same.
 #[test]
 fn inverse_square_and_cosine_laws() {
-    for (light, ies) in [("", false), ("ies = \"cos.ies\"", true)] {
+    let intensity = "intensity_cd = 1000.0\n";
+    let file = "ies = \"cos.ies\"";
+    for (given, light, ies) in [(intensity, "", false), (intensity, file, true), ("", file, true)] {
         let dir = tempfile::tempdir().unwrap();
         let lights = format!(
-            "[[lights]]\nkind = \"point\"\nposition = [0.0, 0.0, 2.0]\nintensity_cd = 1000.0\nspectrum = \"lamp\"\n{light}"
+            "[[lights]]\nkind = \"point\"\nposition = [0.0, 0.0, 2.0]\n{given}spectrum = \"lamp\"\n{light}"
         );
         let render = "[render]\nintegrator = \"whitted\"\nsamples_per_pixel = 1\nmax_depth = 1";
         let loaded = scene(dir.path(), PLANE, LOOK_DOWN, &lights, render);

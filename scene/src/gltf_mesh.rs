@@ -33,7 +33,8 @@ fn external_path(uri: &str, path: &Path, index: usize) -> Result<String> {
             path,
             format!("buffer {index}"),
             format!(
-                "refers to `{uri}`, which is not a file beside the model; keep the buffer in                  the scene's folder and refer to it by a relative path"
+                "refers to `{uri}`, which is not a file beside the model; keep the buffer in \
+                 the scene's folder and refer to it by a relative path"
             ),
         ));
     }

@@ -100,19 +100,40 @@ impl std::fmt::Display for ResolvedLight {
                     "sun: {illuminance_lux} lux, azimuth {azimuth_deg:.2}°, elevation {elevation_deg:.2}°, spectrum {spectrum}"
                 )
             }
-            ResolvedLight::Point { position, intensity_cd, photometry, .. } => write!(
-                f,
-                "point luminaire at {position:?}: {intensity_cd} cd{}",
-                if photometry.is_some() { ", photometric file" } else { "" }
-            ),
-            ResolvedLight::Spot { position, intensity_cd, cone_deg, .. } => {
-                write!(f, "spot at {position:?}: {intensity_cd} cd, cone {cone_deg}°")
+            ResolvedLight::Point { position, intensity_cd, photometry, .. } => {
+                write!(f, "point luminaire at {position:?}: {intensity_cd} cd")?;
+                write_photometry(f, *intensity_cd, photometry.as_ref())
+            }
+            ResolvedLight::Spot { position, intensity_cd, cone_deg, photometry, .. } => {
+                write!(f, "spot at {position:?}: {intensity_cd} cd")?;
+                match photometry {
+                    Some(_) => write_photometry(f, *intensity_cd, photometry.as_ref()),
+                    None => write!(f, ", cone {cone_deg}°"),
+                }
             }
             ResolvedLight::Sky { illuminance_lux, model, spectrum } => {
                 write!(f, "{model}: {illuminance_lux} lux on the horizontal, spectrum {spectrum}")
             }
         }
     }
+}
+
+/// What `scene check` says of a luminaire's photometric file, at the intensity rendered:
+/// its flux, peak intensity and beam angle (50 % of the peak).
+fn write_photometry(
+    f: &mut std::fmt::Formatter<'_>,
+    intensity_cd: f64,
+    photometry: Option<&Photometry>,
+) -> std::fmt::Result {
+    let Some(p) = photometry else { return Ok(()) };
+    let scale = if p.peak_cd() > 0.0 { intensity_cd / p.peak_cd() } else { 0.0 };
+    write!(
+        f,
+        " (photometric file: {:.0} lm, peak {:.0} cd, beam {:.1}°)",
+        scale * p.flux_lm(),
+        intensity_cd,
+        p.beam_angle_deg()
+    )
 }
 
 /// A scene that has passed every check.
@@ -931,19 +952,20 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
         let place = format!("lights[{i}]");
         let resolved = match l {
             Light::Point { position, intensity_cd, spectrum, ies, aim } => {
-                check_luminaire(&ctx, &place, *position, *intensity_cd, *aim)?;
                 ctx.emission(spectrum, &format!("{place}.spectrum"))?;
                 let photometry = photometry(&ctx, ies, &format!("{place}.ies"))?;
+                let intensity_cd =
+                    luminaire_intensity(&mut ctx, &place, *intensity_cd, photometry.as_ref())?;
+                check_luminaire(&ctx, &place, *position, intensity_cd, *aim)?;
                 ResolvedLight::Point {
                     position: *position,
-                    intensity_cd: *intensity_cd,
+                    intensity_cd,
                     spectrum: spectrum.clone(),
                     photometry,
                     aim: *aim,
                 }
             }
             Light::Spot { position, intensity_cd, spectrum, aim, cone_deg, falloff_deg, ies } => {
-                check_luminaire(&ctx, &place, *position, *intensity_cd, Some(*aim))?;
                 if !(cone_deg.is_finite()
                     && *cone_deg > 0.0
                     && falloff_deg.is_finite()
@@ -957,9 +979,12 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
                 }
                 ctx.emission(spectrum, &format!("{place}.spectrum"))?;
                 let photometry = photometry(&ctx, ies, &format!("{place}.ies"))?;
+                let intensity_cd =
+                    luminaire_intensity(&mut ctx, &place, *intensity_cd, photometry.as_ref())?;
+                check_luminaire(&ctx, &place, *position, intensity_cd, Some(*aim))?;
                 ResolvedLight::Spot {
                     position: *position,
-                    intensity_cd: *intensity_cd,
+                    intensity_cd,
                     spectrum: spectrum.clone(),
                     aim: *aim,
                     cone_deg: *cone_deg,
@@ -1141,6 +1166,37 @@ fn check_illuminance(ctx: &Ctx, place: &str, lux: f64) -> Result<()> {
         ));
     }
     Ok(())
+}
+
+/// A luminaire's peak intensity (cd): the photometric file's own unless `intensity_cd`
+/// overrides it (noted when it departs from the file by more than 1 %); without a file,
+/// `intensity_cd` itself, which is then required.
+fn luminaire_intensity(
+    ctx: &mut Ctx,
+    place: &str,
+    intensity_cd: Option<f64>,
+    photometry: Option<&Photometry>,
+) -> Result<f64> {
+    match (intensity_cd, photometry) {
+        (None, Some(p)) => Ok(p.peak_cd()),
+        (Some(cd), Some(p)) => {
+            let peak = p.peak_cd();
+            if cd.is_finite() && peak > 0.0 && (cd / peak - 1.0).abs() > 0.01 {
+                ctx.notes.push(format!(
+                    "{place}: intensity_cd = {cd} cd overrides the photometric file's peak of \
+                     {peak:.1} cd (× {:.3}); leave intensity_cd out to render the luminaire as \
+                     measured",
+                    cd / peak
+                ));
+            }
+            Ok(cd)
+        }
+        (Some(cd), None) => Ok(cd),
+        (None, None) => Err(ctx.invalid(
+            format!("{place}.intensity_cd"),
+            "a luminaire without a photometric file (ies) needs its intensity in candela",
+        )),
+    }
 }
 
 fn check_luminaire(

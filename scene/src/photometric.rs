@@ -214,6 +214,29 @@ impl Photometry {
         self.candela.iter().flatten().fold(0.0, |m: f64, &v| m.max(v))
     }
 
+    /// The beam angle (degrees): the full apex angle of the cone whose solid angle is that of the
+    /// directions receiving at least half the peak intensity (the 50 %-of-peak beam of CIE
+    /// 121 / IES LM-63 usage, as one equivalent cone, so that it is defined for asymmetric beams
+    /// too): Ω = 2π(1 − cos(θ/2)). Integrated over the interpolated distribution on a ¼° × ½°
+    /// grid of (γ, C).
+    pub fn beam_angle_deg(&self) -> f64 {
+        let half = 0.5 * self.peak_cd();
+        if half <= 0.0 {
+            return 0.0;
+        }
+        let (dg, dc) = (0.25f64, 0.5f64);
+        let mut solid_angle = 0.0;
+        for i in 0..(180.0 / dg) as usize {
+            let gamma = (i as f64 + 0.5) * dg;
+            let band = dg.to_radians() * dc.to_radians() * gamma.to_radians().sin();
+            let inside = (0..(360.0 / dc) as usize)
+                .filter(|&k| self.intensity_at((k as f64 + 0.5) * dc, gamma) >= half)
+                .count();
+            solid_angle += band * inside as f64;
+        }
+        2.0 * (1.0 - solid_angle / (2.0 * PI)).clamp(-1.0, 1.0).acos().to_degrees()
+    }
+
     /// The γ band holding `gamma` and the fraction across it, or `None` outside the measured
     /// range (a hair of rounding at either end is taken as the end itself).
     fn gamma_cell(&self, gamma: f64) -> Option<(usize, f64)> {
@@ -1588,6 +1611,16 @@ mod tests {
         let d60 = [60f64.to_radians().sin(), 0.0, -60f64.to_radians().cos()];
         assert_close(p.intensity_cd(d60), 500.0, 1e-9);
         assert_eq!(p.intensity_cd([0.0, 0.0, 1.0]), 0.0);
+    }
+
+    /// The beam (50 % of the peak, as an equivalent cone): a Lambertian downlight I0 cos γ is
+    /// at half its peak at γ = 60°, so its beam is 120°; an isotropic source fills the sphere.
+    #[test]
+    fn beam_angles_of_ideal_distributions() {
+        let lambert = ies(LAMBERT).photometry.beam_angle_deg();
+        assert!((lambert - 120.0).abs() < 0.5, "Lambertian beam {lambert}°");
+        let sphere = ies(ISOTROPIC).photometry.beam_angle_deg();
+        assert!((sphere - 360.0).abs() < 0.5, "isotropic beam {sphere}°");
     }
 
     #[test]

@@ -379,12 +379,14 @@ pub struct SiteTime {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
 pub enum Light {
-    /// A luminaire radiating from a point: total luminous intensity in candela, optionally
-    /// shaped by an IES or EULUMDAT file (then `intensity_cd` scales the file's peak).
+    /// A luminaire radiating from a point: its luminous intensity in candela, or, with an IES or
+    /// EULUMDAT file, the file's own absolute photometry (then `intensity_cd`, if given,
+    /// overrides it: the file's peak is scaled to it).
     Point {
         #[serde(deserialize_with = "vec3::position")]
         position: [f64; 3],
-        intensity_cd: f64,
+        #[serde(default)]
+        intensity_cd: Option<f64>,
         spectrum: String,
         #[serde(default)]
         ies: Option<String>,
@@ -397,7 +399,8 @@ pub enum Light {
     Spot {
         #[serde(deserialize_with = "vec3::position")]
         position: [f64; 3],
-        intensity_cd: f64,
+        #[serde(default)]
+        intensity_cd: Option<f64>,
         spectrum: String,
         #[serde(deserialize_with = "vec3::aim")]
         aim: [f64; 3],

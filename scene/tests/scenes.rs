@@ -208,6 +208,52 @@ fn a_gltf_with_its_bin_beside_it_loads_and_bundles() {
     assert!(err.contains("meshes/gone.bin"), "{err}");
 }
 
+/// A luminaire with a photometric file is rendered at the file's own absolute photometry;
+/// `scene check` says its flux, peak and beam; an `intensity_cd` that departs from the file is
+/// noted; without a file, `intensity_cd` is required.
+#[test]
+fn a_luminaire_renders_its_file_as_measured() {
+    let f = Folder::new();
+    f.write("meshes/wall.obj", QUAD_OBJ);
+    let cos =
+        concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/photometric/lambertian_cos_1000cd.ies");
+    f.write("lamps/cos.ies", std::fs::read(cos).unwrap());
+    let lamp = |intensity: &str| {
+        format!(
+            "[[lights]]\nkind = \"point\"\nposition = [0.0, -2.0, 2.0]\n{intensity}spectrum = \"sunlight\"\nies = \"lamps/cos.ies\"\n"
+        )
+    };
+    let measured = load(&f, &scene_toml(OBJ_OBJECT, &lamp(""))).unwrap();
+    let shown = measured.lights.iter().map(ToString::to_string).collect::<Vec<_>>().join("\n");
+    // The file tabulates 1000 cd · cos γ: π · 1000 lm (to the 2.5° table's 1e-3), a 120° beam.
+    let flux = |shown: &str| -> f64 {
+        let after = shown.split("photometric file: ").nth(1).expect("the file's figures");
+        after.split(" lm").next().unwrap().parse().unwrap()
+    };
+    assert!((flux(&shown) / (1000.0 * std::f64::consts::PI) - 1.0).abs() < 1e-3, "{shown}");
+    assert!(shown.contains("lm, peak 1000 cd, beam 120.0°"), "{shown}");
+    assert!(measured.notes.iter().all(|n| !n.contains("overrides")), "{:?}", measured.notes);
+    let doubled = load(&f, &scene_toml(OBJ_OBJECT, &lamp("intensity_cd = 2000.0\n"))).unwrap();
+    let shown = doubled.lights.iter().map(ToString::to_string).collect::<Vec<_>>().join("\n");
+    assert!((flux(&shown) / (2000.0 * std::f64::consts::PI) - 1.0).abs() < 1e-3, "{shown}");
+    assert!(shown.contains("lm, peak 2000 cd"), "{shown}");
+    assert!(
+        doubled
+            .notes
+            .iter()
+            .any(|n| n.contains("overrides the photometric file's peak of 1000.0 cd (× 2.000)")),
+        "{:?}",
+        doubled.notes
+    );
+    let bare =
+        "[[lights]]\nkind = \"point\"\nposition = [0.0, -2.0, 2.0]\nspectrum = \"sunlight\"\n";
+    let err = refused(&f, &scene_toml(OBJ_OBJECT, bare));
+    assert!(
+        err.contains("intensity_cd") && err.contains("needs its intensity in candela"),
+        "{err}"
+    );
+}
+
 #[test]
 fn files_outside_the_folder_and_the_scene_itself_are_refused() {
     let f = Folder::new();

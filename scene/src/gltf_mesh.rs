@@ -14,6 +14,7 @@ use crate::error::{Result, SceneError};
 use crate::guard;
 use crate::load::Limits;
 use crate::mesh::{Group, Mesh};
+use crate::vrml::Viewpoint;
 use base64::Engine;
 use glam::{Mat4, Vec3};
 use gltf::accessor::{DataType, Dimensions};
@@ -160,6 +161,29 @@ fn check_accessor(
 struct Totals<'a> {
     limits: &'a Limits,
     instances: u64,
+    /// The perspective cameras met, as viewpoints.
+    cameras: Vec<Viewpoint>,
+}
+
+/// A node's perspective camera as a viewpoint in the file's coordinates: glTF cameras look
+/// along their local −Z with +Y up (glTF 2.0 §3.10), as VRML's do, and `yfov` is the vertical
+/// field of view in radians. The node's scale is dropped (a camera has none).
+fn camera_viewpoint(node: &gltf::Node, world: Mat4) -> Option<Viewpoint> {
+    let camera = node.camera()?;
+    let gltf::camera::Projection::Perspective(p) = camera.projection() else { return None };
+    let (_, rotation, translation) = world.to_scale_rotation_translation();
+    let (axis, angle) = rotation.to_axis_angle();
+    let name = camera
+        .name()
+        .or(node.name())
+        .map_or_else(|| format!("camera {}", camera.index()), str::to_owned);
+    let finite = translation.is_finite() && axis.is_finite() && angle.is_finite();
+    (finite && p.yfov().is_finite() && p.yfov() > 0.0).then(|| Viewpoint {
+        position: translation.to_array(),
+        orientation: (axis.to_array(), angle),
+        field_of_view: p.yfov(),
+        description: name,
+    })
 }
 
 fn add_node(
@@ -188,6 +212,7 @@ fn add_node(
     }
     let local = Mat4::from_cols_array_2d(&node.transform().matrix());
     let world = parent * local;
+    totals.cameras.extend(camera_viewpoint(&node, world));
     if let Some(m) = node.mesh() {
         for (p, prim) in m.primitives().enumerate() {
             let place = || {
@@ -454,6 +479,17 @@ pub fn parse_limited(
     limits: &Limits,
     external: External<'_>,
 ) -> Result<Mesh> {
+    Ok(parse_with_cameras(bytes, path, limits, external)?.0)
+}
+
+/// [`parse_limited`], with the file's perspective cameras (in the default scene, in node order)
+/// as viewpoints the scene's camera can use.
+pub fn parse_with_cameras(
+    bytes: &[u8],
+    path: &Path,
+    limits: &Limits,
+    external: External<'_>,
+) -> Result<(Mesh, Vec<Viewpoint>)> {
     if bytes.starts_with(b"glTF") {
         check_glb(bytes, path)?;
     }
@@ -476,11 +512,11 @@ pub fn parse_limited(
         .or_else(|| doc.scenes().next())
         .ok_or_else(|| SceneError::invalid(path, "scenes", "the file has no scene"))?;
     let mut mesh = Mesh::default();
-    let mut totals = Totals { limits, instances: 0 };
+    let mut totals = Totals { limits, instances: 0, cameras: Vec::new() };
     for node in scene.nodes() {
         add_node(node, Mat4::IDENTITY, &buffers, &mut mesh, path, 0, &mut totals)?;
     }
-    Ok(mesh)
+    Ok((mesh, totals.cameras))
 }
 
 /// A `.gltf` with the buffers it keeps in separate files embedded as base64 `data:` URIs, so

@@ -527,7 +527,8 @@ fn import_mesh(
         "gltf" | "glb" => {
             let beside =
                 |uri: &str| ctx.assets.read(&crate::assets::sibling(reference, uri), place);
-            (gltf_mesh::parse_limited(&bytes, &name, limits, &beside)?, Vec::new(), UpAxis::Y)
+            let (mesh, cameras) = gltf_mesh::parse_with_cameras(&bytes, &name, limits, &beside)?;
+            (mesh, cameras, UpAxis::Y)
         }
         "wrl" => {
             let text = utf8_text(bytes, &name)?;
@@ -868,18 +869,26 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
                     unknown("object", &vp.object, file.objects.iter().map(|o| o.name.as_str())),
                 )
             })?;
-            let v = list.get(vp.index).ok_or_else(|| {
-                ctx.invalid(
-                    "camera.viewpoint",
-                    format!(
-                        "object `{}` has {} viewpoints; index {} does not exist",
-                        vp.object,
-                        list.len(),
-                        vp.index
-                    ),
-                )
-            })?;
-            // VRML views along −Z with +Y up, turned by the viewpoint's orientation.
+            let v = match &vp.name {
+                Some(name) => list.iter().find(|v| &v.description == name).ok_or_else(|| {
+                    ctx.invalid(
+                        "camera.viewpoint.name",
+                        unknown("viewpoint", name, list.iter().map(|v| v.description.as_str())),
+                    )
+                })?,
+                None => list.get(vp.index).ok_or_else(|| {
+                    ctx.invalid(
+                        "camera.viewpoint",
+                        format!(
+                            "object `{}` has {} viewpoints; index {} does not exist",
+                            vp.object,
+                            list.len(),
+                            vp.index
+                        ),
+                    )
+                })?,
+            };
+            // VRML and glTF view along −Z with +Y up, turned by the viewpoint's orientation.
             let (axis, angle) = v.orientation;
             let rot = DMat3::from_axis_angle(
                 DVec3::from_array(axis.map(f64::from)).normalize_or(DVec3::Y),

@@ -93,7 +93,7 @@ pub struct Camera {
     pub vertical_fov_deg: f64,
     pub width: u32,
     pub height: u32,
-    /// Use a VRML97 Viewpoint of an object's mesh as the camera.
+    /// Use a camera of an object's mesh (a VRML97 Viewpoint or a glTF perspective camera).
     #[serde(default)]
     pub viewpoint: Option<ViewpointRef>,
 }
@@ -109,11 +109,14 @@ fn default_fov() -> f64 {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ViewpointRef {
-    /// The object whose mesh (a `.wrl`) holds the viewpoint.
+    /// The object whose mesh (a `.wrl`, `.gltf` or `.glb`) holds the viewpoint.
     pub object: String,
-    /// Which viewpoint, in file order.
+    /// Which viewpoint, in file order (when no `name` is given).
     #[serde(default)]
     pub index: usize,
+    /// Which viewpoint, by its name (a VRML `description`, a glTF camera's or node's name).
+    #[serde(default)]
+    pub name: Option<String>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

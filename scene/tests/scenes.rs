@@ -254,6 +254,50 @@ fn a_luminaire_renders_its_file_as_measured() {
     );
 }
 
+/// A glTF's perspective camera is a viewpoint the scene's camera can use by name: glTF looks
+/// along −Z with +Y up; turned Z-up, a camera 10 m along +Z at 1.7 m looks north from the south.
+#[test]
+fn a_gltf_camera_is_a_viewpoint_by_name() {
+    let f = Folder::new();
+    let mut bin: Vec<u8> = [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    bin.extend([0u16, 1, 2].iter().flat_map(|i| i.to_le_bytes()));
+    std::fs::create_dir_all(f.dir.path().join("meshes")).unwrap();
+    std::fs::write(f.dir.path().join("meshes/model.bin"), &bin).unwrap();
+    f.write(
+        "meshes/model.gltf",
+        r#"{"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0,1]}],
+        "nodes":[{"mesh":0},{"camera":0,"name":"Entrance","translation":[0,1.7,10]}],
+        "cameras":[{"type":"perspective","perspective":{"yfov":0.7,"znear":0.1}}],
+        "meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1}]}],
+        "accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]},
+                     {"bufferView":1,"componentType":5123,"count":3,"type":"SCALAR"}],
+        "bufferViews":[{"buffer":0,"byteOffset":0,"byteLength":36},{"buffer":0,"byteOffset":36,"byteLength":6}],
+        "buffers":[{"byteLength":42,"uri":"model.bin"}]}"#,
+    );
+    let objects =
+        "[[objects]]\nname = \"model\"\nmesh = \"meshes/model.gltf\"\nmaterial = \"stone\"\n";
+    let toml = scene_toml(objects, "").replacen(
+        "[camera]\n",
+        "[camera]\nviewpoint = { object = \"model\", name = \"Entrance\" }\n",
+        1,
+    );
+    let loaded = load(&f, &toml).unwrap();
+    let c = &loaded.camera;
+    let close = |a: [f64; 3], b: [f64; 3]| a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-5);
+    assert!(close(c.position, [0.0, -10.0, 1.7]), "{:?}", c.position);
+    assert!(close(c.target, [0.0, -9.0, 1.7]), "looks north: {:?}", c.target);
+    assert!((c.vertical_fov_deg - 0.7f64.to_degrees()).abs() < 1e-4, "{}", c.vertical_fov_deg);
+    let wrong = toml.replace("name = \"Entrance\"", "name = \"Entrence\"");
+    let err = refused(&f, &wrong);
+    assert!(
+        err.contains("camera.viewpoint.name") && err.contains("did you mean `Entrance`"),
+        "{err}"
+    );
+}
+
 #[test]
 fn files_outside_the_folder_and_the_scene_itself_are_refused() {
     let f = Folder::new();

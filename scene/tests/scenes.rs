@@ -164,20 +164,23 @@ fn a_ply_part_bound_by_name_loads_from_its_bundle_too() {
     assert_eq!(from_bundle.objects[0].group_materials, ["stone"]);
 }
 
+/// A glTF buffer of one triangle: three f32 VEC3 positions (bytes 0–35), three u16 indices.
+fn triangle_bin() -> Vec<u8> {
+    let mut bin: Vec<u8> = [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    bin.extend([0u16, 1, 2].iter().flat_map(|i| i.to_le_bytes()));
+    bin
+}
+
 /// A `.gltf` with its `.bin` beside it, as most exporters write it: read from the scene's folder,
 /// embedded in the bundle (one file, by hash), the same triangles both ways; a buffer outside the
 /// folder is refused.
 #[test]
 fn a_gltf_with_its_bin_beside_it_loads_and_bundles() {
     let f = Folder::new();
-    // One triangle: three f32 VEC3 positions and three u16 indices.
-    let mut bin: Vec<u8> = [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0]
-        .iter()
-        .flat_map(|v| v.to_le_bytes())
-        .collect();
-    bin.extend([0u16, 1, 2].iter().flat_map(|i| i.to_le_bytes()));
-    std::fs::create_dir_all(f.dir.path().join("meshes")).unwrap();
-    std::fs::write(f.dir.path().join("meshes/wall.bin"), &bin).unwrap();
+    f.write("meshes/wall.bin", triangle_bin());
     let gltf = |uri: &str| {
         format!(
             r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
@@ -259,13 +262,7 @@ fn a_luminaire_renders_its_file_as_measured() {
 #[test]
 fn a_gltf_camera_is_a_viewpoint_by_name() {
     let f = Folder::new();
-    let mut bin: Vec<u8> = [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0]
-        .iter()
-        .flat_map(|v| v.to_le_bytes())
-        .collect();
-    bin.extend([0u16, 1, 2].iter().flat_map(|i| i.to_le_bytes()));
-    std::fs::create_dir_all(f.dir.path().join("meshes")).unwrap();
-    std::fs::write(f.dir.path().join("meshes/model.bin"), &bin).unwrap();
+    f.write("meshes/model.bin", triangle_bin());
     f.write(
         "meshes/model.gltf",
         r#"{"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0,1]}],

@@ -35,8 +35,12 @@ pub fn bundle_scene(path: &Path, limits: &Limits) -> Result<Bundle> {
         let mut bytes = assets.read(reference, &place)?;
         if extension(reference) == "gltf" {
             // One file in the bundle: the model with its separate buffers embedded.
-            let beside = |uri: &str| assets.read(&crate::assets::sibling(reference, uri), &place);
             let shown = assets.display_path(reference);
+            let beside = |uri: &str| {
+                assets.read(&crate::assets::sibling(reference, uri), &place).map_err(|e| {
+                    SceneError::invalid(&shown, format!("buffer `{uri}`"), e.to_string())
+                })
+            };
             bytes = crate::gltf_mesh::embed_buffers(&bytes, &shown, &beside)?;
         }
         let hash = blake3::hash(&bytes).to_hex().to_string();

@@ -525,8 +525,12 @@ fn import_mesh(
         }
         "ply" => (ply::parse_limited(&bytes, &name, limits)?, Vec::new(), UpAxis::Z),
         "gltf" | "glb" => {
-            let beside =
-                |uri: &str| ctx.assets.read(&crate::assets::sibling(reference, uri), place);
+            // A buffer that cannot be read is the model's problem: the message names the model.
+            let beside = |uri: &str| {
+                ctx.assets.read(&crate::assets::sibling(reference, uri), place).map_err(|e| {
+                    SceneError::invalid(&name, format!("buffer `{uri}`"), e.to_string())
+                })
+            };
             let (mesh, cameras) = gltf_mesh::parse_with_cameras(&bytes, &name, limits, &beside)?;
             (mesh, cameras, UpAxis::Y)
         }

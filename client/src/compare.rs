@@ -106,7 +106,8 @@ pub fn scale_max(values: &[f32]) -> f64 {
     ((p99 / 5.0).ceil() * 5.0).max(5.0)
 }
 
-fn picture(image: &XyzImage, exposure: Exposure) -> Rgb8 {
+/// An image as the display shows it (sRGB, 8 bits) with `exposure`.
+pub fn picture(image: &XyzImage, exposure: Exposure) -> Rgb8 {
     let encoded = encode(&image.pixels, &DisplayParams { space: RgbSpace::Srgb, exposure });
     Rgb8 { width: image.width as u32, height: image.height as u32, data: to_u8(&encoded) }
 }

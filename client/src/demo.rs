@@ -45,7 +45,7 @@ use restauro_spectral::Lab;
 use restauro_spectral::appearance::d65_white;
 use restauro_spectral::ciede2000::ciede2000;
 use restauro_spectral::colorimetry::Xyz;
-use restauro_spectral::display::{DisplayParams, Exposure, encode, exposure_scale, to_u8};
+use restauro_spectral::display::{Exposure, exposure_scale};
 use restauro_spectral::rgb_space::RgbSpace;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -553,10 +553,7 @@ fn read_pair(f: &Finished) -> Result<Pair> {
 }
 
 /// The sRGB picture of an XYZ image.
-fn picture(image: &XyzImage, exposure: Exposure) -> Rgb8 {
-    let encoded = encode(&image.pixels, &DisplayParams { space: RgbSpace::Srgb, exposure });
-    Rgb8 { width: image.width as u32, height: image.height as u32, data: to_u8(&encoded) }
-}
+use crate::compare::picture;
 
 fn write_sheet(out: &Path, name: &str, image: &Rgb8, what: &str) -> Result<Image> {
     let path = out.join("sheets").join(name);

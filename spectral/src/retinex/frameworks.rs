@@ -50,6 +50,13 @@ pub(super) struct Frameworks {
     pub light_ratio: Vec<[f64; 3]>,
 }
 
+impl Frameworks {
+    /// `n` pixels in one framework.
+    pub(super) fn one(n: usize) -> Self {
+        Frameworks { labels: vec![0; n], count: 1, light_ratio: vec![[0.0; 3]] }
+    }
+}
+
 /// The half-width of the square that a framework's area must hold: 2 px, and more for large
 /// images (a 1920×1080 image's joints are wider).
 pub(super) fn solid_radius(width: usize, height: usize) -> usize {
@@ -99,7 +106,7 @@ pub(super) fn frameworks(
     (width, height): (usize, usize),
 ) -> Frameworks {
     let n = keys.len();
-    let one = || Frameworks { labels: vec![0; n], count: 1, light_ratio: vec![[0.0; 3]] };
+    let one = || Frameworks::one(n);
     // Black pixels (a camera ray that met nothing, with no sky to see) are lit by nothing,
     // but they are no framework.
     let counted: Vec<bool> = (0..n).map(|p| !emitters[p] && pixels[p] != [0.0; 3]).collect();

@@ -339,9 +339,7 @@ pub fn retinex(
     };
     let frameworks = match &params.frameworks {
         Some(keys) => frameworks::frameworks(keys, emitters, pixels, (width, height)),
-        None => {
-            frameworks::Frameworks { labels: vec![0; n], count: 1, light_ratio: vec![[0.0; 3]] }
-        }
+        None => frameworks::Frameworks::one(n),
     };
     let area = params.white == WhiteReference::Area;
     let white =

@@ -64,16 +64,40 @@ fn place_mesh(mesh: &Path, out: &Path) -> Result<String> {
     Ok(format!("meshes/{file}"))
 }
 
-/// The parts of the mesh and its bounds in the scene's world (Z up), read as a scene reads it.
-fn survey(dir: &Path, reference: &str) -> Result<(Vec<String>, [[f64; 3]; 2])> {
+/// What the starter scene needs to know of the mesh.
+struct Survey {
+    parts: Vec<String>,
+    /// Its bounds in the scene's world (Z up).
+    bounds: [[f64; 3]; 2],
+    /// An OBJ or PLY that looks Y-up is read with `up_axis = "y"` (see `restauro_scene::upright`).
+    y_up: bool,
+}
+
+/// The mesh read as a scene reads it; an OBJ or PLY that lies on its back is read again Y-up.
+fn survey(dir: &Path, reference: &str) -> Result<Survey> {
+    let (parts, bounds, on_its_back) = read_mesh(dir, reference, false)?;
+    if !on_its_back {
+        return Ok(Survey { parts, bounds, y_up: false });
+    }
+    let (parts, bounds, _) = read_mesh(dir, reference, true)?;
+    Ok(Survey { parts, bounds, y_up: true })
+}
+
+/// The parts and world bounds of the mesh, and whether it probably lies on its back.
+fn read_mesh(
+    dir: &Path,
+    reference: &str,
+    y_up: bool,
+) -> Result<(Vec<String>, [[f64; 3]; 2], bool)> {
     let probe = format!(
         "format = 1\n[camera]\nposition = [0.0, -10.0, 0.0]\ntarget = [0.0, 0.0, 0.0]\n\
          width = 16\nheight = 9\n[spectra]\nstone = {}\n[materials.stone]\nmodel = \"lambert\"\n\
          reflectance = \"stone\"\n[[objects]]\nname = \"model\"\nmesh = {}\nmaterial = \"stone\"\n\
-         [[lights]]\nkind = \"sun\"\nilluminance_lux = 1.0\nspectrum = \"stone\"\n\
+         {}[[lights]]\nkind = \"sun\"\nilluminance_lux = 1.0\nspectrum = \"stone\"\n\
          azimuth_deg = 0.0\nelevation_deg = 45.0\n",
         quoted(PLACEHOLDER),
-        quoted(reference)
+        quoted(reference),
+        if y_up { "up_axis = \"y\"\n" } else { "" }
     );
     let path = dir.join(format!(".restauro-scene-new-{}.toml", std::process::id()));
     std::fs::write(&path, probe).with_context(|| format!("writing {}", path.display()))?;
@@ -85,7 +109,8 @@ fn survey(dir: &Path, reference: &str) -> Result<(Vec<String>, [[f64; 3]; 2])> {
         bail!("{reference}: the mesh has no triangles, so there is nothing to frame");
     };
     let parts = mesh.groups.iter().map(|g| g.name.clone()).collect();
-    Ok((parts, [b.min.map(f64::from), b.max.map(f64::from)]))
+    let on_its_back = loaded.notes.iter().any(|n| n.contains("probably lies on its back"));
+    Ok((parts, [b.min.map(f64::from), b.max.map(f64::from)], on_its_back))
 }
 
 /// A camera that frames `bounds` from the side on which they are widest, at eye level with the
@@ -139,12 +164,9 @@ fn sun(site: Option<(f64, f64)>) -> String {
 }
 
 /// The starter scene's text.
-fn scene_text(
-    mesh: &str,
-    parts: &[String],
-    bounds: [[f64; 3]; 2],
-    site: Option<(f64, f64)>,
-) -> String {
+fn scene_text(mesh: &str, survey: &Survey, site: Option<(f64, f64)>) -> String {
+    let Survey { parts, bounds, y_up } = survey;
+    let bounds = *bounds;
     let (position, target) = camera(bounds);
     let mut s = String::new();
     let _ = writeln!(
@@ -190,10 +212,16 @@ fn scene_text(
         if bare { p.to_owned() } else { quoted(p) }
     };
     let bindings: Vec<String> = parts.iter().map(|p| format!("{} = \"stone\"", key(p))).collect();
+    let up = if *y_up {
+        "# The model looked as if it lay on its back read Z-up, so it is read Y-up, as it was\n\
+         # probably exported; delete this line if it now stands on its side.\nup_axis = \"y\"\n"
+    } else {
+        ""
+    };
     let _ = writeln!(
         s,
         "[[objects]]\n# Each part of the mesh ({} in all) bound to a material: give each its own.\n\
-         name = \"model\"\nmesh = {}\nmaterials = {{ {} }}\n",
+         name = \"model\"\nmesh = {}\n{up}materials = {{ {} }}\n",
         parts.len(),
         quoted(mesh),
         bindings.join(", ")
@@ -236,8 +264,9 @@ pub fn run(args: &SceneNewArgs) -> Result<String> {
         bail!("{} exists; choose another --out, or --force to write over it", scene_path.display());
     }
     let reference = place_mesh(&args.mesh, &out)?;
-    let (parts, bounds) = survey(&out, &reference)?;
-    let text = scene_text(&reference, &parts, bounds, site);
+    let survey = survey(&out, &reference)?;
+    let text = scene_text(&reference, &survey, site);
+    let parts = &survey.parts;
     std::fs::write(&scene_path, &text)
         .with_context(|| format!("writing {}", scene_path.display()))?;
     // What was written is checked as any scene is.
@@ -246,6 +275,13 @@ pub fn run(args: &SceneNewArgs) -> Result<String> {
         format!("wrote {} for {} ({} parts: ", scene_path.display(), reference, parts.len());
     s.push_str(&parts.join(", "));
     let _ = writeln!(s, ")");
+    if survey.y_up {
+        let _ = writeln!(
+            s,
+            "note: {reference} looked Y-up (lying on its back read Z-up), so the scene reads it \
+             with up_axis = \"y\""
+        );
+    }
     let _ = writeln!(
         s,
         "next: edit the spectra and materials, then `restauro render {}`",

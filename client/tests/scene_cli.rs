@@ -188,3 +188,41 @@ fn scene_new_writes_a_starter_scene_that_renders() {
     let e = refused(&["scene", "new", "--mesh", m, "--site", "north", "--force"]);
     assert!(e.contains("--site"), "{e}");
 }
+
+/// A model exported Y-up (an open-bottomed house, 4 m wide, 3 m deep, 2 m high, with its +Z
+/// written as +Y): `scene check` says it lies on its back, `scene new` reads it Y-up.
+#[test]
+fn a_y_up_model_is_stood_up() {
+    let dir = tempfile::tempdir().unwrap();
+    let (x, y, z) = (4.0, 3.0, 2.0);
+    let quads: [[[f64; 3]; 4]; 5] = [
+        [[0., 0., 0.], [x, 0., 0.], [x, 0., z], [0., 0., z]],
+        [[x, y, 0.], [0., y, 0.], [0., y, z], [x, y, z]],
+        [[0., y, 0.], [0., 0., 0.], [0., 0., z], [0., y, z]],
+        [[x, 0., 0.], [x, y, 0.], [x, y, z], [x, 0., z]],
+        [[0., 0., z], [x, 0., z], [x, y, z], [0., y, z]],
+    ];
+    let mut obj = String::from("g walls\n");
+    for (q, quad) in quads.iter().enumerate() {
+        for [a, b, c] in quad {
+            obj += &format!("v {a} {c} {}\n", -b);
+        }
+        obj += &format!("f {} {} {} {}\n", 4 * q + 1, 4 * q + 2, 4 * q + 3, 4 * q + 4);
+    }
+    let mesh = dir.path().join("house.obj");
+    std::fs::write(&mesh, obj).unwrap();
+    let text = ok(&["scene", "new", "--mesh", mesh.to_str().unwrap()]);
+    assert!(text.contains("looked Y-up"), "{text}");
+    let scene = dir.path().join("house.toml");
+    let toml = std::fs::read_to_string(&scene).unwrap();
+    assert!(toml.contains("\nup_axis = \"y\"\n"), "{toml}");
+    // Framed standing: 4 m wide, 3 m deep, 2 m high.
+    assert!(toml.contains("(4.0 × 3.0 × 2.0 m)"), "{toml}");
+    let check = ok(&["scene", "check", scene.to_str().unwrap()]);
+    assert!(!check.contains("lies on its back"), "{check}");
+    // Without the line, `scene check` says what is wrong and what to write.
+    std::fs::write(&scene, toml.replace("\nup_axis = \"y\"\n", "\n")).unwrap();
+    let check = ok(&["scene", "check", scene.to_str().unwrap()]);
+    assert!(check.contains("`house.obj` probably lies on its back"), "{check}");
+    assert!(check.contains("add `up_axis = \"y\"`"), "{check}");
+}

@@ -25,4 +25,5 @@ pub mod ply;
 mod ply_layout;
 pub mod samples;
 pub mod scene_file;
+pub mod upright;
 pub mod vrml;

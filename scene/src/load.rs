@@ -12,7 +12,7 @@ use crate::scene_file::{
     self, Light, MaterialModel, SceneFile, SkyModel, SkyPreset, SpectrumSource, SunPreset, UpAxis,
 };
 use crate::sun::{Site, SunPosition, direction_to_sun, sun_position};
-use crate::{gltf_mesh, obj, ply, vrml};
+use crate::{gltf_mesh, obj, ply, upright, vrml};
 use glam::{DMat3, DMat4, DVec3};
 use restauro_spectral::csv::{Quantity, load as load_csv};
 use restauro_spectral::tabulated::Coverage;
@@ -571,6 +571,19 @@ fn object_matrix(object: &scene_file::Object, file_up: UpAxis) -> DMat4 {
         * up
 }
 
+/// A note when a mesh read as Z-up looks as if it were written Y-up (see [`upright`]).
+fn note_if_on_its_back(ctx: &mut Ctx, mesh: &Mesh, place: &str, reference: &str) {
+    if let Some(e) = upright::y_up_evidence(mesh) {
+        ctx.notes.push(format!(
+            "{place}: `{reference}` probably lies on its back: read Z-up, as OBJ and PLY are by \
+             default, its surfaces face +Y overall ({:.0}° from +Y, where a survey's open \
+             underside leaves them facing up). If it was exported Y-up, add `up_axis = \"y\"` \
+             to the object; `up_axis = \"z\"` says it is right as it is and ends this note",
+            e.angle_to_y_deg
+        ));
+    }
+}
+
 /// Check the imported mesh: finite vertices, valid indices, something to render; degenerate
 /// triangles (zero area, common in scans) are dropped and counted.
 fn check_mesh(ctx: &mut Ctx, mesh: &mut Mesh, place: &str, reference: &str) -> Result<()> {
@@ -786,6 +799,9 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
         let (mut mesh, vps, file_up) =
             import_mesh(&ctx, &o.mesh, &format!("{place}.mesh"), limits)?;
         check_mesh(&mut ctx, &mut mesh, &place, &o.mesh)?;
+        if o.up_axis.is_none() && file_up == UpAxis::Z {
+            note_if_on_its_back(&mut ctx, &mesh, &place, &o.mesh);
+        }
         triangles += mesh.triangles.len() as u64;
         if triangles > limits.max_triangles {
             return Err(limit(

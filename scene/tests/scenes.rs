@@ -515,3 +515,83 @@ fn the_aosta_scene_validates() {
     assert_eq!(scene.state_of("as-found", "facade", "travertine"), Some("degraded"));
     assert_eq!(scene.state_of("cleaned", "facade", "puddinga"), Some("cleaned"));
 }
+
+/// A house without a floor (walls and a flat roof, wound outwards), as OBJ text in Z-up world
+/// coordinates mapped to the file's by `to_file`.
+fn open_house_obj(to_file: impl Fn([f32; 3]) -> [f32; 3]) -> String {
+    let (x, y, z) = (4.0f32, 3.0f32, 2.0f32);
+    let quads = [
+        [[0., 0., 0.], [x, 0., 0.], [x, 0., z], [0., 0., z]],
+        [[x, y, 0.], [0., y, 0.], [0., y, z], [x, y, z]],
+        [[0., y, 0.], [0., 0., 0.], [0., 0., z], [0., y, z]],
+        [[x, 0., 0.], [x, y, 0.], [x, y, z], [x, 0., z]],
+        [[0., 0., z], [x, 0., z], [x, y, z], [0., y, z]],
+    ];
+    let mut text = String::from("usemtl stone\n");
+    for (q, quad) in quads.iter().enumerate() {
+        for p in quad {
+            let [a, b, c] = to_file(*p);
+            text += &format!("v {a} {b} {c}\n");
+        }
+        let i = 4 * q + 1;
+        text += &format!("f {} {} {} {}\n", i, i + 1, i + 2, i + 3);
+    }
+    text
+}
+
+const HOUSE_OBJECT: &str = r#"[[objects]]
+name = "house"
+mesh = "meshes/house.obj"
+material = "stone"
+"#;
+
+#[test]
+fn a_y_up_obj_is_noticed_and_up_axis_stands_it_up() {
+    let folder = Folder::new();
+    // As a Y-up exporter writes it: world +Z is the file's +Y, world +Y the file's −Z.
+    folder.write("meshes/house.obj", open_house_obj(|[x, y, z]| [x, z, -y]));
+    let scene = load(&folder, &scene_toml(HOUSE_OBJECT, "")).unwrap();
+    let hint: Vec<_> = scene.notes.iter().filter(|n| n.contains("lies on its back")).collect();
+    assert_eq!(hint.len(), 1, "{:?}", scene.notes);
+    assert!(hint[0].contains("objects[0]") && hint[0].contains("up_axis = \"y\""), "{hint:?}");
+    // Read as Z-up it lies 3 m "tall" (its depth); with the suggested fix it stands 2 m tall.
+    let height = |s: &LoadedScene| {
+        let b = s.objects[0].mesh.bounds().unwrap();
+        b.max[2] - b.min[2]
+    };
+    assert!((height(&scene) - 3.0).abs() < 1e-5);
+    let fixed = HOUSE_OBJECT.replace("material =", "up_axis = \"y\"\nmaterial =");
+    let scene = load(&folder, &scene_toml(&fixed, "")).unwrap();
+    assert!(scene.notes.iter().all(|n| !n.contains("lies on its back")), "{:?}", scene.notes);
+    assert!((height(&scene) - 2.0).abs() < 1e-5);
+    // The same house written Z-up gives no note.
+    folder.write("meshes/house.obj", open_house_obj(|p| p));
+    let scene = load(&folder, &scene_toml(HOUSE_OBJECT, "")).unwrap();
+    assert!(scene.notes.iter().all(|n| !n.contains("lies on its back")), "{:?}", scene.notes);
+}
+
+#[test]
+fn a_y_up_ply_is_noticed_too() {
+    let folder = Folder::new();
+    let obj = open_house_obj(|[x, y, z]| [x, z, -y]);
+    let vertices: Vec<&str> = obj.lines().filter_map(|l| l.strip_prefix("v ")).collect();
+    let mut ply = format!(
+        "ply\nformat ascii 1.0\nelement vertex {}\nproperty float x\nproperty float y\n\
+         property float z\nelement face 5\nproperty list uchar int vertex_indices\nend_header\n",
+        vertices.len()
+    );
+    for v in &vertices {
+        ply += &format!("{v}\n");
+    }
+    for q in 0..5 {
+        ply += &format!("4 {} {} {} {}\n", 4 * q, 4 * q + 1, 4 * q + 2, 4 * q + 3);
+    }
+    folder.write("meshes/house.ply", ply);
+    let object = HOUSE_OBJECT.replace("house.obj", "house.ply");
+    let scene = load(&folder, &scene_toml(&object, "")).unwrap();
+    assert!(
+        scene.notes.iter().any(|n| n.contains("`meshes/house.ply` probably lies on its back")),
+        "{:?}",
+        scene.notes
+    );
+}

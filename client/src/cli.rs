@@ -59,6 +59,9 @@ pub enum Command {
     /// How two images differ as a person judges colour: a CIEDE2000 map with its scale and
     /// statistics, side-by-side and split images, and a JSON summary.
     Compare(CompareArgs),
+    /// The studio, the restorer's web page: starts an embedded local cluster whose coordinator
+    /// serves it, prints its address, and runs until interrupted (Ctrl-C).
+    Studio(StudioArgs),
     /// Scenes: generate the Aosta theatre, check a scene, bundle it.
     #[command(subcommand)]
     Scene(SceneCommand),
@@ -397,6 +400,23 @@ pub struct ColorArgs {
     /// List the shipped spectra and exit.
     #[arg(long)]
     pub list: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct StudioArgs {
+    /// Where the studio listens; port 0 picks a free port. Another machine can reach it only if
+    /// this is not a loopback address (and then anyone who can reach it sees the sign-in page).
+    #[arg(long, default_value = "127.0.0.1:7880")]
+    pub listen: std::net::SocketAddr,
+    /// Workers in the embedded cluster (they share this machine's cores).
+    #[arg(long, default_value_t = 2)]
+    pub workers: usize,
+    /// Write the cluster's logs (coordinator.log, worker-N.log) into this folder.
+    #[arg(long)]
+    pub cluster_logs: Option<PathBuf>,
+    /// Stop when standard input closes (for tests that start the studio).
+    #[arg(long, hide = true)]
+    pub exit_with_stdin: bool,
 }
 
 #[derive(Debug, Args)]

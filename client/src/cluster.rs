@@ -230,7 +230,11 @@ pub async fn fetch(client: &Client, status: &pb::JobStatus, out: &Path) -> Resul
 pub struct LocalCluster {
     children: Vec<Child>,
     pub url: String,
+    /// The studio's address, when the coordinator was asked to serve it (`--studio-listen`).
+    pub studio_url: Option<String>,
     pub client_token: String,
+    /// The file holding `client_token`, for commands run beside the cluster.
+    pub client_token_file: PathBuf,
     pub worker_token: String,
     _dir: tempfile::TempDir,
 }
@@ -289,8 +293,9 @@ impl LocalCluster {
             .context("starting the embedded coordinator")?;
         let stdout = coordinator.stdout.take().expect("piped");
         let mut children = vec![coordinator];
+        let mut stdout = BufReader::new(stdout);
         let mut line = String::new();
-        BufReader::new(stdout).read_line(&mut line).context("reading the coordinator's address")?;
+        stdout.read_line(&mut line).context("reading the coordinator's address")?;
         let Some(addr) = line.trim().strip_prefix("listening on ") else {
             let log = std::fs::read_to_string(log_dir.join("coordinator.log")).unwrap_or_default();
             for c in &mut children {
@@ -299,6 +304,14 @@ impl LocalCluster {
             bail!("the embedded coordinator did not start: {}", log.trim());
         };
         let url = format!("http://{addr}");
+        // The studio's address follows when it was asked for (after the metrics', which the
+        // embedded cluster never serves).
+        let mut studio_url = None;
+        if coordinator_args.contains(&"--studio-listen") {
+            let mut line = String::new();
+            stdout.read_line(&mut line).context("reading the studio's address")?;
+            studio_url = line.trim().strip_prefix("studio on ").map(str::to_owned);
+        }
         let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
         let threads = (cores / workers.max(1)).max(1);
         for i in 0..workers {
@@ -319,7 +332,15 @@ impl LocalCluster {
                 .context("starting an embedded worker")?;
             children.push(child);
         }
-        Ok(LocalCluster { children, url, client_token, worker_token, _dir: dir })
+        Ok(LocalCluster {
+            children,
+            url,
+            studio_url,
+            client_token,
+            client_token_file: client_file,
+            worker_token,
+            _dir: dir,
+        })
     }
 }
 

@@ -16,3 +16,4 @@ pub mod retinex;
 pub mod scene_cmd;
 pub mod scene_new;
 pub mod sheet;
+pub mod studio_cmd;

@@ -27,6 +27,7 @@ fn main() -> ExitCode {
         Command::Retinex(args) => restauro::retinex::run(args),
         Command::Display(args) => restauro::retinex::run_display(args),
         Command::Compare(args) => restauro::compare::run(args),
+        Command::Studio(args) => restauro::studio_cmd::run(args),
         Command::Scene(command) => restauro::scene_cmd::run(command),
         Command::Bench(args) => restauro::bench::run(args),
     };

@@ -76,6 +76,11 @@ impl Tokens {
             });
         }
         let token = bearer.ok_or(CoordinatorError::NoToken { role: role.name() })?;
+        self.authorize_token(role, token)
+    }
+
+    /// Checks a bearer token for `role`'s door (the studio's, which has no protocol header).
+    pub fn authorize_token(&self, role: Role, token: &str) -> Result<(), CoordinatorError> {
         let hash = blake3::hash(token.as_bytes());
         let (mine, other) = match role {
             Role::Client => (self.client, self.worker),
@@ -93,6 +98,12 @@ impl Tokens {
         } else {
             Err(CoordinatorError::BadToken { role: role.name() })
         }
+    }
+
+    /// The key of the studio's session cookies: derived from the client token, so that a
+    /// cookie outlives a coordinator restart and dies with the token.
+    pub fn session_key(&self) -> [u8; 32] {
+        blake3::derive_key("restauro studio session cookie v1", self.client.as_bytes())
     }
 }
 

@@ -86,6 +86,27 @@ pub enum CoordinatorError {
     #[error("{path}: {source}")]
     Io { path: String, source: std::io::Error },
 
+    /// A studio request without a valid client token or session.
+    #[error(
+        "not signed in: give the client token (the page asks for it; a program sends \
+         `authorization: Bearer <token>`)"
+    )]
+    NotSignedIn,
+
+    /// A change sent to the studio from another site's page (cross-site request forgery).
+    #[error(
+        "refused: this change comes from a page at {origin}, not from the studio at {expected}; \
+         open the studio's own address"
+    )]
+    CrossOrigin { origin: String, expected: String },
+
+    /// A studio request whose body or path does not say what it must.
+    #[error("invalid request: {0}")]
+    Request(String),
+
+    #[error("no such page `{0}` in the studio")]
+    NoSuchPage(String),
+
     #[error("internal error: {0}")]
     Internal(String),
 }
@@ -119,6 +140,29 @@ impl CoordinatorError {
             E::Limit { .. } | E::TooManyJobs { .. } => Code::ResourceExhausted,
             E::Store(_) => Code::Unavailable,
             E::Io { .. } | E::Internal(_) => Code::Internal,
+            E::NotSignedIn => Code::Unauthenticated,
+            E::CrossOrigin { .. } => Code::PermissionDenied,
+            E::Request(_) => Code::InvalidArgument,
+            E::NoSuchPage(_) => Code::NotFound,
+        }
+    }
+
+    /// The HTTP status of the studio's answer: the gRPC code's counterpart (as in Google's
+    /// HTTP mapping of gRPC codes), so both doors refuse the same thing the same way.
+    pub fn http_status(&self) -> axum::http::StatusCode {
+        use axum::http::StatusCode as S;
+        use tonic::Code;
+        match self.code() {
+            // A job that is not done yet has no result to give: that is a conflict of state.
+            Code::FailedPrecondition => S::CONFLICT,
+            Code::Aborted => S::CONFLICT,
+            Code::Unauthenticated => S::UNAUTHORIZED,
+            Code::PermissionDenied => S::FORBIDDEN,
+            Code::InvalidArgument => S::BAD_REQUEST,
+            Code::NotFound => S::NOT_FOUND,
+            Code::ResourceExhausted => S::TOO_MANY_REQUESTS,
+            Code::Unavailable => S::SERVICE_UNAVAILABLE,
+            _ => S::INTERNAL_SERVER_ERROR,
         }
     }
 }

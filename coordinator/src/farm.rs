@@ -470,6 +470,11 @@ impl Farm {
         Ok(rx)
     }
 
+    /// Wakes at every change of a job (the studio's event stream diffs its snapshots).
+    pub fn changes(&self) -> watch::Receiver<u64> {
+        self.changed.subscribe()
+    }
+
     /// The path of one result file of a finished job.
     pub fn result_path(&self, id: &JobId, name: &str) -> Result<PathBuf> {
         let st = self.lock();

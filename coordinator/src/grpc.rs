@@ -75,14 +75,9 @@ impl From<WorkerStatus> for pb::WorkerStatus {
     }
 }
 
-/// A job id from the wire: the coordinator's ids are UUIDs, and nothing else names a job.
+/// A job id from the wire.
 fn job_id(text: &str) -> Result<JobId> {
-    if uuid::Uuid::parse_str(text).is_err() {
-        return Err(
-            WireError::new("job_id", format!("`{}` is not a job id", text.escape_debug())).into()
-        );
-    }
-    Ok(JobId::from(text))
+    JobId::parse(text)
 }
 
 /// The version a request carries in its body (the interceptor checked the header's).

@@ -67,6 +67,11 @@ pub struct CoordinatorArgs {
     /// port, printed as `metrics on ADDR`.
     #[arg(long, env = "RESTAURO_METRICS_LISTEN")]
     pub metrics_listen: Option<SocketAddr>,
+    /// Serve the studio, the restorer's web page, over HTTP on this address (else
+    /// RESTAURO_STUDIO_LISTEN; off when neither is given). Port 0 picks a free port, printed as
+    /// `studio on http://ADDR/`.
+    #[arg(long, env = "RESTAURO_STUDIO_LISTEN")]
+    pub studio_listen: Option<SocketAddr>,
     /// Exit when standard input closes (an embedded cluster's processes end with their parent).
     #[arg(long, hide = true)]
     pub exit_with_stdin: bool,
@@ -131,7 +136,15 @@ pub fn run(args: &CoordinatorArgs) -> Result<()> {
         .context("starting the async runtime")?;
     let tls = tls_identity(args)?;
     let exit_with_stdin = args.exit_with_stdin;
-    let endpoints = Endpoints { grpc: args.listen, metrics: args.metrics_listen };
+    if args.studio_listen.is_some() && tls.is_some() {
+        bail!(
+            "--studio-listen with --tls-cert: the studio serves plain HTTP in this release, and \
+             would send the client token in the clear; serve it on 127.0.0.1 behind a TLS proxy, \
+             or run the coordinator without TLS on a trusted network"
+        );
+    }
+    let endpoints =
+        Endpoints { grpc: args.listen, metrics: args.metrics_listen, studio: args.studio_listen };
     runtime.block_on(serve(config, endpoints, tls, stop_signal(exit_with_stdin)))
 }
 
@@ -142,6 +155,8 @@ pub struct Endpoints {
     pub grpc: SocketAddr,
     /// Prometheus metrics and HTTP health, when given.
     pub metrics: Option<SocketAddr>,
+    /// The studio, when given.
+    pub studio: Option<SocketAddr>,
 }
 
 /// Serves until `stop` resolves.
@@ -192,12 +207,22 @@ pub async fn serve(
         }
         None => None,
     };
+    let studio = match endpoints.studio {
+        Some(at) => {
+            let tokens = tokens.clone();
+            Some(crate::studio::serve(at, farm.clone(), tokens, stop_rx.clone()).await?)
+        }
+        None => None,
+    };
     {
         // The embedded cluster and the tests read the addresses from here.
         let mut out = std::io::stdout().lock();
         writeln!(out, "listening on {addr}")?;
         if let Some((at, _)) = &metrics {
             writeln!(out, "metrics on {at}")?;
+        }
+        if let Some((at, _)) = &studio {
+            writeln!(out, "studio on http://{at}/")?;
         }
         out.flush()?;
     }
@@ -233,7 +258,7 @@ pub async fn serve(
         .serve_with_incoming_shutdown(TcpListenerStream::new(listener), stopped(stop_rx))
         .await?;
     timer.abort();
-    if let Some((_, task)) = metrics {
+    for (_, task) in metrics.into_iter().chain(studio) {
         let _ = task.await;
     }
     info!("coordinator stopped");

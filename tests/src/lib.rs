@@ -4,6 +4,8 @@
 //! The binaries are the ones `cargo test --workspace` builds beside this crate's test
 //! executables (`target/<profile>/`); this module finds them and starts processes.
 
+pub mod browser;
+pub mod http;
 pub mod wire;
 
 use std::io::{BufRead, BufReader};
@@ -30,6 +32,8 @@ pub struct Coordinator {
     pub url: String,
     /// The address of its metrics endpoint, when started with `--metrics-listen`.
     pub metrics: Option<String>,
+    /// The studio's `HOST:PORT`, when started with `--studio-listen`.
+    pub studio: Option<String>,
 }
 
 pub const CLIENT_TOKEN: &str = "client-token-for-tests";
@@ -100,7 +104,13 @@ impl Coordinator {
             stdout.read_line(&mut line).unwrap();
             line.trim().strip_prefix("metrics on ").expect("the metrics address").to_owned()
         });
-        Coordinator { child, url, metrics }
+        let studio = extra.contains(&"--studio-listen").then(|| {
+            let mut line = String::new();
+            stdout.read_line(&mut line).unwrap();
+            let url = line.trim().strip_prefix("studio on http://").expect("the studio's address");
+            url.trim_end_matches('/').to_owned()
+        });
+        Coordinator { child, url, metrics, studio }
     }
 }
 
@@ -181,6 +191,23 @@ impl Drop for Worker {
 /// Runs the `restauro` client with `args`.
 pub fn restauro(args: &[&str]) -> Output {
     Command::new(binary("restauro")).args(args).env_remove("RESTAURO_COORDINATOR").output().unwrap()
+}
+
+/// Runs a client command of `restauro` against the coordinator at `url`, with the client
+/// token in the file `token`.
+pub fn client(args: &[&str], url: &str, token: &Path) -> Output {
+    let token = token.to_str().expect("a UTF-8 path");
+    let all: Vec<&str> =
+        args.iter().copied().chain(["--coordinator", url, "--token-file", token]).collect();
+    restauro(&all)
+}
+
+/// Submits `scene` with `extra` options; the job's id.
+pub fn submit(scene: &str, extra: &[&str], url: &str, token: &Path) -> String {
+    let args: Vec<&str> = ["submit", scene].into_iter().chain(extra.iter().copied()).collect();
+    let o = client(&args, url, token);
+    assert!(o.status.success(), "{}", text(&o));
+    String::from_utf8_lossy(&o.stdout).trim().to_owned()
 }
 
 /// The output of a finished process, stdout and stderr together.

@@ -8,7 +8,8 @@
 //!   with (the same code; a second, release build would take minutes);
 //! * `cargo test --workspace` is skipped: it is the command running this test;
 //! * sizes are reduced where a flag allows: `demo --quick`, `scene aosta` at 160×90, `--spp 1`;
-//! * the cluster's port 7878 is a free port, so that tests running at once do not collide.
+//! * the cluster's port 7878 is a free port, and the studio's 7880 another, so that tests
+//!   running at once do not collide.
 //!
 //! A failing line fails the test with the script's output.
 
@@ -39,13 +40,14 @@ fn shell_lines(readme: &str) -> Vec<String> {
 }
 
 /// One README line as the test runs it (see the module comment).
-fn adapted(line: &str, port: u16) -> Option<String> {
+fn adapted(line: &str, (port, studio_port): (u16, u16)) -> Option<String> {
     let command = line.split('#').next().unwrap_or("").trim();
     if command.starts_with("cargo test") {
         return None;
     }
     let mut out = line.replace("cargo run --release -p restauro --", "\"$RESTAURO\"");
     out = out.replace("7878", &port.to_string());
+    out = out.replace("7880", &studio_port.to_string());
     if command.contains(" -- demo") {
         out = out.replacen(" demo", " demo --quick", 1);
     }
@@ -65,8 +67,8 @@ fn every_readme_command_runs_in_order() {
     let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
     let lines = shell_lines(&readme);
     assert!(lines.len() > 20, "premise: the README has its commands: {lines:?}");
-    let port = free_port();
-    let body: Vec<String> = lines.iter().filter_map(|l| adapted(l, port)).collect();
+    let ports = (free_port(), free_port());
+    let body: Vec<String> = lines.iter().filter_map(|l| adapted(l, ports)).collect();
     // Whatever the script leaves running (a coordinator it did not get to stop) is stopped.
     let script = format!(
         "set -euo pipefail\ntrap 'kill $(jobs -p) 2>/dev/null || true' EXIT\nset -x\n{}\n",
@@ -111,9 +113,9 @@ fn every_readme_command_runs_in_order() {
 fn the_runner_reads_blocks_and_continuations() {
     let readme = "text\n```sh\n# c\nfoo a \\\n  b\n```\n```toml\nx = 1\n```\n```sh\nbar\n```\n";
     assert_eq!(shell_lines(readme), ["# c", "foo a   b", "bar"]);
-    assert_eq!(adapted("cargo test --workspace   # all", 1), None);
+    assert_eq!(adapted("cargo test --workspace   # all", (1, 2)), None);
     assert_eq!(
-        adapted("cargo run --release -p restauro -- demo   # x", 9).unwrap(),
+        adapted("cargo run --release -p restauro -- demo   # x", (9, 10)).unwrap(),
         "\"$RESTAURO\" demo --quick   # x"
     );
 }

@@ -1,0 +1,199 @@
+//! The studio's JSON API under `/api/`: the same domain calls the gRPC `Render` service makes
+//! ([`Farm`]), and the same refusals, with HTTP statuses (`CoordinatorError::http_status`) and
+//! a body `{"error": "<the message>"}` the page shows as it is.
+
+use super::Studio;
+use super::events::Start;
+use super::views::{JobView, WorkerView};
+use crate::error::{CoordinatorError, Result};
+use crate::ids::JobId;
+use axum::Json;
+use axum::body::{Body, Bytes};
+use axum::extract::{Path, State};
+use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
+use axum::response::sse::{Event as SseEvent, KeepAlive, Sse};
+use axum::response::{IntoResponse, Response};
+use serde::{Deserialize, Serialize};
+use std::convert::Infallible;
+use std::sync::Arc;
+use tokio::sync::broadcast::error::RecvError;
+use tokio_stream::wrappers::ReceiverStream;
+
+/// The one conversion of the coordinator's errors to an HTTP answer.
+impl IntoResponse for CoordinatorError {
+    fn into_response(self) -> Response {
+        #[derive(Serialize)]
+        struct Body {
+            error: String,
+        }
+        (self.http_status(), Json(Body { error: self.to_string() })).into_response()
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SignIn {
+    token: String,
+}
+
+/// `POST /api/session {"token": "…"}`: the client token for a session cookie. The page sends
+/// it once; the cookie then goes with every request, and no script can read it.
+pub async fn sign_in(
+    State(studio): State<Arc<Studio>>,
+    headers: HeaderMap,
+    body: Bytes,
+) -> Result<Response> {
+    super::session::same_origin(&headers)?;
+    let SignIn { token } = serde_json::from_slice(&body).map_err(|e| {
+        CoordinatorError::Request(format!(
+            "the body must be {{\"token\": \"<client token>\"}} ({e})"
+        ))
+    })?;
+    let cookie = studio.gate.sign_in(token.trim())?;
+    Ok(with_cookie(StatusCode::NO_CONTENT, &cookie))
+}
+
+/// `DELETE /api/session`: ends the page's session.
+pub async fn sign_out(State(studio): State<Arc<Studio>>) -> Response {
+    with_cookie(StatusCode::NO_CONTENT, &studio.gate.sign_out())
+}
+
+fn with_cookie(status: StatusCode, cookie: &str) -> Response {
+    let mut response = status.into_response();
+    if let Ok(value) = HeaderValue::from_str(cookie) {
+        response.headers_mut().insert(header::SET_COOKIE, value);
+    }
+    response
+}
+
+#[derive(Serialize)]
+pub struct Whoami {
+    role: &'static str,
+    /// The coordinator's own trouble (its store cannot be written), shown as a banner.
+    problem: Option<String>,
+}
+
+/// `GET /api/whoami`: 200 when signed in (the page's first call), else 401.
+pub async fn whoami(State(studio): State<Arc<Studio>>) -> Json<Whoami> {
+    Json(Whoami { role: "client", problem: studio.farm.problem() })
+}
+
+/// `GET /api/jobs`
+pub async fn jobs(State(studio): State<Arc<Studio>>) -> Json<Vec<JobView>> {
+    Json(studio.farm.jobs().into_iter().map(JobView::from).collect())
+}
+
+/// `GET /api/jobs/{id}`
+pub async fn job(
+    State(studio): State<Arc<Studio>>,
+    Path(id): Path<String>,
+) -> Result<Json<JobView>> {
+    let id = JobId::parse(&id)?;
+    let job = studio.farm.jobs().into_iter().find(|j| j.id == id);
+    job.map(|j| Json(j.into())).ok_or(CoordinatorError::NoSuchJob(id))
+}
+
+/// `POST /api/jobs/{id}/cancel`
+pub async fn cancel(
+    State(studio): State<Arc<Studio>>,
+    Path(id): Path<String>,
+) -> Result<Json<JobView>> {
+    Ok(Json(studio.farm.cancel(&JobId::parse(&id)?)?.into()))
+}
+
+/// `GET /api/jobs/{id}/results/{name}`: one result file of a finished job (an EXR is
+/// downloaded, a PNG shown).
+pub async fn result(
+    State(studio): State<Arc<Studio>>,
+    Path((id, name)): Path<(String, String)>,
+) -> Result<Response> {
+    let path = studio.farm.result_path(&JobId::parse(&id)?, &name)?;
+    let file = tokio::fs::File::open(&path).await.map_err(|e| CoordinatorError::io(&path, e))?;
+    let length = file.metadata().await.map_err(|e| CoordinatorError::io(&path, e))?.len();
+    let kind = match name.rsplit('.').next() {
+        Some("png") => "image/png",
+        Some("exr") => "image/x-exr",
+        Some("json") => "application/json",
+        _ => "application/octet-stream",
+    };
+    let body = Body::from_stream(tokio_util_stream(file));
+    let mut response = (StatusCode::OK, body).into_response();
+    let h = response.headers_mut();
+    h.insert(header::CONTENT_TYPE, HeaderValue::from_static(kind));
+    h.insert(header::CONTENT_LENGTH, HeaderValue::from(length));
+    if kind != "image/png" {
+        // The file's own name, which the coordinator chose (`render.exr`, …): no quoting issue.
+        if let Ok(v) = HeaderValue::from_str(&format!("attachment; filename=\"{name}\"")) {
+            h.insert(header::CONTENT_DISPOSITION, v);
+        }
+    }
+    Ok(response)
+}
+
+/// A file as a stream of chunks of 256 KiB.
+fn tokio_util_stream(
+    mut file: tokio::fs::File,
+) -> ReceiverStream<std::result::Result<Bytes, std::io::Error>> {
+    use tokio::io::AsyncReadExt as _;
+    let (tx, rx) = tokio::sync::mpsc::channel(4);
+    tokio::spawn(async move {
+        loop {
+            let mut buffer = vec![0u8; 256 << 10];
+            match file.read(&mut buffer).await {
+                Ok(0) => return,
+                Ok(n) => {
+                    buffer.truncate(n);
+                    if tx.send(Ok(Bytes::from(buffer))).await.is_err() {
+                        return;
+                    }
+                }
+                Err(e) => {
+                    let _ = tx.send(Err(e)).await;
+                    return;
+                }
+            }
+        }
+    });
+    ReceiverStream::new(rx)
+}
+
+/// `GET /api/workers`
+pub async fn workers(State(studio): State<Arc<Studio>>) -> Json<Vec<WorkerView>> {
+    Json(studio.farm.workers().into_iter().map(WorkerView::from).collect())
+}
+
+/// `GET /api/events`: the live events (see [`super::events`]), resumed after `Last-Event-ID`.
+pub async fn events(State(studio): State<Arc<Studio>>, headers: HeaderMap) -> impl IntoResponse {
+    let last = headers.get("last-event-id").and_then(|v| v.to_str().ok());
+    let mut new = studio.events.subscribe();
+    let Start { first, from_seq } = studio.events.start(last);
+    let (tx, rx) = tokio::sync::mpsc::channel::<std::result::Result<SseEvent, Infallible>>(64);
+    let (events, mut stop) = (studio.events.clone(), studio.stop.clone());
+    let sse = move |e: &super::events::Event| {
+        Ok(SseEvent::default().event(e.kind).id(events.id(e)).data(e.data.clone()))
+    };
+    tokio::spawn(async move {
+        for e in &first {
+            if tx.send(sse(e)).await.is_err() {
+                return;
+            }
+        }
+        loop {
+            let next = tokio::select! {
+                _ = stop.wait_for(|s| *s) => return,
+                next = new.recv() => next,
+            };
+            match next {
+                Ok(e) if e.seq.is_some_and(|s| s < from_seq) => {}
+                Ok(e) => {
+                    if tx.send(sse(&e)).await.is_err() {
+                        return;
+                    }
+                }
+                // Too slow a page: it reconnects, and is sent a snapshot or what it missed.
+                Err(RecvError::Lagged(_)) | Err(RecvError::Closed) => return,
+            }
+        }
+    });
+    Sse::new(ReceiverStream::new(rx)).keep_alive(KeepAlive::default())
+}

@@ -1,0 +1,104 @@
+//! The studio: the restorer's interactive tool, a web page served by the coordinator over HTTP
+//! beside its gRPC port (`--studio-listen ADDR`). The page is static files embedded in the
+//! binary ([`page`]: plain ES modules, nothing to build); its JSON API ([`api`]) and live events
+//! ([`events`]) are a second door to the same [`Farm`] the gRPC services use. Every `/api/` call
+//! but signing in needs the client token or a session made from it ([`session`]).
+
+pub mod api;
+pub mod events;
+pub mod page;
+pub mod session;
+pub mod views;
+
+use crate::auth::Tokens;
+use crate::error::CoordinatorError;
+use crate::farm::Farm;
+use anyhow::{Context, Result};
+use axum::Router;
+use axum::extract::{Request, State};
+use axum::http::{HeaderValue, header};
+use axum::middleware::{self, Next};
+use axum::response::{IntoResponse, Response};
+use axum::routing::{get, post};
+use std::net::SocketAddr;
+use std::sync::Arc;
+use tokio::net::TcpListener;
+use tokio::sync::watch;
+use tokio::task::JoinHandle;
+use tracing::{info, warn};
+
+/// What every handler shares.
+pub struct Studio {
+    pub farm: Arc<Farm>,
+    pub gate: session::Gate,
+    pub events: Arc<events::Events>,
+    /// True once the coordinator stops: open event streams end, so the server can.
+    pub stop: watch::Receiver<bool>,
+}
+
+/// Every `/api/` route but `POST /api/session` goes through the gate.
+async fn signed_in(State(studio): State<Arc<Studio>>, request: Request, next: Next) -> Response {
+    if let Err(e) = studio.gate.check(request.method(), request.headers()) {
+        return e.into_response();
+    }
+    let mut response = next.run(request).await;
+    // Answers about live state are never cached.
+    response.headers_mut().insert(header::CACHE_CONTROL, HeaderValue::from_static("no-store"));
+    response
+}
+
+async fn no_such_route(request: Request) -> CoordinatorError {
+    CoordinatorError::NoSuchPage(request.uri().path().chars().take(200).collect())
+}
+
+fn router(studio: Arc<Studio>) -> Router {
+    let api = Router::new()
+        .route("/api/whoami", get(api::whoami))
+        .route("/api/jobs", get(api::jobs))
+        .route("/api/jobs/{id}", get(api::job))
+        .route("/api/jobs/{id}/cancel", post(api::cancel))
+        .route("/api/jobs/{id}/results/{name}", get(api::result))
+        .route("/api/workers", get(api::workers))
+        .route("/api/events", get(api::events))
+        .route_layer(middleware::from_fn_with_state(studio.clone(), signed_in));
+    Router::new()
+        .route("/api/session", post(api::sign_in).delete(api::sign_out))
+        .merge(api)
+        .route("/", get(page::index))
+        .route("/static/{*file}", get(page::file))
+        .fallback(no_such_route)
+        .with_state(studio)
+}
+
+/// Binds `listen` (port 0 picks a free port) and serves the studio until `stop` turns true.
+/// Returns the bound address and the serving task.
+pub async fn serve(
+    listen: SocketAddr,
+    farm: Arc<Farm>,
+    tokens: Tokens,
+    stop: watch::Receiver<bool>,
+) -> Result<(SocketAddr, JoinHandle<()>)> {
+    let listener = TcpListener::bind(listen)
+        .await
+        .with_context(|| format!("listening for the studio on {listen}"))?;
+    let addr = listener.local_addr()?;
+    let events = events::Events::new();
+    let studio = Arc::new(Studio {
+        farm: farm.clone(),
+        gate: session::Gate::new(tokens, false),
+        events: events.clone(),
+        stop: stop.clone(),
+    });
+    let stopped = |mut rx: watch::Receiver<bool>| async move {
+        let _ = rx.wait_for(|s| *s).await;
+    };
+    tokio::spawn(events.pump(farm, stopped(stop.clone())));
+    let app = router(studio);
+    info!(%addr, "studio on http://{addr}/");
+    let task = tokio::spawn(async move {
+        if let Err(e) = axum::serve(listener, app).with_graceful_shutdown(stopped(stop)).await {
+            warn!(error = %e, "the studio stopped");
+        }
+    });
+    Ok((addr, task))
+}

@@ -1,0 +1,48 @@
+//! The page's files, embedded in the binary: `coordinator/studio/` in the source tree. Plain
+//! ES modules, so nothing is built; a change to a file is in the next `cargo build`.
+
+use crate::error::CoordinatorError;
+use axum::extract::Path;
+use axum::http::{HeaderValue, header};
+use axum::response::{IntoResponse, Response};
+
+/// Every file of the page: its path under `/static/`, its type and its bytes.
+const FILES: &[(&str, &str, &str)] = &[
+    ("studio.css", "text/css; charset=utf-8", include_str!("../../studio/studio.css")),
+    ("studio.js", "text/javascript; charset=utf-8", include_str!("../../studio/studio.js")),
+    ("api.js", "text/javascript; charset=utf-8", include_str!("../../studio/api.js")),
+    ("farm.js", "text/javascript; charset=utf-8", include_str!("../../studio/farm.js")),
+];
+
+const INDEX: &str = include_str!("../../studio/index.html");
+
+/// Only the page's own files run, and no other site may frame it.
+const POLICY: &str = "default-src 'self'; img-src 'self' blob: data:; style-src 'self'; \
+                      script-src 'self'; connect-src 'self'; frame-ancestors 'none'; \
+                      base-uri 'none'; form-action 'self'";
+
+fn page(kind: &'static str, text: &'static str) -> Response {
+    let mut response = text.into_response();
+    let h = response.headers_mut();
+    h.insert(header::CONTENT_TYPE, HeaderValue::from_static(kind));
+    h.insert(header::CONTENT_SECURITY_POLICY, HeaderValue::from_static(POLICY));
+    h.insert(header::X_CONTENT_TYPE_OPTIONS, HeaderValue::from_static("nosniff"));
+    h.insert(header::REFERRER_POLICY, HeaderValue::from_static("no-referrer"));
+    // The files change with the binary: a page must not mix two releases' modules.
+    h.insert(header::CACHE_CONTROL, HeaderValue::from_static("no-cache"));
+    response
+}
+
+/// `GET /`
+pub async fn index() -> Response {
+    page("text/html; charset=utf-8", INDEX)
+}
+
+/// `GET /static/{file}`
+pub async fn file(Path(name): Path<String>) -> Result<Response, CoordinatorError> {
+    FILES
+        .iter()
+        .find(|(path, _, _)| *path == name)
+        .map(|(_, kind, text)| page(kind, text))
+        .ok_or_else(|| CoordinatorError::NoSuchPage(format!("/static/{}", name.escape_debug())))
+}

@@ -1,0 +1,110 @@
+// The farm panel: the coordinator's jobs and workers as the live events say they stand.
+
+import { cancelJob, resultUrl } from './api.js';
+
+const jobs = new Map();
+const workers = new Map();
+let onShow = () => {};
+let onError = () => {};
+
+export function init({ show, error }) {
+  onShow = show;
+  onError = error;
+  setInterval(renderWorkers, 1000);
+}
+
+export function snapshot(data) {
+  jobs.clear();
+  workers.clear();
+  for (const j of data.jobs) jobs.set(j.id, { ...j, at: Date.now() });
+  for (const w of data.workers) workers.set(w.id, { ...w, at: Date.now() });
+  renderJobs();
+  renderWorkers();
+}
+
+export function job(j) { jobs.set(j.id, { ...j, at: Date.now() }); renderJobs(); }
+export function jobGone({ id }) { jobs.delete(id); renderJobs(); }
+export function worker(w) { workers.set(w.id, { ...w, at: Date.now() }); renderWorkers(); }
+export function workerGone({ id }) { workers.delete(id); renderWorkers(); }
+export function jobById(id) { return jobs.get(id); }
+
+function cell(text, cls) {
+  const td = document.createElement('td');
+  td.textContent = text;
+  if (cls) td.className = cls;
+  return td;
+}
+
+function duration(s) {
+  if (!Number.isFinite(s)) return '–';
+  if (s < 60) return `${s.toFixed(1)} s`;
+  const m = Math.floor(s / 60);
+  return `${m} min ${Math.round(s - 60 * m)} s`;
+}
+
+function progressCell(j) {
+  const td = document.createElement('td');
+  const bar = document.createElement('progress');
+  bar.max = Math.max(j.tiles_total, 1);
+  bar.value = j.tiles_done;
+  bar.setAttribute('aria-label', `${j.name}: tiles done`);
+  td.append(bar, ` ${j.tiles_done}/${j.tiles_total} tiles`);
+  if (!j.finished && j.tiles_done > 0 && j.tiles_done < j.tiles_total) {
+    const eta = j.elapsed_s * (j.tiles_total - j.tiles_done) / j.tiles_done;
+    td.append(`, about ${duration(eta)} left`);
+  }
+  return td;
+}
+
+function button(text, label, onClick) {
+  const b = document.createElement('button');
+  b.type = 'button';
+  b.textContent = text;
+  b.setAttribute('aria-label', label);
+  b.addEventListener('click', onClick);
+  return b;
+}
+
+function renderJobs() {
+  const body = document.querySelector('#jobs tbody');
+  const rows = [...jobs.values()].sort((a, b) => a.name.localeCompare(b.name));
+  body.replaceChildren(...rows.map((j) => {
+    const tr = document.createElement('tr');
+    tr.dataset.job = j.id;
+    const state = cell(j.state, `state-${j.state}`);
+    if (j.error) state.title = j.error;
+    const results = document.createElement('td');
+    for (const name of j.results) {
+      const a = document.createElement('a');
+      a.href = resultUrl(j.id, name);
+      a.textContent = name;
+      if (!name.endsWith('.png')) a.download = name;
+      results.append(a, ' ');
+    }
+    const actions = document.createElement('td');
+    if (j.state === 'done' && j.results.some((n) => n.endsWith('.png'))) {
+      actions.append(button('Show', `Show ${j.name}`, () => onShow(j)));
+    } else if (!j.finished) {
+      actions.append(button('Cancel', `Cancel ${j.name}`, () => cancelJob(j.id).then(job, onError)));
+    }
+    tr.append(cell(j.name), state, progressCell(j), cell(`${j.width} × ${j.height}`, 'number'),
+      cell(duration(j.elapsed_s), 'number'), results, actions);
+    if (j.error) tr.append(cell(j.error, 'error'));
+    return tr;
+  }));
+  document.getElementById('no-jobs').hidden = jobs.size > 0;
+}
+
+function renderWorkers() {
+  const body = document.querySelector('#workers tbody');
+  const rows = [...workers.values()].sort((a, b) => a.name.localeCompare(b.name));
+  body.replaceChildren(...rows.map((w) => {
+    const tr = document.createElement('tr');
+    tr.dataset.worker = w.id;
+    const seen = w.last_seen_s + (Date.now() - w.at) / 1000;
+    tr.append(cell(w.name), cell(`${w.leases} of ${w.capacity} tiles`), cell(String(w.tiles_done), 'number'),
+      cell(String(w.tiles_failed), 'number'), cell(`${seen.toFixed(0)} s ago`, 'number'), cell(w.build));
+    return tr;
+  }));
+  document.getElementById('no-workers').hidden = workers.size > 0;
+}

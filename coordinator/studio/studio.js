@@ -1,0 +1,141 @@
+// The studio page: signs in, follows the coordinator's live events, shows the farm and results.
+
+import * as api from './api.js';
+import * as farm from './farm.js';
+
+const $ = (id) => document.getElementById(id);
+let events = null;
+let shown = null;
+
+function status(text, live) {
+  const el = $('connection');
+  el.textContent = text;
+  el.className = live ? 'live' : 'down';
+}
+
+function problem(text) {
+  $('problem').textContent = text || '';
+  $('problem').hidden = !text;
+}
+
+function showError(e) {
+  problem(e.message || String(e));
+}
+
+async function askForToken(message) {
+  if (events) { events.close(); events = null; }
+  status('signed out', false);
+  $('sign-out').hidden = true;
+  $('sign-in-error').textContent = message || '';
+  if (!$('sign-in').open) $('sign-in').showModal();
+  $('token').focus();
+}
+
+async function signIn(token) {
+  try {
+    await api.signIn(token);
+  } catch (e) {
+    await askForToken(e.message);
+    return;
+  }
+  $('sign-in').close();
+  $('token').value = '';
+  await start();
+}
+
+async function start() {
+  let me;
+  try {
+    me = await api.whoami();
+  } catch (e) {
+    if (e.status === 401 || e.status === 403) return askForToken('');
+    status('coordinator unreachable', false);
+    return showError(e);
+  }
+  problem(me.problem);
+  $('sign-out').hidden = false;
+  follow();
+}
+
+// The live events: the browser reconnects by itself and sends Last-Event-ID, so the page is sent
+// what it missed; a snapshot replaces everything.
+function follow() {
+  if (events) events.close();
+  events = new EventSource('/api/events');
+  const on = (kind, handler) => events.addEventListener(kind, (e) => handler(JSON.parse(e.data)));
+  events.onopen = () => status('live', true);
+  on('snapshot', farm.snapshot);
+  on('job', (j) => { farm.job(j); if (shown && shown.id === j.id) show(j); });
+  on('job-gone', farm.jobGone);
+  on('worker', farm.worker);
+  on('worker-gone', farm.workerGone);
+  events.onerror = async () => {
+    status('reconnecting…', false);
+    if (events.readyState === EventSource.CLOSED) {
+      // Refused, not dropped: the session ended, or the coordinator is gone.
+      try { await api.whoami(); follow(); } catch (e) {
+        if (e.status === 401) askForToken('The session ended: sign in again.');
+        else setTimeout(follow, 2000);
+      }
+    }
+  };
+}
+
+function show(job, seen) {
+  shown = job;
+  const name = job.results.find((n) => n.endsWith('.png') && !n.endsWith('-retinex.png'));
+  const retinex = job.results.find((n) => n.endsWith('-retinex.png'));
+  const useSeen = seen ?? ($('as-seen').getAttribute('aria-pressed') === 'true');
+  const file = useSeen && retinex ? retinex : name;
+  $('as-seen').disabled = !retinex;
+  $('as-rendered').setAttribute('aria-pressed', String(file === name));
+  $('as-seen').setAttribute('aria-pressed', String(file === retinex));
+  $('result').hidden = false;
+  $('result-title').textContent = `Snapshot: ${job.name}`;
+  const img = $('result-image');
+  img.src = api.resultUrl(job.id, file);
+  img.alt = `${job.name}, ${file === retinex ? 'as seen after the Retinex' : 'as rendered'}`;
+  $('result-caption').textContent = `${file} — ${job.width} × ${job.height} px`;
+  const downloads = $('result-downloads');
+  downloads.replaceChildren('Download: ');
+  for (const n of job.results) {
+    const a = document.createElement('a');
+    a.href = api.resultUrl(job.id, n);
+    a.download = n;
+    a.textContent = n;
+    downloads.append(a, ' ');
+  }
+}
+
+function shortcuts() {
+  const d = $('shortcuts');
+  if (d.open) d.close(); else d.showModal();
+}
+
+document.addEventListener('DOMContentLoaded', () => {
+  farm.init({ show: (j) => show(j), error: showError });
+  $('sign-in-form').addEventListener('submit', (e) => {
+    e.preventDefault();
+    signIn($('token').value);
+  });
+  $('sign-in').addEventListener('cancel', (e) => e.preventDefault());
+  $('sign-out').addEventListener('click', async () => {
+    await api.signOut().catch(showError);
+    askForToken('');
+  });
+  $('show-shortcuts').addEventListener('click', shortcuts);
+  $('as-rendered').addEventListener('click', () => shown && show(shown, false));
+  $('as-seen').addEventListener('click', () => shown && show(shown, true));
+  document.addEventListener('keydown', (e) => {
+    if (e.key === '?' && !(e.target instanceof HTMLInputElement)) shortcuts();
+  });
+  // `restauro studio` prints an address whose fragment carries the token: it is taken from
+  // there (a fragment never reaches a server or a log) and removed from the address bar.
+  const token = new URLSearchParams(location.hash.slice(1)).get('token');
+  if (token) {
+    history.replaceState(null, '', location.pathname);
+    signIn(token);
+  } else {
+    start();
+  }
+});

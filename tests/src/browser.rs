@@ -1,0 +1,218 @@
+//! A headless Chromium driven over the Chrome DevTools Protocol, for the studio's browser tests.
+//!
+//! Why CDP over a WebSocket (tungstenite) rather than WebDriver or a Node driver: Debian's
+//! `chromium` speaks CDP itself, so nothing else is installed (no chromedriver, no Node), and
+//! the few commands the tests need (navigate, evaluate, type, click, screenshot) are plain JSON.
+//! The browser runs with a fresh profile and is killed with the test.
+
+use serde_json::{Value, json};
+use std::net::TcpStream;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+use tungstenite::stream::MaybeTlsStream;
+use tungstenite::{Message, WebSocket};
+
+pub struct Browser {
+    child: Child,
+    socket: WebSocket<MaybeTlsStream<TcpStream>>,
+    session: String,
+    next_id: u64,
+    _profile: tempfile::TempDir,
+}
+
+/// The browser, if this machine has one: `RESTAURO_CHROMIUM`, else `chromium` or
+/// `chromium-browser` on the path.
+pub fn chromium() -> Option<PathBuf> {
+    if let Some(path) = std::env::var_os("RESTAURO_CHROMIUM") {
+        return Some(PathBuf::from(path));
+    }
+    let path = std::env::var_os("PATH")?;
+    std::env::split_paths(&path)
+        .flat_map(|dir| ["chromium", "chromium-browser"].map(|name| dir.join(name)))
+        .find(|candidate| candidate.is_file())
+}
+
+/// Whether a test that needs the browser should run: it fails when `RESTAURO_REQUIRE_BROWSER`
+/// is set (CI installs Chromium and sets it) and there is none, and is skipped, saying so, on a
+/// machine without a browser.
+pub fn available(test: &str) -> bool {
+    if chromium().is_some() {
+        return true;
+    }
+    assert!(
+        std::env::var_os("RESTAURO_REQUIRE_BROWSER").is_none(),
+        "{test}: no Chromium found, and RESTAURO_REQUIRE_BROWSER is set; install it \
+         (apt-get install chromium) or set RESTAURO_CHROMIUM to its path"
+    );
+    eprintln!("{test}: skipped: no Chromium on this machine (apt-get install chromium)");
+    false
+}
+
+impl Browser {
+    /// Starts headless Chromium with a `width × height` window and attaches to its page.
+    pub fn launch(width: u32, height: u32) -> Browser {
+        let exe = chromium().expect("a Chromium (see `available`)");
+        let profile = tempfile::tempdir().unwrap();
+        let child = Command::new(exe)
+            .args([
+                "--headless=new",
+                "--no-sandbox",
+                "--disable-gpu",
+                "--no-first-run",
+                "--no-default-browser-check",
+                "--disable-extensions",
+                "--hide-scrollbars",
+                "--remote-debugging-port=0",
+                &format!("--window-size={width},{height}"),
+            ])
+            .arg(format!("--user-data-dir={}", profile.path().display()))
+            .arg("about:blank")
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("starting Chromium");
+        let (port, path) = devtools_address(profile.path());
+        let (socket, _) =
+            tungstenite::connect(format!("ws://127.0.0.1:{port}{path}")).expect("CDP socket");
+        let mut browser =
+            Browser { child, socket, session: String::new(), next_id: 1, _profile: profile };
+        let targets = browser.call("Target.getTargets", json!({}));
+        let page = targets["targetInfos"]
+            .as_array()
+            .and_then(|t| t.iter().find(|t| t["type"] == "page"))
+            .expect("a page target")["targetId"]
+            .clone();
+        let attached =
+            browser.call("Target.attachToTarget", json!({ "targetId": page, "flatten": true }));
+        browser.session = attached["sessionId"].as_str().unwrap().to_owned();
+        browser.call("Page.enable", json!({}));
+        browser.call("Runtime.enable", json!({}));
+        browser
+    }
+
+    /// Sends a CDP command (to the page once attached) and waits for its answer, passing over
+    /// the events that come between.
+    pub fn call(&mut self, method: &str, params: Value) -> Value {
+        let id = self.next_id;
+        self.next_id += 1;
+        let mut message = json!({ "id": id, "method": method, "params": params });
+        if !self.session.is_empty() {
+            message["sessionId"] = json!(self.session);
+        }
+        self.socket.send(Message::text(message.to_string())).expect("sending to Chromium");
+        loop {
+            let reply = self.socket.read().expect("reading from Chromium");
+            let Message::Text(text) = reply else { continue };
+            let value: Value = serde_json::from_str(&text).unwrap();
+            if value["id"] == id {
+                if let Some(error) = value.get("error") {
+                    panic!("{method}: {error}");
+                }
+                return value["result"].clone();
+            }
+        }
+    }
+
+    pub fn goto(&mut self, url: &str) {
+        self.call("Page.navigate", json!({ "url": url }));
+        self.wait_for("the page to load", "document.readyState === 'complete'");
+    }
+
+    /// The value of a JavaScript expression in the page (promises awaited).
+    pub fn eval(&mut self, expression: &str) -> Value {
+        let r = self.call(
+            "Runtime.evaluate",
+            json!({ "expression": expression, "returnByValue": true, "awaitPromise": true }),
+        );
+        if let Some(e) = r.get("exceptionDetails") {
+            panic!("`{expression}` threw: {e}");
+        }
+        r["result"]["value"].clone()
+    }
+
+    /// Waits until `condition` (JavaScript) is true; fails naming `what` after 60 s.
+    pub fn wait_for(&mut self, what: &str, condition: &str) {
+        let deadline = Instant::now() + Duration::from_secs(60);
+        loop {
+            if self.eval(&format!("!!({condition})")) == json!(true) {
+                return;
+            }
+            assert!(Instant::now() < deadline, "timed out waiting for {what} ({condition})");
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    }
+
+    /// Clicks the middle of the element `selector` with the mouse, as a person would.
+    pub fn click(&mut self, selector: &str) {
+        let quoted = serde_json::to_string(selector).unwrap();
+        let at = self.eval(&format!(
+            "(() => {{ const r = document.querySelector({quoted}).getBoundingClientRect(); \
+             return [r.x + r.width / 2, r.y + r.height / 2]; }})()"
+        ));
+        let (x, y) = (at[0].as_f64().unwrap(), at[1].as_f64().unwrap());
+        for kind in ["mousePressed", "mouseReleased"] {
+            self.call(
+                "Input.dispatchMouseEvent",
+                json!({ "type": kind, "x": x, "y": y, "button": "left", "clickCount": 1 }),
+            );
+        }
+    }
+
+    /// Types `text` into the focused element.
+    pub fn type_text(&mut self, text: &str) {
+        self.call("Input.insertText", json!({ "text": text }));
+    }
+
+    /// Presses and releases a key (`"Enter"`, `"?"`, …).
+    pub fn press(&mut self, key: &str) {
+        let text = if key.chars().count() == 1 { key } else { "" };
+        let code = if key == "Enter" { 13 } else { 0 };
+        for kind in ["keyDown", "keyUp"] {
+            let mut event = json!({ "type": kind, "key": key, "windowsVirtualKeyCode": code });
+            if kind == "keyDown" && !text.is_empty() {
+                event["text"] = json!(text);
+            }
+            if key == "Enter" && kind == "keyDown" {
+                event["text"] = json!("\r");
+            }
+            self.call("Input.dispatchKeyEvent", event);
+        }
+    }
+
+    /// Writes what the page shows now to `path` as a PNG.
+    pub fn screenshot(&mut self, path: &Path) {
+        use base64::Engine as _;
+        let shot = self.call("Page.captureScreenshot", json!({ "format": "png" }));
+        let data = base64::engine::general_purpose::STANDARD
+            .decode(shot["data"].as_str().unwrap())
+            .unwrap();
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(path, data).unwrap();
+    }
+}
+
+impl Drop for Browser {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// The port and browser path Chromium writes into its profile once it listens.
+fn devtools_address(profile: &Path) -> (u16, String) {
+    let file = profile.join("DevToolsActivePort");
+    let deadline = Instant::now() + Duration::from_secs(30);
+    loop {
+        if let Ok(text) = std::fs::read_to_string(&file) {
+            let mut lines = text.lines();
+            if let (Some(port), Some(path)) = (lines.next(), lines.next())
+                && let Ok(port) = port.trim().parse()
+            {
+                return (port, path.trim().to_owned());
+            }
+        }
+        assert!(Instant::now() < deadline, "Chromium did not open its DevTools port");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}

@@ -1,0 +1,252 @@
+//! The studio's HTTP API against a real coordinator and worker (processes on loopback): every
+//! route, every refusal, the session cookie, the live events and their resumption.
+
+use restauro_tests::http::{Events, request};
+use restauro_tests::{
+    CLIENT_TOKEN, Coordinator, WORKER_TOKEN, Worker, aosta_scene, client, submit, text,
+};
+
+const BEARER: &str = "Bearer client-token-for-tests";
+
+fn get(studio: &str, path: &str, auth: &[(&str, &str)]) -> restauro_tests::http::Response {
+    request(studio, "GET", path, auth, b"")
+}
+
+fn error_of(r: &restauro_tests::http::Response) -> String {
+    r.json()["error"].as_str().unwrap_or_else(|| panic!("no error in {}", r.text())).to_owned()
+}
+
+#[test]
+fn every_route_needs_the_client_token_and_refuses_in_the_servers_words() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let c =
+        Coordinator::start(d, &d.join("data"), "127.0.0.1:0", &["--studio-listen", "127.0.0.1:0"]);
+    let studio = c.studio.clone().unwrap();
+    let s = studio.as_str();
+
+    // The page itself is public, with a policy that runs only its own scripts.
+    let page = get(s, "/", &[]);
+    assert_eq!(page.status, 200);
+    assert!(page.text().contains("<title>restauro studio</title>"));
+    assert!(page.header("content-security-policy").unwrap().contains("script-src 'self'"));
+    let js = get(s, "/static/studio.js", &[]);
+    assert_eq!(
+        (js.status, js.header("content-type")),
+        (200, Some("text/javascript; charset=utf-8"))
+    );
+    let missing = get(s, "/static/nothing.js", &[]);
+    assert_eq!(missing.status, 404);
+    assert!(error_of(&missing).contains("/static/nothing.js"));
+    assert_eq!(get(s, "/nowhere", &[]).status, 404);
+
+    // Every API route: 401 without a token, 403 with the worker's, 401 with a guess.
+    let id = "6f0a4f7e-1111-4a2b-9c3d-0123456789ab";
+    let routes = [
+        ("GET", "/api/whoami".to_owned()),
+        ("GET", "/api/jobs".to_owned()),
+        ("GET", format!("/api/jobs/{id}")),
+        ("POST", format!("/api/jobs/{id}/cancel")),
+        ("GET", format!("/api/jobs/{id}/results/a.png")),
+        ("GET", "/api/workers".to_owned()),
+        ("GET", "/api/events".to_owned()),
+    ];
+    let worker = format!("Bearer {WORKER_TOKEN}");
+    for (method, path) in &routes {
+        let r = request(s, method, path, &[], b"");
+        assert_eq!(r.status, 401, "{method} {path}");
+        assert!(error_of(&r).contains("not signed in"), "{method} {path}");
+        let r = request(s, method, path, &[("Authorization", &worker)], b"");
+        assert_eq!(r.status, 403, "{method} {path}");
+        assert!(error_of(&r).contains("this is a worker token"), "{}", error_of(&r));
+        let r = request(s, method, path, &[("Authorization", "Bearer guess")], b"");
+        assert_eq!(r.status, 401, "{method} {path}");
+        assert!(error_of(&r).contains("not valid"), "{}", error_of(&r));
+    }
+
+    // With the client token: what the domain says, as the gRPC door says it.
+    let auth = [("Authorization", BEARER)];
+    assert_eq!(get(s, "/api/whoami", &auth).json()["role"], "client");
+    assert_eq!(get(s, "/api/jobs", &auth).json(), serde_json::json!([]));
+    let r = get(s, "/api/jobs/not-a-job", &auth);
+    assert_eq!(r.status, 400);
+    assert!(error_of(&r).contains("`not-a-job` is not a job id"), "{}", error_of(&r));
+    let r = get(s, &format!("/api/jobs/{id}"), &auth);
+    assert_eq!((r.status, error_of(&r)), (404, format!("no job {id}")));
+    let r = request(s, "POST", &format!("/api/jobs/{id}/cancel"), &auth, b"");
+    assert_eq!(r.status, 404);
+    assert_eq!(get(s, &format!("/api/jobs/{id}/results/a.png"), &auth).status, 404);
+    assert_eq!(request(s, "DELETE", "/api/jobs", &auth, b"").status, 405);
+}
+
+#[test]
+fn the_session_cookie_is_made_from_the_client_token_only_and_guards_changes() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let c =
+        Coordinator::start(d, &d.join("data"), "127.0.0.1:0", &["--studio-listen", "127.0.0.1:0"]);
+    let s = c.studio.clone().unwrap();
+    let origin = format!("http://{s}");
+    let sign_in = |token: &str, origin: &str| {
+        let body = serde_json::json!({ "token": token }).to_string();
+        request(&s, "POST", "/api/session", &[("Origin", origin)], body.as_bytes())
+    };
+    let r = sign_in(WORKER_TOKEN, &origin);
+    assert_eq!(r.status, 403, "the worker token opens nothing here");
+    assert_eq!(sign_in("guess", &origin).status, 401);
+    let r = sign_in(CLIENT_TOKEN, "http://evil.example");
+    assert_eq!(r.status, 403);
+    assert!(error_of(&r).contains("http://evil.example"), "{}", error_of(&r));
+    let r = request(&s, "POST", "/api/session", &[("Origin", &origin)], b"{\"tokn\": 1}");
+    assert_eq!(r.status, 400);
+    assert!(error_of(&r).contains("{\"token\": \"<client token>\"}"), "{}", error_of(&r));
+
+    let r = sign_in(CLIENT_TOKEN, &origin);
+    assert_eq!(r.status, 204);
+    let set = r.header("set-cookie").unwrap().to_owned();
+    for attribute in ["HttpOnly", "SameSite=Strict", "Path=/"] {
+        assert!(set.contains(attribute), "{set}");
+    }
+    let cookie = set.split(';').next().unwrap().to_owned();
+    assert_eq!(get(&s, "/api/whoami", &[("Cookie", &cookie)]).status, 200);
+    // A change by cookie needs the studio's own Origin; reading does not.
+    let job = "6f0a4f7e-1111-4a2b-9c3d-0123456789ab";
+    let cancel = format!("/api/jobs/{job}/cancel");
+    let r = request(&s, "POST", &cancel, &[("Cookie", &cookie)], b"");
+    assert_eq!(r.status, 403, "{}", r.text());
+    let r = request(
+        &s,
+        "POST",
+        &cancel,
+        &[("Cookie", &cookie), ("Origin", "http://evil.example")],
+        b"",
+    );
+    assert_eq!(r.status, 403);
+    let r = request(&s, "POST", &cancel, &[("Cookie", &cookie), ("Origin", &origin)], b"");
+    assert_eq!(r.status, 404, "past the gate, to the domain: {}", r.text());
+    // A tampered cookie is no session; signing out clears it.
+    let forged = format!("{}0", &cookie[..cookie.len() - 1]);
+    assert_eq!(get(&s, "/api/whoami", &[("Cookie", &forged)]).status, 401);
+    let out = request(&s, "DELETE", "/api/session", &[], b"");
+    assert!(out.header("set-cookie").unwrap().contains("Max-Age=0"));
+}
+
+#[test]
+fn events_follow_a_job_to_its_end_and_resume_after_the_last_event_seen() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let c =
+        Coordinator::start(d, &d.join("data"), "127.0.0.1:0", &["--studio-listen", "127.0.0.1:0"]);
+    let s = c.studio.clone().unwrap();
+    let auth = [("Authorization", BEARER)];
+    let mut events = Events::open(&s, "/api/events", &auth);
+    assert_eq!(events.status, 200);
+    let first = events.next_event();
+    assert_eq!(first.kind, "snapshot");
+    assert_eq!(first.json()["jobs"], serde_json::json!([]));
+
+    let _worker = Worker::start(d, &c.url, "w1", &[]);
+    let w = events.next_event();
+    assert_eq!(w.kind, "worker");
+    assert_eq!(w.json()["name"], "w1");
+
+    let scene = aosta_scene(d, 64, 36);
+    let token = d.join("client.token");
+    let id = submit(&scene, &["--spp", "1", "--tile", "16"], &c.url, &token);
+    // Job events until it is done; the tiles done never go back.
+    let (mut done_seen, mut seen) = (0, Vec::new());
+    let last = loop {
+        let e = events.next_event();
+        seen.push(e.clone());
+        if e.kind != "job" {
+            continue;
+        }
+        let j = e.json();
+        assert_eq!(j["id"], id.as_str());
+        let done = j["tiles_done"].as_u64().unwrap();
+        assert!(done >= done_seen, "tiles done went from {done_seen} to {done}");
+        done_seen = done;
+        if j["state"] == "done" {
+            break j;
+        }
+    };
+    assert_eq!(last["tiles_total"], 12, "64 × 36 px in 16-px tiles");
+    assert!(seen.iter().filter(|e| e.kind == "job").count() >= 2, "{seen:?}");
+
+    // The result as the studio gives it is the file the CLI fetches.
+    let png = last["results"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|n| n.as_str().unwrap().ends_with("aosta.png"))
+        .unwrap()
+        .as_str()
+        .unwrap()
+        .to_owned();
+    let r = get(&s, &format!("/api/jobs/{id}/results/{png}"), &auth);
+    assert_eq!((r.status, r.header("content-type")), (200, Some("image/png")));
+    let out = d.join("fetched");
+    let o = client(&["fetch", &id, "--out", out.to_str().unwrap()], &c.url, &token);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(r.body == std::fs::read(out.join(&png)).unwrap(), "the studio's PNG differs");
+    let exr = get(&s, &format!("/api/jobs/{id}/results/aosta.exr"), &auth);
+    assert!(exr.header("content-disposition").unwrap().contains("attachment"));
+    let r = get(&s, &format!("/api/jobs/{id}/results/secret.txt"), &auth);
+    assert_eq!(r.status, 404);
+    assert!(error_of(&r).contains("has no result `secret.txt`"));
+    assert_eq!(get(&s, &format!("/api/jobs/{id}"), &auth).json()["state"], "done");
+
+    // Reconnecting after an event: what came after it, not a snapshot.
+    let middle = &seen[0];
+    let mut resumed = Events::open(&s, "/api/events", &[auth[0], ("Last-Event-ID", &middle.id)]);
+    let next = resumed.next_event();
+    assert_eq!(
+        (next.kind.as_str(), next.id.as_str()),
+        (seen[1].kind.as_str(), seen[1].id.as_str())
+    );
+    // An id of another coordinator's run (or none): a snapshot, with the job done.
+    let mut fresh =
+        Events::open(&s, "/api/events", &[auth[0], ("Last-Event-ID", "0123456789ab-3")]);
+    let snap = fresh.next_event();
+    assert_eq!(snap.kind, "snapshot");
+    assert_eq!(snap.json()["jobs"][0]["state"], "done");
+
+    // Cancelling: a job too large to finish first.
+    let long = submit(&scene, &["--spp", "4096", "--tile", "8"], &c.url, &token);
+    let r = request(&s, "POST", &format!("/api/jobs/{long}/cancel"), &auth, b"");
+    assert_eq!((r.status, r.json()["state"].as_str()), (200, Some("cancelled")));
+    let r = get(&s, &format!("/api/jobs/{long}/results/aosta.png"), &auth);
+    assert_eq!(r.status, 409, "{}", r.text());
+    assert!(error_of(&r).contains("is cancelled, not done"), "{}", error_of(&r));
+}
+
+/// `restauro studio` starts an embedded cluster whose coordinator serves the studio, and prints
+/// an address whose fragment carries a token that opens it.
+#[test]
+fn restauro_studio_prints_an_address_that_signs_in() {
+    use std::io::{BufRead, BufReader};
+    let mut child = std::process::Command::new(restauro_tests::binary("restauro"))
+        .args(["studio", "--listen", "127.0.0.1:0", "--exit-with-stdin"])
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut out = BufReader::new(child.stdout.take().unwrap());
+    let mut line = String::new();
+    out.read_line(&mut line).unwrap();
+    let url = line.trim().strip_prefix("studio on http://").unwrap_or_else(|| panic!("{line}"));
+    let (addr, token) = url.split_once("/#token=").unwrap();
+    let mut rest = String::new();
+    out.read_line(&mut rest).unwrap();
+    out.read_line(&mut rest).unwrap();
+    assert!(rest.contains("restauro submit --coordinator http://127.0.0.1:"), "{rest}");
+    assert_eq!(get(addr, "/", &[]).status, 200);
+    let bearer = format!("Bearer {token}");
+    restauro_tests::wait_for("both workers", std::time::Duration::from_secs(30), || {
+        get(addr, "/api/workers", &[("Authorization", &bearer)]).json().as_array().map(Vec::len)
+            == Some(2)
+    });
+    drop(child.stdin.take());
+    let status = child.wait().unwrap();
+    assert!(status.success(), "{status}");
+}

@@ -1,0 +1,117 @@
+//! The studio in a real browser (headless Chromium, driven over CDP) against a real coordinator
+//! and two workers: signing in, the farm as it stands, a render followed live and its image as
+//! the page shows it. Screenshots of each step are written to `<target>/tmp/studio/`.
+
+use restauro_tests::browser::{Browser, available};
+use restauro_tests::{CLIENT_TOKEN, Coordinator, Worker, aosta_scene, client, submit, text};
+use std::path::PathBuf;
+
+fn shots() -> PathBuf {
+    PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("studio")
+}
+
+/// The mean of the RGB channels of a PNG file, 0–255.
+fn png_mean(bytes: &[u8]) -> [f64; 3] {
+    let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
+    decoder.set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
+    let mut reader = decoder.read_info().unwrap();
+    let mut data = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut data).unwrap();
+    let channels = info.color_type.samples();
+    let pixels = (info.width * info.height) as usize;
+    let mut sum = [0.0; 3];
+    for p in data[..pixels * channels].chunks(channels) {
+        for k in 0..3 {
+            sum[k] += f64::from(p[k]);
+        }
+    }
+    sum.map(|s| s / pixels as f64)
+}
+
+#[test]
+fn a_restorer_signs_in_follows_a_render_and_sees_its_image() {
+    if !available("studio_browser") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let c =
+        Coordinator::start(d, &d.join("data"), "127.0.0.1:0", &["--studio-listen", "127.0.0.1:0"]);
+    let studio = format!("http://{}/", c.studio.clone().unwrap());
+    let _workers =
+        [Worker::start(d, &c.url, "local-1", &[]), Worker::start(d, &c.url, "local-2", &[])];
+    let mut b = Browser::launch(1280, 720);
+
+    // Without a session the page asks for the token.
+    b.goto(&studio);
+    b.wait_for("the sign-in dialog", "document.getElementById('sign-in').open");
+    b.screenshot(&shots().join("01-sign-in.png"));
+    // A wrong token is refused, in the server's words.
+    b.click("#token");
+    b.type_text("not-the-token");
+    b.click("#sign-in-form button[type=submit]");
+    b.wait_for("the refusal", "document.getElementById('sign-in-error').textContent.length > 0");
+    let said = b.eval("document.getElementById('sign-in-error').textContent");
+    assert_eq!(said, "the client token is not valid", "{said}");
+    assert_eq!(b.eval("document.getElementById('sign-in').open"), true);
+    b.screenshot(&shots().join("02-wrong-token.png"));
+    // The right one opens the studio: the farm's two workers are listed, live.
+    b.eval("document.getElementById('token').value = ''");
+    b.click("#token");
+    b.type_text(CLIENT_TOKEN);
+    b.press("Enter");
+    b.wait_for("the dialog to close", "!document.getElementById('sign-in').open");
+    b.wait_for("both workers", "document.querySelectorAll('#workers tbody tr').length === 2");
+    let names = b.eval("[...document.querySelectorAll('#workers tbody tr td:first-child')].map(td => td.textContent)");
+    assert_eq!(names, serde_json::json!(["local-1", "local-2"]));
+    b.wait_for("the live status", "document.getElementById('connection').textContent === 'live'");
+    assert_eq!(b.eval("document.getElementById('no-jobs').hidden"), false);
+    b.screenshot(&shots().join("03-farm.png"));
+
+    // A render sent from the command line appears, progresses and ends done.
+    let scene = aosta_scene(d, 320, 180);
+    let token = d.join("client.token");
+    let id = submit(&scene, &["--spp", "2", "--tile", "32"], &c.url, &token);
+    let row = format!("document.querySelector('#jobs tr[data-job=\"{id}\"]')");
+    b.wait_for("the job's row", &row);
+    b.wait_for("the job to finish", &format!("{row}.children[1].textContent === 'done'"));
+    let progress = b.eval(&format!("{row}.children[2].textContent"));
+    assert_eq!(progress, " 60/60 tiles", "{progress}");
+    b.click(&format!("#jobs tr[data-job=\"{id}\"] button"));
+    b.wait_for(
+        "the image",
+        "(() => { const i = document.getElementById('result-image'); \
+         return i.complete && i.naturalWidth === 320; })()",
+    );
+    b.screenshot(&shots().join("04-snapshot.png"));
+    // What the page shows is the PNG the farm wrote: the same mean colour, read back from the
+    // image the page decoded.
+    let shown = b.eval(
+        "(() => { const i = document.getElementById('result-image'); const c = document.createElement('canvas'); \
+         c.width = i.naturalWidth; c.height = i.naturalHeight; const g = c.getContext('2d'); g.drawImage(i, 0, 0); \
+         const d = g.getImageData(0, 0, c.width, c.height).data; const s = [0, 0, 0]; \
+         for (let p = 0; p < d.length; p += 4) { s[0] += d[p]; s[1] += d[p + 1]; s[2] += d[p + 2]; } \
+         return s.map(v => v / (c.width * c.height)); })()",
+    );
+    let out = d.join("fetched");
+    let o = client(&["fetch", &id, "--out", out.to_str().unwrap()], &c.url, &token);
+    assert!(o.status.success(), "{}", text(&o));
+    let expected = png_mean(&std::fs::read(out.join("aosta.png")).unwrap());
+    for k in 0..3 {
+        let got = shown[k].as_f64().unwrap();
+        assert!((got - expected[k]).abs() < 0.01, "channel {k}: page {got}, file {}", expected[k]);
+    }
+    assert!(expected.iter().sum::<f64>() > 30.0, "the render is not black: {expected:?}");
+    // As seen: the Retinex image.
+    b.click("#as-seen");
+    b.wait_for(
+        "the Retinex image",
+        "(() => { const i = document.getElementById('result-image'); \
+         return i.src.endsWith('aosta-retinex.png') && i.complete && i.naturalWidth === 320; })()",
+    );
+    assert_eq!(b.eval("document.getElementById('as-seen').getAttribute('aria-pressed')"), "true");
+    b.screenshot(&shots().join("05-as-seen.png"));
+    // `?` lists the keyboard shortcuts.
+    b.press("?");
+    b.wait_for("the shortcuts", "document.getElementById('shortcuts').open");
+}

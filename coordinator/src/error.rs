@@ -104,6 +104,9 @@ pub enum CoordinatorError {
     #[error("invalid request: {0}")]
     Request(String),
 
+    #[error("no scene {0}: the coordinator holds the scenes of its jobs")]
+    NoSuchScene(String),
+
     #[error("no such page `{0}` in the studio")]
     NoSuchPage(String),
 
@@ -143,7 +146,7 @@ impl CoordinatorError {
             E::NotSignedIn => Code::Unauthenticated,
             E::CrossOrigin { .. } => Code::PermissionDenied,
             E::Request(_) => Code::InvalidArgument,
-            E::NoSuchPage(_) => Code::NotFound,
+            E::NoSuchPage(_) | E::NoSuchScene(_) => Code::NotFound,
         }
     }
 

@@ -27,6 +27,7 @@ use restauro_proto as pb;
 use restauro_scene::bundle::Bundle;
 use restauro_scene::job::{JobSpec, check_label, printable};
 use restauro_scene::limits::Limits;
+use restauro_scene::load::LoadedScene;
 use restauro_scene::plan::{Plan, Rect};
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
@@ -96,6 +97,17 @@ pub struct WorkerStatus {
     pub failed: u64,
     pub last_seen_s: f64,
     pub build: String,
+}
+
+/// A scene the coordinator holds (see [`Farm::scenes`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneEntry {
+    /// The bundle's identity: the BLAKE3 hash of its canonical form.
+    pub id: String,
+    /// The name of its latest job.
+    pub name: String,
+    pub jobs: usize,
+    pub latest_ms: u64,
 }
 
 /// What a worker renders for a job: the scene, the plan resolved at submission, and the limits
@@ -468,6 +480,47 @@ impl Farm {
             }
         });
         Ok(rx)
+    }
+
+    /// The scenes the coordinator holds: the bundles of its jobs, by identity, named by their
+    /// latest job.
+    pub fn scenes(&self) -> Vec<SceneEntry> {
+        let st = self.lock();
+        let mut by_id: BTreeMap<String, SceneEntry> = BTreeMap::new();
+        for r in st.jobs.values() {
+            let id = blake3::hash(r.manifest_json.as_bytes()).to_hex().to_string();
+            let entry = by_id.entry(id.clone()).or_insert_with(|| SceneEntry {
+                id,
+                name: String::new(),
+                jobs: 0,
+                latest_ms: 0,
+            });
+            entry.jobs += 1;
+            if r.submitted_unix_ms >= entry.latest_ms {
+                entry.latest_ms = r.submitted_unix_ms;
+                entry.name = r.spec.name.to_string();
+            }
+        }
+        by_id.into_values().collect()
+    }
+
+    /// The scene of bundle `id` (see [`Farm::scenes`]), loaded from the store as a worker
+    /// loads it.
+    pub async fn load_scene(self: &Arc<Self>, id: &str) -> Result<LoadedScene> {
+        let manifest = {
+            let st = self.lock();
+            st.jobs
+                .values()
+                .find(|r| blake3::hash(r.manifest_json.as_bytes()).to_hex().as_str() == id)
+                .map(|r| r.manifest_json.clone())
+        }
+        .ok_or_else(|| CoordinatorError::NoSuchScene(id.chars().take(80).collect()))?;
+        let farm = self.clone();
+        tokio::task::spawn_blocking(move || -> Result<LoadedScene> {
+            Ok(farm.bundle(&manifest)?.load(&farm.config.limits)?)
+        })
+        .await
+        .map_err(|e| CoordinatorError::Internal(e.to_string()))?
     }
 
     /// Wakes at every change of a job (the studio's event stream diffs its snapshots).

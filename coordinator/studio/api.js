@@ -37,3 +37,6 @@ export const whoami = () => call('GET', '/api/whoami');
 export const cancelJob = (id) => call('POST', `/api/jobs/${encodeURIComponent(id)}/cancel`);
 export const resultUrl = (id, name) =>
   `/api/jobs/${encodeURIComponent(id)}/results/${encodeURIComponent(name)}`;
+export const scenes = () => call('GET', '/api/scenes');
+export const scene = (id) => call('GET', `/api/scenes/${encodeURIComponent(id)}`);
+export const sceneGlbUrl = (id) => `/api/scenes/${encodeURIComponent(id)}/preview.glb`;

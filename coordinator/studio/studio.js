@@ -2,10 +2,45 @@
 
 import * as api from './api.js';
 import * as farm from './farm.js';
+import { Viewer } from './viewer.js';
 
 const $ = (id) => document.getElementById(id);
 let events = null;
 let shown = null;
+let viewer = null;
+let openScene = '';
+
+// The scenes the coordinator holds, in the picker; the first is opened if none is.
+async function listScenes() {
+  const list = await api.scenes();
+  const picker = $('scene-picker');
+  const current = picker.value;
+  if (list.length === 0) return;
+  picker.replaceChildren(...list.map((s) => {
+    const o = document.createElement('option');
+    o.value = s.id;
+    o.textContent = `${s.name} (${s.jobs} ${s.jobs === 1 ? 'job' : 'jobs'})`;
+    return o;
+  }));
+  picker.value = list.some((s) => s.id === current) ? current : list[list.length - 1].id;
+  if (picker.value !== openScene) await open(picker.value);
+}
+
+async function open(id) {
+  openScene = id;
+  $('scene-status').textContent = 'loading the scene…';
+  try {
+    const view = await api.scene(id);
+    viewer = viewer || new Viewer($('view'));
+    await viewer.open(view, api.sceneGlbUrl(id));
+    $('scene-status').textContent = `${view.triangles.toLocaleString('en')} triangles, ` +
+      `${view.materials.length} materials`;
+    $('view').dataset.scene = id;
+  } catch (e) {
+    $('scene-status').textContent = '';
+    showError(e);
+  }
+}
 
 function status(text, live) {
   const el = $('connection');
@@ -55,6 +90,7 @@ async function start() {
   problem(me.problem);
   $('sign-out').hidden = false;
   follow();
+  listScenes().catch(showError);
 }
 
 // The live events: the browser reconnects by itself and sends Last-Event-ID, so the page is sent
@@ -65,7 +101,12 @@ function follow() {
   const on = (kind, handler) => events.addEventListener(kind, (e) => handler(JSON.parse(e.data)));
   events.onopen = () => status('live', true);
   on('snapshot', farm.snapshot);
-  on('job', (j) => { farm.job(j); if (shown && shown.id === j.id) show(j); });
+  on('job', (j) => {
+    const isNew = !farm.jobById(j.id);
+    farm.job(j);
+    if (shown && shown.id === j.id) show(j);
+    if (isNew) listScenes().catch(showError);
+  });
   on('job-gone', farm.jobGone);
   on('worker', farm.worker);
   on('worker-gone', farm.workerGone);
@@ -124,10 +165,14 @@ document.addEventListener('DOMContentLoaded', () => {
     askForToken('');
   });
   $('show-shortcuts').addEventListener('click', shortcuts);
+  $('scene-picker').addEventListener('change', (e) => e.target.value && open(e.target.value));
+  $('home').addEventListener('click', () => viewer && viewer.view && viewer.home());
   $('as-rendered').addEventListener('click', () => shown && show(shown, false));
   $('as-seen').addEventListener('click', () => shown && show(shown, true));
   document.addEventListener('keydown', (e) => {
-    if (e.key === '?' && !(e.target instanceof HTMLInputElement)) shortcuts();
+    if (e.target instanceof HTMLInputElement || e.target instanceof HTMLSelectElement) return;
+    if (e.key === '?') shortcuts();
+    if ((e.key === 'h' || e.key === 'H') && viewer && viewer.view) viewer.home();
   });
   // `restauro studio` prints an address whose fragment carries the token: it is taken from
   // there (a fragment never reaches a server or a log) and removed from the address bar.

@@ -595,3 +595,49 @@ fn a_y_up_ply_is_noticed_too() {
         scene.notes
     );
 }
+
+/// The studio's preview GLB, read back by the glTF reader (the `gltf` crate validates it against
+/// the specification): the same triangles, in the same world places once its offset is added
+/// back and its Y-up turned Z-up, with each part's material and the colour given for it.
+#[test]
+fn the_preview_glb_holds_the_scene_as_it_is_in_the_world() {
+    let folder = Folder::new();
+    // A survey far from the origin: its centimetres must survive.
+    let far = "v 500000.00 5000000.00 0\nv 500004.00 5000000.00 0\nv 500004.00 5000000.00 3.01\n\
+               v 500000.00 5000000.00 3.01\nusemtl stone\nf 1 2 3 4\nusemtl joint\nf 1 3 4\n";
+    folder.write("meshes/wall.obj", far);
+    let scene = load(&folder, &scene_toml(OBJ_OBJECT, "")).unwrap();
+    let colour = |m: &str| if m == "stone" { [0.5, 0.4, 0.3] } else { [0.1, 0.2, 0.3] };
+    let preview = restauro_scene::gltf_export::scene_glb(&scene, colour);
+    assert_eq!(preview.triangles, 3);
+    let offset = preview.offset_m;
+    assert!((offset[0] - 500002.0).abs() < 0.01 && (offset[2] - 1.505).abs() < 1e-3, "{offset:?}");
+    let none =
+        |uri: &str| -> restauro_scene::Result<Vec<u8>> { panic!("no external buffer {uri}") };
+    let (mesh, _) = restauro_scene::gltf_mesh::parse_with_cameras(
+        &preview.glb,
+        Path::new("preview.glb"),
+        &Limits::default(),
+        &none,
+    )
+    .unwrap();
+    assert_eq!(mesh.triangles.len(), 3);
+    // Back to the world: glTF (x, y, z) is world (x, −z, y), plus the offset.
+    let world = |p: [f32; 3]| {
+        [f64::from(p[0]) + offset[0], -f64::from(p[2]) + offset[1], f64::from(p[1]) + offset[2]]
+    };
+    let original = &scene.objects[0].mesh;
+    for (t, u) in mesh.triangles.iter().zip(&original.triangles) {
+        for (&a, &b) in t.iter().zip(u) {
+            let (got, want) = (world(mesh.positions[a as usize]), original.positions[b as usize]);
+            for k in 0..3 {
+                assert!((got[k] - f64::from(want[k])).abs() < 0.01, "{got:?} vs {want:?}");
+            }
+        }
+    }
+    // Parts are named by their scene material, coloured as asked.
+    let by_name: std::collections::BTreeMap<_, _> =
+        mesh.groups.iter().map(|g| (g.name.clone(), g.colour)).collect();
+    assert_eq!(by_name.get("stone"), Some(&Some([0.5, 0.4, 0.3])), "{by_name:?}");
+    assert_eq!(by_name.get("glaze"), Some(&Some([0.1, 0.2, 0.3])), "{by_name:?}");
+}

@@ -59,6 +59,9 @@ impl Browser {
                 "--headless=new",
                 "--no-sandbox",
                 "--disable-gpu",
+                // WebGL on the CPU (SwiftShader): the studio's 3D view, on a machine without GPU.
+                "--use-angle=swiftshader",
+                "--enable-unsafe-swiftshader",
                 "--no-first-run",
                 "--no-default-browser-check",
                 "--disable-extensions",
@@ -147,7 +150,9 @@ impl Browser {
     pub fn click(&mut self, selector: &str) {
         let quoted = serde_json::to_string(selector).unwrap();
         let at = self.eval(&format!(
-            "(() => {{ const r = document.querySelector({quoted}).getBoundingClientRect(); \
+            "(() => {{ const e = document.querySelector({quoted}); \
+             e.scrollIntoView({{ block: 'center', inline: 'center' }}); \
+             const r = e.getBoundingClientRect(); \
              return [r.x + r.width / 2, r.y + r.height / 2]; }})()"
         ));
         let (x, y) = (at[0].as_f64().unwrap(), at[1].as_f64().unwrap());
@@ -180,15 +185,26 @@ impl Browser {
         }
     }
 
-    /// Writes what the page shows now to `path` as a PNG.
-    pub fn screenshot(&mut self, path: &Path) {
+    /// Writes what the page shows now to `path` as a PNG, and returns its bytes.
+    pub fn screenshot(&mut self, path: &Path) -> Vec<u8> {
         use base64::Engine as _;
         let shot = self.call("Page.captureScreenshot", json!({ "format": "png" }));
         let data = base64::engine::general_purpose::STANDARD
             .decode(shot["data"].as_str().unwrap())
             .unwrap();
         std::fs::create_dir_all(path.parent().unwrap()).unwrap();
-        std::fs::write(path, data).unwrap();
+        std::fs::write(path, &data).unwrap();
+        data
+    }
+
+    /// The page-pixel rectangle (x, y, width, height) of the element `selector`.
+    pub fn rect(&mut self, selector: &str) -> [f64; 4] {
+        let quoted = serde_json::to_string(selector).unwrap();
+        let r = self.eval(&format!(
+            "(() => {{ const r = document.querySelector({quoted}).getBoundingClientRect(); \
+             return [r.x, r.y, r.width, r.height]; }})()"
+        ));
+        std::array::from_fn(|k| r[k].as_f64().unwrap())
     }
 }
 

@@ -50,6 +50,9 @@ fn every_route_needs_the_client_token_and_refuses_in_the_servers_words() {
         ("GET", format!("/api/jobs/{id}/results/a.png")),
         ("GET", "/api/workers".to_owned()),
         ("GET", "/api/events".to_owned()),
+        ("GET", "/api/scenes".to_owned()),
+        ("GET", format!("/api/scenes/{}", "0".repeat(64))),
+        ("GET", format!("/api/scenes/{}/preview.glb", "0".repeat(64))),
     ];
     let worker = format!("Bearer {WORKER_TOKEN}");
     for (method, path) in &routes {
@@ -77,6 +80,15 @@ fn every_route_needs_the_client_token_and_refuses_in_the_servers_words() {
     assert_eq!(r.status, 404);
     assert_eq!(get(s, &format!("/api/jobs/{id}/results/a.png"), &auth).status, 404);
     assert_eq!(request(s, "DELETE", "/api/jobs", &auth, b"").status, 405);
+    assert_eq!(get(s, "/api/scenes", &auth).json(), serde_json::json!([]));
+    let r = get(s, "/api/scenes/../../etc", &auth);
+    assert_eq!(r.status, 404, "{}", r.text());
+    let r = get(s, "/api/scenes/not-a-scene", &auth);
+    assert_eq!(r.status, 400);
+    assert!(error_of(&r).contains("is not a scene id"), "{}", error_of(&r));
+    let r = get(s, &format!("/api/scenes/{}", "0".repeat(64)), &auth);
+    assert_eq!(r.status, 404);
+    assert!(error_of(&r).contains("the coordinator holds the scenes of its jobs"));
 }
 
 #[test]
@@ -195,6 +207,31 @@ fn events_follow_a_job_to_its_end_and_resume_after_the_last_event_seen() {
     assert_eq!(r.status, 404);
     assert!(error_of(&r).contains("has no result `secret.txt`"));
     assert_eq!(get(&s, &format!("/api/jobs/{id}"), &auth).json()["state"], "done");
+
+    // The job's scene, for the real-time view: its camera, its materials coloured from their
+    // spectra as `restauro color` computes them, and its geometry as GLB.
+    let scenes = get(&s, "/api/scenes", &auth).json();
+    assert_eq!(scenes.as_array().unwrap().len(), 1, "{scenes}");
+    assert_eq!((scenes[0]["name"].as_str(), scenes[0]["jobs"].as_u64()), (Some("aosta"), Some(1)));
+    let scene_id = scenes[0]["id"].as_str().unwrap().to_owned();
+    let view = get(&s, &format!("/api/scenes/{scene_id}"), &auth).json();
+    assert!(view["triangles"].as_u64().unwrap() > 1000, "{}", view["triangles"]);
+    assert_eq!(view["camera"]["width"], 64);
+    let travertine =
+        view["materials"].as_array().unwrap().iter().find(|m| m["name"] == "travertine").unwrap();
+    let o = restauro_tests::restauro(&["color", "travertine_tufa_solid__eco_ward73", "--json"]);
+    let color: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    for k in 0..3 {
+        let (got, want) = (
+            travertine["colour_linear_srgb"][k].as_f64().unwrap(),
+            color["sample"]["rgb_linear"][k].as_f64().unwrap(),
+        );
+        assert!((got - want).abs() < 1e-4, "channel {k}: {got} vs {want}");
+    }
+    let glb = get(&s, &format!("/api/scenes/{scene_id}/preview.glb"), &auth);
+    assert_eq!((glb.status, glb.header("content-type")), (200, Some("model/gltf-binary")));
+    assert_eq!(&glb.body[..4], b"glTF");
+    assert_eq!(u32::from_le_bytes(glb.body[8..12].try_into().unwrap()) as usize, glb.body.len());
 
     // Reconnecting after an event: what came after it, not a snapshot.
     let middle = &seen[0];

@@ -10,8 +10,8 @@ fn shots() -> PathBuf {
     PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("studio")
 }
 
-/// The mean of the RGB channels of a PNG file, 0–255.
-fn png_mean(bytes: &[u8]) -> [f64; 3] {
+/// A PNG's pixels as RGB, row by row, and its width.
+fn png_rgb(bytes: &[u8]) -> (Vec<[u8; 3]>, usize) {
     let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
     decoder.set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
     let mut reader = decoder.read_info().unwrap();
@@ -19,13 +19,25 @@ fn png_mean(bytes: &[u8]) -> [f64; 3] {
     let info = reader.next_frame(&mut data).unwrap();
     let channels = info.color_type.samples();
     let pixels = (info.width * info.height) as usize;
+    let rgb = data[..pixels * channels].chunks(channels).map(|p| [p[0], p[1], p[2]]).collect();
+    (rgb, info.width as usize)
+}
+
+/// The mean of the RGB channels of a PNG file, 0–255.
+fn png_mean(bytes: &[u8]) -> [f64; 3] {
+    let (rgb, _) = png_rgb(bytes);
     let mut sum = [0.0; 3];
-    for p in data[..pixels * channels].chunks(channels) {
+    for p in &rgb {
         for k in 0..3 {
             sum[k] += f64::from(p[k]);
         }
     }
-    sum.map(|s| s / pixels as f64)
+    sum.map(|s| s / rgb.len() as f64)
+}
+
+/// The view's background (`#9fb4c8`, the page's sky colour), within rounding.
+fn is_background(p: [u8; 3]) -> bool {
+    p.iter().zip([0x9f, 0xb4, 0xc8]).all(|(&a, b): (&u8, i32)| (i32::from(a) - b).abs() <= 2)
 }
 
 #[test]
@@ -77,13 +89,32 @@ fn a_restorer_signs_in_follows_a_render_and_sees_its_image() {
     b.wait_for("the job to finish", &format!("{row}.children[1].textContent === 'done'"));
     let progress = b.eval(&format!("{row}.children[2].textContent"));
     assert_eq!(progress, " 60/60 tiles", "{progress}");
+    // Its scene is listed and drawn in real time from the scene's camera: the model fills the
+    // middle of the view, the sky is above it.
+    b.wait_for("the scene in the picker", "document.getElementById('scene-picker').selectedOptions[0].textContent.startsWith('aosta')");
+    b.wait_for("the model", "document.getElementById('view').dataset.scene");
+    let shot = b.screenshot(&shots().join("04-scene.png"));
+    let [x, y, w, h] = b.rect("#view");
+    let (rgb, width) = png_rgb(&shot);
+    let at = |fx: f64, fy: f64| rgb[(y + fy * h) as usize * width + (x + fx * w) as usize];
+    assert!(!is_background(at(0.5, 0.5)), "the middle of the view is sky: {:?}", at(0.5, 0.5));
+    assert!(is_background(at(0.5, 0.03)), "the top of the view is not sky: {:?}", at(0.5, 0.03));
+    let model = (0..40 * 40)
+        .filter(|i| {
+            !is_background(at(
+                0.1 + 0.8 * f64::from(i % 40) / 40.0,
+                0.1 + 0.8 * f64::from(i / 40) / 40.0,
+            ))
+        })
+        .count();
+    assert!(model > 400, "the model covers only {model} of 1600 samples of the view");
     b.click(&format!("#jobs tr[data-job=\"{id}\"] button"));
     b.wait_for(
         "the image",
         "(() => { const i = document.getElementById('result-image'); \
          return i.complete && i.naturalWidth === 320; })()",
     );
-    b.screenshot(&shots().join("04-snapshot.png"));
+    b.screenshot(&shots().join("05-snapshot.png"));
     // What the page shows is the PNG the farm wrote: the same mean colour, read back from the
     // image the page decoded.
     let shown = b.eval(
@@ -110,7 +141,7 @@ fn a_restorer_signs_in_follows_a_render_and_sees_its_image() {
          return i.src.endsWith('aosta-retinex.png') && i.complete && i.naturalWidth === 320; })()",
     );
     assert_eq!(b.eval("document.getElementById('as-seen').getAttribute('aria-pressed')"), "true");
-    b.screenshot(&shots().join("05-as-seen.png"));
+    b.screenshot(&shots().join("06-as-seen.png"));
     // `?` lists the keyboard shortcuts.
     b.press("?");
     b.wait_for("the shortcuts", "document.getElementById('shortcuts').open");

@@ -197,3 +197,48 @@ pub async fn events(State(studio): State<Arc<Studio>>, headers: HeaderMap) -> im
     });
     Sse::new(ReceiverStream::new(rx)).keep_alive(KeepAlive::default())
 }
+
+#[derive(Serialize)]
+pub struct SceneEntryView {
+    id: String,
+    name: String,
+    jobs: usize,
+}
+
+/// `GET /api/scenes`: the scenes of the coordinator's jobs.
+pub async fn scenes(State(studio): State<Arc<Studio>>) -> Json<Vec<SceneEntryView>> {
+    let list = studio.farm.scenes().into_iter();
+    Json(list.map(|s| SceneEntryView { id: s.id, name: s.name, jobs: s.jobs }).collect())
+}
+
+/// A scene id from a caller: a BLAKE3 hash in hex.
+fn scene_id(text: &str) -> Result<&str> {
+    if text.len() == 64 && text.bytes().all(|b| b.is_ascii_hexdigit()) {
+        Ok(text)
+    } else {
+        Err(CoordinatorError::Request(format!(
+            "`{}` is not a scene id (64 hexadecimal digits, as /api/scenes lists them)",
+            text.chars().take(80).collect::<String>().escape_debug()
+        )))
+    }
+}
+
+/// `GET /api/scenes/{id}`: what the page needs to show the scene: its camera, its materials
+/// and their colours, the offset of its preview.
+pub async fn scene(State(studio): State<Arc<Studio>>, Path(id): Path<String>) -> Result<Response> {
+    let preview = studio.previews.get(&studio.farm, scene_id(&id)?).await?;
+    Ok(Json(&preview.view).into_response())
+}
+
+/// `GET /api/scenes/{id}/preview.glb`: its geometry as glTF binary.
+pub async fn scene_glb(
+    State(studio): State<Arc<Studio>>,
+    Path(id): Path<String>,
+) -> Result<Response> {
+    let preview = studio.previews.get(&studio.farm, scene_id(&id)?).await?;
+    let mut response = (StatusCode::OK, preview.glb.clone()).into_response();
+    response
+        .headers_mut()
+        .insert(header::CONTENT_TYPE, HeaderValue::from_static("model/gltf-binary"));
+    Ok(response)
+}

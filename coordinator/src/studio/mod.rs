@@ -7,6 +7,7 @@
 pub mod api;
 pub mod events;
 pub mod page;
+pub mod preview;
 pub mod session;
 pub mod views;
 
@@ -32,6 +33,7 @@ pub struct Studio {
     pub farm: Arc<Farm>,
     pub gate: session::Gate,
     pub events: Arc<events::Events>,
+    pub previews: preview::Previews,
     /// True once the coordinator stops: open event streams end, so the server can.
     pub stop: watch::Receiver<bool>,
 }
@@ -60,6 +62,9 @@ fn router(studio: Arc<Studio>) -> Router {
         .route("/api/jobs/{id}/results/{name}", get(api::result))
         .route("/api/workers", get(api::workers))
         .route("/api/events", get(api::events))
+        .route("/api/scenes", get(api::scenes))
+        .route("/api/scenes/{id}", get(api::scene))
+        .route("/api/scenes/{id}/preview.glb", get(api::scene_glb))
         .route_layer(middleware::from_fn_with_state(studio.clone(), signed_in));
     Router::new()
         .route("/api/session", post(api::sign_in).delete(api::sign_out))
@@ -87,6 +92,7 @@ pub async fn serve(
         farm: farm.clone(),
         gate: session::Gate::new(tokens, false),
         events: events.clone(),
+        previews: preview::Previews::default(),
         stop: stop.clone(),
     });
     let stopped = |mut rx: watch::Receiver<bool>| async move {

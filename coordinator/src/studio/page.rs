@@ -6,12 +6,28 @@ use axum::extract::Path;
 use axum::http::{HeaderValue, header};
 use axum::response::{IntoResponse, Response};
 
-/// Every file of the page: its path under `/static/`, its type and its bytes.
+/// A file of the page: its path under `/static/` (and under `coordinator/studio/`), as
+/// JavaScript.
+macro_rules! script {
+    ($path:literal) => {
+        ($path, "text/javascript; charset=utf-8", include_str!(concat!("../../studio/", $path)))
+    };
+}
+
+/// Every file of the page: its path under `/static/`, its type and its bytes. three.js is
+/// vendored (see `coordinator/studio/vendor/README.md`).
 const FILES: &[(&str, &str, &str)] = &[
     ("studio.css", "text/css; charset=utf-8", include_str!("../../studio/studio.css")),
-    ("studio.js", "text/javascript; charset=utf-8", include_str!("../../studio/studio.js")),
-    ("api.js", "text/javascript; charset=utf-8", include_str!("../../studio/api.js")),
-    ("farm.js", "text/javascript; charset=utf-8", include_str!("../../studio/farm.js")),
+    script!("studio.js"),
+    script!("api.js"),
+    script!("farm.js"),
+    script!("viewer.js"),
+    script!("vendor/three/three.module.js"),
+    script!("vendor/three/three.core.js"),
+    script!("vendor/three/addons/controls/OrbitControls.js"),
+    script!("vendor/three/addons/loaders/GLTFLoader.js"),
+    script!("vendor/three/addons/utils/BufferGeometryUtils.js"),
+    script!("vendor/three/addons/utils/SkeletonUtils.js"),
 ];
 
 const INDEX: &str = include_str!("../../studio/index.html");

@@ -1,0 +1,69 @@
+// The real-time view of a scene: its geometry as the coordinator converts it (glTF, re-centred,
+// Y up), each material in the colour restauro computes from its spectrum, seen from the scene's
+// camera, with orbit, pan and zoom.
+
+import * as THREE from './vendor/three/three.module.js';
+import { OrbitControls } from './vendor/three/addons/controls/OrbitControls.js';
+import { GLTFLoader } from './vendor/three/addons/loaders/GLTFLoader.js';
+
+export class Viewer {
+  constructor(canvas) {
+    this.canvas = canvas;
+    this.renderer = new THREE.WebGLRenderer({ canvas, antialias: true });
+    this.renderer.setPixelRatio(Math.min(window.devicePixelRatio, 2));
+    this.scene = new THREE.Scene();
+    this.scene.background = new THREE.Color(0x9fb4c8);
+    this.camera = new THREE.PerspectiveCamera(40, 16 / 9, 0.1, 10000);
+    this.controls = new OrbitControls(this.camera, canvas);
+    this.controls.addEventListener('change', () => this.draw());
+    // A preview light: the sky from above, the sun from the south-west.
+    this.scene.add(new THREE.HemisphereLight(0xffffff, 0x6b5a48, 1.6));
+    const sun = new THREE.DirectionalLight(0xffffff, 2.0);
+    sun.position.set(-0.5, 1.0, 0.8);
+    this.scene.add(sun);
+    this.model = null;
+    this.view = null;
+    new ResizeObserver(() => this.resize()).observe(canvas);
+  }
+
+  resize() {
+    const { clientWidth: w, clientHeight: h } = this.canvas;
+    if (w === 0 || h === 0) return;
+    this.renderer.setSize(w, h, false);
+    this.camera.aspect = w / h;
+    this.camera.updateProjectionMatrix();
+    this.draw();
+  }
+
+  draw() {
+    this.renderer.render(this.scene, this.camera);
+    this.frames = (this.frames || 0) + 1;
+  }
+
+  // Opens the scene `view` (from /api/scenes/{id}); resolves when its model is drawn.
+  async open(view, glbUrl) {
+    const gltf = await new GLTFLoader().loadAsync(glbUrl);
+    if (this.model) this.scene.remove(this.model);
+    this.model = gltf.scene;
+    this.scene.add(this.model);
+    this.view = view;
+    const box = new THREE.Box3().setFromObject(this.model);
+    const size = box.getSize(new THREE.Vector3()).length();
+    this.camera.near = Math.max(size / 10000, 0.01);
+    this.camera.far = size * 20 + 1000;
+    this.home();
+    return gltf;
+  }
+
+  // Back to the scene's own camera.
+  home() {
+    const c = this.view.camera;
+    this.camera.fov = c.vertical_fov_deg;
+    this.camera.up.set(...c.up);
+    this.camera.position.set(...c.position);
+    this.controls.target.set(...c.target);
+    this.camera.updateProjectionMatrix();
+    this.controls.update();
+    this.draw();
+  }
+}

@@ -63,6 +63,10 @@ mod primitives;
 mod proto;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_geometry;
+#[cfg(test)]
+mod tests_proto;
 
 use builder::Builder;
 use census::Census;

@@ -28,6 +28,9 @@ pub(super) struct Node {
     /// Whether an `IS` (§4.8.3) is in this node or below it: only such nodes are copied when a
     /// PROTO is instantiated, the rest are shared.
     pub has_is: bool,
+    /// How many nodes with an `IS` in or below them this one holds, itself included and
+    /// every `USE` counted: what an expansion copies at most, known before copying.
+    pub is_nodes: u64,
     /// An instance of an EXTERNPROTO that is not in this file: what it was declared as.
     pub external: Option<Rc<Extern>>,
 }
@@ -66,7 +69,7 @@ impl Node {
         fields: Vec<Field>,
         ordinal: usize,
     ) -> Node {
-        let (mut height, mut has_is) = (1, false);
+        let (mut height, mut has_is, mut below) = (1, false, 0u64);
         for field in &fields {
             match &*field.value {
                 Value::Is(_) => has_is = true,
@@ -74,12 +77,14 @@ impl Node {
                     for n in nodes {
                         height = height.max(n.height + 1);
                         has_is |= n.has_is;
+                        below = below.saturating_add(n.is_nodes);
                     }
                 }
                 _ => {}
             }
         }
-        Node { kind, def, pos, fields, ordinal, height, has_is, external: None }
+        let is_nodes = if has_is { below.saturating_add(1) } else { 0 };
+        Node { kind, def, pos, fields, ordinal, height, has_is, is_nodes, external: None }
     }
 
     pub fn field(&self, name: &str) -> Option<&Field> {
@@ -97,6 +102,11 @@ impl Node {
         self.nodes(name).first()
     }
 }
+
+/// The nodes PROTO expansion may copy are at most `max_instances` / this (1 250 000 by
+/// default): unlike instances, which a `USE` shares, copies are held in memory at once (about
+/// 150 bytes each), and making them takes time before the census can count anything.
+pub(super) const EXPANSION_SHARE: u64 = 16;
 
 /// A PROTO whose body is being read: what `IS` may refer to, and what may not be
 /// instantiated inside it (§4.8.3: a prototype cannot contain itself).
@@ -124,7 +134,8 @@ pub(super) struct Parser<'a> {
 }
 
 impl<'a> Parser<'a> {
-    pub fn new(text: &'a str, path: &'a Path, max_expanded: u64) -> crate::Result<Self> {
+    /// `max_instances` bounds the nodes copied by PROTO expansion too (see [`EXPANSION_SHARE`]).
+    pub fn new(text: &'a str, path: &'a Path, max_instances: u64) -> crate::Result<Self> {
         let mut lexer = Lexer::new(text, path);
         let current = lexer.next_token()?;
         let ahead = lexer.next_token()?;
@@ -137,7 +148,7 @@ impl<'a> Parser<'a> {
             defining: Vec::new(),
             shapes: 0,
             expanded: 0,
-            max_expanded,
+            max_expanded: max_instances / EXPANSION_SHARE,
         })
     }
 
@@ -742,6 +753,12 @@ impl Parser<'_> {
             }
         }
         self.check_height(depth, proto.root.height, pos, "PROTO expansions")?;
+        // A chain of prototypes that each use the one before twice stands for 2^n copies:
+        // refused before the first is made.
+        let copies = self.expanded.saturating_add(proto.root.is_nodes);
+        if copies > self.max_expanded {
+            return Err(super::proto::too_many_copies(self, copies, pos));
+        }
         let root = Expander::new(self, bindings, pos).expand(&proto.root)?;
         Ok(match def {
             Some(name) => Rc::new(super::proto::renamed(&root, name)),

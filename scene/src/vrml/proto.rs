@@ -123,19 +123,27 @@ impl<'p, 'a> Expander<'p, 'a> {
     fn count(&mut self) -> crate::Result<()> {
         self.parser.expanded += 1;
         if self.parser.expanded > self.parser.max_expanded {
-            return Err(SceneError::Limit {
-                path: self.parser.path.to_path_buf(),
-                what: format!(
-                    "the number of nodes made by expanding PROTO instances (at {}:{})",
-                    self.at.line, self.at.column
-                ),
-                value: self.parser.expanded,
-                limit: self.parser.max_expanded,
-                fix: "use fewer nested PROTO instances, or raise the limit with --max-instances"
-                    .to_string(),
-            });
+            return Err(too_many_copies(self.parser, self.parser.expanded, self.at));
         }
         Ok(())
+    }
+}
+
+/// The error for expansions past `max_instances`, naming the instance at `at`.
+pub(super) fn too_many_copies(parser: &Parser, copies: u64, at: Pos) -> SceneError {
+    SceneError::Limit {
+        path: parser.path.to_path_buf(),
+        what: format!(
+            "the number of nodes made by expanding PROTO instances (with the one at {}:{})",
+            at.line, at.column
+        ),
+        value: copies,
+        limit: parser.max_expanded,
+        fix: format!(
+            "use fewer nested PROTO instances (or have the exporter expand them), or raise \
+             --max-instances (expansions may copy one node per {} instances allowed)",
+            super::parser::EXPANSION_SHARE
+        ),
     }
 }
 

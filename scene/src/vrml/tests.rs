@@ -6,9 +6,9 @@ use std::path::Path;
 use super::*;
 use crate::mesh::Mesh;
 
-const PATH: &str = "t.wrl";
+pub(super) const PATH: &str = "t.wrl";
 
-fn ok(text: &str) -> VrmlScene {
+pub(super) fn ok(text: &str) -> VrmlScene {
     match parse(text, Path::new(PATH)) {
         Ok(scene) => {
             check_consistent(&scene.mesh);
@@ -18,24 +18,24 @@ fn ok(text: &str) -> VrmlScene {
     }
 }
 
-fn err(text: &str) -> String {
+pub(super) fn err(text: &str) -> String {
     match parse(text, Path::new(PATH)) {
         Ok(_) => panic!("expected an error for:\n{text}"),
         Err(e) => e.to_string(),
     }
 }
 
-fn assert_has(message: &str, words: &[&str]) {
+pub(super) fn assert_has(message: &str, words: &[&str]) {
     for w in words {
         assert!(message.contains(w), "`{w}` missing from: {message}");
     }
 }
 
-fn close(a: f32, b: f32) -> bool {
+pub(super) fn close(a: f32, b: f32) -> bool {
     (a - b).abs() < 1e-4
 }
 
-fn close3(a: [f32; 3], b: [f32; 3]) -> bool {
+pub(super) fn close3(a: [f32; 3], b: [f32; 3]) -> bool {
     (0..3).all(|k| close(a[k], b[k]))
 }
 
@@ -48,13 +48,13 @@ fn x(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
 }
 
 /// Twice the area vector of a triangle of the mesh.
-fn area_vector(mesh: &Mesh, t: [u32; 3]) -> [f32; 3] {
+pub(super) fn area_vector(mesh: &Mesh, t: [u32; 3]) -> [f32; 3] {
     let p = t.map(|i| mesh.positions[i as usize]);
     x(d(p[1], p[0]), d(p[2], p[0]))
 }
 
 /// One normal per position, unit length, on the front side of every triangle.
-fn check_consistent(mesh: &Mesh) {
+pub(super) fn check_consistent(mesh: &Mesh) {
     let normals = mesh.normals.as_ref().expect("normals");
     assert_eq!(normals.len(), mesh.positions.len());
     assert_eq!(mesh.triangles.len(), mesh.triangle_group.len());

@@ -305,6 +305,21 @@ impl Builder<'_> {
         }
     }
 
+    /// Refuses a geometry of more than 2^32 points (possible only with raised limits): the
+    /// mesh indexes its vertices with 32 bits.
+    pub fn check_points(&self, node: &Node, points: u64) -> crate::Result<()> {
+        if points <= u32::MAX as u64 {
+            return Ok(());
+        }
+        Err(SceneError::Limit {
+            path: self.path.to_path_buf(),
+            what: format!("the number of points of {}", of(node)),
+            value: points,
+            limit: u32::MAX as u64,
+            fix: "split the geometry into several shapes".to_string(),
+        })
+    }
+
     /// `local` placed by `m` and appended to the mesh in the group `name`.
     fn append(
         &mut self,

@@ -118,10 +118,7 @@ impl<'a> Census<'a> {
                 }
                 _ => (0, ""),
             },
-            _ => match primitives::triangle_bound(geometry) {
-                Some(bound) => bound,
-                None => (0, ""),
-            },
+            _ => primitives::triangle_bound(geometry).unwrap_or_default(),
         };
         if triangles > self.limits.max_triangles {
             return Err(SceneError::Limit {

@@ -67,6 +67,8 @@ impl Builder<'_> {
             crease: self.numbers(node, "creaseAngle", [0.0])?[0],
             solid: self.boolean(node, "solid", true)?,
         };
+        let points = (sweep.spine.len() as u64).saturating_mul(sweep.section.len() as u64);
+        self.check_points(node, points)?;
         let (points, faces) = sweep.faces();
         if let Some(&(_, len)) = faces.spans.iter().find(|s| s.1 as u64 > self.max_polygon_vertices)
         {

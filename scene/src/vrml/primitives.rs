@@ -160,6 +160,7 @@ impl Builder<'_> {
                 ),
             ));
         }
+        self.check_points(node, heights.len() as u64)?;
         let rules = Rules {
             convex: true,
             crease: self.numbers(node, "creaseAngle", [0.0])?[0],

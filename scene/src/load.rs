@@ -508,22 +508,23 @@ fn check_surface(
     Ok(())
 }
 
-/// Import a mesh by its reference's extension; also returns VRML viewpoints. Messages about the
-/// mesh's content name the mesh file by its path.
+/// Import a mesh by its reference's extension; also returns VRML viewpoints and the file's
+/// own notes (what a VRML world holds but does not draw). Messages about the mesh's content
+/// name the mesh file by its path.
 fn import_mesh(
     ctx: &Ctx,
     reference: &str,
     place: &str,
     limits: &Limits,
-) -> Result<(Mesh, Vec<vrml::Viewpoint>, UpAxis)> {
+) -> Result<(Mesh, Vec<vrml::Viewpoint>, UpAxis, Vec<String>)> {
     let bytes = ctx.assets.read(reference, place)?;
     let name = ctx.assets.display_path(reference);
     Ok(match extension(reference).as_str() {
         "obj" => {
             let text = utf8_text(bytes, &name)?;
-            (obj::parse_limited(&text, &name, limits)?, Vec::new(), UpAxis::Z)
+            (obj::parse_limited(&text, &name, limits)?, Vec::new(), UpAxis::Z, Vec::new())
         }
-        "ply" => (ply::parse_limited(&bytes, &name, limits)?, Vec::new(), UpAxis::Z),
+        "ply" => (ply::parse_limited(&bytes, &name, limits)?, Vec::new(), UpAxis::Z, Vec::new()),
         "gltf" | "glb" => {
             // A buffer that cannot be read is the model's problem: the message names the model.
             let beside = |uri: &str| {
@@ -532,12 +533,12 @@ fn import_mesh(
                 })
             };
             let (mesh, cameras) = gltf_mesh::parse_with_cameras(&bytes, &name, limits, &beside)?;
-            (mesh, cameras, UpAxis::Y)
+            (mesh, cameras, UpAxis::Y, Vec::new())
         }
         "wrl" => {
             let text = utf8_text(bytes, &name)?;
             let scene = vrml::parse_limited(&text, &name, limits)?;
-            (scene.mesh, scene.viewpoints, UpAxis::Y)
+            (scene.mesh, scene.viewpoints, UpAxis::Y, scene.notes)
         }
         other => {
             return Err(ctx.invalid(
@@ -796,8 +797,10 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
                 "every number must be finite, and a scale not 0",
             ));
         }
-        let (mut mesh, vps, file_up) =
+        let (mut mesh, vps, file_up, file_notes) =
             import_mesh(&ctx, &o.mesh, &format!("{place}.mesh"), limits)?;
+        // The notes name the mesh file and its line; the object says which use of it.
+        ctx.notes.extend(file_notes.into_iter().map(|n| format!("object `{}`: {n}", o.name)));
         check_mesh(&mut ctx, &mut mesh, &place, &o.mesh)?;
         if o.up_axis.is_none() && file_up == UpAxis::Z {
             note_if_on_its_back(&mut ctx, &mesh, &place, &o.mesh);

@@ -125,7 +125,7 @@ fn every_mesh_format_loads_through_a_scene() {
     f.write("meshes/a.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 0 1\n3 0 1 2\n");
     f.write(
         "meshes/b.wrl",
-        "#VRML V2.0 utf8\nTransform { translation 5 0 0 children [ DEF B Shape { geometry IndexedFaceSet { coord Coordinate { point [0 0 0, 1 0 0, 0 1 0] } coordIndex [0 1 2 -1] } } ] }\n",
+        "#VRML V2.0 utf8\nTransform { translation 5 0 0 children [ DEF B Shape { geometry IndexedFaceSet { coord Coordinate { point [0 0 0, 1 0 0, 0 1 0] } coordIndex [0 1 2 -1] } } ] }\nPointLight { }\n",
     );
     let objects = r#"
 [[objects]]
@@ -146,6 +146,12 @@ material = "stone"
     let survey = scene.objects[1].mesh.bounds().unwrap();
     let near = |a: [f32; 3], b: [f32; 3]| a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-6);
     assert!(near(survey.min, [5.0, 0.0, 0.0]) && near(survey.max, [6.0, 0.0, 1.0]), "{survey:?}");
+    // The file's own notes reach `scene check`, naming the object, the file and the line.
+    let light = scene.notes.iter().find(|n| n.contains("PointLight")).expect("a note");
+    assert!(
+        light.starts_with("object `survey`: ") && light.contains("b.wrl:3: PointLight"),
+        "{light}"
+    );
 }
 
 /// A PLY file has one part, `default` (as an OBJ without groups): its name must not depend on

@@ -467,7 +467,33 @@ LOD { level [ Transform { translation 0 3 0 children USE tile } ] }
 Shape { geometry Box { size 1 1 1 } }
 ROUTE view.bindTime TO outer.set_translation
 "#;
-    vec![("world.wrl".into(), world.into())]
+    // Prototypes (nested, with IS, DEF/USE in a body, an EXTERNPROTO of the file and one
+    // not) around every primitive, with a light and text that are noted.
+    let protos = r##"#VRML V2.0 utf8
+PROTO Post [ field SFFloat r 0.5 field SFColor c 0.8 0.7 0.6 ] {
+  Shape { appearance Appearance { material Material { diffuseColor IS c } } geometry Cylinder { radius IS r height 3 } }
+}
+PROTO Bay [ field SFFloat r 0.5 exposedField SFVec3f at 0 0 0 eventIn SFVec3f set_at ] {
+  PROTO Cap [ field SFFloat s 1 ] { Shape { geometry Cone { bottomRadius IS s height 1 side TRUE bottom FALSE } } }
+  Transform { translation IS at set_translation IS set_at children [
+    DEF p Post { r IS r }
+    Transform { translation 0 2 0 children [ Cap { s IS r } USE p ] }
+  ] }
+  DirectionalLight { }
+}
+EXTERNPROTO Pier [ field SFFloat r ] [ "lib.wrl#Pier" "#Post" ]
+EXTERNPROTO Statue [ ] "http://example.org/statue.wrl"
+Bay { at 2 0 0 } DEF b2 Bay { r 0.25 } Pier { r 1 } Statue { }
+Transform { rotation 0 1 0 0.3 scale 1 2 1 children [
+  Shape { geometry Box { size 1 2 3 } }
+  Shape { geometry Sphere { radius 0.7 } }
+  Shape { geometry ElevationGrid { xDimension 3 zDimension 2 xSpacing 0.5 zSpacing 1 height [0 0.1 0.2, 0.3 0.4 0.5] ccw FALSE solid FALSE creaseAngle 1 } }
+  Shape { geometry Extrusion { spine [0 0 0, 1 1 0, 2 1 1, 0 0 0] crossSection [1 0, 0 1, -1 0, 0 -1, 1 0] scale [1 1, 0.5 0.5, 1 2, 1 1] orientation [0 1 0 0.5] convex FALSE creaseAngle 0.8 } }
+  Shape { geometry Text { string "Tempio" } }
+  PointLight { } Inline { url "other.wrl" }
+] }
+"##;
+    vec![("world.wrl".into(), world.into()), ("protos.wrl".into(), protos.into())]
 }
 
 fn photometric_seeds(extension: &str) -> Vec<(String, Vec<u8>)> {

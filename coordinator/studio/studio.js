@@ -3,6 +3,7 @@
 import * as api from './api.js';
 import * as farm from './farm.js';
 import { Viewer } from './viewer.js';
+import * as material from './material.js';
 
 const $ = (id) => document.getElementById(id);
 let events = null;
@@ -31,7 +32,11 @@ async function open(id) {
   $('scene-status').textContent = 'loading the scene…';
   try {
     const view = await api.scene(id);
-    viewer = viewer || new Viewer($('view'));
+    if (!viewer) {
+      viewer = new Viewer($('view'));
+      viewer.onPick = (picked) => material.show($('material'), picked, viewer.view);
+    }
+    $('material').hidden = true;
     await viewer.open(view, api.sceneGlbUrl(id));
     $('scene-status').textContent = `${view.triangles.toLocaleString('en')} triangles, ` +
       `${view.materials.length} materials`;

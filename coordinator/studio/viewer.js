@@ -24,6 +24,27 @@ export class Viewer {
     this.model = null;
     this.view = null;
     new ResizeObserver(() => this.resize()).observe(canvas);
+    this.onPick = () => {};
+    // A click (not the end of a drag) picks the surface under the pointer.
+    let down = null;
+    canvas.addEventListener('pointerdown', (e) => { down = [e.clientX, e.clientY]; });
+    canvas.addEventListener('pointerup', (e) => {
+      if (down && Math.hypot(e.clientX - down[0], e.clientY - down[1]) < 4) this.pick(e);
+      down = null;
+    });
+  }
+
+  // The object, part and material under the pointer event `e`, given to `onPick`.
+  pick(e) {
+    if (!this.model) return;
+    const r = this.canvas.getBoundingClientRect();
+    const ndc = new THREE.Vector2(((e.clientX - r.left) / r.width) * 2 - 1, -((e.clientY - r.top) / r.height) * 2 + 1);
+    const ray = new THREE.Raycaster();
+    ray.setFromCamera(ndc, this.camera);
+    const hit = ray.intersectObject(this.model, true)[0];
+    if (!hit) return;
+    const extras = hit.object.geometry.userData || {};
+    this.onPick({ object: extras.object, part: extras.part, material: extras.material, point: hit.point.toArray() });
   }
 
   resize() {

@@ -158,7 +158,7 @@ pub fn scene_glb(scene: &LoadedScene, colour: impl Fn(&str) -> [f32; 3]) -> Prev
             }
             primitives.push(json!({
                 "attributes": attributes, "indices": indices, "material": material,
-                "extras": { "part": group.name, "material": o.group_materials[g] }
+                "extras": { "object": o.name, "part": group.name, "material": o.group_materials[g] }
             }));
         }
         meshes.push(json!({ "name": o.name, "primitives": primitives }));

@@ -108,13 +108,50 @@ fn a_restorer_signs_in_follows_a_render_and_sees_its_image() {
         })
         .count();
     assert!(model > 400, "the model covers only {model} of 1600 samples of the view");
+
+    // A click on the facade names what is there and what it is made of.
+    b.click("#view");
+    b.wait_for("the material panel", "!document.getElementById('material').hidden");
+    let facts = b.eval(
+        "[...document.querySelectorAll('#material .body > table:first-child tr')].map(r => [r.cells[0].textContent, r.cells[1].textContent])",
+    );
+    let fact = |name: &str| {
+        facts
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|f| f[0] == name)
+            .map(|f| f[1].as_str().unwrap().to_owned())
+    };
+    assert_eq!(fact("Object").as_deref(), Some("facade"), "{facts}");
+    let stone = fact("Material").unwrap();
+    assert!(["travertine", "puddinga", "mortar"].contains(&stone.as_str()), "{facts}");
+    // Its base state's L*a*b* is the one `restauro color` gives for the spectrum the scene
+    // binds it to.
+    let toml: toml::Table = toml::from_str(&std::fs::read_to_string(&scene).unwrap()).unwrap();
+    let alias = toml["materials"][stone.as_str()]["reflectance"].as_str().unwrap().to_owned();
+    let library = toml["spectra"][alias.as_str()].as_str().unwrap().to_owned();
+    let o = restauro_tests::restauro(&["color", &library, "--json"]);
+    let color: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let row = b.eval("[...document.querySelector('#material tr[data-state=base]').cells].map(c => c.textContent)");
+    assert_eq!(row[1], alias.as_str(), "{row}");
+    for (k, key) in ["l", "a", "b"].iter().enumerate() {
+        let shown: f64 = row[3 + k].as_str().unwrap().parse().unwrap();
+        let want = color["sample"]["lab"][key].as_f64().unwrap();
+        assert!((shown - want).abs() <= 0.051, "{key}: shown {shown}, restauro color {want}");
+    }
+    assert_eq!(
+        b.eval("document.querySelectorAll('#material svg.spectrum polyline').length"),
+        row_count(&mut b)
+    );
+    b.screenshot(&shots().join("05-material.png"));
     b.click(&format!("#jobs tr[data-job=\"{id}\"] button"));
     b.wait_for(
         "the image",
         "(() => { const i = document.getElementById('result-image'); \
          return i.complete && i.naturalWidth === 320; })()",
     );
-    b.screenshot(&shots().join("05-snapshot.png"));
+    b.screenshot(&shots().join("06-snapshot.png"));
     // What the page shows is the PNG the farm wrote: the same mean colour, read back from the
     // image the page decoded.
     let shown = b.eval(
@@ -141,8 +178,13 @@ fn a_restorer_signs_in_follows_a_render_and_sees_its_image() {
          return i.src.endsWith('aosta-retinex.png') && i.complete && i.naturalWidth === 320; })()",
     );
     assert_eq!(b.eval("document.getElementById('as-seen').getAttribute('aria-pressed')"), "true");
-    b.screenshot(&shots().join("06-as-seen.png"));
+    b.screenshot(&shots().join("07-as-seen.png"));
     // `?` lists the keyboard shortcuts.
     b.press("?");
     b.wait_for("the shortcuts", "document.getElementById('shortcuts').open");
+}
+
+/// The states listed in the material panel, as the number of rows.
+fn row_count(b: &mut Browser) -> serde_json::Value {
+    b.eval("document.querySelectorAll('#material tbody tr').length")
 }

@@ -22,6 +22,7 @@ const FILES: &[(&str, &str, &str)] = &[
     script!("api.js"),
     script!("farm.js"),
     script!("viewer.js"),
+    script!("material.js"),
     script!("vendor/three/three.module.js"),
     script!("vendor/three/three.core.js"),
     script!("vendor/three/addons/controls/OrbitControls.js"),

@@ -7,8 +7,9 @@ use crate::error::Result;
 use crate::farm::Farm;
 use restauro_scene::gltf_export::{self, Preview};
 use restauro_scene::load::LoadedScene;
+use restauro_spectral::Lab;
 use restauro_spectral::Spectrum;
-use restauro_spectral::colorimetry::{Observer, relative_xyz};
+use restauro_spectral::colorimetry::{Observer, relative_xyz, white_point};
 use restauro_spectral::illuminant::Illuminant;
 use restauro_spectral::rgb_space::RgbSpace;
 use serde::Serialize;
@@ -22,9 +23,42 @@ pub struct MaterialView {
     pub name: String,
     /// `lambert` or `cook-torrance`.
     pub model: String,
+    pub roughness: Option<f64>,
     pub reflectance: String,
     /// Linear sRGB, 0–1, under D65.
     pub colour_linear_srgb: [f32; 3],
+    /// Its surface in each state it has: `base`, and `degraded` and `cleaned` when defined.
+    pub states: Vec<StateView>,
+}
+
+/// One state of a material: its reflectance, sampled, and its colour under D65.
+#[derive(Serialize)]
+pub struct StateView {
+    pub state: &'static str,
+    pub spectrum: String,
+    /// ρ(λ) at 380, 385, … 780 nm.
+    pub reflectance: Vec<f32>,
+    /// CIE 1976 L*a*b* under D65 (2° observer), D65 white.
+    pub lab: [f64; 3],
+    pub colour_linear_srgb: [f32; 3],
+}
+
+/// The wavelengths of `StateView::reflectance`, in nm.
+pub const FIRST_NM: f64 = 380.0;
+pub const STEP_NM: f64 = 5.0;
+
+fn state_view(state: &'static str, spectrum: &str, scene: &LoadedScene) -> Option<StateView> {
+    let rho = scene.spectra.get(spectrum)?;
+    let d65 = Illuminant::D65.spd().unwrap_or(Spectrum::ONE);
+    let xyz = relative_xyz(rho, &d65, Observer::Cie1931TwoDegree);
+    let lab = Lab::from_xyz(xyz, white_point(&d65, Observer::Cie1931TwoDegree));
+    Some(StateView {
+        state,
+        spectrum: spectrum.to_owned(),
+        reflectance: rho.0.to_vec(),
+        lab: [lab.l, lab.a, lab.b],
+        colour_linear_srgb: colour(rho),
+    })
 }
 
 #[derive(Serialize)]
@@ -66,6 +100,14 @@ fn to_glb(p: [f64; 3], offset: [f64; 3]) -> [f64; 3] {
     [x, z, -y]
 }
 
+/// The spectrum a state of `m` reflects with, when the state changes it.
+fn state_spectrum<'a>(
+    m: &'a restauro_scene::scene_file::Material,
+    state: &str,
+) -> Option<&'a String> {
+    m.state(state)?.reflectance.as_ref()
+}
+
 fn build(id: &str, scene: &LoadedScene) -> ScenePreview {
     let materials: Vec<MaterialView> = scene
         .file
@@ -77,8 +119,17 @@ fn build(id: &str, scene: &LoadedScene) -> ScenePreview {
                 .ok()
                 .and_then(|v| v.as_str().map(str::to_owned))
                 .unwrap_or_default(),
+            roughness: m.roughness,
             reflectance: m.reflectance.clone(),
             colour_linear_srgb: scene.spectra.get(&m.reflectance).map_or([0.5; 3], colour),
+            states: [
+                ("base", Some(&m.reflectance)),
+                ("degraded", state_spectrum(m, "degraded")),
+                ("cleaned", state_spectrum(m, "cleaned")),
+            ]
+            .into_iter()
+            .filter_map(|(state, spectrum)| state_view(state, spectrum?, scene))
+            .collect(),
         })
         .collect();
     let Preview { glb, offset_m, triangles } = gltf_export::scene_glb(scene, |name| {

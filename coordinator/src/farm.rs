@@ -99,15 +99,28 @@ pub struct WorkerStatus {
     pub build: String,
 }
 
+/// A scene's identity in the studio: the BLAKE3 hash of its canonical manifest without its
+/// camera (JSON objects serialise with sorted keys, so the hash is stable).
+pub fn scene_identity(manifest_json: &str) -> String {
+    let text = match serde_json::from_str::<serde_json::Value>(manifest_json) {
+        Ok(serde_json::Value::Object(mut scene)) => {
+            scene.remove("camera");
+            serde_json::Value::Object(scene).to_string()
+        }
+        _ => manifest_json.to_owned(),
+    };
+    blake3::hash(text.as_bytes()).to_hex().to_string()
+}
+
 /// A scene the coordinator holds (see [`Farm::scenes`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct SceneEntry {
-    /// The bundle's identity: the BLAKE3 hash of its canonical form.
+    /// See [`scene_identity`].
     pub id: String,
-    /// The name of its latest job.
+    /// The name of its first job.
     pub name: String,
     pub jobs: usize,
-    pub latest_ms: u64,
+    pub first_ms: u64,
 }
 
 /// What a worker renders for a job: the scene, the plan resolved at submission, and the limits
@@ -482,39 +495,44 @@ impl Farm {
         Ok(rx)
     }
 
-    /// The scenes the coordinator holds: the bundles of its jobs, by identity, named by their
-    /// latest job.
+    /// The scenes the coordinator holds: the bundles of its jobs, one per scene whatever its
+    /// camera (a studio snapshot changes only the camera), named by its first job.
     pub fn scenes(&self) -> Vec<SceneEntry> {
         let st = self.lock();
         let mut by_id: BTreeMap<String, SceneEntry> = BTreeMap::new();
         for r in st.jobs.values() {
-            let id = blake3::hash(r.manifest_json.as_bytes()).to_hex().to_string();
+            let id = scene_identity(&r.manifest_json);
             let entry = by_id.entry(id.clone()).or_insert_with(|| SceneEntry {
                 id,
                 name: String::new(),
                 jobs: 0,
-                latest_ms: 0,
+                first_ms: u64::MAX,
             });
             entry.jobs += 1;
-            if r.submitted_unix_ms >= entry.latest_ms {
-                entry.latest_ms = r.submitted_unix_ms;
+            if r.submitted_unix_ms < entry.first_ms {
+                entry.first_ms = r.submitted_unix_ms;
                 entry.name = r.spec.name.to_string();
             }
         }
         by_id.into_values().collect()
     }
 
+    /// The canonical manifest of scene `id` (see [`Farm::scenes`]) as its first job had it,
+    /// camera included.
+    pub fn scene_manifest(&self, id: &str) -> Result<String> {
+        let st = self.lock();
+        st.jobs
+            .values()
+            .filter(|r| scene_identity(&r.manifest_json) == id)
+            .min_by_key(|r| r.submitted_unix_ms)
+            .map(|r| r.manifest_json.clone())
+            .ok_or_else(|| CoordinatorError::NoSuchScene(id.chars().take(80).collect()))
+    }
+
     /// The scene of bundle `id` (see [`Farm::scenes`]), loaded from the store as a worker
     /// loads it.
     pub async fn load_scene(self: &Arc<Self>, id: &str) -> Result<LoadedScene> {
-        let manifest = {
-            let st = self.lock();
-            st.jobs
-                .values()
-                .find(|r| blake3::hash(r.manifest_json.as_bytes()).to_hex().as_str() == id)
-                .map(|r| r.manifest_json.clone())
-        }
-        .ok_or_else(|| CoordinatorError::NoSuchScene(id.chars().take(80).collect()))?;
+        let manifest = self.scene_manifest(id)?;
         let farm = self.clone();
         tokio::task::spawn_blocking(move || -> Result<LoadedScene> {
             Ok(farm.bundle(&manifest)?.load(&farm.config.limits)?)

@@ -40,3 +40,5 @@ export const resultUrl = (id, name) =>
 export const scenes = () => call('GET', '/api/scenes');
 export const scene = (id) => call('GET', `/api/scenes/${encodeURIComponent(id)}`);
 export const sceneGlbUrl = (id) => `/api/scenes/${encodeURIComponent(id)}/preview.glb`;
+export const takeSnapshot = (id, request) =>
+  call('POST', `/api/scenes/${encodeURIComponent(id)}/snapshots`, request);

@@ -10,6 +10,29 @@ let events = null;
 let shown = null;
 let viewer = null;
 let openScene = '';
+// The snapshot last taken here: shown as soon as it is done.
+let awaited = null;
+
+async function takeSnapshot() {
+  if (!viewer || !viewer.view) return showError(new Error('open a scene first'));
+  const number = (id) => Number($(id).value);
+  const request = {
+    camera: viewer.pose(),
+    width: number('snap-width'),
+    height: number('snap-height'),
+    samples_per_pixel: number('snap-spp'),
+    integrator: $('snap-integrator').value,
+    variant: $('snap-variant').value || null,
+  };
+  try {
+    const job = await api.takeSnapshot(openScene, request);
+    awaited = job.id;
+    farm.job(job);
+    problem('');
+  } catch (e) {
+    showError(e);
+  }
+}
 
 // The scenes the coordinator holds, in the picker; the first is opened if none is.
 async function listScenes() {
@@ -38,6 +61,10 @@ async function open(id) {
     }
     $('material').hidden = true;
     await viewer.open(view, api.sceneGlbUrl(id));
+    const variant = $('snap-variant');
+    variant.replaceChildren(new Option('as the scene is', ''), ...view.variants.map((v) => new Option(v, v)));
+    $('snap-width').value = view.camera.width;
+    $('snap-height').value = view.camera.height;
     $('scene-status').textContent = `${view.triangles.toLocaleString('en')} triangles, ` +
       `${view.materials.length} materials`;
     $('view').dataset.scene = id;
@@ -110,6 +137,7 @@ function follow() {
     const isNew = !farm.jobById(j.id);
     farm.job(j);
     if (shown && shown.id === j.id) show(j);
+    if (awaited === j.id && j.state === 'done') { awaited = null; show(j); }
     if (isNew) listScenes().catch(showError);
   });
   on('job-gone', farm.jobGone);
@@ -171,6 +199,7 @@ document.addEventListener('DOMContentLoaded', () => {
   });
   $('show-shortcuts').addEventListener('click', shortcuts);
   $('scene-picker').addEventListener('change', (e) => e.target.value && open(e.target.value));
+  $('snapshot-form').addEventListener('submit', (e) => { e.preventDefault(); takeSnapshot(); });
   $('home').addEventListener('click', () => viewer && viewer.view && viewer.home());
   $('as-rendered').addEventListener('click', () => shown && show(shown, false));
   $('as-seen').addEventListener('click', () => shown && show(shown, true));

@@ -76,6 +76,16 @@ export class Viewer {
     return gltf;
   }
 
+  // The camera as it stands, for a snapshot (the preview's coordinates).
+  pose() {
+    return {
+      position: this.camera.position.toArray(),
+      target: this.controls.target.toArray(),
+      up: this.camera.up.toArray(),
+      vertical_fov_deg: this.camera.fov,
+    };
+  }
+
   // Back to the scene's own camera.
   home() {
     const c = this.view.camera;

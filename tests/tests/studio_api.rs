@@ -233,6 +233,48 @@ fn events_follow_a_job_to_its_end_and_resume_after_the_last_event_seen() {
     assert_eq!(&glb.body[..4], b"glTF");
     assert_eq!(u32::from_le_bytes(glb.body[8..12].try_into().unwrap()) as usize, glb.body.len());
 
+    // Snapshots: checked as a submission is, refused in the same words.
+    let snapshot = |patch: serde_json::Value| {
+        let mut body = serde_json::json!({
+            "camera": {
+                "position": view["camera"]["position"], "target": view["camera"]["target"],
+                "up": view["camera"]["up"], "vertical_fov_deg": view["camera"]["vertical_fov_deg"]
+            },
+            "width": 32, "height": 18,
+            "samples_per_pixel": 1, "integrator": "whitted", "variant": "cleaned"
+        });
+        for (k, v) in patch.as_object().unwrap() {
+            body[k] = v.clone();
+        }
+        body.as_object_mut().unwrap().retain(|_, v| !v.is_null());
+        let path = format!("/api/scenes/{scene_id}/snapshots");
+        request(&s, "POST", &path, &auth, body.to_string().as_bytes())
+    };
+    for (patch, words) in [
+        (
+            serde_json::json!({ "integrator": "raymarch" }),
+            "integrator: `raymarch`: use path or whitted",
+        ),
+        (serde_json::json!({ "variant": "restored" }), "restored"),
+        (serde_json::json!({ "samples_per_pixel": 0 }), "samples"),
+        (serde_json::json!({ "colour": "red" }), "unknown field `colour`"),
+        (serde_json::json!({ "width": -3 }), "width"),
+    ] {
+        let r = snapshot(patch.clone());
+        assert_eq!(r.status, 400, "{patch}: {}", r.text());
+        assert!(error_of(&r).contains(words), "{patch}: {}", error_of(&r));
+    }
+    let r = snapshot(serde_json::json!({}));
+    assert_eq!(r.status, 200, "{}", r.text());
+    let job = r.json();
+    assert_eq!((job["name"].as_str(), job["width"].as_u64()), (Some("aosta-cleaned"), Some(32)));
+    // The snapshot's scene differs only by its camera: still one scene, with two jobs.
+    let scenes = get(&s, "/api/scenes", &auth).json();
+    assert_eq!(
+        (scenes[0]["id"].as_str(), scenes[0]["jobs"].as_u64()),
+        (Some(scene_id.as_str()), Some(2))
+    );
+
     // Reconnecting after an event: what came after it, not a snapshot.
     let middle = &seen[0];
     let mut resumed = Events::open(&s, "/api/events", &[auth[0], ("Last-Event-ID", &middle.id)]);
@@ -246,7 +288,9 @@ fn events_follow_a_job_to_its_end_and_resume_after_the_last_event_seen() {
         Events::open(&s, "/api/events", &[auth[0], ("Last-Event-ID", "0123456789ab-3")]);
     let snap = fresh.next_event();
     assert_eq!(snap.kind, "snapshot");
-    assert_eq!(snap.json()["jobs"][0]["state"], "done");
+    let jobs = snap.json()["jobs"].clone();
+    let first = jobs.as_array().unwrap().iter().find(|j| j["id"] == id.as_str()).unwrap();
+    assert_eq!(first["state"], "done", "{jobs}");
 
     // Cancelling: a job too large to finish first.
     let long = submit(&scene, &["--spp", "4096", "--tile", "8"], &c.url, &token);

@@ -87,6 +87,9 @@ fn a_restorer_signs_in_follows_a_render_and_sees_its_image() {
     let row = format!("document.querySelector('#jobs tr[data-job=\"{id}\"]')");
     b.wait_for("the job's row", &row);
     b.wait_for("the job to finish", &format!("{row}.children[1].textContent === 'done'"));
+    let o =
+        client(&["fetch", &id, "--out", d.join("fetched-first").to_str().unwrap()], &c.url, &token);
+    assert!(o.status.success(), "{}", text(&o));
     let progress = b.eval(&format!("{row}.children[2].textContent"));
     assert_eq!(progress, " 60/60 tiles", "{progress}");
     // Its scene is listed and drawn in real time from the scene's camera: the model fills the
@@ -145,13 +148,47 @@ fn a_restorer_signs_in_follows_a_render_and_sees_its_image() {
         row_count(&mut b)
     );
     b.screenshot(&shots().join("05-material.png"));
+
+    // A snapshot of the view as it stands (the scene's camera) renders on the farm and is shown
+    // when done: the image the command line rendered of the scene, bit for bit (the camera's trip
+    // through the preview's coordinates is exact).
+    b.eval("document.getElementById('snap-spp').value = 2");
+    assert_eq!(b.eval("document.getElementById('snap-width').value"), "320");
+    assert_eq!(
+        b.eval("[...document.getElementById('snap-variant').options].map(o => o.value)"),
+        serde_json::json!(["", "as-found", "cleaned"])
+    );
+    b.click("#take-snapshot");
+    b.wait_for("the snapshot's row", "document.querySelectorAll('#jobs tbody tr').length === 2");
+    let snap = b.eval(&format!("[...document.querySelectorAll('#jobs tbody tr')].map(r => r.dataset.job).find(j => j !== '{id}')"));
+    let snap = snap.as_str().unwrap().to_owned();
+    b.wait_for(
+        "the snapshot shown",
+        &format!("(() => {{ const i = document.getElementById('result-image'); return i.src.includes('{snap}') && i.complete && i.naturalWidth === 320; }})()"),
+    );
+    b.screenshot(&shots().join("06-snapshot-taken.png"));
+    let taken = d.join("taken");
+    let o = client(&["fetch", &snap, "--out", taken.to_str().unwrap()], &c.url, &token);
+    assert!(o.status.success(), "{}", text(&o));
+    let exr = |dir: &std::path::Path| {
+        restauro_image::image_files::read_exr(
+            &dir.join("aosta.exr"),
+            restauro_image::image_files::MAX_PIXELS,
+        )
+        .unwrap()
+        .pixels
+    };
+    let (a, r) = (exr(&taken), exr(&d.join("fetched-first")));
+    assert_eq!(a.len(), r.len());
+    let differing = a.iter().zip(&r).filter(|(p, q)| p != q).count();
+    assert_eq!(differing, 0, "{differing} of {} pixels differ from the CLI render", a.len());
     b.click(&format!("#jobs tr[data-job=\"{id}\"] button"));
     b.wait_for(
         "the image",
         "(() => { const i = document.getElementById('result-image'); \
          return i.complete && i.naturalWidth === 320; })()",
     );
-    b.screenshot(&shots().join("06-snapshot.png"));
+    b.screenshot(&shots().join("07-snapshot.png"));
     // What the page shows is the PNG the farm wrote: the same mean colour, read back from the
     // image the page decoded.
     let shown = b.eval(
@@ -178,7 +215,7 @@ fn a_restorer_signs_in_follows_a_render_and_sees_its_image() {
          return i.src.endsWith('aosta-retinex.png') && i.complete && i.naturalWidth === 320; })()",
     );
     assert_eq!(b.eval("document.getElementById('as-seen').getAttribute('aria-pressed')"), "true");
-    b.screenshot(&shots().join("07-as-seen.png"));
+    b.screenshot(&shots().join("08-as-seen.png"));
     // `?` lists the keyboard shortcuts.
     b.press("?");
     b.wait_for("the shortcuts", "document.getElementById('shortcuts').open");

@@ -242,3 +242,26 @@ pub async fn scene_glb(
         .insert(header::CONTENT_TYPE, HeaderValue::from_static("model/gltf-binary"));
     Ok(response)
 }
+
+/// `POST /api/scenes/{id}/snapshots`: renders the page's view on the farm (see
+/// [`super::snapshot`]); the new job, which the events then follow.
+pub async fn take_snapshot(
+    State(studio): State<Arc<Studio>>,
+    Path(id): Path<String>,
+    body: Bytes,
+) -> Result<Json<JobView>> {
+    let id = scene_id(&id)?;
+    let request: super::snapshot::SnapshotRequest = parse(&body, "the snapshot request")?;
+    let preview = studio.previews.get(&studio.farm, id).await?;
+    Ok(Json(super::snapshot::take(&studio.farm, id, &preview, request).await?.into()))
+}
+
+/// A JSON body, refused naming the field that does not parse (`width: invalid value: …`).
+fn parse<T: serde::de::DeserializeOwned>(body: &[u8], what: &str) -> Result<T> {
+    let mut json = serde_json::Deserializer::from_slice(body);
+    serde_path_to_error::deserialize(&mut json).map_err(|e| {
+        let path = e.path().to_string();
+        let field = if path == "." { String::new() } else { format!("{path}: ") };
+        CoordinatorError::Request(format!("{what}: {field}{}", e.inner()))
+    })
+}

@@ -9,6 +9,7 @@ pub mod events;
 pub mod page;
 pub mod preview;
 pub mod session;
+pub mod snapshot;
 pub mod views;
 
 use crate::auth::Tokens;
@@ -65,6 +66,7 @@ fn router(studio: Arc<Studio>) -> Router {
         .route("/api/scenes", get(api::scenes))
         .route("/api/scenes/{id}", get(api::scene))
         .route("/api/scenes/{id}/preview.glb", get(api::scene_glb))
+        .route("/api/scenes/{id}/snapshots", post(api::take_snapshot))
         .route_layer(middleware::from_fn_with_state(studio.clone(), signed_in));
     Router::new()
         .route("/api/session", post(api::sign_in).delete(api::sign_out))

@@ -79,6 +79,8 @@ pub struct SceneView {
     pub triangles: usize,
     pub camera: CameraView,
     pub materials: Vec<MaterialView>,
+    /// The scene's hypotheses (variants), by name.
+    pub variants: Vec<String>,
     pub notes: Vec<String>,
 }
 
@@ -98,6 +100,11 @@ fn colour(reflectance: &Spectrum) -> [f32; 3] {
 fn to_glb(p: [f64; 3], offset: [f64; 3]) -> [f64; 3] {
     let [x, y, z] = std::array::from_fn(|k| p[k] - offset[k]);
     [x, z, -y]
+}
+
+/// The GLB's frame back to the world: the inverse of [`to_glb`].
+pub fn to_world(p: [f64; 3], offset: [f64; 3]) -> [f64; 3] {
+    [p[0] + offset[0], -p[2] + offset[1], p[1] + offset[2]]
 }
 
 /// The spectrum a state of `m` reflects with, when the state changes it.
@@ -150,6 +157,7 @@ fn build(id: &str, scene: &LoadedScene) -> ScenePreview {
         triangles,
         camera,
         materials,
+        variants: scene.file.variants.keys().cloned().collect(),
         notes: scene.notes.clone(),
     };
     ScenePreview { view, glb }

@@ -404,6 +404,10 @@ pub struct ColorArgs {
 
 #[derive(Debug, Args)]
 pub struct StudioArgs {
+    /// A scene to open (a scene file or a `scene bundle` archive): it is sent to the cluster
+    /// with a first, quick preview render (160×90, 1 sample per pixel), so that the studio
+    /// holds it and the page opens it.
+    pub scene: Option<PathBuf>,
     /// Where the studio listens; port 0 picks a free port. Another machine can reach it only if
     /// this is not a loopback address (and then anyone who can reach it sees the sign-in page).
     #[arg(long, default_value = "127.0.0.1:7880")]

@@ -4,9 +4,40 @@
 //! scene to the same cluster from another terminal.
 
 use crate::cli::StudioArgs;
-use crate::cluster::{LocalCluster, runtime};
+use crate::cluster::{self, LocalCluster, runtime};
 use anyhow::{Context, Result};
+use restauro_proto as pb;
+use restauro_scene::bundle::bundle_scene;
+use restauro_scene::job::{JobName, JobSpec, RetinexOptions};
+use restauro_scene::limits::Limits;
+use restauro_scene::plan::RenderOptions;
 use std::io::Write as _;
+use std::path::Path;
+
+/// Sends `scene` to the cluster with a quick preview render: the studio holds the scenes of its
+/// jobs. The job's id.
+async fn open_scene(cluster: &LocalCluster, scene: &Path) -> Result<String> {
+    let bundle = bundle_scene(scene, &Limits::default())?;
+    let stem = scene.file_stem().and_then(|s| s.to_str()).unwrap_or("scene");
+    let name = JobName::new(stem)
+        .map_err(|e| anyhow::anyhow!("the scene's name `{stem}`: {}", e.problem))?;
+    let render = RenderOptions {
+        samples_per_pixel: Some(1),
+        width: Some(160),
+        height: Some(90),
+        ..RenderOptions::default()
+    };
+    let retinex = RetinexOptions::new(None, None).map_err(|e| anyhow::anyhow!("{}", e.problem))?;
+    let spec = JobSpec { name, priority: 0, render, exposure: Default::default(), retinex };
+    let mut client = cluster::connect(&cluster.url, &cluster.client_token).await?;
+    cluster::upload(&mut client, &bundle).await?;
+    let submitted = client
+        .submit_job(pb::convert::submit_request(bundle.canonical_json(), &spec))
+        .await
+        .map_err(|s| cluster::refused(&format!("opening {}", scene.display()), s))?
+        .into_inner();
+    Ok(submitted.job_id)
+}
 
 pub fn run(args: &StudioArgs) -> Result<String> {
     let listen = args.listen.to_string();
@@ -29,7 +60,14 @@ pub fn run(args: &StudioArgs) -> Result<String> {
         )?;
         out.flush()?;
     }
-    runtime()?.block_on(restauro_ops::signal::stop_signal(args.exit_with_stdin));
+    let runtime = runtime()?;
+    if let Some(scene) = &args.scene {
+        let job = runtime.block_on(open_scene(&cluster, scene))?;
+        let mut out = std::io::stdout().lock();
+        writeln!(out, "opened {} (its preview render is job {job})", scene.display())?;
+        out.flush()?;
+    }
+    runtime.block_on(restauro_ops::signal::stop_signal(args.exit_with_stdin));
     drop(cluster);
     Ok("studio stopped\n".to_owned())
 }

@@ -306,8 +306,10 @@ fn events_follow_a_job_to_its_end_and_resume_after_the_last_event_seen() {
 #[test]
 fn restauro_studio_prints_an_address_that_signs_in() {
     use std::io::{BufRead, BufReader};
+    let dir = tempfile::tempdir().unwrap();
+    let scene = aosta_scene(dir.path(), 64, 36);
     let mut child = std::process::Command::new(restauro_tests::binary("restauro"))
-        .args(["studio", "--listen", "127.0.0.1:0", "--exit-with-stdin"])
+        .args(["studio", &scene, "--listen", "127.0.0.1:0", "--exit-with-stdin"])
         .stdin(std::process::Stdio::piped())
         .stdout(std::process::Stdio::piped())
         .spawn()
@@ -321,12 +323,18 @@ fn restauro_studio_prints_an_address_that_signs_in() {
     out.read_line(&mut rest).unwrap();
     out.read_line(&mut rest).unwrap();
     assert!(rest.contains("restauro submit --coordinator http://127.0.0.1:"), "{rest}");
+    out.read_line(&mut rest).unwrap();
+    out.read_line(&mut rest).unwrap();
+    assert!(rest.contains(&format!("opened {scene} (its preview render is job ")), "{rest}");
     assert_eq!(get(addr, "/", &[]).status, 200);
     let bearer = format!("Bearer {token}");
     restauro_tests::wait_for("both workers", std::time::Duration::from_secs(30), || {
         get(addr, "/api/workers", &[("Authorization", &bearer)]).json().as_array().map(Vec::len)
             == Some(2)
     });
+    // The scene it was given is the studio's.
+    let scenes = get(addr, "/api/scenes", &[("Authorization", &bearer)]).json();
+    assert_eq!(scenes[0]["name"], "aosta", "{scenes}");
     drop(child.stdin.take());
     let status = child.wait().unwrap();
     assert!(status.success(), "{status}");

@@ -96,11 +96,8 @@ pub fn bench(args: &BenchArgs) -> Result<String> {
                 },
                 ..Default::default()
             };
-            let status = client
-                .submit_job(pb::convert::submit_request(bundle.canonical_json(), &spec))
-                .await
-                .map_err(|s| cluster::refused("submitting a benchmark job", s))?
-                .into_inner();
+            let status =
+                cluster::submit(&mut client, &bundle, &spec, "submitting a benchmark job").await?;
             tiles_per_job = status.tiles_total;
             total_tiles += u64::from(status.tiles_total);
         }

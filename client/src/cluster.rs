@@ -100,6 +100,21 @@ pub async fn upload(client: &mut Client, bundle: &Bundle) -> Result<()> {
     Ok(())
 }
 
+/// Submits a job of `bundle`, whose files are uploaded; `what` says what was being done in a
+/// refusal (`submitting aosta.toml`).
+pub async fn submit(
+    client: &mut Client,
+    bundle: &Bundle,
+    spec: &restauro_scene::job::JobSpec,
+    what: &str,
+) -> Result<pb::JobStatus> {
+    Ok(client
+        .submit_job(pb::convert::submit_request(bundle.canonical_json(), spec))
+        .await
+        .map_err(|s| refused(what, s))?
+        .into_inner())
+}
+
 fn is_final(status: &pb::JobStatus) -> bool {
     matches!(
         pb::JobState::try_from(status.state),

@@ -392,11 +392,8 @@ async fn render_all(
             },
             ..JobSpec::default()
         };
-        let status = client
-            .submit_job(pb::convert::submit_request(bundle.canonical_json(), &spec))
-            .await
-            .map_err(|s| cluster::refused(&format!("submitting {}", job.scene.display()), s))?
-            .into_inner();
+        let what = format!("submitting {}", job.scene.display());
+        let status = cluster::submit(&mut client, &bundle, &spec, &what).await?;
         submitted.push(status);
     }
     let total: u64 = submitted.iter().map(|s| u64::from(s.tiles_total)).sum();

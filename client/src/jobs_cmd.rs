@@ -65,11 +65,8 @@ pub fn submit(args: &SubmitArgs) -> Result<String> {
     let (bundle, _plan) = checked_bundle(r)?;
     with_client(&connect, async |client| {
         cluster::upload(client, &bundle).await?;
-        let status = client
-            .submit_job(pb::convert::submit_request(bundle.canonical_json(), &spec))
-            .await
-            .map_err(|s| refused(&format!("submitting {}", r.scene.display()), s))?
-            .into_inner();
+        let what = format!("submitting {}", r.scene.display());
+        let status = cluster::submit(client, &bundle, &spec, &what).await?;
         let mut s = format!("{}\n", status.job_id);
         if args.wait {
             let status = cluster::watch(client, &status.job_id, true).await?;

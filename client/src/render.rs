@@ -110,11 +110,8 @@ pub fn run(args: &RenderArgs) -> Result<String> {
     let (status, files) = runtime.block_on(async {
         let mut client = cluster::connect_as(&url, &token, tls_ca, pb::PROTOCOL_VERSION).await?;
         cluster::upload(&mut client, &bundle).await?;
-        let submitted = client
-            .submit_job(pb::convert::submit_request(bundle.canonical_json(), &spec))
-            .await
-            .map_err(|s| cluster::refused(&format!("submitting {}", args.scene.display()), s))?
-            .into_inner();
+        let what = format!("submitting {}", args.scene.display());
+        let submitted = cluster::submit(&mut client, &bundle, &spec, &what).await?;
         let status = cluster::watch(&mut client, &submitted.job_id, true).await?;
         if status.state != pb::JobState::Done as i32 {
             anyhow::bail!(

@@ -6,9 +6,8 @@
 use crate::cli::StudioArgs;
 use crate::cluster::{self, LocalCluster, runtime};
 use anyhow::{Context, Result};
-use restauro_proto as pb;
 use restauro_scene::bundle::bundle_scene;
-use restauro_scene::job::{JobName, JobSpec, RetinexOptions};
+use restauro_scene::job::{JobName, JobSpec};
 use restauro_scene::limits::Limits;
 use restauro_scene::plan::RenderOptions;
 use std::io::Write as _;
@@ -27,15 +26,11 @@ async fn open_scene(cluster: &LocalCluster, scene: &Path) -> Result<String> {
         height: Some(90),
         ..RenderOptions::default()
     };
-    let retinex = RetinexOptions::new(None, None).map_err(|e| anyhow::anyhow!("{}", e.problem))?;
-    let spec = JobSpec { name, priority: 0, render, exposure: Default::default(), retinex };
+    let spec = JobSpec { name, render, ..JobSpec::default() };
     let mut client = cluster::connect(&cluster.url, &cluster.client_token).await?;
     cluster::upload(&mut client, &bundle).await?;
-    let submitted = client
-        .submit_job(pb::convert::submit_request(bundle.canonical_json(), &spec))
-        .await
-        .map_err(|s| cluster::refused(&format!("opening {}", scene.display()), s))?
-        .into_inner();
+    let what = format!("opening {}", scene.display());
+    let submitted = cluster::submit(&mut client, &bundle, &spec, &what).await?;
     Ok(submitted.job_id)
 }
 

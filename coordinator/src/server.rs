@@ -159,6 +159,12 @@ pub struct Endpoints {
     pub studio: Option<SocketAddr>,
 }
 
+/// Resolves once the coordinator's one stop (`serve`'s watch channel) turns true: every server
+/// and task that ends with the coordinator waits on it.
+pub(crate) async fn stopped(mut rx: tokio::sync::watch::Receiver<bool>) {
+    let _ = rx.wait_for(|s| *s).await;
+}
+
 /// Serves until `stop` resolves.
 pub async fn serve(
     config: Config,
@@ -167,15 +173,12 @@ pub async fn serve(
     stop: impl Future<Output = ()> + Send + 'static,
 ) -> Result<()> {
     let listen = endpoints.grpc;
-    // One stop for both servers.
+    // One stop for every server.
     let (stop_tx, stop_rx) = tokio::sync::watch::channel(false);
     tokio::spawn(async move {
         stop.await;
         let _ = stop_tx.send(true);
     });
-    let stopped = |mut rx: tokio::sync::watch::Receiver<bool>| async move {
-        let _ = rx.wait_for(|s| *s).await;
-    };
     let has_tls = tls.is_some();
     // Every call in a span named by its method, so a log line says which call it belongs to;
     // calls about one tile record its job, tile and worker in the span.

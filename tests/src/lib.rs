@@ -235,15 +235,8 @@ pub fn aosta_scene(dir: &Path, width: u32, height: u32) -> String {
 
 /// `GET path` on `addr` (plain HTTP/1.1): the status code and the body.
 pub fn http_get(addr: &str, path: &str) -> (u16, String) {
-    use std::io::{Read, Write};
-    let mut stream = std::net::TcpStream::connect(addr).unwrap();
-    stream.set_read_timeout(Some(std::time::Duration::from_secs(10))).unwrap();
-    write!(stream, "GET {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n").unwrap();
-    let mut response = String::new();
-    stream.read_to_string(&mut response).unwrap();
-    let status = response.split(' ').nth(1).and_then(|s| s.parse().ok()).unwrap_or(0);
-    let body = response.split_once("\r\n\r\n").map_or("", |(_, b)| b).to_owned();
-    (status, body)
+    let response = http::request(addr, "GET", path, &[], b"");
+    (response.status, response.text())
 }
 
 /// The value of the unlabelled sample `name` in a Prometheus scrape.

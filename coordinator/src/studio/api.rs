@@ -116,7 +116,7 @@ pub async fn result(
         Some("json") => "application/json",
         _ => "application/octet-stream",
     };
-    let body = Body::from_stream(tokio_util_stream(file));
+    let body = Body::from_stream(tokio_util::io::ReaderStream::new(file));
     let mut response = (StatusCode::OK, body).into_response();
     let h = response.headers_mut();
     h.insert(header::CONTENT_TYPE, HeaderValue::from_static(kind));
@@ -128,33 +128,6 @@ pub async fn result(
         }
     }
     Ok(response)
-}
-
-/// A file as a stream of chunks of 256 KiB.
-fn tokio_util_stream(
-    mut file: tokio::fs::File,
-) -> ReceiverStream<std::result::Result<Bytes, std::io::Error>> {
-    use tokio::io::AsyncReadExt as _;
-    let (tx, rx) = tokio::sync::mpsc::channel(4);
-    tokio::spawn(async move {
-        loop {
-            let mut buffer = vec![0u8; 256 << 10];
-            match file.read(&mut buffer).await {
-                Ok(0) => return,
-                Ok(n) => {
-                    buffer.truncate(n);
-                    if tx.send(Ok(Bytes::from(buffer))).await.is_err() {
-                        return;
-                    }
-                }
-                Err(e) => {
-                    let _ = tx.send(Err(e)).await;
-                    return;
-                }
-            }
-        }
-    });
-    ReceiverStream::new(rx)
 }
 
 /// `GET /api/workers`

@@ -15,6 +15,7 @@ pub mod views;
 use crate::auth::Tokens;
 use crate::error::CoordinatorError;
 use crate::farm::Farm;
+use crate::server::stopped;
 use anyhow::{Context, Result};
 use axum::Router;
 use axum::extract::{Request, State};
@@ -97,9 +98,6 @@ pub async fn serve(
         previews: preview::Previews::default(),
         stop: stop.clone(),
     });
-    let stopped = |mut rx: watch::Receiver<bool>| async move {
-        let _ = rx.wait_for(|s| *s).await;
-    };
     tokio::spawn(events.pump(farm, stopped(stop.clone())));
     let app = router(studio);
     info!(%addr, "studio on http://{addr}/");

@@ -57,7 +57,7 @@ fn state_view(state: &'static str, spectrum: &str, scene: &LoadedScene) -> Optio
         spectrum: spectrum.to_owned(),
         reflectance: rho.0.to_vec(),
         lab: [lab.l, lab.a, lab.b],
-        colour_linear_srgb: colour(rho),
+        colour_linear_srgb: colour(xyz),
     })
 }
 
@@ -89,11 +89,10 @@ pub struct ScenePreview {
     pub glb: Vec<u8>,
 }
 
-/// The linear-sRGB colour of a reflectance under D65, clipped to the gamut.
-fn colour(reflectance: &Spectrum) -> [f32; 3] {
-    let d65 = Illuminant::D65.spd().unwrap_or(Spectrum::ONE);
-    let xyz = relative_xyz(reflectance, &d65, Observer::Cie1931TwoDegree).scale(0.01);
-    RgbSpace::Srgb.linear_from_xyz(xyz).map(|v| v.clamp(0.0, 1.0) as f32)
+/// The linear-sRGB colour of relative tristimulus values (Y = 100 for white), clipped to the
+/// gamut.
+fn colour(xyz: restauro_spectral::Xyz) -> [f32; 3] {
+    RgbSpace::Srgb.linear_from_xyz(xyz.scale(0.01)).map(|v| v.clamp(0.0, 1.0) as f32)
 }
 
 /// World (Z up) to the GLB's frame (Y up), relative to `offset`.
@@ -120,23 +119,30 @@ fn build(id: &str, scene: &LoadedScene) -> ScenePreview {
         .file
         .materials
         .iter()
-        .map(|(name, m)| MaterialView {
-            name: name.clone(),
-            model: serde_json::to_value(m.model)
-                .ok()
-                .and_then(|v| v.as_str().map(str::to_owned))
-                .unwrap_or_default(),
-            roughness: m.roughness,
-            reflectance: m.reflectance.clone(),
-            colour_linear_srgb: scene.spectra.get(&m.reflectance).map_or([0.5; 3], colour),
-            states: [
+        .map(|(name, m)| {
+            let states: Vec<StateView> = [
                 ("base", Some(&m.reflectance)),
                 ("degraded", state_spectrum(m, "degraded")),
                 ("cleaned", state_spectrum(m, "cleaned")),
             ]
             .into_iter()
             .filter_map(|(state, spectrum)| state_view(state, spectrum?, scene))
-            .collect(),
+            .collect();
+            MaterialView {
+                name: name.clone(),
+                model: serde_json::to_value(m.model)
+                    .ok()
+                    .and_then(|v| v.as_str().map(str::to_owned))
+                    .unwrap_or_default(),
+                roughness: m.roughness,
+                reflectance: m.reflectance.clone(),
+                // The base state comes first whenever its spectrum is loaded.
+                colour_linear_srgb: states
+                    .first()
+                    .filter(|s| s.state == "base")
+                    .map_or([0.5; 3], |s| s.colour_linear_srgb),
+                states,
+            }
         })
         .collect();
     let Preview { glb, offset_m, triangles } = gltf_export::scene_glb(scene, |name| {

@@ -8,7 +8,7 @@ use crate::error::{CoordinatorError, Result};
 use crate::farm::Farm;
 use crate::job::JobStatus;
 use restauro_scene::bundle::Bundle;
-use restauro_scene::job::{JobName, JobSpec, RetinexOptions};
+use restauro_scene::job::{JobName, JobSpec};
 use restauro_scene::plan::RenderOptions;
 use restauro_scene::scene_file::Integrator;
 use serde::Deserialize;
@@ -79,7 +79,6 @@ pub async fn take(
     });
     let spec = JobSpec {
         name: JobName::new(&name).map_err(|e| refuse("name", e.problem))?,
-        priority: 0,
         render: RenderOptions {
             variant: request.variant,
             integrator: Some(integrator),
@@ -89,8 +88,7 @@ pub async fn take(
             spectral: false,
             tile: None,
         },
-        exposure: Default::default(),
-        retinex: RetinexOptions::new(None, None).map_err(|e| refuse("retinex", e.problem))?,
+        ..JobSpec::default()
     }
     .checked()
     .map_err(|e| refuse(e.field, e.problem))?;

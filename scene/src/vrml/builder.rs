@@ -5,7 +5,7 @@ use std::collections::HashMap;
 use std::path::Path;
 use std::rc::Rc;
 
-use super::census::{TRIANGLES_FIX, instances_limit};
+use super::census::{TRIANGLES_FIX, depth_limit, instances_limit};
 use super::faces::Local;
 use super::math::*;
 use super::notes::Notes;
@@ -137,17 +137,7 @@ impl Builder<'_> {
         depth: usize,
     ) -> crate::Result<()> {
         if depth > MAX_DEPTH {
-            return Err(SceneError::Limit {
-                path: self.path.to_path_buf(),
-                what: format!(
-                    "the nesting depth of nodes (with USE copies) at {}:{}",
-                    node.pos.line, node.pos.column
-                ),
-                value: depth as u64,
-                limit: MAX_DEPTH as u64,
-                fix: "flatten the scene graph (fewer nested Transforms, Groups and USEs)"
-                    .to_string(),
-            });
+            return Err(depth_limit(self.path, node.pos, depth));
         }
         // The census has counted these already; this is the backstop.
         self.instances += 1;

@@ -5,6 +5,7 @@ use std::path::Path;
 use std::rc::Rc;
 
 use super::MAX_DEPTH;
+use super::lexer::Pos;
 use super::parser::{Node, Value};
 use super::primitives;
 use crate::error::SceneError;
@@ -21,6 +22,21 @@ pub(super) fn instances_limit(path: &Path, value: u64, limit: u64) -> SceneError
         limit,
         fix: "use fewer nested USEs of large groups, or raise the limit with --max-instances"
             .to_string(),
+    }
+}
+
+/// A node nested deeper than [`MAX_DEPTH`] once `USE` copies are counted: the census refuses
+/// it, and the walk has the same backstop.
+pub(super) fn depth_limit(path: &Path, pos: Pos, depth: usize) -> SceneError {
+    SceneError::Limit {
+        path: path.to_path_buf(),
+        what: format!(
+            "the nesting depth of nodes (with USE copies) at {}:{}",
+            pos.line, pos.column
+        ),
+        value: depth as u64,
+        limit: MAX_DEPTH as u64,
+        fix: "flatten the scene graph (fewer nested Transforms, Groups and USEs)".to_string(),
     }
 }
 
@@ -70,17 +86,7 @@ impl<'a> Census<'a> {
             return Ok(counted);
         }
         if depth > MAX_DEPTH {
-            return Err(SceneError::Limit {
-                path: self.path.to_path_buf(),
-                what: format!(
-                    "the nesting depth of nodes (with USE copies) at {}:{}",
-                    node.pos.line, node.pos.column
-                ),
-                value: depth as u64,
-                limit: MAX_DEPTH as u64,
-                fix: "flatten the scene graph (fewer nested Transforms, Groups and USEs)"
-                    .to_string(),
-            });
+            return Err(depth_limit(self.path, node.pos, depth));
         }
         let below: Vec<Rc<Node>> = match node.kind.as_str() {
             "Transform" | "Group" | "Anchor" | "Billboard" | "Collision" => {

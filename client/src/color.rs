@@ -307,10 +307,7 @@ pub fn render_text(r: &ColorReport) -> String {
 pub fn list_library() -> String {
     let mut out = String::new();
     for name in library::names() {
-        let material = library::text(name)
-            .and_then(|t| t.lines().find_map(|l| l.strip_prefix("# material:")))
-            .unwrap_or("")
-            .trim();
+        let material = library::material(name).unwrap_or("");
         let _ = writeln!(out, "{name:<55} {material}");
     }
     out

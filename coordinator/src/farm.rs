@@ -27,7 +27,6 @@ use restauro_proto as pb;
 use restauro_scene::bundle::Bundle;
 use restauro_scene::job::{JobSpec, check_label, printable};
 use restauro_scene::limits::Limits;
-use restauro_scene::load::LoadedScene;
 use restauro_scene::plan::{Plan, Rect};
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
@@ -35,6 +34,9 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 use tokio::sync::{Notify, mpsc, watch};
 use tracing::{debug, info, warn};
+
+mod scenes;
+pub use scenes::{RevisionInfo, SceneEntry, scene_identity};
 
 /// How the coordinator runs.
 #[derive(Clone)]
@@ -66,6 +68,8 @@ pub struct Farm {
     work: Notify,
     /// Woken when a deadline may have come nearer, for the expiry timer.
     timer: Notify,
+    /// One scene edit at a time: each applies to the revision the last one made.
+    editing: tokio::sync::Mutex<()>,
     /// When the expiry timer will wake next (`None` while it is computing).
     timer_wakes: Mutex<Option<Instant>>,
     /// Bumped on every change of a job, for watchers.
@@ -79,6 +83,8 @@ struct FarmState {
     workers: HashMap<WorkerId, WorkerEntry>,
     /// Submissions admitted and not yet recorded: they count towards `max_jobs`.
     admitting: usize,
+    /// The studio's scenes: their revisions and which manifests are theirs.
+    scenes: scenes::Scenes,
 }
 
 struct WorkerEntry {
@@ -97,30 +103,6 @@ pub struct WorkerStatus {
     pub failed: u64,
     pub last_seen_s: f64,
     pub build: String,
-}
-
-/// A scene's identity in the studio: the BLAKE3 hash of its canonical manifest without its
-/// camera (JSON objects serialise with sorted keys, so the hash is stable).
-pub fn scene_identity(manifest_json: &str) -> String {
-    let text = match serde_json::from_str::<serde_json::Value>(manifest_json) {
-        Ok(serde_json::Value::Object(mut scene)) => {
-            scene.remove("camera");
-            serde_json::Value::Object(scene).to_string()
-        }
-        _ => manifest_json.to_owned(),
-    };
-    blake3::hash(text.as_bytes()).to_hex().to_string()
-}
-
-/// A scene the coordinator holds (see [`Farm::scenes`]).
-#[derive(Clone, Debug, PartialEq)]
-pub struct SceneEntry {
-    /// See [`scene_identity`].
-    pub id: String,
-    /// The name of its first job.
-    pub name: String,
-    pub jobs: usize,
-    pub first_ms: u64,
 }
 
 /// What a worker renders for a job: the scene, the plan resolved at submission, and the limits
@@ -199,16 +181,19 @@ impl Farm {
                 jobs: BTreeMap::new(),
                 workers: HashMap::new(),
                 admitting: 0,
+                scenes: scenes::Scenes::default(),
             }),
             config,
             persisting: Mutex::new(()),
             work: Notify::new(),
             timer: Notify::new(),
+            editing: tokio::sync::Mutex::new(()),
             timer_wakes: Mutex::new(None),
             changed: watch::Sender::new(0),
             metrics: Metrics::new(),
         });
         let to_assemble = farm.resume()?;
+        farm.resume_scenes()?;
         for id in to_assemble {
             let farm = farm.clone();
             std::thread::spawn(move || crate::assembly::assemble(&farm, &id));
@@ -493,52 +478,6 @@ impl Farm {
             }
         });
         Ok(rx)
-    }
-
-    /// The scenes the coordinator holds: the bundles of its jobs, one per scene whatever its
-    /// camera (a studio snapshot changes only the camera), named by its first job.
-    pub fn scenes(&self) -> Vec<SceneEntry> {
-        let st = self.lock();
-        let mut by_id: BTreeMap<String, SceneEntry> = BTreeMap::new();
-        for r in st.jobs.values() {
-            let id = scene_identity(&r.manifest_json);
-            let entry = by_id.entry(id.clone()).or_insert_with(|| SceneEntry {
-                id,
-                name: String::new(),
-                jobs: 0,
-                first_ms: u64::MAX,
-            });
-            entry.jobs += 1;
-            if r.submitted_unix_ms < entry.first_ms {
-                entry.first_ms = r.submitted_unix_ms;
-                entry.name = r.spec.name.to_string();
-            }
-        }
-        by_id.into_values().collect()
-    }
-
-    /// The canonical manifest of scene `id` (see [`Farm::scenes`]) as its first job had it,
-    /// camera included.
-    pub fn scene_manifest(&self, id: &str) -> Result<String> {
-        let st = self.lock();
-        st.jobs
-            .values()
-            .filter(|r| scene_identity(&r.manifest_json) == id)
-            .min_by_key(|r| r.submitted_unix_ms)
-            .map(|r| r.manifest_json.clone())
-            .ok_or_else(|| CoordinatorError::NoSuchScene(id.chars().take(80).collect()))
-    }
-
-    /// The scene of bundle `id` (see [`Farm::scenes`]), loaded from the store as a worker
-    /// loads it.
-    pub async fn load_scene(self: &Arc<Self>, id: &str) -> Result<LoadedScene> {
-        let manifest = self.scene_manifest(id)?;
-        let farm = self.clone();
-        tokio::task::spawn_blocking(move || -> Result<LoadedScene> {
-            Ok(farm.bundle(&manifest)?.load(&farm.config.limits)?)
-        })
-        .await
-        .map_err(|e| CoordinatorError::Internal(e.to_string()))?
     }
 
     /// Wakes at every change of a job (the studio's event stream diffs its snapshots).

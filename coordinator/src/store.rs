@@ -28,6 +28,9 @@ const TILES: TableDefinition<(&str, u32), &[u8]> = TableDefinition::new("tiles")
 const ASSETS: TableDefinition<&str, &[u8]> = TableDefinition::new("assets");
 /// The run's identity: `secret` (32 bytes) and `epoch` (u64 little-endian).
 const META: TableDefinition<&str, &[u8]> = TableDefinition::new("meta");
+/// The studio's scene revisions: (scene id, revision number) → the revision's record.
+const SCENE_REVISIONS: TableDefinition<(&str, u32), &[u8]> =
+    TableDefinition::new("scene_revisions");
 
 #[derive(Clone, Debug, thiserror::Error)]
 pub enum StoreError {
@@ -85,6 +88,7 @@ impl Store {
             txn.open_table(TILES)?;
             txn.open_table(ASSETS)?;
             txn.open_table(META)?;
+            txn.open_table(SCENE_REVISIONS)?;
             Ok(())
         })?;
         Ok(store)
@@ -211,6 +215,28 @@ impl Store {
             for entry in table.iter()? {
                 let (k, v) = entry?;
                 out.push((k.value().to_owned(), v.value().to_vec()));
+            }
+            Ok(out)
+        })
+    }
+
+    /// Keeps revision `number` of scene `scene`.
+    pub fn put_revision(&self, scene: &str, number: u32, record: &[u8]) -> Result<()> {
+        self.write(|txn| {
+            txn.open_table(SCENE_REVISIONS)?.insert((scene, number), record)?;
+            Ok(())
+        })
+    }
+
+    /// Every scene revision: scene id, number and record, by scene and number.
+    pub fn revisions(&self) -> Result<Vec<(String, u32, Vec<u8>)>> {
+        self.read(|txn| {
+            let table = txn.open_table(SCENE_REVISIONS)?;
+            let mut out = Vec::new();
+            for entry in table.iter()? {
+                let (k, v) = entry?;
+                let (scene, number) = k.value();
+                out.push((scene.to_owned(), number, v.value().to_vec()));
             }
             Ok(out)
         })

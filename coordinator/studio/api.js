@@ -38,7 +38,16 @@ export const cancelJob = (id) => call('POST', `/api/jobs/${encodeURIComponent(id
 export const resultUrl = (id, name) =>
   `/api/jobs/${encodeURIComponent(id)}/results/${encodeURIComponent(name)}`;
 export const scenes = () => call('GET', '/api/scenes');
-export const scene = (id) => call('GET', `/api/scenes/${encodeURIComponent(id)}`);
-export const sceneGlbUrl = (id) => `/api/scenes/${encodeURIComponent(id)}/preview.glb`;
+const sceneUrl = (id) => `/api/scenes/${encodeURIComponent(id)}`;
+const at = (revision) => (revision === undefined || revision === null ? '' : `?revision=${revision}`);
+export const scene = (id, revision) => call('GET', `${sceneUrl(id)}${at(revision)}`);
+export const sceneGlbUrl = (id, revision) => `${sceneUrl(id)}/preview.glb${at(revision)}`;
+// One edit of the scene (restauro_scene::edit::Edit as JSON); the new revision's view.
+export const edit = (id, change) => call('POST', `${sceneUrl(id)}/edits`, change);
+export const revert = (id, revision) => call('POST', `${sceneUrl(id)}/revert`, { revision });
+export const downloadUrl = (id, revision) => `${sceneUrl(id)}/download${at(revision)}`;
+export const revisions = (id) => call('GET', `${sceneUrl(id)}/revisions`);
+export const spectra = () => call('GET', '/api/spectra');
+export const sunPath = (site) => call('GET', `/api/sun-path?${new URLSearchParams(site)}`);
 export const takeSnapshot = (id, request) =>
   call('POST', `/api/scenes/${encodeURIComponent(id)}/snapshots`, request);

@@ -1,6 +1,9 @@
 // The material panel: what the clicked surface is (object, part, material) and what it is made
 // of: each state's reflectance spectrum 380–780 nm, plotted, with its colour and L*a*b* under
-// D65 as restauro computes them.
+// D65 as restauro computes them; and the controls that change it: another shipped spectrum for
+// a state (searched, each candidate plotted beside the current ones), the reflection model and
+// its roughness. Each change is sent as an edit; the panel is then drawn again from the scene's
+// new revision, as the server keeps it.
 
 const NS = 'http://www.w3.org/2000/svg';
 const FIRST_NM = 380;
@@ -58,8 +61,63 @@ function row(table, label, value) {
   table.append(tr);
 }
 
-// Shows the surface `picked` ({object, part, material}) of the scene `view`.
-export function show(panel, picked, view) {
+// The controls that change material `m`: `library` is /api/spectra, `onEdit` sends an edit.
+function editor(m, library, onEdit) {
+  const form = document.createElement('form');
+  form.className = 'material-edit';
+  form.setAttribute('aria-label', `Change ${m.name}`);
+  const id = (k) => `material-${k}`;
+  form.innerHTML = `<h4>Change ${m.name}</h4>
+    <label for="${id('state')}">State</label>
+    <select id="${id('state')}"><option value="base">base (the material itself)</option>
+      <option value="degraded">degraded (as found)</option><option value="cleaned">cleaned</option></select>
+    <label for="${id('search')}">Search the shipped spectra</label>
+    <input id="${id('search')}" type="search" placeholder="travertine, marble, brick…" autocomplete="off">
+    <label for="${id('spectrum')}">Spectrum</label>
+    <select id="${id('spectrum')}" size="6"></select>
+    <p id="${id('candidate')}" class="candidate" aria-live="polite"></p>
+    <button type="button" id="${id('assign')}">Assign spectrum</button>
+    <label for="${id('model')}">Model</label>
+    <select id="${id('model')}"><option value="lambert">Lambert (matte)</option>
+      <option value="cook-torrance">Cook–Torrance (glossy)</option></select>
+    <label for="${id('roughness')}">Roughness m (Beckmann rms slope, 0–1)</label>
+    <input id="${id('roughness')}" type="number" min="0.01" max="1" step="0.01">
+    <button type="button" id="${id('apply-model')}">Apply model</button>`;
+  const $ = (k) => form.querySelector(`#${id(k)}`);
+  $('model').value = m.model;
+  $('roughness').value = m.roughness ?? 0.3;
+  const fill = () => {
+    const words = $('search').value.toLowerCase().split(/\s+/).filter(Boolean);
+    const match = (s) => words.every((w) => `${s.name} ${s.material}`.toLowerCase().includes(w));
+    $('spectrum').replaceChildren(...library.filter(match).map((s) => new Option(`${s.name} — ${s.material}`, s.name)));
+  };
+  const candidate = () => library.find((s) => s.name === $('spectrum').value);
+  $('search').addEventListener('input', fill);
+  $('spectrum').addEventListener('change', () => {
+    const c = candidate();
+    if (!c) return;
+    $('candidate').textContent = `${c.name}: L* ${c.lab[0].toFixed(1)}, a* ${c.lab[1].toFixed(1)}, b* ${c.lab[2].toFixed(1)}`;
+    const plotted = form.parentElement.querySelector('svg.spectrum');
+    if (plotted) plotted.replaceWith(plot([...m.states, { ...c, state: 'candidate' }]));
+  });
+  $('assign').addEventListener('click', () => {
+    const c = candidate();
+    if (!c) { $('candidate').textContent = 'choose a spectrum in the list first'; return; }
+    onEdit({ edit: 'material', material: m.name, state: $('state').value, spectrum: c.name });
+  });
+  $('apply-model').addEventListener('click', () => {
+    const model = $('model').value;
+    const change = { edit: 'material', material: m.name, model };
+    if (model === 'cook-torrance') change.roughness = Number($('roughness').value);
+    onEdit(change);
+  });
+  fill();
+  return form;
+}
+
+// Shows the surface `picked` ({object, part, material}) of the scene `view`; with `library`
+// and `onEdit`, the controls that change its material.
+export function show(panel, picked, view, library, onEdit) {
   const m = view.materials.find((x) => x.name === picked.material);
   panel.hidden = false;
   const body = panel.querySelector('.body');
@@ -95,4 +153,5 @@ export function show(panel, picked, view) {
   }
   states.append(tbody);
   body.append(states, plot(m.states));
+  if (library && onEdit) body.append(editor(m, library, onEdit));
 }

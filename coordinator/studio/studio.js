@@ -4,12 +4,18 @@ import * as api from './api.js';
 import * as farm from './farm.js';
 import { Viewer } from './viewer.js';
 import * as material from './material.js';
+import * as light from './light.js';
 
 const $ = (id) => document.getElementById(id);
 let events = null;
 let shown = null;
 let viewer = null;
 let openScene = '';
+// The scene whose geometry the viewer holds (a new revision keeps it), the shipped spectra, and
+// the surface last clicked (its panel is drawn again after an edit).
+let loadedGeometry = '';
+let library = null;
+let picked = null;
 // The snapshot last taken here: shown as soon as it is done.
 let awaited = null;
 
@@ -23,6 +29,7 @@ async function takeSnapshot() {
     samples_per_pixel: number('snap-spp'),
     integrator: $('snap-integrator').value,
     variant: $('snap-variant').value || null,
+    revision: viewer.view.revision,
   };
   try {
     const job = await api.takeSnapshot(openScene, request);
@@ -50,19 +57,24 @@ async function listScenes() {
   if (picker.value !== openScene) await open(picker.value);
 }
 
-async function open(id) {
+async function open(id, revision) {
   openScene = id;
   $('scene-status').textContent = 'loading the scene…';
   try {
-    const view = await api.scene(id);
+    const view = await api.scene(id, revision);
     if (!viewer) {
       viewer = new Viewer($('view'));
-      viewer.onPick = (picked) => material.show($('material'), picked, viewer.view);
+      // For the browser's console (and the tests): the view's camera and controls.
+      window.studioViewer = viewer;
+      viewer.onPick = (p) => { picked = p; showMaterial(); };
     }
-    $('material').hidden = true;
-    await viewer.open(view, api.sceneGlbUrl(id));
-    const variant = $('snap-variant');
-    variant.replaceChildren(new Option('as the scene is', ''), ...view.variants.map((v) => new Option(v, v)));
+    if (loadedGeometry !== id) {
+      $('material').hidden = true;
+      picked = null;
+      await viewer.open(view, api.sceneGlbUrl(id, view.revision));
+      loadedGeometry = id;
+    }
+    await present(view);
     $('snap-width').value = view.camera.width;
     $('snap-height').value = view.camera.height;
     $('scene-status').textContent = `${view.triangles.toLocaleString('en')} triangles, ` +
@@ -72,6 +84,58 @@ async function open(id) {
     $('scene-status').textContent = '';
     showError(e);
   }
+}
+
+// Everything drawn from the scene `view` (a revision): colours and sun in the viewer, the
+// hypotheses, views and revisions, the sun panel, the material panel of the surface clicked.
+async function present(view) {
+  viewer.update(view);
+  const variant = $('snap-variant');
+  const chosen = variant.value;
+  variant.replaceChildren(new Option('as the scene is', ''), ...view.variants.map((v) => new Option(v, v)));
+  if (view.variants.includes(chosen)) variant.value = chosen;
+  const views = $('view-picker');
+  views.replaceChildren(new Option("the scene's camera", ''), ...view.views.map((v) => new Option(v.name, v.name)));
+  const list = await api.revisions(openScene);
+  const picker = $('revision-picker');
+  picker.replaceChildren(...list.map((r) => new Option(`${r.number}: ${r.summary}`, String(r.number))));
+  picker.value = String(view.revision);
+  $('revert').hidden = view.revision === list[list.length - 1].number;
+  $('view').dataset.revision = String(view.revision);
+  $('download').href = api.downloadUrl(openScene, view.revision);
+  light.show(view, showError);
+  showMaterial();
+}
+
+async function showMaterial() {
+  if (!picked || !viewer || !viewer.view) return;
+  if (!library) library = await api.spectra().catch((e) => { showError(e); return null; });
+  material.show($('material'), picked, viewer.view, library, applyEdit);
+}
+
+// Sends one edit; the page then shows the revision it made.
+async function applyEdit(change) {
+  try {
+    const view = await api.edit(openScene, change);
+    problem('');
+    await present(view);
+    const list = await api.revisions(openScene);
+    $('scene-status').textContent = `revision ${view.revision}: ${list[list.length - 1].summary}`;
+  } catch (e) {
+    showError(e);
+  }
+}
+
+function saveView() {
+  const name = $('view-name').value.trim();
+  if (!name) return showError(new Error('give the view a name first'));
+  const { position, target, up, vertical_fov_deg } = viewer.pose();
+  applyEdit({ edit: 'save-view', view: { name, position, target, up, vertical_fov_deg } });
+}
+
+function flyTo(name) {
+  const v = viewer.view.views.find((x) => x.name === name);
+  if (v) viewer.fly(v); else viewer.home();
 }
 
 function status(text, live) {
@@ -201,6 +265,19 @@ document.addEventListener('DOMContentLoaded', () => {
   $('scene-picker').addEventListener('change', (e) => e.target.value && open(e.target.value));
   $('snapshot-form').addEventListener('submit', (e) => { e.preventDefault(); takeSnapshot(); });
   $('home').addEventListener('click', () => viewer && viewer.view && viewer.home());
+  $('revision-picker').addEventListener('change', (e) => open(openScene, Number(e.target.value)));
+  $('revert').addEventListener('click', async () => {
+    try { await present(await api.revert(openScene, viewer.view.revision)); } catch (e) { showError(e); }
+  });
+  $('view-picker').addEventListener('change', (e) => viewer && flyTo(e.target.value));
+  $('save-view').addEventListener('click', () => viewer && viewer.view && saveView());
+  $('delete-view').addEventListener('click', () => {
+    const name = $('view-picker').value;
+    if (!name) return showError(new Error("choose a saved view to delete (the scene's camera stays)"));
+    applyEdit({ edit: 'delete-view', name });
+  });
+  $('set-sun').addEventListener('click', () => viewer && viewer.view && applyEdit(light.edit()));
+  light.init(showError);
   $('as-rendered').addEventListener('click', () => shown && show(shown, false));
   $('as-seen').addEventListener('click', () => shown && show(shown, true));
   document.addEventListener('keydown', (e) => {

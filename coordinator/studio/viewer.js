@@ -16,11 +16,15 @@ export class Viewer {
     this.camera = new THREE.PerspectiveCamera(40, 16 / 9, 0.1, 10000);
     this.controls = new OrbitControls(this.camera, canvas);
     this.controls.addEventListener('change', () => this.draw());
-    // A preview light: the sky from above, the sun from the south-west.
+    // A preview light: the sky from above, and the sun from where the scene puts it (or from
+    // the south-west when the scene has none), casting shadows.
     this.scene.add(new THREE.HemisphereLight(0xffffff, 0x6b5a48, 1.6));
-    const sun = new THREE.DirectionalLight(0xffffff, 2.0);
-    sun.position.set(-0.5, 1.0, 0.8);
-    this.scene.add(sun);
+    this.sun = new THREE.DirectionalLight(0xffffff, 2.0);
+    this.sun.position.set(-0.5, 1.0, 0.8);
+    this.sun.castShadow = true;
+    this.sun.shadow.mapSize.set(2048, 2048);
+    this.scene.add(this.sun, this.sun.target);
+    this.renderer.shadowMap.enabled = true;
     this.model = null;
     this.view = null;
     new ResizeObserver(() => this.resize()).observe(canvas);
@@ -44,7 +48,15 @@ export class Viewer {
     const hit = ray.intersectObject(this.model, true)[0];
     if (!hit) return;
     const extras = hit.object.geometry.userData || {};
+    this.picked = hit.point.clone();
     this.onPick({ object: extras.object, part: extras.part, material: extras.material, point: hit.point.toArray() });
+  }
+
+  // Where the point `p` (a THREE.Vector3) is drawn, in the page's CSS pixels.
+  onScreen(p) {
+    const q = p.clone().project(this.camera);
+    const r = this.canvas.getBoundingClientRect();
+    return [r.left + ((q.x + 1) / 2) * r.width, r.top + ((1 - q.y) / 2) * r.height];
   }
 
   resize() {
@@ -67,13 +79,53 @@ export class Viewer {
     if (this.model) this.scene.remove(this.model);
     this.model = gltf.scene;
     this.scene.add(this.model);
-    this.view = view;
+    // A Lambert material is drawn as one (no highlight), so that its pixels scale with its
+    // colour as restauro's matte surfaces do; Cook–Torrance keeps glTF's rough metal-free PBR.
+    const lambert = new Set(view.materials.filter((m) => m.model === 'lambert').map((m) => m.name));
+    this.model.traverse((o) => {
+      if (!o.isMesh) return;
+      o.castShadow = true;
+      o.receiveShadow = true;
+      if (lambert.has(o.material.name)) {
+        const { name, color, side } = o.material;
+        o.material = new THREE.MeshLambertMaterial({ name, color, side });
+      }
+    });
     const box = new THREE.Box3().setFromObject(this.model);
+    this.bounds = box;
     const size = box.getSize(new THREE.Vector3()).length();
     this.camera.near = Math.max(size / 10000, 0.01);
     this.camera.far = size * 20 + 1000;
+    this.update(view);
     this.home();
     return gltf;
+  }
+
+  // A new revision of the open scene (same geometry): its materials' colours and its sun.
+  update(view) {
+    this.view = view;
+    const colours = new Map(view.materials.map((m) => [m.name, m.colour_linear_srgb]));
+    this.model.traverse((o) => {
+      if (!o.isMesh) return;
+      const rgb = colours.get(o.material.name);
+      if (rgb) o.material.color.setRGB(...rgb);
+    });
+    this.placeSun(view.sun);
+    this.draw();
+  }
+
+  // The preview's sun along the scene's sun direction, its shadow camera over the model.
+  placeSun(sun) {
+    const box = this.bounds;
+    const centre = box.getCenter(new THREE.Vector3());
+    const radius = box.getSize(new THREE.Vector3()).length() / 2 || 1;
+    const d = sun ? new THREE.Vector3(...sun.direction) : new THREE.Vector3(-0.5, 1.0, 0.8).normalize();
+    this.sun.intensity = sun && sun.elevation_deg <= 0 ? 0 : 2.0;
+    this.sun.position.copy(centre).addScaledVector(d, radius * 2);
+    this.sun.target.position.copy(centre);
+    const c = this.sun.shadow.camera;
+    [c.left, c.right, c.top, c.bottom, c.near, c.far] = [-radius, radius, radius, -radius, radius * 0.5, radius * 4];
+    c.updateProjectionMatrix();
   }
 
   // The camera as it stands, for a snapshot (the preview's coordinates).
@@ -88,7 +140,11 @@ export class Viewer {
 
   // Back to the scene's own camera.
   home() {
-    const c = this.view.camera;
+    this.fly(this.view.camera);
+  }
+
+  // To the pose `c` ({position, target, up, vertical_fov_deg}, the preview's coordinates).
+  fly(c) {
     this.camera.fov = c.vertical_fov_deg;
     this.camera.up.set(...c.up);
     this.camera.position.set(...c.position);

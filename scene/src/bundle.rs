@@ -111,6 +111,23 @@ impl Bundle {
         Ok(bundle)
     }
 
+    /// Every file reference in the scene, to rewrite.
+    pub fn references_mut(scene: &mut SceneFile) -> Vec<&mut String> {
+        let mut out = Vec::new();
+        for s in scene.spectra.values_mut() {
+            if let SpectrumSource::File { file, .. } = s {
+                out.push(file);
+            }
+        }
+        out.extend(scene.objects.iter_mut().map(|o| &mut o.mesh));
+        for l in &mut scene.lights {
+            if let Light::Point { ies: Some(r), .. } | Light::Spot { ies: Some(r), .. } = l {
+                out.push(r);
+            }
+        }
+        out
+    }
+
     /// Every file reference in the scene.
     pub fn references(&self) -> Vec<String> {
         let mut out = Vec::new();

@@ -13,6 +13,8 @@ pub use restauro_spectral::csv as spectrum_csv;
 pub mod archive;
 pub mod assets;
 pub mod bundle;
+pub mod edit;
+pub mod folder;
 pub mod gltf_export;
 pub mod gltf_mesh;
 pub mod guard;

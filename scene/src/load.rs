@@ -303,7 +303,7 @@ pub fn read_scene_file(path: &Path, limits: &Limits) -> Result<SceneFile> {
 }
 
 /// "unknown X `name` (did you mean …?); the scene defines …".
-fn unknown<'a>(kind: &str, name: &str, known: impl Iterator<Item = &'a str>) -> String {
+pub(crate) fn unknown<'a>(kind: &str, name: &str, known: impl Iterator<Item = &'a str>) -> String {
     let known: Vec<&str> = known.collect();
     let mut close: Vec<(f64, &str)> = known
         .iter()
@@ -629,6 +629,63 @@ fn check_mesh(ctx: &mut Ctx, mesh: &mut Mesh, place: &str, reference: &str) -> R
     Ok(())
 }
 
+/// A pose (the camera's, a view's) the tracer can look from: every point in range, the target
+/// away from the eye, up not along the line of sight, a field of view between 0° and 180°.
+fn check_pose(ctx: &Ctx, place: &str, pose: &ResolvedCamera) -> Result<()> {
+    check_point(ctx, &format!("{place}.position"), pose.position)?;
+    check_point(ctx, &format!("{place}.target"), pose.target)?;
+    check_point(ctx, &format!("{place}.up"), pose.up)?;
+    let (p, t, u) = (
+        DVec3::from_array(pose.position),
+        DVec3::from_array(pose.target),
+        DVec3::from_array(pose.up),
+    );
+    if (t - p).length() < 1e-9 {
+        return Err(ctx.invalid(place, "the target is where the camera is; move one of them"));
+    }
+    if (t - p).normalize().cross(u.normalize_or_zero()).length() < 1e-6 {
+        return Err(ctx.invalid(
+            format!("{place}.up"),
+            "up is parallel to the viewing direction; use another up, e.g. [0, 0, 1]",
+        ));
+    }
+    let fov = pose.vertical_fov_deg;
+    if !(fov.is_finite() && fov > 0.0 && fov < 180.0) {
+        return Err(ctx.invalid(
+            format!("{place}.vertical_fov_deg"),
+            format!("{fov} is out of range; use an angle between 0 and 180 degrees"),
+        ));
+    }
+    Ok(())
+}
+
+/// Every saved view: a name of its own, and a pose [`check_pose`] accepts.
+fn check_views(ctx: &Ctx, views: &[scene_file::View]) -> Result<()> {
+    let mut seen = std::collections::BTreeSet::new();
+    for (i, v) in views.iter().enumerate() {
+        let place = format!("views[{i}]");
+        if v.name.trim().is_empty() {
+            return Err(ctx.invalid(format!("{place}.name"), "a view needs a name"));
+        }
+        if !seen.insert(v.name.as_str()) {
+            return Err(ctx.invalid(
+                format!("{place}.name"),
+                format!("a second view named `{}`; give each view its own name", v.name),
+            ));
+        }
+        let pose = ResolvedCamera {
+            position: v.position,
+            target: v.target,
+            up: v.up,
+            vertical_fov_deg: v.vertical_fov_deg,
+            width: 1,
+            height: 1,
+        };
+        check_pose(ctx, &place, &pose)?;
+    }
+    Ok(())
+}
+
 /// Whether a world coordinate is one the tracer can hold: finite, and within
 /// [`MAX_COORDINATE_M`] (so finite as a 32-bit float too).
 fn placeable(x: f64) -> bool {
@@ -945,35 +1002,8 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
             }
         }
     };
-    let (p, t, u) = (
-        DVec3::from_array(camera.position),
-        DVec3::from_array(camera.target),
-        DVec3::from_array(camera.up),
-    );
-    check_point(&ctx, "camera.position", camera.position)?;
-    check_point(&ctx, "camera.target", camera.target)?;
-    check_point(&ctx, "camera.up", camera.up)?;
-    if (t - p).length() < 1e-9 {
-        return Err(ctx.invalid("camera", "the target is where the camera is; move one of them"));
-    }
-    if (t - p).normalize().cross(u.normalize_or_zero()).length() < 1e-6 {
-        return Err(ctx.invalid(
-            "camera.up",
-            "up is parallel to the viewing direction; use another up, e.g. [0, 0, 1]",
-        ));
-    }
-    if !(camera.vertical_fov_deg.is_finite()
-        && camera.vertical_fov_deg > 0.0
-        && camera.vertical_fov_deg < 180.0)
-    {
-        return Err(ctx.invalid(
-            "camera.vertical_fov_deg",
-            format!(
-                "{} is out of range; use an angle between 0 and 180 degrees",
-                camera.vertical_fov_deg
-            ),
-        ));
-    }
+    check_pose(&ctx, "camera", &camera)?;
+    check_views(&ctx, &file.views)?;
 
     // Lights.
     if file.lights.is_empty() {
@@ -1068,13 +1098,23 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
                     }
                 };
                 if position.elevation_deg <= 0.0 {
-                    return Err(ctx.invalid(
-                        &place,
-                        format!(
-                            "the sun is below the horizon (elevation {:.2}°, azimuth {:.2}°); choose a daytime date-time or a positive elevation",
-                            position.elevation_deg, position.azimuth_deg
-                        ),
+                    // A moment after sunset is a real question (the facade at dusk): that sun
+                    // lights nothing, and the other lights still do. A direction given below
+                    // the horizon is a slip, and refused.
+                    let Some(s) = site else {
+                        return Err(ctx.invalid(
+                            &place,
+                            format!(
+                                "the sun is below the horizon (elevation {:.2}°, azimuth {:.2}°); choose a daytime date-time or a positive elevation",
+                                position.elevation_deg, position.azimuth_deg
+                            ),
+                        ));
+                    };
+                    ctx.notes.push(format!(
+                        "{place}: at {} the sun is below the horizon (elevation {:.2}°, azimuth {:.2}°): it lights nothing, the other lights still do",
+                        s.datetime, position.elevation_deg, position.azimuth_deg
                     ));
+                    continue;
                 }
                 ResolvedLight::Sun {
                     direction: direction_to_sun(position),
@@ -1111,6 +1151,13 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
             }
         };
         lights.push(resolved);
+    }
+    if lights.is_empty() {
+        return Err(ctx.invalid(
+            "lights",
+            "the sun is below the horizon at that time and the scene has no other light; \
+             choose a daytime date-time, or add a sky or a luminaire",
+        ));
     }
     if file.lights.iter().filter(|l| matches!(l, Light::Sky { .. })).count() > 1 {
         return Err(ctx.invalid(

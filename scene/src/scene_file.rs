@@ -75,6 +75,30 @@ pub struct SceneFile {
     /// Restoration hypotheses by name.
     #[serde(default)]
     pub variants: BTreeMap<String, Variant>,
+    /// Saved poses of the camera, by name (the studio's views). Not written when there are none,
+    /// so a scene without views keeps the identity it had before views existed.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub views: Vec<View>,
+}
+
+/// A named pose of the camera: where a restorer stood to look at something. The studio lists
+/// these beside the scene's camera and the meshes' viewpoints, and flies to one when chosen; a
+/// snapshot taken there renders from that pose.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct View {
+    pub name: String,
+    /// Where the eye is (m).
+    #[serde(deserialize_with = "vec3::position")]
+    pub position: [f64; 3],
+    /// The point looked at (m).
+    #[serde(deserialize_with = "vec3::target")]
+    pub target: [f64; 3],
+    #[serde(default = "default_up", deserialize_with = "vec3::up")]
+    pub up: [f64; 3],
+    /// The vertical field of view, degrees.
+    #[serde(default = "default_fov")]
+    pub vertical_fov_deg: f64,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -258,7 +282,7 @@ impl Material {
 }
 
 /// A state of a material: the fields it changes.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SurfaceOverride {
     #[serde(default)]

@@ -301,6 +301,34 @@ fn a_gltf_camera_is_a_viewpoint_by_name() {
     );
 }
 
+/// The facade at dusk: a sun placed by site and time after sunset lights nothing and is noted
+/// with its position, the sky still lights; alone, it leaves nothing to light the scene.
+#[test]
+fn a_sun_after_sunset_is_noted_and_lights_nothing() {
+    let f = Folder::new();
+    f.write("meshes/wall.obj", QUAD_OBJ);
+    // Aosta, 21 December 2026, 17:00 CET: the sun set at about 16:45.
+    let dusk = scene_toml(OBJ_OBJECT, "").replace(
+        "illuminance_lux = 100000.0\nazimuth_deg = 180.0\nelevation_deg = 50.0",
+        "illuminance_lux = 100000.0\nsite = { latitude_deg = 45.7371, longitude_deg = 7.3228, datetime = \"2026-12-21T17:00:00+01:00\" }",
+    );
+    assert!(dusk.contains("site = "));
+    let message = refused(&f, &dusk);
+    assert!(message.contains("no other light"), "{message}");
+    let with_sky = format!(
+        "{dusk}\n[[lights]]\nkind = \"sky\"\npreset = \"overcast\"\nspectrum = \"sunlight\"\n"
+    );
+    let scene = load(&f, &with_sky).unwrap();
+    assert!(!scene.lights.iter().any(|l| matches!(l, ResolvedLight::Sun { .. })));
+    assert!(scene.lights.iter().any(|l| matches!(l, ResolvedLight::Sky { .. })));
+    let note = scene.notes.iter().find(|n| n.contains("below the horizon")).expect("a note");
+    assert!(
+        note.starts_with("lights[0]: at 2026-12-21T17:00:00+01:00")
+            && note.contains("lights nothing"),
+        "{note}"
+    );
+}
+
 #[test]
 fn files_outside_the_folder_and_the_scene_itself_are_refused() {
     let f = Folder::new();
@@ -646,4 +674,25 @@ fn the_preview_glb_holds_the_scene_as_it_is_in_the_world() {
         mesh.groups.iter().map(|g| (g.name.clone(), g.colour)).collect();
     assert_eq!(by_name.get("stone"), Some(&Some([0.5, 0.4, 0.3])), "{by_name:?}");
     assert_eq!(by_name.get("glaze"), Some(&Some([0.1, 0.2, 0.3])), "{by_name:?}");
+}
+
+/// A bundle written out as a folder reads back as the same bundle: the same canonical scene,
+/// the same identity, the same files.
+#[test]
+fn a_bundle_written_as_a_folder_reads_back_as_itself() {
+    let f = Folder::new();
+    f.write("meshes/wall.obj", QUAD_OBJ);
+    let path = f.write("scene.toml", scene_toml(OBJ_OBJECT, ""));
+    let bundle = bundle_scene(&path, &Limits::default()).unwrap();
+    let tar =
+        restauro_scene::folder::folder_tar(&bundle, "wall-r1", "Revision 1\nof the wall").unwrap();
+    let out = tempfile::tempdir().unwrap();
+    tar::Archive::new(std::io::Cursor::new(tar)).unpack(out.path()).unwrap();
+    let scene = out.path().join("wall-r1/scene.toml");
+    let text = std::fs::read_to_string(&scene).unwrap();
+    assert!(text.starts_with("# Revision 1\n# of the wall\n"), "{text}");
+    let again = bundle_scene(&scene, &Limits::default()).unwrap();
+    assert_eq!(again.canonical_json(), bundle.canonical_json());
+    assert_eq!(again.id(), bundle.id());
+    assert_eq!(again.files, bundle.files);
 }

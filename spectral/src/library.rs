@@ -31,6 +31,11 @@ pub fn text(stem: &str) -> Option<&'static str> {
     embedded::FILES.iter().find(|(s, _)| *s == stem).map(|(_, text)| *text)
 }
 
+/// What a library spectrum is of, in a few words: its file's `# material:` line.
+pub fn material(stem: &str) -> Option<&'static str> {
+    text(stem)?.lines().find_map(|l| l.strip_prefix("# material:")).map(str::trim)
+}
+
 /// True when a spectrum file's comment lines (its provenance header) say it comes from the
 /// ECOSTRESS library, whose licence requires [`ECOSTRESS_ACKNOWLEDGEMENT`] wherever it is shown.
 pub fn requires_ecostress_acknowledgement(comments: &[String]) -> bool {

@@ -232,3 +232,16 @@ fn devtools_address(profile: &Path) -> (u16, String) {
         std::thread::sleep(Duration::from_millis(50));
     }
 }
+
+/// A PNG's pixels as RGB, row by row, and its width.
+pub fn png_rgb(bytes: &[u8]) -> (Vec<[u8; 3]>, usize) {
+    let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
+    decoder.set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
+    let mut reader = decoder.read_info().unwrap();
+    let mut data = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut data).unwrap();
+    let channels = info.color_type.samples();
+    let pixels = (info.width * info.height) as usize;
+    let rgb = data[..pixels * channels].chunks(channels).map(|p| [p[0], p[1], p[2]]).collect();
+    (rgb, info.width as usize)
+}

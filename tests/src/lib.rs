@@ -54,6 +54,14 @@ pub fn token_files(dir: &Path) -> (PathBuf, PathBuf) {
 
 impl Coordinator {
     /// Starts `restauro-coordinator` with its store in `data`, on `listen` (port 0: any).
+    /// A coordinator on `dir/data` serving the studio too; with the studio page's address.
+    pub fn with_studio(dir: &Path) -> (Coordinator, String) {
+        let c =
+            Self::start(dir, &dir.join("data"), "127.0.0.1:0", &["--studio-listen", "127.0.0.1:0"]);
+        let page = format!("http://{}/", c.studio.as_deref().expect("the studio's address"));
+        (c, page)
+    }
+
     pub fn start(dir: &Path, data: &Path, listen: &str, extra: &[&str]) -> Coordinator {
         Self::start_under(&[], dir, data, listen, extra)
     }
@@ -86,7 +94,7 @@ impl Coordinator {
             .arg(&w)
             .args(extra)
             .stdout(Stdio::piped())
-            .stderr(Stdio::from(std::fs::File::create(dir.join("coordinator.log")).unwrap()))
+            .stderr(Stdio::from(appending(&dir.join("coordinator.log"))))
             .spawn()
             .unwrap();
         let mut line = String::new();
@@ -255,6 +263,33 @@ pub fn wait_for(what: &str, timeout: std::time::Duration, mut ok: impl FnMut() -
         assert!(std::time::Instant::now() < deadline, "timed out waiting for {what}");
         std::thread::sleep(std::time::Duration::from_millis(20));
     }
+}
+
+/// `path` opened for appending: a coordinator restarted on the same directory keeps its
+/// predecessor's log.
+fn appending(path: &Path) -> std::fs::File {
+    std::fs::OpenOptions::new().create(true).append(true).open(path).unwrap()
+}
+
+/// The last lines of every process log (`*.log`) in `dir`, for a failure's message: a test
+/// that times out waiting on processes says what they were doing.
+pub fn logs(dir: &Path) -> String {
+    let mut out = String::new();
+    let Ok(entries) = std::fs::read_dir(dir) else { return out };
+    let mut paths: Vec<PathBuf> = entries.flatten().map(|e| e.path()).collect();
+    paths.sort();
+    for path in paths.iter().filter(|p| p.extension().is_some_and(|e| e == "log")) {
+        let text = std::fs::read_to_string(path).unwrap_or_default();
+        let lines: Vec<&str> = text.lines().collect();
+        let tail = &lines[lines.len().saturating_sub(40)..];
+        out.push_str(&format!(
+            "--- {} (last {} lines)\n{}\n",
+            path.display(),
+            tail.len(),
+            tail.join("\n")
+        ));
+    }
+    out
 }
 
 /// Sends `sig` (`-STOP`, `-CONT`, `-TERM`, …) to a process.

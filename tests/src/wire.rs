@@ -189,6 +189,20 @@ pub async fn wait_end(client: &mut Render, job: &str, limit: Duration) -> pb::Jo
     tokio::time::timeout(limit, watch).await.expect("the job ended in time")
 }
 
+/// [`wait_end`], with the logs of the processes in `dir` in the failure's message.
+pub async fn wait_end_logged(
+    client: &mut Render,
+    job: &str,
+    limit: Duration,
+    dir: &std::path::Path,
+) -> pb::JobStatus {
+    let end = tokio::time::timeout(limit, wait_end(client, job, limit + Duration::from_secs(1)));
+    match end.await {
+        Ok(status) => status,
+        Err(_) => panic!("the job did not end within {limit:?}\n{}", crate::logs(dir)),
+    }
+}
+
 /// Whether a status's state is final.
 pub fn is_final(status: &pb::JobStatus) -> bool {
     matches!(

@@ -169,7 +169,7 @@ async fn results_of_a_killed_coordinators_leases_are_taken_by_its_successor() {
     let addr = url.strip_prefix("http://").unwrap();
     let _successor = Coordinator::start(d, &data, addr, &args);
     let mut client = wire::render_client(&url).await;
-    let end = wire::wait_end(&mut client, &job.job_id, Duration::from_secs(120)).await;
+    let end = wire::wait_end_logged(&mut client, &job.job_id, Duration::from_secs(120), d).await;
     assert_eq!(end.state, pb::JobState::Done as i32, "{end:?}");
     let tiles = tile_lines(&log);
     let mut sorted = tiles.clone();

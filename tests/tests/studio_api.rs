@@ -53,6 +53,14 @@ fn every_route_needs_the_client_token_and_refuses_in_the_servers_words() {
         ("GET", "/api/scenes".to_owned()),
         ("GET", format!("/api/scenes/{}", "0".repeat(64))),
         ("GET", format!("/api/scenes/{}/preview.glb", "0".repeat(64))),
+        ("POST", format!("/api/scenes/{}/snapshots", "0".repeat(64))),
+        ("POST", format!("/api/scenes/{}/edits", "0".repeat(64))),
+        ("POST", format!("/api/scenes/{}/revert", "0".repeat(64))),
+        ("GET", format!("/api/scenes/{}/revisions", "0".repeat(64))),
+        ("GET", format!("/api/scenes/{}/scene.json", "0".repeat(64))),
+        ("GET", format!("/api/scenes/{}/download", "0".repeat(64))),
+        ("GET", "/api/spectra".to_owned()),
+        ("GET", "/api/sun-path".to_owned()),
     ];
     let worker = format!("Bearer {WORKER_TOKEN}");
     for (method, path) in &routes {
@@ -338,4 +346,230 @@ fn restauro_studio_prints_an_address_that_signs_in() {
     drop(child.stdin.take());
     let status = child.wait().unwrap();
     assert!(status.success(), "{status}");
+}
+
+/// The linear-sRGB colour `restauro color` computes for a shipped spectrum under D65.
+fn colour_of(spectrum: &str) -> [f64; 3] {
+    let o = restauro_tests::restauro(&["color", spectrum, "--json"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let color: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    std::array::from_fn(|k| color["sample"]["rgb_linear"][k].as_f64().unwrap())
+}
+
+fn material<'a>(view: &'a serde_json::Value, name: &str) -> &'a serde_json::Value {
+    view["materials"].as_array().unwrap().iter().find(|m| m["name"] == name).unwrap()
+}
+
+/// Edits from the page make revisions of the scene: each checked as a scene file is (the same
+/// messages), refused edits leave no revision, earlier revisions stay readable and can be made
+/// the latest again, and every revision survives a restart of the coordinator.
+#[test]
+fn edits_make_revisions_checked_as_scene_files_and_kept_across_a_restart() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let data = d.join("data");
+    let c = Coordinator::start(d, &data, "127.0.0.1:0", &["--studio-listen", "127.0.0.1:0"]);
+    let s = c.studio.clone().unwrap();
+    let auth = [("Authorization", BEARER)];
+    let scene = aosta_scene(d, 64, 36);
+    let token = d.join("client.token");
+    submit(&scene, &["--spp", "1", "--tile", "32"], &c.url, &token);
+    let id = get(&s, "/api/scenes", &auth).json()[0]["id"].as_str().unwrap().to_owned();
+    let edit = |body: serde_json::Value| {
+        request(&s, "POST", &format!("/api/scenes/{id}/edits"), &auth, body.to_string().as_bytes())
+    };
+    let first = get(&s, &format!("/api/scenes/{id}"), &auth).json();
+    assert_eq!(first["revision"], 0);
+
+    // Another shipped travertine for the stone: its colour is restauro's own for that spectrum.
+    let other = "travertine_particulate_fine__eco_travertine1";
+    let r =
+        edit(serde_json::json!({"edit": "material", "material": "travertine", "spectrum": other}));
+    assert_eq!(r.status, 200, "{}", r.text());
+    let v1 = r.json();
+    assert_eq!(v1["revision"], 1);
+    let stone = material(&v1, "travertine");
+    assert_eq!(stone["states"][0]["spectrum"], other, "{stone}");
+    // `restauro color` integrates the measurement at its own resolution, the preview the
+    // 5-nm grid the renderer uses: they agree to a few parts in 10⁴.
+    let want = colour_of(other);
+    for (k, want) in want.iter().enumerate() {
+        let got = stone["colour_linear_srgb"][k].as_f64().unwrap();
+        assert!((got - want).abs() < 1e-3, "channel {k}: {got} vs {want}");
+    }
+    let old = material(&first, "travertine")["colour_linear_srgb"].clone();
+    assert_ne!(stone["colour_linear_srgb"], old, "the preview's colour changed");
+
+    // Refusals, in the words `scene check` uses; none makes a revision.
+    for (body, status, words) in [
+        (
+            serde_json::json!({"edit": "material", "material": "travertin", "roughness": 0.2}),
+            400,
+            "did you mean `travertine`",
+        ),
+        (
+            serde_json::json!({"edit": "material", "material": "travertine", "spectrum": "travertine_tufa"}),
+            400,
+            "travertine_tufa_solid__eco_ward73",
+        ),
+        (
+            serde_json::json!({"edit": "material", "material": "travertine", "model": "cook-torrance", "roughness": 7.0}),
+            400,
+            "roughness",
+        ),
+        (
+            serde_json::json!({"edit": "sun", "latitude_deg": 45.7, "longitude_deg": 7.3, "datetime": "21/12/2026 17:00"}),
+            400,
+            "RFC 3339",
+        ),
+        (
+            serde_json::json!({"edit": "paint", "colour": "red"}),
+            400,
+            "unknown kind `paint`; use material, sun, save-view, delete-view",
+        ),
+        (serde_json::json!({"edit": "delete-view", "name": "portal"}), 400, "view"),
+        (serde_json::json!({"edit": "sun", "latitude_deg": "north"}), 400, "latitude_deg"),
+    ] {
+        let r = edit(body.clone());
+        assert_eq!(r.status, status, "{body}: {}", r.text());
+        assert!(error_of(&r).contains(words), "{body}: {}", error_of(&r));
+    }
+    let r = request(&s, "POST", &format!("/api/scenes/{}/edits", "0".repeat(64)), &auth, b"{}");
+    assert_eq!(r.status, 400, "{}", r.text());
+    let r = request(
+        &s,
+        "POST",
+        &format!("/api/scenes/{}/edits", "0".repeat(64)),
+        &auth,
+        br#"{"edit": "delete-view", "name": "x"}"#,
+    );
+    assert_eq!(r.status, 404, "{}", r.text());
+    assert_eq!(
+        get(&s, &format!("/api/scenes/{id}/revisions"), &auth).json().as_array().unwrap().len(),
+        2
+    );
+
+    // The sun at 17:00 on 21 December at the theatre: after sunset. Its path that day peaks
+    // at the solstice's noon altitude, 90° − 45.74° − 23.44° = 20.8° (plus refraction).
+    let r =
+        edit(serde_json::json!({"edit": "sun", "latitude_deg": 45.7371, "longitude_deg": 7.3228,
+        "datetime": "2026-12-21T17:00:00+01:00"}));
+    assert_eq!(r.status, 200, "{}", r.text());
+    let v2 = r.json();
+    let sun = &v2["sun"];
+    assert_eq!(sun["site"]["datetime"], "2026-12-21T17:00:00+01:00");
+    let path = get(
+        &s,
+        "/api/sun-path?latitude_deg=45.7371&longitude_deg=7.3228&date=2026-12-21&utc_offset=%2B01:00",
+        &auth,
+    );
+    assert_eq!(path.status, 200, "{}", path.text());
+    let path = path.json();
+    let points = path.as_array().unwrap();
+    assert_eq!(points.len(), 96);
+    let at_five = points.iter().find(|p| p["time"] == "17:00").unwrap();
+    assert!(
+        (at_five["elevation_deg"].as_f64().unwrap() - sun["elevation_deg"].as_f64().unwrap()).abs()
+            < 1e-9
+    );
+    assert!(sun["elevation_deg"].as_f64().unwrap() < 0.0, "{sun}");
+    let highest =
+        points.iter().map(|p| p["elevation_deg"].as_f64().unwrap()).fold(f64::MIN, f64::max);
+    assert!((highest - 20.8).abs() < 0.3, "noon altitude {highest}");
+    let r = get(
+        &s,
+        "/api/sun-path?latitude_deg=100&longitude_deg=7&date=2026-12-21&utc_offset=%2B01:00",
+        &auth,
+    );
+    assert_eq!(r.status, 400);
+    assert!(error_of(&r).contains("latitude_deg"), "{}", error_of(&r));
+
+    // A view saved in the preview's frame (Y up, offset removed) is kept in the world's.
+    let offset: Vec<f64> = serde_json::from_value(v2["offset_m"].clone()).unwrap();
+    let r = edit(serde_json::json!({"edit": "save-view", "view": {"name": "portal",
+        "position": [1.0, 1.6, 8.0], "target": [1.0, 3.0, 0.0], "up": [0.0, 1.0, 0.0]}}));
+    assert_eq!(r.status, 200, "{}", r.text());
+    let shown = r.json()["views"][0]["position"].clone();
+    for (k, want) in [1.0, 1.6, 8.0].iter().enumerate() {
+        assert!((shown[k].as_f64().unwrap() - want).abs() < 1e-9, "{shown}");
+    }
+    let manifest = get(&s, &format!("/api/scenes/{id}/scene.json"), &auth).json();
+    let kept = &manifest["views"][0];
+    let want = [1.0 + offset[0], -8.0 + offset[1], 1.6 + offset[2]];
+    for (k, want) in want.iter().enumerate() {
+        assert!((kept["position"][k].as_f64().unwrap() - want).abs() < 1e-9, "{kept}");
+    }
+    assert_eq!(kept["up"], serde_json::json!([0.0, 0.0, 1.0]));
+
+    // Earlier revisions stay as they were; one is made the latest again as a new revision.
+    let zero = get(&s, &format!("/api/scenes/{id}?revision=0"), &auth).json();
+    assert_eq!(material(&zero, "travertine")["colour_linear_srgb"], old);
+    let r = get(&s, &format!("/api/scenes/{id}?revision=9"), &auth);
+    assert_eq!(r.status, 400);
+    assert!(error_of(&r).contains("has no revision 9; its latest is 3"), "{}", error_of(&r));
+    let r = get(&s, &format!("/api/scenes/{id}?revision=last"), &auth);
+    assert!(error_of(&r).contains("`last` is not a revision number"), "{}", error_of(&r));
+    let r = request(&s, "POST", &format!("/api/scenes/{id}/revert"), &auth, br#"{"revision": 0}"#);
+    assert_eq!(r.status, 200, "{}", r.text());
+    assert_eq!(r.json()["revision"], 4);
+    let at = |n: u32| get(&s, &format!("/api/scenes/{id}/scene.json?revision={n}"), &auth).text();
+    assert_eq!(at(4), at(0), "revision 4 is revision 0 again");
+    let summaries: Vec<String> = get(&s, &format!("/api/scenes/{id}/revisions"), &auth)
+        .json()
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["summary"].as_str().unwrap().to_owned())
+        .collect();
+    assert_eq!(summaries.len(), 5, "{summaries:?}");
+    assert!(
+        summaries[1].contains(other) && summaries[4].contains("back to revision 0"),
+        "{summaries:?}"
+    );
+
+    // A snapshot of revision 1 belongs to the same scene.
+    let camera = &first["camera"];
+    let body = serde_json::json!({
+        "camera": {"position": camera["position"], "target": camera["target"], "up": camera["up"],
+            "vertical_fov_deg": camera["vertical_fov_deg"]},
+        "width": 16, "height": 9, "samples_per_pixel": 1, "integrator": "whitted", "revision": 1
+    });
+    let r = request(
+        &s,
+        "POST",
+        &format!("/api/scenes/{id}/snapshots"),
+        &auth,
+        body.to_string().as_bytes(),
+    );
+    assert_eq!(r.status, 200, "{}", r.text());
+    let scenes = get(&s, "/api/scenes", &auth).json();
+    assert_eq!(scenes.as_array().unwrap().len(), 1, "{scenes}");
+    assert_eq!((scenes[0]["jobs"].as_u64(), scenes[0]["revision"].as_u64()), (Some(2), Some(4)));
+
+    // Restarted on the same store: every revision is there.
+    let addr = c.url.strip_prefix("http://").unwrap().to_owned();
+    drop(c);
+    let c = Coordinator::start(d, &data, &addr, &["--studio-listen", "127.0.0.1:0"]);
+    let s = c.studio.clone().unwrap();
+    let list = get(&s, &format!("/api/scenes/{id}/revisions"), &auth).json();
+    assert_eq!(list.as_array().unwrap().len(), 5, "{list}");
+    let v1 = get(&s, &format!("/api/scenes/{id}?revision=1"), &auth).json();
+    assert_eq!(material(&v1, "travertine")["states"][0]["spectrum"], other);
+    // Any revision downloads as a scene folder; one that does not exist is refused.
+    let r = get(&s, &format!("/api/scenes/{id}/download?revision=2"), &auth);
+    assert_eq!((r.status, r.header("content-type")), (200, Some("application/x-tar")));
+    let mut archive = tar::Archive::new(std::io::Cursor::new(r.body));
+    let names: Vec<String> = archive
+        .entries()
+        .unwrap()
+        .map(|e| e.unwrap().path().unwrap().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(names[0], "aosta-revision-2/scene.toml", "{names:?}");
+    assert!(names.iter().any(|n| n.starts_with("aosta-revision-2/files/") && n.ends_with(".obj")));
+    let r = get(&s, &format!("/api/scenes/{id}/download?revision=9"), &auth);
+    assert_eq!(r.status, 400);
+    let library = get(&s, "/api/spectra", &auth).json();
+    let shipped = library.as_array().unwrap().iter().find(|x| x["name"] == other).unwrap();
+    assert_eq!(shipped["reflectance"].as_array().unwrap().len(), 81);
+    assert!(shipped["material"].as_str().unwrap().contains("travertine"), "{shipped}");
 }

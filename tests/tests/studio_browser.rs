@@ -2,26 +2,14 @@
 //! and two workers: signing in, the farm as it stands, a render followed live and its image as
 //! the page shows it. Screenshots of each step are written to `<target>/tmp/studio/`.
 
-use restauro_tests::browser::{Browser, available};
-use restauro_tests::{CLIENT_TOKEN, Coordinator, Worker, aosta_scene, client, submit, text};
+use restauro_tests::browser::{Browser, available, png_rgb};
 use std::path::PathBuf;
 
+/// Screenshots go to `<target>/tmp/studio/`.
 fn shots() -> PathBuf {
     PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("studio")
 }
-
-/// A PNG's pixels as RGB, row by row, and its width.
-fn png_rgb(bytes: &[u8]) -> (Vec<[u8; 3]>, usize) {
-    let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
-    decoder.set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
-    let mut reader = decoder.read_info().unwrap();
-    let mut data = vec![0; reader.output_buffer_size().unwrap()];
-    let info = reader.next_frame(&mut data).unwrap();
-    let channels = info.color_type.samples();
-    let pixels = (info.width * info.height) as usize;
-    let rgb = data[..pixels * channels].chunks(channels).map(|p| [p[0], p[1], p[2]]).collect();
-    (rgb, info.width as usize)
-}
+use restauro_tests::{CLIENT_TOKEN, Coordinator, Worker, aosta_scene, client, submit, text};
 
 /// The mean of the RGB channels of a PNG file, 0–255.
 fn png_mean(bytes: &[u8]) -> [f64; 3] {
@@ -47,9 +35,7 @@ fn a_restorer_signs_in_follows_a_render_and_sees_its_image() {
     }
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let c =
-        Coordinator::start(d, &d.join("data"), "127.0.0.1:0", &["--studio-listen", "127.0.0.1:0"]);
-    let studio = format!("http://{}/", c.studio.clone().unwrap());
+    let (c, studio) = Coordinator::with_studio(d);
     let _workers =
         [Worker::start(d, &c.url, "local-1", &[]), Worker::start(d, &c.url, "local-2", &[])];
     let mut b = Browser::launch(1280, 720);

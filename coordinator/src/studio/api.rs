@@ -9,7 +9,7 @@ use crate::error::{CoordinatorError, Result};
 use crate::ids::JobId;
 use axum::Json;
 use axum::body::{Body, Bytes};
-use axum::extract::{Path, State};
+use axum::extract::{Path, RawQuery, State};
 use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
 use axum::response::sse::{Event as SseEvent, KeepAlive, Sse};
 use axum::response::{IntoResponse, Response};
@@ -176,16 +176,37 @@ pub struct SceneEntryView {
     id: String,
     name: String,
     jobs: usize,
+    /// Its latest revision.
+    revision: u32,
 }
 
 /// `GET /api/scenes`: the scenes of the coordinator's jobs.
 pub async fn scenes(State(studio): State<Arc<Studio>>) -> Json<Vec<SceneEntryView>> {
     let list = studio.farm.scenes().into_iter();
-    Json(list.map(|s| SceneEntryView { id: s.id, name: s.name, jobs: s.jobs }).collect())
+    Json(
+        list.map(|s| SceneEntryView { id: s.id, name: s.name, jobs: s.jobs, revision: s.revision })
+            .collect(),
+    )
+}
+
+/// The value of `name` in a query string, decoded.
+pub(super) fn query_value(query: Option<&str>, name: &str) -> Option<String> {
+    form_urlencoded::parse(query?.as_bytes()).find(|(k, _)| k == name).map(|(_, v)| v.into_owned())
+}
+
+/// The revision a query asks for (`?revision=3`), the latest when it names none.
+pub(super) fn revision(query: Option<&str>) -> Result<Option<u32>> {
+    let Some(value) = query_value(query, "revision") else { return Ok(None) };
+    value.parse::<u32>().map(Some).map_err(|_| {
+        CoordinatorError::Request(format!(
+            "revision: `{}` is not a revision number (0, 1, 2, …)",
+            value.chars().take(40).collect::<String>().escape_debug()
+        ))
+    })
 }
 
 /// A scene id from a caller: a BLAKE3 hash in hex.
-fn scene_id(text: &str) -> Result<&str> {
+pub(super) fn scene_id(text: &str) -> Result<&str> {
     if text.len() == 64 && text.bytes().all(|b| b.is_ascii_hexdigit()) {
         Ok(text)
     } else {
@@ -198,17 +219,30 @@ fn scene_id(text: &str) -> Result<&str> {
 
 /// `GET /api/scenes/{id}`: what the page needs to show the scene: its camera, its materials
 /// and their colours, the offset of its preview.
-pub async fn scene(State(studio): State<Arc<Studio>>, Path(id): Path<String>) -> Result<Response> {
-    let preview = studio.previews.get(&studio.farm, scene_id(&id)?).await?;
-    Ok(Json(&preview.view).into_response())
+pub async fn scene(
+    State(studio): State<Arc<Studio>>,
+    Path(id): Path<String>,
+    RawQuery(query): RawQuery,
+) -> Result<Response> {
+    Ok(Json(&preview(&studio, &id, query.as_deref()).await?.view).into_response())
+}
+
+/// The preview of the revision a query names (the latest when none) of scene `id`.
+async fn preview(
+    studio: &Studio,
+    id: &str,
+    query: Option<&str>,
+) -> Result<Arc<super::preview::ScenePreview>> {
+    studio.previews.get(&studio.farm, scene_id(id)?, revision(query)?).await
 }
 
 /// `GET /api/scenes/{id}/preview.glb`: its geometry as glTF binary.
 pub async fn scene_glb(
     State(studio): State<Arc<Studio>>,
     Path(id): Path<String>,
+    RawQuery(query): RawQuery,
 ) -> Result<Response> {
-    let preview = studio.previews.get(&studio.farm, scene_id(&id)?).await?;
+    let preview = preview(&studio, &id, query.as_deref()).await?;
     let mut response = (StatusCode::OK, preview.glb.clone()).into_response();
     response
         .headers_mut()
@@ -225,12 +259,12 @@ pub async fn take_snapshot(
 ) -> Result<Json<JobView>> {
     let id = scene_id(&id)?;
     let request: super::snapshot::SnapshotRequest = parse(&body, "the snapshot request")?;
-    let preview = studio.previews.get(&studio.farm, id).await?;
+    let preview = studio.previews.get(&studio.farm, id, request.revision).await?;
     Ok(Json(super::snapshot::take(&studio.farm, id, &preview, request).await?.into()))
 }
 
 /// A JSON body, refused naming the field that does not parse (`width: invalid value: …`).
-fn parse<T: serde::de::DeserializeOwned>(body: &[u8], what: &str) -> Result<T> {
+pub(super) fn parse<T: serde::de::DeserializeOwned>(body: &[u8], what: &str) -> Result<T> {
     let mut json = serde_json::Deserializer::from_slice(body);
     serde_path_to_error::deserialize(&mut json).map_err(|e| {
         let path = e.path().to_string();

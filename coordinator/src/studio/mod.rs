@@ -5,6 +5,7 @@
 //! but signing in needs the client token or a session made from it ([`session`]).
 
 pub mod api;
+pub mod edits;
 pub mod events;
 pub mod page;
 pub mod preview;
@@ -68,6 +69,13 @@ fn router(studio: Arc<Studio>) -> Router {
         .route("/api/scenes/{id}", get(api::scene))
         .route("/api/scenes/{id}/preview.glb", get(api::scene_glb))
         .route("/api/scenes/{id}/snapshots", post(api::take_snapshot))
+        .route("/api/scenes/{id}/edits", post(edits::edit))
+        .route("/api/scenes/{id}/revert", post(edits::revert))
+        .route("/api/scenes/{id}/revisions", get(edits::revisions))
+        .route("/api/scenes/{id}/scene.json", get(edits::manifest))
+        .route("/api/scenes/{id}/download", get(edits::download))
+        .route("/api/spectra", get(edits::spectra))
+        .route("/api/sun-path", get(edits::sun_path))
         .route_layer(middleware::from_fn_with_state(studio.clone(), signed_in));
     Router::new()
         .route("/api/session", post(api::sign_in).delete(api::sign_out))

@@ -23,6 +23,7 @@ const FILES: &[(&str, &str, &str)] = &[
     script!("farm.js"),
     script!("viewer.js"),
     script!("material.js"),
+    script!("light.js"),
     script!("vendor/three/three.module.js"),
     script!("vendor/three/three.core.js"),
     script!("vendor/three/addons/controls/OrbitControls.js"),

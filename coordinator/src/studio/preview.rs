@@ -47,17 +47,23 @@ pub struct StateView {
 pub const FIRST_NM: f64 = 380.0;
 pub const STEP_NM: f64 = 5.0;
 
-fn state_view(state: &'static str, spectrum: &str, scene: &LoadedScene) -> Option<StateView> {
-    let rho = scene.spectra.get(spectrum)?;
+/// How a reflectance looks under D65 (2° observer): its L*a*b* and its linear-sRGB colour.
+pub fn appearance(rho: &Spectrum) -> ([f64; 3], [f32; 3]) {
     let d65 = Illuminant::D65.spd().unwrap_or(Spectrum::ONE);
     let xyz = relative_xyz(rho, &d65, Observer::Cie1931TwoDegree);
     let lab = Lab::from_xyz(xyz, white_point(&d65, Observer::Cie1931TwoDegree));
+    ([lab.l, lab.a, lab.b], colour(xyz))
+}
+
+fn state_view(state: &'static str, spectrum: &str, scene: &LoadedScene) -> Option<StateView> {
+    let rho = scene.spectra.get(spectrum)?;
+    let (lab, colour_linear_srgb) = appearance(rho);
     Some(StateView {
         state,
         spectrum: spectrum.to_owned(),
         reflectance: rho.0.to_vec(),
-        lab: [lab.l, lab.a, lab.b],
-        colour_linear_srgb: colour(xyz),
+        lab,
+        colour_linear_srgb,
     })
 }
 
@@ -72,15 +78,77 @@ pub struct CameraView {
     pub height: u32,
 }
 
+/// A saved view, in the GLB's coordinates.
+#[derive(Serialize)]
+pub struct NamedView {
+    pub name: String,
+    pub position: [f64; 3],
+    pub target: [f64; 3],
+    pub up: [f64; 3],
+    pub vertical_fov_deg: f64,
+}
+
+/// The scene's sun: where it is (as the render places it) and the site and time it was put
+/// at, when it was.
+#[derive(Serialize)]
+pub struct SunView {
+    /// Unit vector towards the sun, in the GLB's coordinates.
+    pub direction: [f64; 3],
+    pub azimuth_deg: f64,
+    pub elevation_deg: f64,
+    /// On a surface normal to the sun.
+    pub illuminance_lux: f64,
+    pub site: Option<restauro_scene::scene_file::SiteTime>,
+}
+
+/// The scene's sun as the render has it; a sun placed after sunset lights nothing and is not
+/// among the render's lights, so its position is worked out from its site here, the same way.
+fn sun_view(scene: &LoadedScene) -> Option<SunView> {
+    use restauro_scene::load::ResolvedLight;
+    use restauro_scene::scene_file::Light;
+    use restauro_scene::sun::{Site, direction_to_sun, sun_position};
+    let site = scene.file.lights.iter().find_map(|l| match l {
+        Light::Sun { site, .. } => Some(site.clone()),
+        _ => None,
+    })?;
+    let resolved = scene.lights.iter().find_map(|l| match l {
+        ResolvedLight::Sun { direction, azimuth_deg, elevation_deg, illuminance_lux, .. } => {
+            Some((*direction, *azimuth_deg, *elevation_deg, *illuminance_lux))
+        }
+        _ => None,
+    });
+    let (direction, azimuth_deg, elevation_deg, illuminance_lux) = match (resolved, &site) {
+        (Some(r), _) => r,
+        (None, Some(s)) => {
+            let at = Site::new(s.latitude_deg, s.longitude_deg, s.height_m);
+            let p = sun_position(at, &s.datetime, None).ok()?;
+            (direction_to_sun(p), p.azimuth_deg, p.elevation_deg, 0.0)
+        }
+        (None, None) => return None,
+    };
+    Some(SunView {
+        direction: to_glb(direction, [0.0; 3]),
+        azimuth_deg,
+        elevation_deg,
+        illuminance_lux,
+        site,
+    })
+}
+
 #[derive(Serialize)]
 pub struct SceneView {
     pub id: String,
+    /// The revision shown (0: as first submitted).
+    pub revision: u32,
     pub offset_m: [f64; 3],
     pub triangles: usize,
     pub camera: CameraView,
     pub materials: Vec<MaterialView>,
     /// The scene's hypotheses (variants), by name.
     pub variants: Vec<String>,
+    /// The scene's saved views (`[[views]]`).
+    pub views: Vec<NamedView>,
+    pub sun: Option<SunView>,
     pub notes: Vec<String>,
 }
 
@@ -114,7 +182,7 @@ fn state_spectrum<'a>(
     m.state(state)?.reflectance.as_ref()
 }
 
-fn build(id: &str, scene: &LoadedScene) -> ScenePreview {
+fn build(id: &str, revision: u32, scene: &LoadedScene) -> ScenePreview {
     let materials: Vec<MaterialView> = scene
         .file
         .materials
@@ -157,8 +225,23 @@ fn build(id: &str, scene: &LoadedScene) -> ScenePreview {
         width: c.width,
         height: c.height,
     };
+    let views = scene
+        .file
+        .views
+        .iter()
+        .map(|v| NamedView {
+            name: v.name.clone(),
+            position: to_glb(v.position, offset_m),
+            target: to_glb(v.target, offset_m),
+            up: to_glb(v.up, [0.0; 3]),
+            vertical_fov_deg: v.vertical_fov_deg,
+        })
+        .collect();
     let view = SceneView {
         id: id.to_owned(),
+        revision,
+        views,
+        sun: sun_view(scene),
         offset_m,
         triangles,
         camera,
@@ -176,13 +259,24 @@ pub struct Previews {
 }
 
 impl Previews {
-    pub async fn get(&self, farm: &Arc<Farm>, id: &str) -> Result<Arc<ScenePreview>> {
-        if let Some(p) = self.lock().iter().find(|(k, _)| k == id) {
+    /// The preview of revision `revision` of scene `id` (the latest when `None`).
+    pub async fn get(
+        &self,
+        farm: &Arc<Farm>,
+        id: &str,
+        revision: Option<u32>,
+    ) -> Result<Arc<ScenePreview>> {
+        let number = match revision {
+            Some(n) => n,
+            None => farm.scene_revision(id, None)?.0,
+        };
+        let key = format!("{id}@{number}");
+        if let Some(p) = self.lock().iter().find(|(k, _)| *k == key) {
             return Ok(p.1.clone());
         }
-        let scene = farm.load_scene(id).await?;
-        let (key, id) = (id.to_owned(), id.to_owned());
-        let preview = tokio::task::spawn_blocking(move || Arc::new(build(&id, &scene)))
+        let (number, scene) = farm.load_scene(id, Some(number)).await?;
+        let id = id.to_owned();
+        let preview = tokio::task::spawn_blocking(move || Arc::new(build(&id, number, &scene)))
             .await
             .map_err(|e| crate::error::CoordinatorError::Internal(e.to_string()))?;
         let mut kept = self.lock();

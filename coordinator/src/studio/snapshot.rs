@@ -37,6 +37,9 @@ pub struct SnapshotRequest {
     pub variant: Option<String>,
     #[serde(default)]
     pub name: Option<String>,
+    /// The scene's revision the page shows (the latest when absent).
+    #[serde(default)]
+    pub revision: Option<u32>,
 }
 
 fn refuse(field: &str, problem: impl std::fmt::Display) -> CoordinatorError {
@@ -50,7 +53,8 @@ pub async fn take(
     preview: &ScenePreview,
     request: SnapshotRequest,
 ) -> Result<JobStatus> {
-    let mut scene = Bundle::parse_manifest(&farm.scene_manifest(id)?)?;
+    let mut scene =
+        Bundle::parse_manifest(&farm.scene_revision(id, Some(preview.view.revision))?.1)?;
     let offset = preview.view.offset_m;
     let c = &request.camera;
     let finite = |v: &[f64; 3]| v.iter().all(|x| x.is_finite());

@@ -1,0 +1,205 @@
+//! Editing a scene from the page: each edit (`restauro_scene::edit::Edit`) makes a new revision
+//! through [`Farm::edit_scene`], checked as a scene file is and refused with the same messages;
+//! the answer is the new revision's view, so the page redraws from what the server keeps. The
+//! shipped spectra are listed for the material panel's library.
+//!
+//! The page holds positions in the preview's frame (Y up, offset removed): a saved view's
+//! pose is turned back into the world's here, the one place that knows both.
+
+use super::Studio;
+use super::api::{parse, revision, scene_id};
+use super::preview::{appearance, to_world};
+use crate::error::{CoordinatorError, Result};
+use crate::farm::RevisionInfo;
+use axum::Json;
+use axum::body::Bytes;
+use axum::extract::{Path, RawQuery, State};
+use axum::response::{IntoResponse, Response};
+use restauro_scene::edit::{self, Edit, SaveView};
+use restauro_spectral::library;
+use serde::{Deserialize, Serialize};
+use std::sync::{Arc, OnceLock};
+
+/// `POST /api/scenes/{id}/edits`: one edit; the new revision's view.
+pub async fn edit(
+    State(studio): State<Arc<Studio>>,
+    Path(id): Path<String>,
+    body: Bytes,
+) -> Result<Response> {
+    let id = scene_id(&id)?;
+    let mut edit = parse_edit(&body)?;
+    if let Edit::SaveView(SaveView { view }) = &mut edit {
+        let offset = studio.previews.get(&studio.farm, id, None).await?.view.offset_m;
+        view.position = to_world(view.position, offset);
+        view.target = to_world(view.target, offset);
+        view.up = to_world(view.up, [0.0; 3]);
+    }
+    let made = studio.farm.edit_scene(id, &edit).await?;
+    let preview = studio.previews.get(&studio.farm, id, Some(made.number)).await?;
+    Ok(Json(&preview.view).into_response())
+}
+
+/// An edit from its JSON, refused naming the field that does not parse. serde reads an
+/// internally tagged enum through a buffer that loses the path, so the kind is read first and
+/// its fields then parsed as the kind's own type.
+fn parse_edit(body: &[u8]) -> Result<Edit> {
+    let refuse = |problem: String| CoordinatorError::Request(format!("the edit: {problem}"));
+    let mut json: serde_json::Value =
+        serde_json::from_slice(body).map_err(|e| refuse(e.to_string()))?;
+    let kinds = edit::KINDS.join(", ");
+    let kind = match json.as_object_mut().and_then(|o| o.remove("edit")) {
+        Some(serde_json::Value::String(k)) => k,
+        _ => return Err(refuse(format!("give `edit`, the kind of edit: one of {kinds}"))),
+    };
+    let fields = serde_json::to_vec(&json).map_err(|e| refuse(e.to_string()))?;
+    let what = format!("the {kind} edit");
+    Ok(match kind.as_str() {
+        "material" => Edit::Material(parse(&fields, &what)?),
+        "sun" => Edit::Sun(parse(&fields, &what)?),
+        "save-view" => Edit::SaveView(parse(&fields, &what)?),
+        "delete-view" => Edit::DeleteView(parse(&fields, &what)?),
+        other => {
+            let other = other.chars().take(40).collect::<String>();
+            return Err(refuse(format!("unknown kind `{}`; use {kinds}", other.escape_debug())));
+        }
+    })
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Revert {
+    revision: u32,
+}
+
+/// `POST /api/scenes/{id}/revert {"revision": N}`: revision N made the latest again (as a new
+/// revision: nothing is lost); the new revision's view.
+pub async fn revert(
+    State(studio): State<Arc<Studio>>,
+    Path(id): Path<String>,
+    body: Bytes,
+) -> Result<Response> {
+    let id = scene_id(&id)?;
+    let Revert { revision } = parse(&body, "the revert request")?;
+    let made = studio.farm.revert_scene(id, revision).await?;
+    let preview = studio.previews.get(&studio.farm, id, Some(made.number)).await?;
+    Ok(Json(&preview.view).into_response())
+}
+
+/// `GET /api/scenes/{id}/revisions`: every revision, the first job's (0) first.
+pub async fn revisions(
+    State(studio): State<Arc<Studio>>,
+    Path(id): Path<String>,
+) -> Result<Json<Vec<RevisionInfo>>> {
+    Ok(Json(studio.farm.revisions(scene_id(&id)?)?))
+}
+
+/// `GET /api/scenes/{id}/scene.json?revision=N`: the revision's canonical scene (every file
+/// named by its hash), as a worker receives it.
+pub async fn manifest(
+    State(studio): State<Arc<Studio>>,
+    Path(id): Path<String>,
+    RawQuery(query): RawQuery,
+) -> Result<Response> {
+    let (_, manifest) = studio.farm.scene_revision(scene_id(&id)?, revision(query.as_deref())?)?;
+    Ok(([(axum::http::header::CONTENT_TYPE, "application/json")], manifest).into_response())
+}
+
+/// `GET /api/scenes/{id}/download?revision=N`: the revision as a scene folder (`scene.toml`
+/// and its files) in a tar, to check and render with the command line.
+pub async fn download(
+    State(studio): State<Arc<Studio>>,
+    Path(id): Path<String>,
+    RawQuery(query): RawQuery,
+) -> Result<Response> {
+    let id = scene_id(&id)?;
+    let (name, tar) = studio.farm.scene_folder(id, revision(query.as_deref())?).await?;
+    let disposition = format!("attachment; filename=\"{name}.tar\"");
+    let headers = [
+        (axum::http::header::CONTENT_TYPE, "application/x-tar".to_owned()),
+        (axum::http::header::CONTENT_DISPOSITION, disposition),
+    ];
+    Ok((headers, tar).into_response())
+}
+
+/// A shipped spectrum, as the library panel lists it.
+#[derive(Serialize)]
+pub struct LibrarySpectrum {
+    pub name: String,
+    /// What it is of (the file's `# material:` line).
+    pub material: String,
+    /// ρ(λ) at 380, 385, … 780 nm.
+    pub reflectance: Vec<f32>,
+    /// CIE 1976 L*a*b* under D65 (2° observer).
+    pub lab: [f64; 3],
+    pub colour_linear_srgb: [f32; 3],
+}
+
+/// Every shipped reflectance, loaded once.
+fn shipped() -> &'static [LibrarySpectrum] {
+    static SHIPPED: OnceLock<Vec<LibrarySpectrum>> = OnceLock::new();
+    SHIPPED.get_or_init(|| {
+        library::names()
+            .filter_map(|name| {
+                let loaded = library::load_reflectance(name).ok()?;
+                let (lab, colour_linear_srgb) = appearance(&loaded.spectrum);
+                Some(LibrarySpectrum {
+                    name: name.to_owned(),
+                    material: library::material(name).unwrap_or("").to_owned(),
+                    reflectance: loaded.spectrum.0.to_vec(),
+                    lab,
+                    colour_linear_srgb,
+                })
+            })
+            .collect()
+    })
+}
+
+/// `GET /api/spectra`: the shipped reflectance spectra, each with its curve and colour.
+pub async fn spectra() -> Result<Json<&'static [LibrarySpectrum]>> {
+    let all = tokio::task::spawn_blocking(shipped)
+        .await
+        .map_err(|e| CoordinatorError::Internal(e.to_string()))?;
+    Ok(Json(all))
+}
+
+/// The sun over one day at a site, for the page's sun-path chart.
+#[derive(Serialize)]
+pub struct SunPathPoint {
+    /// Local time, `HH:MM`.
+    pub time: String,
+    pub azimuth_deg: f64,
+    pub elevation_deg: f64,
+}
+
+/// `GET /api/sun-path?latitude_deg=…&longitude_deg=…&date=YYYY-MM-DD&utc_offset=+01:00`: where
+/// the sun is every 15 minutes of that local day, by the same solar position algorithm the
+/// render uses (NREL SPA).
+pub async fn sun_path(RawQuery(query): RawQuery) -> Result<Json<Vec<SunPathPoint>>> {
+    let field = |name: &str| -> Result<String> {
+        super::api::query_value(query.as_deref(), name)
+            .ok_or_else(|| CoordinatorError::Request(format!("{name}: missing from the query")))
+    };
+    let number =
+        |name: &str| -> Result<f64> {
+            field(name)?.parse::<f64>().ok().filter(|v| v.is_finite()).ok_or_else(|| {
+                CoordinatorError::Request(format!("{name}: not a number of degrees"))
+            })
+        };
+    let (latitude, longitude) = (number("latitude_deg")?, number("longitude_deg")?);
+    if !(-90.0..=90.0).contains(&latitude) || !(-180.0..=180.0).contains(&longitude) {
+        return Err(CoordinatorError::Request(
+            "latitude_deg must be within ±90 and longitude_deg within ±180".into(),
+        ));
+    }
+    let (date, offset) = (field("date")?, field("utc_offset")?);
+    let site = restauro_scene::sun::Site::new(latitude, longitude, 0.0);
+    let mut out = Vec::new();
+    for quarter in 0..96 {
+        let time = format!("{:02}:{:02}", quarter / 4, quarter % 4 * 15);
+        let at = format!("{date}T{time}:00{offset}");
+        let p = restauro_scene::sun::sun_position(site, &at, None)
+            .map_err(|e| CoordinatorError::Request(format!("date, utc_offset: {e}")))?;
+        out.push(SunPathPoint { time, azimuth_deg: p.azimuth_deg, elevation_deg: p.elevation_deg });
+    }
+    Ok(Json(out))
+}

@@ -1,0 +1,340 @@
+//! Edits of a scene, as the studio makes them: each changes the scene file (the one source of
+//! truth) in one place, and the changed file is then checked exactly as a file on disk is
+//! ([`crate::load::load`]), so an edit can never make a scene that `scene check` would refuse.
+//!
+//! An edit names what it changes by the names the file uses (a material, a view), and a name
+//! that does not exist is refused with the names that do.
+
+use crate::error::{Result, SceneError};
+use crate::scene_file::{Light, MaterialModel, SceneFile, SiteTime, SpectrumSource, View};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// One change to a scene. As JSON, an object whose `edit` names the kind (`material`, `sun`,
+/// `save-view`, `delete-view`) beside the kind's own fields.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "edit", rename_all = "kebab-case")]
+pub enum Edit {
+    Material(MaterialEdit),
+    Sun(SunEdit),
+    SaveView(SaveView),
+    DeleteView(DeleteView),
+}
+
+/// A material's surface in one of its states (`base` unless given): a shipped spectrum by its
+/// name (`restauro color --list`), the reflection model, the roughness.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialEdit {
+    pub material: String,
+    #[serde(default)]
+    pub state: Option<String>,
+    #[serde(default)]
+    pub spectrum: Option<String>,
+    #[serde(default)]
+    pub model: Option<MaterialModel>,
+    #[serde(default)]
+    pub roughness: Option<f64>,
+}
+
+/// The sun placed by its site and a local date and time (its direction then follows from
+/// NREL's solar position algorithm, as for any scene with a `site`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SunEdit {
+    pub latitude_deg: f64,
+    pub longitude_deg: f64,
+    #[serde(default)]
+    pub height_m: f64,
+    /// RFC 3339 with the site's UTC offset, e.g. `2026-12-21T17:00:00+01:00`.
+    pub datetime: String,
+}
+
+/// A view saved under its name (replacing a view of that name).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SaveView {
+    pub view: View,
+}
+
+/// A saved view removed.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DeleteView {
+    pub name: String,
+}
+
+/// The kinds of edit, as `edit` names them.
+pub const KINDS: [&str; 4] = ["material", "sun", "save-view", "delete-view"];
+
+/// Where an edit's refusals say they come from.
+const PLACE: &str = "edit";
+
+fn refuse(field: &str, problem: impl Into<String>) -> SceneError {
+    SceneError::invalid(Path::new(PLACE), field, problem)
+}
+
+impl Edit {
+    /// Applies the edit to `scene`; what changed, in a few words (a revision's summary). The
+    /// caller checks the whole scene afterwards.
+    pub fn apply(&self, scene: &mut SceneFile) -> Result<String> {
+        match self {
+            Edit::Material(e) => {
+                let state = e.state.as_deref().unwrap_or("base");
+                material_edit(
+                    scene,
+                    &e.material,
+                    state,
+                    e.spectrum.as_deref(),
+                    e.model,
+                    e.roughness,
+                )
+            }
+            Edit::Sun(e) => {
+                let site = SiteTime {
+                    latitude_deg: e.latitude_deg,
+                    longitude_deg: e.longitude_deg,
+                    height_m: e.height_m,
+                    datetime: e.datetime.clone(),
+                };
+                Ok(sun_edit(scene, site))
+            }
+            Edit::SaveView(SaveView { view }) => {
+                let summary = format!("view `{}` saved", view.name);
+                match scene.views.iter_mut().find(|v| v.name == view.name) {
+                    Some(old) => *old = view.clone(),
+                    None => scene.views.push(view.clone()),
+                }
+                Ok(summary)
+            }
+            Edit::DeleteView(DeleteView { name }) => {
+                let before = scene.views.len();
+                scene.views.retain(|v| v.name != *name);
+                if scene.views.len() == before {
+                    let names = scene.views.iter().map(|v| v.name.as_str());
+                    return Err(refuse("name", crate::load::unknown("view", name, names)));
+                }
+                Ok(format!("view `{name}` deleted"))
+            }
+        }
+    }
+}
+
+fn material_edit(
+    scene: &mut SceneFile,
+    material: &str,
+    state: &str,
+    spectrum: Option<&str>,
+    model: Option<MaterialModel>,
+    roughness: Option<f64>,
+) -> Result<String> {
+    if !scene.materials.contains_key(material) {
+        let names = scene.materials.keys().map(String::as_str);
+        return Err(refuse("material", crate::load::unknown("material", material, names)));
+    }
+    if state == "base" && spectrum.is_none() && model.is_none() && roughness.is_none() {
+        return Err(refuse("material", "nothing to change: give spectrum, model or roughness"));
+    }
+    let key = match spectrum {
+        Some(stem) => Some(library_spectrum(scene, stem)?),
+        None => None,
+    };
+    let m = scene.materials.get_mut(material).expect("checked above");
+    let mut changed = Vec::new();
+    if state == "base" {
+        if let Some(key) = &key {
+            m.reflectance.clone_from(key);
+            changed.push(format!("spectrum {key}"));
+        }
+        if let Some(model) = model {
+            m.model = model;
+            changed.push(format!("{model:?}"));
+        }
+        if let Some(r) = roughness {
+            m.roughness = Some(r);
+            changed.push(format!("roughness {r}"));
+        }
+        return Ok(format!("{material}: {}", changed.join(", ")));
+    }
+    let surface = match state {
+        "degraded" => &mut m.degraded,
+        "cleaned" => &mut m.cleaned,
+        other => {
+            return Err(refuse(
+                "state",
+                format!("unknown state `{}`; use base, degraded or cleaned", other.escape_debug()),
+            ));
+        }
+    };
+    if model.is_some() {
+        return Err(refuse("model", "a state changes the surface, not the model; edit the base"));
+    }
+    let surface = surface.get_or_insert_with(Default::default);
+    if let Some(key) = &key {
+        surface.reflectance = Some(key.clone());
+        changed.push(format!("spectrum {key}"));
+    }
+    if let Some(r) = roughness {
+        surface.roughness = Some(r);
+        changed.push(format!("roughness {r}"));
+    }
+    Ok(format!("{material} ({state}): {}", changed.join(", ")))
+}
+
+/// The scene's name for the shipped spectrum `stem`: the one that already names it, or a new
+/// entry (named by the stem, or the stem with a number when another spectrum has that name).
+fn library_spectrum(scene: &mut SceneFile, stem: &str) -> Result<String> {
+    if restauro_spectral::library::text(stem).is_none() {
+        let close = restauro_spectral::library::suggest(stem);
+        let hint = if close.is_empty() {
+            "see `restauro color --list`".to_owned()
+        } else {
+            format!("did you mean {}?", close.join(", "))
+        };
+        return Err(refuse(
+            "spectrum",
+            format!("no shipped spectrum is named `{}`; {hint}", stem.escape_debug()),
+        ));
+    }
+    let shipped = SpectrumSource::Library(stem.to_owned());
+    if let Some((key, _)) = scene.spectra.iter().find(|(_, s)| **s == shipped) {
+        return Ok(key.clone());
+    }
+    let key = std::iter::once(stem.to_owned())
+        .chain((2..).map(|n| format!("{stem}-{n}")))
+        .find(|k| !scene.spectra.contains_key(k))
+        .expect("an unused name exists");
+    scene.spectra.insert(key.clone(), shipped);
+    Ok(key)
+}
+
+/// Puts the scene's sun at `site` (its direction from the site and time from now on), or adds
+/// a clear-day sun there when the scene has none.
+fn sun_edit(scene: &mut SceneFile, site: SiteTime) -> String {
+    let summary = format!(
+        "sun at {:.4}°, {:.4}° on {}",
+        site.latitude_deg, site.longitude_deg, site.datetime
+    );
+    for light in &mut scene.lights {
+        if let Light::Sun { site: s, azimuth_deg, elevation_deg, .. } = light {
+            *s = Some(site);
+            *azimuth_deg = None;
+            *elevation_deg = None;
+            return summary;
+        }
+    }
+    let daylight = SpectrumSource::Illuminant { illuminant: "D55".into() };
+    let spectrum = match scene.spectra.iter().find(|(_, s)| **s == daylight) {
+        Some((key, _)) => key.clone(),
+        None => {
+            let key = std::iter::once("sunlight".to_owned())
+                .chain((2..).map(|n| format!("sunlight-{n}")))
+                .find(|k| !scene.spectra.contains_key(k))
+                .expect("an unused name exists");
+            scene.spectra.insert(key.clone(), daylight);
+            key
+        }
+    };
+    scene.lights.push(Light::Sun {
+        illuminance_lux: None,
+        preset: Some(crate::scene_file::SunPreset::Sun),
+        azimuth_deg: None,
+        elevation_deg: None,
+        site: Some(site),
+        spectrum,
+    });
+    summary
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::aosta;
+
+    fn scene() -> SceneFile {
+        crate::load::parse_scene(&aosta::generate(64, 32, 1).scene_toml, Path::new("aosta.toml"))
+            .unwrap()
+    }
+
+    fn edit(json: &str) -> Edit {
+        serde_json::from_str(json).unwrap()
+    }
+
+    #[test]
+    fn a_shipped_spectrum_is_added_once_and_bound_to_the_state() {
+        let mut s = scene();
+        let e = edit(
+            r#"{"edit":"material","material":"travertine","spectrum":"travertine_particulate_fine__eco_travertine1"}"#,
+        );
+        e.apply(&mut s).unwrap();
+        let key = &s.materials["travertine"].reflectance;
+        assert_eq!(
+            s.spectra[key],
+            SpectrumSource::Library("travertine_particulate_fine__eco_travertine1".into())
+        );
+        let spectra = s.spectra.len();
+        e.apply(&mut s).unwrap();
+        assert_eq!(s.spectra.len(), spectra, "the same spectrum is not added twice");
+        edit(r#"{"edit":"material","material":"travertine","state":"degraded","spectrum":"carbon_black_soot_proxy__usgs_GDS68"}"#)
+            .apply(&mut s)
+            .unwrap();
+        let degraded = s.materials["travertine"].degraded.as_ref().unwrap();
+        let key = degraded.reflectance.as_ref().unwrap();
+        assert_eq!(
+            s.spectra[key],
+            SpectrumSource::Library("carbon_black_soot_proxy__usgs_GDS68".into())
+        );
+    }
+
+    #[test]
+    fn unknown_names_are_refused_with_the_names_that_exist() {
+        let mut s = scene();
+        let e = edit(
+            r#"{"edit":"material","material":"travertin","spectrum":"marble_white_solid__eco_ward95"}"#,
+        );
+        let message = e.apply(&mut s).unwrap_err().to_string();
+        assert!(message.contains("did you mean `travertine`"), "{message}");
+        let e = edit(r#"{"edit":"material","material":"travertine","spectrum":"travertine_tufa"}"#);
+        let message = e.apply(&mut s).unwrap_err().to_string();
+        assert!(message.contains("travertine_tufa_solid__eco_ward73"), "{message}");
+        let e = edit(
+            r#"{"edit":"material","material":"travertine","state":"polished","roughness":0.2}"#,
+        );
+        assert!(e.apply(&mut s).unwrap_err().to_string().contains("unknown state `polished`"));
+        let e = edit(r#"{"edit":"delete-view","name":"portal"}"#);
+        assert!(e.apply(&mut s).unwrap_err().to_string().contains("view"));
+        assert_eq!(s, scene(), "a refused edit changes nothing");
+    }
+
+    #[test]
+    fn the_sun_takes_the_site_and_time_in_place_of_a_direction() {
+        let mut s = scene();
+        edit(r#"{"edit":"sun","latitude_deg":45.7371,"longitude_deg":7.3228,"datetime":"2026-12-21T17:00:00+01:00"}"#)
+            .apply(&mut s)
+            .unwrap();
+        let suns: Vec<&Light> =
+            s.lights.iter().filter(|l| matches!(l, Light::Sun { .. })).collect();
+        assert_eq!(suns.len(), 1);
+        let Light::Sun { site: Some(site), azimuth_deg: None, elevation_deg: None, .. } = suns[0]
+        else {
+            panic!("{:?}", suns[0]);
+        };
+        assert_eq!(site.datetime, "2026-12-21T17:00:00+01:00");
+    }
+
+    #[test]
+    fn views_are_saved_replaced_and_deleted_by_name() {
+        let mut s = scene();
+        let view = |x: f64| {
+            format!(
+                r#"{{"edit":"save-view","view":{{"name":"portal","position":[{x},-10,1.6],"target":[0,0,2]}}}}"#
+            )
+        };
+        edit(&view(1.0)).apply(&mut s).unwrap();
+        edit(&view(2.0)).apply(&mut s).unwrap();
+        assert_eq!(s.views.len(), 1);
+        assert_eq!(s.views[0].position, [2.0, -10.0, 1.6]);
+        edit(r#"{"edit":"delete-view","name":"portal"}"#).apply(&mut s).unwrap();
+        assert!(s.views.is_empty());
+    }
+}

@@ -1,0 +1,256 @@
+//! Editing a scene in the studio, in a real browser against a real coordinator: a stone's
+//! spectrum swapped for another shipped one (the panel and the real-time view change as the
+//! spectra say they must), the sun set by date and time on its day's path, a view saved and
+//! flown to, an earlier revision opened again, and a refused edit shown in the server's words.
+//! Screenshots in `<target>/tmp/studio/`.
+
+use restauro_image::image_files::{MAX_PIXELS, read_exr};
+use restauro_tests::browser::{Browser, available, png_rgb};
+use std::path::PathBuf;
+
+/// Screenshots go to `<target>/tmp/studio/`.
+fn shots() -> PathBuf {
+    PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("studio")
+}
+use restauro_tests::http::request;
+use restauro_tests::{CLIENT_TOKEN, Coordinator, Worker, aosta_scene, client, submit, text};
+
+const BEARER: &str = "Bearer client-token-for-tests";
+
+/// IEC 61966-2-1: an 8-bit sRGB value to linear.
+fn linear(v: u8) -> f64 {
+    let c = f64::from(v) / 255.0;
+    if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
+}
+
+/// The linear RGB of the 21 × 21 screen pixels around where the surface last clicked is drawn
+/// now (the view may have moved on the page since).
+fn around_pick(b: &mut Browser, name: &str) -> Vec<[f64; 3]> {
+    let at = b.eval("window.studioViewer.onScreen(window.studioViewer.picked)");
+    let (cx, cy) = (at[0].as_f64().unwrap() as usize, at[1].as_f64().unwrap() as usize);
+    let (rgb, width) = png_rgb(&b.screenshot(&shots().join(name)));
+    let mut out = Vec::new();
+    for py in cy - 10..=cy + 10 {
+        for px in cx - 10..=cx + 10 {
+            out.push(rgb[py * width + px].map(linear));
+        }
+    }
+    out
+}
+
+/// Per channel, the median of after/before over the pixels whose colour changed: those of the
+/// edited material (a click may land on the edge of a block, so a window is read, and the
+/// pixels of other materials, which do not change, are left out).
+fn scaled(before: &[[f64; 3]], after: &[[f64; 3]]) -> [f64; 3] {
+    let changed: Vec<usize> = (0..before.len())
+        .filter(|&i| (0..3).any(|k| (after[i][k] - before[i][k]).abs() > 0.01))
+        .collect();
+    assert!(changed.len() >= 40, "only {} pixels changed around the click", changed.len());
+    std::array::from_fn(|k| {
+        let mut r: Vec<f64> = changed.iter().map(|&i| after[i][k] / before[i][k]).collect();
+        r.sort_by(f64::total_cmp);
+        r[r.len() / 2]
+    })
+}
+
+/// `restauro color`'s linear sRGB and L*a*b* of a shipped spectrum under D65.
+fn restauro_colour(spectrum: &str) -> ([f64; 3], [f64; 3]) {
+    let o = restauro_tests::restauro(&["color", spectrum, "--json"]);
+    let c: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let rgb = std::array::from_fn(|k| c["sample"]["rgb_linear"][k].as_f64().unwrap());
+    let lab = ["l", "a", "b"].map(|k| c["sample"]["lab"][k].as_f64().unwrap());
+    (rgb, lab)
+}
+
+fn set_value(b: &mut Browser, id: &str, value: &str) {
+    b.eval(&format!(
+        "(() => {{ const e = document.getElementById('{id}'); e.value = {value:?}; \
+         e.dispatchEvent(new Event('input')); e.dispatchEvent(new Event('change')); }})()"
+    ));
+}
+
+#[test]
+fn a_restorer_swaps_a_stone_sets_the_sun_and_keeps_a_view() {
+    if !available("studio_editing") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (c, studio) = Coordinator::with_studio(d);
+    let _worker = Worker::start(d, &c.url, "local-1", &[]);
+    let scene = aosta_scene(d, 160, 90);
+    let token = d.join("client.token");
+    let first = submit(&scene, &["--spp", "1", "--tile", "32"], &c.url, &token);
+    let mut b = Browser::launch(1280, 900);
+    b.goto(&format!("{studio}#token={CLIENT_TOKEN}"));
+    b.wait_for("the model", "document.getElementById('view').dataset.revision === '0'");
+    b.wait_for("the sun's path", "document.querySelector('#sun-chart svg polyline')");
+
+    // Click the facade; the material panel opens with the controls that change it.
+    b.click("#view");
+    b.wait_for("the material editor", "document.getElementById('material-search')");
+    // (The panel narrows the view: the colour before is read with it open.)
+    let before = around_pick(&mut b, "11-edit-before.png");
+    let stone =
+        b.eval("document.querySelector('#material .body > table tr:nth-child(3) td').textContent");
+    let stone = stone.as_str().unwrap().to_owned();
+    let toml: toml::Table = toml::from_str(&std::fs::read_to_string(&scene).unwrap()).unwrap();
+    let alias = toml["materials"][stone.as_str()]["reflectance"].as_str().unwrap().to_owned();
+    let old = toml["spectra"][alias.as_str()].as_str().unwrap().to_owned();
+
+    // Search the shipped spectra, choose a red brick, assign it to the base state.
+    set_value(&mut b, "material-search", "brick darkred");
+    let listed =
+        b.eval("[...document.getElementById('material-spectrum').options].map(o => o.value)");
+    let brick = "brick_building_darkred__usgs_GDS350";
+    assert_eq!(listed, serde_json::json!([brick]), "{listed}");
+    set_value(&mut b, "material-spectrum", brick);
+    b.wait_for(
+        "the candidate plotted",
+        "document.querySelector('#material polyline.state-candidate')",
+    );
+    b.click("#material-assign");
+    b.wait_for("revision 1", "document.getElementById('view').dataset.revision === '1'");
+    b.wait_for(
+        "the panel redrawn",
+        &format!("document.querySelector('#material tr[data-state=base]').cells[1].textContent === '{brick}'"),
+    );
+    let row = b.eval("[...document.querySelector('#material tr[data-state=base]').cells].map(c => c.textContent)");
+    let (brick_rgb, brick_lab) = restauro_colour(brick);
+    for k in 0..3 {
+        let shown: f64 = row[3 + k].as_str().unwrap().parse().unwrap();
+        assert!(
+            (shown - brick_lab[k]).abs() <= 0.051,
+            "L*a*b*[{k}]: shown {shown}, restauro color {}",
+            brick_lab[k]
+        );
+    }
+    // The real-time view shades the stone with its new colour under the same light: each
+    // channel of the clicked surface scales as the colours restauro computes do.
+    let after = around_pick(&mut b, "12-edit-after.png");
+    let (old_rgb, _) = restauro_colour(&old);
+    let expected: Vec<f64> = (0..3).map(|k| brick_rgb[k] / old_rgb[k]).collect();
+    let seen = scaled(&before, &after);
+    for k in 0..3 {
+        assert!(
+            (seen[k] / expected[k] - 1.0).abs() < 0.05,
+            "channel {k}: the view's colour scaled by {:.3}, the spectra say {:.3}",
+            seen[k],
+            expected[k]
+        );
+    }
+    assert!(seen[0] / seen[2] > 1.5, "the stone turned red: {seen:?}");
+
+    // A snapshot of revision 1 from the scene's camera: changed from the render of revision 0
+    // as the spectra say, and bit for bit what the command line renders of the revision downloaded as a folder.
+    b.click("#home");
+    b.eval("document.getElementById('snap-spp').value = 1");
+    b.click("#take-snapshot");
+    b.wait_for("the snapshot's row", "document.querySelectorAll('#jobs tbody tr').length === 2");
+    let snap = b.eval(&format!(
+        "[...document.querySelectorAll('#jobs tbody tr')].map(r => r.dataset.job).find(j => j !== '{first}')"
+    ));
+    let snap = snap.as_str().unwrap().to_owned();
+    let row = format!("document.querySelector('#jobs tr[data-job=\"{snap}\"]')");
+    b.wait_for("the snapshot done", &format!("{row}.children[1].textContent === 'done'"));
+    let fetched = |job: &str, out: &str| {
+        let o = client(&["fetch", job, "--out", d.join(out).to_str().unwrap()], &c.url, &token);
+        assert!(o.status.success(), "{}", text(&o));
+        read_exr(&d.join(out).join("aosta.exr"), MAX_PIXELS).unwrap().pixels
+    };
+    let (shot, original) = (fetched(&snap, "snapshot"), fetched(&first, "original"));
+    // Brick is darker than the conglomerate and reflects less of the short waves: the image's
+    // total Y falls, and Z (short waves) falls further than X.
+    let total = |px: &[[f32; 3]], k: usize| px.iter().map(|p| f64::from(p[k])).sum::<f64>();
+    let ratio = |k: usize| total(&shot, k) / total(&original, k);
+    let (x, y, z) = (ratio(0), ratio(1), ratio(2));
+    assert!(y < 0.99 && z < x, "X, Y, Z of the snapshot over the original: {x}, {y}, {z}");
+    let href = b.eval("document.getElementById('download').getAttribute('href')");
+    let tar = request(
+        &c.studio.clone().unwrap(),
+        "GET",
+        href.as_str().unwrap(),
+        &[("Authorization", BEARER)],
+        b"",
+    );
+    assert_eq!(tar.status, 200, "{}", tar.text());
+    assert!(tar.header("content-disposition").unwrap().contains("aosta-revision-1.tar"));
+    tar::Archive::new(std::io::Cursor::new(tar.body)).unpack(d.join("downloaded")).unwrap();
+    let folder = d.join("downloaded/aosta-revision-1/scene.toml");
+    let o = restauro_tests::restauro(&["scene", "check", folder.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+    let out = d.join("rendered");
+    let o = restauro_tests::restauro(&[
+        "render",
+        folder.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--spp",
+        "1",
+        "--integrator",
+        "path",
+        "--width",
+        "160",
+        "--height",
+        "90",
+        "--progress",
+        "none",
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let rendered = read_exr(&out.join("scene.exr"), MAX_PIXELS).unwrap().pixels;
+    let differing = rendered.iter().zip(&shot).filter(|(p, q)| p != q).count();
+    assert_eq!(
+        (rendered.len(), differing),
+        (shot.len(), 0),
+        "the CLI render of the download differs"
+    );
+
+    // The sun at 17:00 on 21 December: after sunset at Aosta, on the day's path.
+    set_value(&mut b, "sun-date", "2026-12-21");
+    set_value(&mut b, "sun-offset", "+01:00");
+    set_value(&mut b, "sun-time", "1020");
+    b.wait_for(
+        "the day's path",
+        "document.getElementById('sun-time-shown').textContent === '17:00' && \
+         document.getElementById('sun-position').textContent.includes('below the horizon')",
+    );
+    b.click("#set-sun");
+    b.wait_for("revision 2", "document.getElementById('view').dataset.revision === '2'");
+    let now = b.eval("document.getElementById('sun-now').textContent");
+    assert!(now.as_str().unwrap().contains("(2026-12-21T17:00:00+01:00)"), "{now}");
+    assert!(now.as_str().unwrap().contains("elevation -"), "{now}");
+    b.screenshot(&shots().join("13-sun-at-dusk.png"));
+    // A latitude off the Earth is refused, in the server's words, and shown.
+    b.eval("document.getElementById('sun-latitude').value = '100'");
+    b.click("#set-sun");
+    b.wait_for("the refusal", "!document.getElementById('problem').hidden");
+    let problem = b.eval("document.getElementById('problem').textContent");
+    assert!(problem.as_str().unwrap().contains("lights[0].site"), "{problem}");
+    assert_eq!(b.eval("document.getElementById('view').dataset.revision"), "2");
+    set_value(&mut b, "sun-latitude", "45.7371");
+
+    // A view saved under a name, then flown to from the scene's camera.
+    let pose = "JSON.stringify(window.studioViewer.pose().position.map(v => v.toFixed(6)))";
+    b.eval("window.studioViewer.camera.position.x += 2; window.studioViewer.controls.update()");
+    let saved = b.eval(pose);
+    set_value(&mut b, "view-name", "portal, closer");
+    b.click("#save-view");
+    b.wait_for("revision 3", "document.getElementById('view').dataset.revision === '3'");
+    let names = b.eval("[...document.getElementById('view-picker').options].map(o => o.value)");
+    assert_eq!(names, serde_json::json!(["", "portal, closer"]));
+    b.click("#home");
+    assert_ne!(b.eval(pose), saved);
+    set_value(&mut b, "view-picker", "portal, closer");
+    assert_eq!(b.eval(pose), saved, "flown to the saved view");
+
+    // Revision 0 opened again: the stone as submitted.
+    set_value(&mut b, "revision-picker", "0");
+    b.wait_for("revision 0", "document.getElementById('view').dataset.revision === '0'");
+    assert_eq!(b.eval("document.getElementById('revert').hidden"), false);
+    b.click("#home");
+    b.screenshot(&shots().join("14-revision-0.png"));
+    let revisions =
+        b.eval("[...document.getElementById('revision-picker').options].map(o => o.textContent)");
+    assert_eq!(revisions.as_array().unwrap().len(), 4, "{revisions}");
+    assert!(revisions[1].as_str().unwrap().contains(brick), "{revisions}");
+}

@@ -133,6 +133,20 @@ function saveView() {
   applyEdit({ edit: 'save-view', view: { name, position, target, up, vertical_fov_deg } });
 }
 
+function walking(on) {
+  $('walk').setAttribute('aria-pressed', String(on));
+  $('walk-hint').hidden = !on;
+}
+
+// Walk mode on or off (G): the eye at 1.6 m over the ground under the camera.
+function toggleWalk() {
+  if (!viewer || !viewer.view) return;
+  const on = !viewer.walker.active;
+  const walks = viewer.walk(on);
+  if (on && !walks) showError(new Error('there is no ground under the camera to stand on: orbit over the model first'));
+  walking(walks);
+}
+
 function flyTo(name) {
   const v = viewer.view.views.find((x) => x.name === name);
   if (v) viewer.fly(v); else viewer.home();
@@ -264,12 +278,12 @@ document.addEventListener('DOMContentLoaded', () => {
   $('show-shortcuts').addEventListener('click', shortcuts);
   $('scene-picker').addEventListener('change', (e) => e.target.value && open(e.target.value));
   $('snapshot-form').addEventListener('submit', (e) => { e.preventDefault(); takeSnapshot(); });
-  $('home').addEventListener('click', () => viewer && viewer.view && viewer.home());
+  $('home').addEventListener('click', () => { if (viewer && viewer.view) { viewer.home(); walking(false); } });
   $('revision-picker').addEventListener('change', (e) => open(openScene, Number(e.target.value)));
   $('revert').addEventListener('click', async () => {
     try { await present(await api.revert(openScene, viewer.view.revision)); } catch (e) { showError(e); }
   });
-  $('view-picker').addEventListener('change', (e) => viewer && flyTo(e.target.value));
+  $('view-picker').addEventListener('change', (e) => { if (viewer) { flyTo(e.target.value); walking(false); } });
   $('save-view').addEventListener('click', () => viewer && viewer.view && saveView());
   $('delete-view').addEventListener('click', () => {
     const name = $('view-picker').value;
@@ -280,11 +294,16 @@ document.addEventListener('DOMContentLoaded', () => {
   light.init(showError);
   $('as-rendered').addEventListener('click', () => shown && show(shown, false));
   $('as-seen').addEventListener('click', () => shown && show(shown, true));
+  $('walk').addEventListener('click', () => toggleWalk());
   document.addEventListener('keydown', (e) => {
     if (e.target instanceof HTMLInputElement || e.target instanceof HTMLSelectElement) return;
+    if (viewer && viewer.walker.active && viewer.walker.key(e, true)) { e.preventDefault(); return; }
     if (e.key === '?') shortcuts();
-    if ((e.key === 'h' || e.key === 'H') && viewer && viewer.view) viewer.home();
+    if ((e.key === 'h' || e.key === 'H') && viewer && viewer.view) { viewer.home(); walking(false); }
+    if (e.key === 'g' || e.key === 'G') toggleWalk();
+    if (e.key === 'Escape' && viewer && viewer.walker.active) toggleWalk();
   });
+  document.addEventListener('keyup', (e) => { if (viewer) viewer.walker.key(e, false); });
   // `restauro studio` prints an address whose fragment carries the token: it is taken from
   // there (a fragment never reaches a server or a log) and removed from the address bar.
   const token = new URLSearchParams(location.hash.slice(1)).get('token');

@@ -5,6 +5,7 @@
 import * as THREE from './vendor/three/three.module.js';
 import { OrbitControls } from './vendor/three/addons/controls/OrbitControls.js';
 import { GLTFLoader } from './vendor/three/addons/loaders/GLTFLoader.js';
+import { Walker } from './walk.js';
 
 export class Viewer {
   constructor(canvas) {
@@ -23,6 +24,9 @@ export class Viewer {
     this.sun.position.set(-0.5, 1.0, 0.8);
     this.sun.castShadow = true;
     this.sun.shadow.mapSize.set(2048, 2048);
+    // Offsets against shadow acne (a surface shadowing itself in bands).
+    this.sun.shadow.bias = -0.0005;
+    this.sun.shadow.normalBias = 0.05;
     this.scene.add(this.sun, this.sun.target);
     this.renderer.shadowMap.enabled = true;
     this.model = null;
@@ -32,6 +36,11 @@ export class Viewer {
     // A click (not the end of a drag) picks the surface under the pointer.
     let down = null;
     canvas.addEventListener('pointerdown', (e) => { down = [e.clientX, e.clientY]; });
+    // Walking, a drag looks around.
+    this.walker = new Walker(this);
+    canvas.addEventListener('pointermove', (e) => {
+      if (this.walker.active && (e.buttons & 1)) this.walker.look(e.movementX, e.movementY);
+    });
     canvas.addEventListener('pointerup', (e) => {
       if (down && Math.hypot(e.clientX - down[0], e.clientY - down[1]) < 4) this.pick(e);
       down = null;
@@ -128,11 +137,35 @@ export class Viewer {
     c.updateProjectionMatrix();
   }
 
+  // Walking on (true: false when there is no ground under the camera) or off; orbiting then
+  // turns around the point 5 m ahead.
+  walk(on) {
+    if (on) {
+      if (!this.model || !this.walker.start()) return false;
+      this.controls.enabled = false;
+      return true;
+    }
+    if (!this.walker.active) return false;
+    this.walker.stop();
+    this.camera.up.set(0, 1, 0);
+    this.controls.target.copy(this.ahead(5));
+    this.controls.enabled = true;
+    this.controls.update();
+    return false;
+  }
+
+  // The point `m` metres ahead of the camera.
+  ahead(m) {
+    const d = new THREE.Vector3();
+    this.camera.getWorldDirection(d);
+    return this.camera.position.clone().addScaledVector(d, m);
+  }
+
   // The camera as it stands, for a snapshot (the preview's coordinates).
   pose() {
     return {
       position: this.camera.position.toArray(),
-      target: this.controls.target.toArray(),
+      target: (this.walker.active ? this.ahead(5) : this.controls.target).toArray(),
       up: this.camera.up.toArray(),
       vertical_fov_deg: this.camera.fov,
     };
@@ -145,6 +178,7 @@ export class Viewer {
 
   // To the pose `c` ({position, target, up, vertical_fov_deg}, the preview's coordinates).
   fly(c) {
+    this.walk(false);
     this.camera.fov = c.vertical_fov_deg;
     this.camera.up.set(...c.up);
     this.camera.position.set(...c.position);

@@ -185,6 +185,13 @@ impl Browser {
         }
     }
 
+    /// Holds a key (`"ArrowUp"`, …) down for `time`, then lets it go.
+    pub fn hold(&mut self, key: &str, time: Duration) {
+        self.call("Input.dispatchKeyEvent", json!({ "type": "keyDown", "key": key, "code": key }));
+        std::thread::sleep(time);
+        self.call("Input.dispatchKeyEvent", json!({ "type": "keyUp", "key": key, "code": key }));
+    }
+
     /// Writes what the page shows now to `path` as a PNG, and returns its bytes.
     pub fn screenshot(&mut self, path: &Path) -> Vec<u8> {
         use base64::Engine as _;

@@ -253,4 +253,35 @@ fn a_restorer_swaps_a_stone_sets_the_sun_and_keeps_a_view() {
         b.eval("[...document.getElementById('revision-picker').options].map(o => o.textContent)");
     assert_eq!(revisions.as_array().unwrap().len(), 4, "{revisions}");
     assert!(revisions[1].as_str().unwrap().contains(brick), "{revisions}");
+
+    // Walking. From 5 m up, 9 m in front of the middle buttress (its face at y = −0.9 m, the
+    // paving at z = 0 to 0.005 m), G stands the eye 1.6 m over the paving; holding ↑ walks north
+    // and the buttress stops the walker its body's radius (0.3 m) short.
+    let world = "(() => { const v = window.studioViewer, p = v.camera.position, o = v.view.offset_m; \
+                 return [p.x + o[0], -p.z + o[1], p.y + o[2]]; })()";
+    b.eval(
+        "(() => { const v = window.studioViewer, o = v.view.offset_m; \
+         const glb = (x, y, z) => [x - o[0], z - o[2], -(y - o[1])]; \
+         v.fly({ position: glb(0, -9, 5), target: glb(0, 0, 5), up: [0, 1, 0], vertical_fov_deg: 60 }); })()",
+    );
+    b.press("g");
+    b.wait_for(
+        "walking",
+        "document.getElementById('walk').getAttribute('aria-pressed') === 'true'",
+    );
+    let at = b.eval(world);
+    let (x, y, z) = (at[0].as_f64().unwrap(), at[1].as_f64().unwrap(), at[2].as_f64().unwrap());
+    assert!(x.abs() < 1e-6 && (y + 9.0).abs() < 1e-6, "{at}");
+    assert!((1.6..=1.606).contains(&z), "eye at {z} m, not 1.6 m over the paving");
+    b.hold("ArrowUp", std::time::Duration::from_secs(9));
+    let at = b.eval(world);
+    let y = at[1].as_f64().unwrap();
+    assert!((-1.35..=-1.19).contains(&y), "stopped at y = {y} m, not short of the buttress: {at}");
+    // Over the paving's slabs (up to 5 mm high) and its mortar bed (−20 mm) between them.
+    assert!((1.58..=1.606).contains(&at[2].as_f64().unwrap()), "{at}");
+    b.screenshot(&shots().join("15-walked-to-the-wall.png"));
+    b.hold("ArrowUp", std::time::Duration::from_secs(1));
+    assert_eq!(b.eval(world)[1], at[1], "the wall still stops the walker");
+    b.press("g");
+    assert_eq!(b.eval("document.getElementById('walk').getAttribute('aria-pressed')"), "false");
 }

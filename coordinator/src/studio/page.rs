@@ -24,6 +24,7 @@ const FILES: &[(&str, &str, &str)] = &[
     script!("viewer.js"),
     script!("material.js"),
     script!("light.js"),
+    script!("walk.js"),
     script!("vendor/three/three.module.js"),
     script!("vendor/three/three.core.js"),
     script!("vendor/three/addons/controls/OrbitControls.js"),

@@ -18,92 +18,22 @@
 //! sources (its `emitter` channel: the sky) are left out.
 
 use crate::cli::CompareArgs;
-use crate::sheet::{BACKGROUND, Grid, INK, Rgb8, colour_bar, colour_map};
+use crate::sheet::{BACKGROUND, Grid, INK, Rgb8, colour_bar};
 use anyhow::{Context, Result, bail};
+use restauro_image::delta_e::{
+    DeltaEMap, DeltaEStats, delta_e_map, map_rgb, scale_max, white_luminance,
+};
 use restauro_image::image_files::{MAX_PIXELS, PngPixels, XyzImage, read_exr, write_png};
 use restauro_spectral::appearance::d65_white;
-use restauro_spectral::ciede2000::ciede2000;
-use restauro_spectral::display::{DisplayParams, Exposure, encode, exposure_scale, to_u8};
+use restauro_spectral::display::{DisplayParams, Exposure, encode, to_u8};
 use restauro_spectral::rgb_space::RgbSpace;
-use restauro_spectral::{Lab, Xyz};
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::Path;
 
-/// The ΔE00 map of two images and its statistics.
-pub struct DeltaEMap {
-    /// Per pixel; NaN where either image shows a light source.
-    pub values: Vec<f32>,
-    pub stats: DeltaEStats,
-}
-
-#[derive(Clone, Debug, Serialize)]
-pub struct DeltaEStats {
-    /// The pixels compared (light sources left out).
-    pub pixels: usize,
-    pub mean: f64,
-    pub median: f64,
-    pub p95: f64,
-    pub max: f64,
-    /// ΔE00 above which a pixel counts as changed.
-    pub threshold: f64,
-    /// The share (0–1) of the compared pixels above the threshold.
-    pub share_above_threshold: f64,
-}
-
-/// ΔE00 between `a` and `b` (the same size) pixel by pixel, in CIELAB relative to `white`.
-pub fn delta_e_map(a: &XyzImage, b: &XyzImage, white: Xyz, threshold: f64) -> DeltaEMap {
-    let light = |image: &XyzImage, i: usize| image.emitter.as_ref().is_some_and(|m| m[i]);
-    let xyz = |p: [f32; 3]| Xyz::from_array(p.map(f64::from));
-    let values: Vec<f32> = (0..a.pixels.len())
-        .map(|i| {
-            if light(a, i) || light(b, i) {
-                f32::NAN
-            } else {
-                let (la, lb) = (
-                    Lab::from_xyz(xyz(a.pixels[i]), white),
-                    Lab::from_xyz(xyz(b.pixels[i]), white),
-                );
-                ciede2000(la, lb) as f32
-            }
-        })
-        .collect();
-    let mut finite: Vec<f64> =
-        values.iter().filter(|v| v.is_finite()).map(|&v| f64::from(v)).collect();
-    finite.sort_by(f64::total_cmp);
-    let n = finite.len();
-    // The value below which a share q of the pixels lie (the nearest rank, ⌊q·n⌋).
-    let at = |q: f64| if n == 0 { 0.0 } else { finite[((n as f64 * q) as usize).min(n - 1)] };
-    let stats = DeltaEStats {
-        pixels: n,
-        mean: finite.iter().sum::<f64>() / n.max(1) as f64,
-        median: at(0.5),
-        p95: at(0.95),
-        max: finite.last().copied().unwrap_or(0.0),
-        threshold,
-        share_above_threshold: finite.iter().filter(|&&v| v > threshold).count() as f64
-            / n.max(1) as f64,
-    };
-    DeltaEMap { values, stats }
-}
-
 /// The map as an image: viridis up to `scale_max`, light sources grey.
 pub fn map_picture(map: &DeltaEMap, width: usize, height: usize, scale_max: f64) -> Rgb8 {
-    let mut picture = colour_map(&map.values, width as u32, height as u32, scale_max);
-    for (i, v) in map.values.iter().enumerate() {
-        if v.is_nan() {
-            picture.data[i * 3..i * 3 + 3].copy_from_slice(&[70, 70, 70]);
-        }
-    }
-    picture
-}
-
-/// A round top for a ΔE00 scale: the 99th percentile up to the next multiple of 5 (at least 5).
-pub fn scale_max(values: &[f32]) -> f64 {
-    let mut finite: Vec<f32> = values.iter().copied().filter(|v| v.is_finite()).collect();
-    finite.sort_by(f32::total_cmp);
-    let p99 = f64::from(finite.get(finite.len() * 99 / 100).copied().unwrap_or(1.0));
-    ((p99 / 5.0).ceil() * 5.0).max(5.0)
+    Rgb8 { width: width as u32, height: height as u32, data: map_rgb(map, scale_max) }
 }
 
 /// An image as the display shows it (sRGB, 8 bits) with `exposure`.
@@ -131,11 +61,6 @@ struct Summary<'a> {
     white: &'a str,
     delta_e00: &'a DeltaEStats,
     files: Vec<&'static str>,
-}
-
-/// The reference white's luminance for `image` under `--white`.
-fn white_luminance(image: &XyzImage, white: Exposure) -> f64 {
-    1.0 / exposure_scale(&image.pixels, white)
 }
 
 /// Compares two images already read; writes the files into `out` and returns the summary text.
@@ -249,34 +174,4 @@ pub fn run(args: &CompareArgs) -> Result<String> {
     let b = read_exr(&args.b, MAX_PIXELS)?;
     let (an, bn) = (args.a.display().to_string(), args.b.display().to_string());
     compare_images((&a, &an), (&b, &bn), (white, &args.white), args.threshold, &args.out)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Two greys of known CIELAB: L* 50 against L* 55 is ΔE00 4.56 (Sharma, Wu & Dalal's
-    /// formula for a pure lightness step at L̄* = 52.5: ΔL/S_L with S_L = 1 + 0.015(L̄−50)²/√(20 +
-    /// (L̄−50)²)).
-    #[test]
-    fn a_lightness_step_has_the_published_difference() {
-        let white = d65_white();
-        let grey = |l: f64| {
-            let xyz = Lab { l, a: 0.0, b: 0.0 }.to_xyz(white);
-            [xyz.x as f32, xyz.y as f32, xyz.z as f32]
-        };
-        let a = XyzImage::new(2, 1, vec![grey(50.0); 2]);
-        let mut b = XyzImage::new(2, 1, vec![grey(55.0), grey(50.0)]);
-        let map = delta_e_map(&a, &b, white, 2.0);
-        let (lbar, dl) = (52.5f64, 5.0f64);
-        let sl = 1.0 + 0.015 * (lbar - 50.0).powi(2) / (20.0 + (lbar - 50.0).powi(2)).sqrt();
-        assert!((f64::from(map.values[0]) - dl / sl).abs() < 1e-3, "{:?}", map.values);
-        assert_eq!(map.values[1], 0.0);
-        assert_eq!((map.stats.pixels, map.stats.share_above_threshold), (2, 0.5));
-        // A light source in either image is left out.
-        b.emitter = Some(vec![true, false]);
-        let map = delta_e_map(&a, &b, white, 2.0);
-        assert!(map.values[0].is_nan());
-        assert_eq!(map.stats.pixels, 1);
-    }
 }

@@ -659,7 +659,8 @@ fn analyse(
         let white_cd_m2 = horizontal_illuminance_lux(scene) / std::f64::consts::PI;
         let white = d65_white().scale(white_cd_m2);
         // The two share the scene's geometry, so their skies (left out) are the same pixels.
-        let map = crate::compare::delta_e_map(&found.rendered, &cleaned.rendered, white, 2.0);
+        let map =
+            restauro_image::delta_e::delta_e_map(&found.rendered, &cleaned.rendered, white, 2.0);
         cleaning.push(CleaningDifference {
             light,
             white_cd_m2,
@@ -670,7 +671,7 @@ fn analyse(
         maps.push(map);
     }
     let all: Vec<f32> = maps.iter().flat_map(|m| m.values.iter().copied()).collect();
-    let scale_max = crate::compare::scale_max(&all);
+    let scale_max = restauro_image::delta_e::scale_max(&all);
     let cells = vec![
         maps.iter()
             .map(|map| {

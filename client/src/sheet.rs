@@ -365,25 +365,8 @@ impl Grid<'_> {
     }
 }
 
-/// matplotlib's viridis sampled at t = 0, 1/8, …, 1, as 0xRRGGBB.
-const VIRIDIS: [u32; 9] =
-    [0x440154, 0x472d7b, 0x3b528b, 0x2c728e, 0x21918c, 0x28ae80, 0x5ec962, 0xaddc30, 0xfde725];
-
-/// A perceptually ordered colour map (viridis): t in [0,1] (clamped; NaN → magenta
-/// [255,0,255], which viridis never produces, so invalid values stand out) → sRGB.
-pub fn viridis(t: f64) -> [u8; 3] {
-    if t.is_nan() {
-        return [255, 0, 255];
-    }
-    let s = t.clamp(0.0, 1.0) * 8.0;
-    let i = (s.floor() as usize).min(7);
-    let f = s - i as f64;
-    let channel = |hex: u32, c: usize| f64::from((hex >> (16 - 8 * c)) & 0xff);
-    std::array::from_fn(|c| {
-        let (a, b) = (channel(VIRIDIS[i], c), channel(VIRIDIS[i + 1], c));
-        (a + f * (b - a)).round() as u8
-    })
-}
+/// The viridis colour map, shared with the studio's ΔE00 layer.
+pub use restauro_image::delta_e::viridis;
 
 /// A map image: each value v (row-major, width×height) coloured viridis(v / max_value).
 /// Missing values and NaN show magenta; with a non-positive `max_value` every positive value

@@ -51,3 +51,6 @@ export const spectra = () => call('GET', '/api/spectra');
 export const sunPath = (site) => call('GET', `/api/sun-path?${new URLSearchParams(site)}`);
 export const takeSnapshot = (id, request) =>
   call('POST', `/api/scenes/${encodeURIComponent(id)}/snapshots`, request);
+const pair = (a, b) => `a=${encodeURIComponent(a)}&b=${encodeURIComponent(b)}`;
+export const compare = (a, b) => call('GET', `/api/compare?${pair(a, b)}`);
+export const compareMapUrl = (a, b) => `/api/compare/delta-e.png?${pair(a, b)}`;

@@ -27,6 +27,8 @@ export function jobGone({ id }) { jobs.delete(id); renderJobs(); }
 export function worker(w) { workers.set(w.id, { ...w, at: Date.now() }); renderWorkers(); }
 export function workerGone({ id }) { workers.delete(id); renderWorkers(); }
 export function jobById(id) { return jobs.get(id); }
+// The finished jobs, oldest first.
+export function doneJobs() { return [...jobs.values()].filter((j) => j.state === 'done'); }
 
 function cell(text, cls) {
   const td = document.createElement('td');

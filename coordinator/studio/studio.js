@@ -5,6 +5,7 @@ import * as farm from './farm.js';
 import { Viewer } from './viewer.js';
 import * as material from './material.js';
 import * as light from './light.js';
+import * as compare from './compare.js';
 
 const $ = (id) => document.getElementById(id);
 let events = null;
@@ -210,10 +211,11 @@ function follow() {
   events = new EventSource('/api/events');
   const on = (kind, handler) => events.addEventListener(kind, (e) => handler(JSON.parse(e.data)));
   events.onopen = () => status('live', true);
-  on('snapshot', farm.snapshot);
+  on('snapshot', (data) => { farm.snapshot(data); compare.refresh(); });
   on('job', (j) => {
     const isNew = !farm.jobById(j.id);
     farm.job(j);
+    if (j.state === 'done') compare.refresh();
     if (shown && shown.id === j.id) show(j);
     if (awaited === j.id && j.state === 'done') { awaited = null; show(j); }
     if (isNew) listScenes().catch(showError);
@@ -292,6 +294,7 @@ document.addEventListener('DOMContentLoaded', () => {
   });
   $('set-sun').addEventListener('click', () => viewer && viewer.view && applyEdit(light.edit()));
   light.init(showError);
+  compare.init(showError);
   $('as-rendered').addEventListener('click', () => shown && show(shown, false));
   $('as-seen').addEventListener('click', () => shown && show(shown, true));
   $('walk').addEventListener('click', () => toggleWalk());

@@ -410,7 +410,19 @@ pub fn write_png(
     pixels: &PngPixels,
     space: RgbSpace,
 ) -> Result<()> {
-    let png_err = |error| ImageFileError::Png { path: path.to_owned(), error };
+    let bytes = encode_png(width, height, pixels, space)
+        .map_err(|error| ImageFileError::Png { path: path.to_owned(), error })?;
+    atomic_file::write(path, &bytes)
+        .map_err(|error| ImageFileError::Io { path: path.to_owned(), error })
+}
+
+/// The PNG file of `pixels` (RGB, row by row), tagged with `space`, as bytes.
+pub fn encode_png(
+    width: usize,
+    height: usize,
+    pixels: &PngPixels,
+    space: RgbSpace,
+) -> std::result::Result<Vec<u8>, png::EncodingError> {
     let mut bytes = Vec::new();
     {
         let mut encoder = png::Encoder::new(&mut bytes, width as u32, height as u32);
@@ -443,12 +455,11 @@ pub fn write_png(
                 v.iter().flat_map(|x| x.to_be_bytes()).collect()
             }
         };
-        let mut writer = encoder.write_header().map_err(png_err)?;
-        writer.write_image_data(&data).map_err(png_err)?;
-        writer.finish().map_err(png_err)?;
+        let mut writer = encoder.write_header()?;
+        writer.write_image_data(&data)?;
+        writer.finish()?;
     }
-    atomic_file::write(path, &bytes)
-        .map_err(|error| ImageFileError::Io { path: path.to_owned(), error })
+    Ok(bytes)
 }
 
 #[cfg(test)]

@@ -6,6 +6,7 @@
 //! to write a file.
 
 pub mod atomic_file;
+pub mod delta_e;
 pub mod framebuffer;
 pub mod image_files;
 pub mod results;

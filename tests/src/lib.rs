@@ -62,6 +62,16 @@ impl Coordinator {
         (c, page)
     }
 
+    /// What a studio test starts from: a coordinator serving the studio, one worker
+    /// (`local-1`), and the Aosta scene of `width × height` px in `dir`; with the page's address,
+    /// the scene's path and the client token's file.
+    pub fn studio_farm(dir: &Path, width: u32, height: u32) -> StudioFarm {
+        let (coordinator, page) = Self::with_studio(dir);
+        let worker = Worker::start(dir, &coordinator.url, "local-1", &[]);
+        let scene = aosta_scene(dir, width, height);
+        StudioFarm { coordinator, _worker: worker, page, scene, token: dir.join("client.token") }
+    }
+
     pub fn start(dir: &Path, data: &Path, listen: &str, extra: &[&str]) -> Coordinator {
         Self::start_under(&[], dir, data, listen, extra)
     }
@@ -120,6 +130,15 @@ impl Coordinator {
         });
         Coordinator { child, url, metrics, studio }
     }
+}
+
+/// See [`Coordinator::studio_farm`].
+pub struct StudioFarm {
+    pub coordinator: Coordinator,
+    _worker: Worker,
+    pub page: String,
+    pub scene: String,
+    pub token: PathBuf,
 }
 
 impl Drop for Coordinator {

@@ -145,7 +145,9 @@ fn the_session_cookie_is_made_from_the_client_token_only_and_guards_changes() {
     let r = request(&s, "POST", &cancel, &[("Cookie", &cookie), ("Origin", &origin)], b"");
     assert_eq!(r.status, 404, "past the gate, to the domain: {}", r.text());
     // A tampered cookie is no session; signing out clears it.
-    let forged = format!("{}0", &cookie[..cookie.len() - 1]);
+    // (Its last hex digit changed: to 1 where it was 0, else to 0.)
+    let last = if cookie.ends_with('0') { '1' } else { '0' };
+    let forged = format!("{}{last}", &cookie[..cookie.len() - 1]);
     assert_eq!(get(&s, "/api/whoami", &[("Cookie", &forged)]).status, 401);
     let out = request(&s, "DELETE", "/api/session", &[], b"");
     assert!(out.header("set-cookie").unwrap().contains("Max-Age=0"));
@@ -572,4 +574,71 @@ fn edits_make_revisions_checked_as_scene_files_and_kept_across_a_restart() {
     let shipped = library.as_array().unwrap().iter().find(|x| x["name"] == other).unwrap();
     assert_eq!(shipped["reflectance"].as_array().unwrap().len(), 81);
     assert!(shipped["material"].as_str().unwrap().contains("travertine"), "{shipped}");
+}
+
+/// The studio's comparison of two snapshots is `restauro compare`'s: the same ΔE00 statistics
+/// for the same two rendered images, and a map of their size; snapshots of two sizes, or one
+/// not finished, are refused.
+#[test]
+fn the_studios_comparison_is_restauro_compares() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (c, _) = Coordinator::with_studio(d);
+    let s = c.studio.clone().unwrap();
+    let auth = [("Authorization", BEARER)];
+    let _worker = Worker::start(d, &c.url, "w", &[]);
+    let scene = aosta_scene(d, 64, 36);
+    let token = d.join("client.token");
+    let render = |variant: &str, width: &str| {
+        let id =
+            submit(&scene, &["--spp", "1", "--variant", variant, "--width", width], &c.url, &token);
+        let o = client(&["watch", &id], &c.url, &token);
+        assert!(o.status.success(), "{}", text(&o));
+        let out = d.join(format!("{variant}-{width}"));
+        let o = client(&["fetch", &id, "--out", out.to_str().unwrap()], &c.url, &token);
+        assert!(o.status.success(), "{}", text(&o));
+        let exr = std::fs::read_dir(&out)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .find(|p| {
+                p.extension().is_some_and(|x| x == "exr")
+                    && !p.to_string_lossy().contains("retinex")
+            })
+            .expect("the rendered EXR");
+        (id, exr)
+    };
+    let (a, a_exr) = render("as-found", "64");
+    let (b, b_exr) = render("cleaned", "64");
+    let r = get(&s, &format!("/api/compare?a={a}&b={b}"), &auth);
+    assert_eq!(r.status, 200, "{}", r.text());
+    let studio = r.json();
+    let out = d.join("compared");
+    let o = restauro_tests::restauro(&[
+        "compare",
+        a_exr.to_str().unwrap(),
+        b_exr.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let cli: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("compare.json")).unwrap()).unwrap();
+    assert_eq!(studio["delta_e00"], cli["delta_e00"], "studio {studio}, restauro compare {cli}");
+    assert_eq!(studio["white_luminance"], cli["white_luminance"]);
+    assert!(studio["delta_e00"]["mean"].as_f64().unwrap() > 1.0, "the hypotheses differ: {studio}");
+    let map = get(&s, &format!("/api/compare/delta-e.png?a={a}&b={b}"), &auth);
+    assert_eq!((map.status, map.header("content-type")), (200, Some("image/png")));
+    let (pixels, width) = restauro_tests::browser::png_rgb(&map.body);
+    assert_eq!((width, pixels.len()), (64, 64 * 36));
+
+    let (small, _) = render("cleaned", "32");
+    let r = get(&s, &format!("/api/compare?a={a}&b={small}"), &auth);
+    assert_eq!(r.status, 400);
+    assert!(error_of(&r).contains("compare snapshots of one size"), "{}", error_of(&r));
+    let r = get(&s, &format!("/api/compare?a={a}"), &auth);
+    assert!(error_of(&r).contains("b: give the job to compare"), "{}", error_of(&r));
+    let long = submit(&scene, &["--spp", "4096", "--tile", "8"], &c.url, &token);
+    let r = get(&s, &format!("/api/compare?a={a}&b={long}"), &auth);
+    assert_eq!(r.status, 409, "{}", r.text());
+    assert!(error_of(&r).contains("not done"), "{}", error_of(&r));
 }

@@ -211,3 +211,116 @@ fn a_restorer_signs_in_follows_a_render_and_sees_its_image() {
 fn row_count(b: &mut Browser) -> serde_json::Value {
     b.eval("document.querySelectorAll('#material tbody tr').length")
 }
+
+/// The screenshot's pixels inside `rect` (x, y, width, height), row by row.
+fn pixels_in(shot: &[u8], rect: [f64; 4]) -> Vec<[u8; 3]> {
+    let (rgb, width) = png_rgb(shot);
+    let [x, y, w, h] = rect.map(|v| v.round() as usize);
+    (y..y + h)
+        .flat_map(|py| (x..x + w).map(move |px| (py, px)))
+        .map(|(py, px)| rgb[py * width + px])
+        .collect()
+}
+
+/// The mean absolute difference of two pictures of one size, 0–255.
+fn difference(a: &[[u8; 3]], b: &[[u8; 3]]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    let sum: i64 = a
+        .iter()
+        .zip(b)
+        .flat_map(|(p, q)| (0..3).map(move |k| (i64::from(p[k]) - i64::from(q[k])).abs()))
+        .sum();
+    sum as f64 / (3 * a.len()) as f64
+}
+
+/// Two hypotheses compared in the page: the slider shows A at one end and B at the other, the
+/// ΔE00 layer shows the server's map (the one `restauro compare` computes, see studio_api) with
+/// its scale and statistics.
+#[test]
+fn a_restorer_compares_two_hypotheses_on_the_slider_and_the_delta_e_layer() {
+    if !available("studio_browser") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let farm = Coordinator::studio_farm(d, 160, 90);
+    let c = &farm.coordinator;
+    let (studio, scene, token) = (farm.page.clone(), farm.scene.clone(), farm.token.clone());
+    let found = submit(&scene, &["--spp", "1", "--variant", "as-found"], &c.url, &token);
+    let cleaned = submit(&scene, &["--spp", "1", "--variant", "cleaned"], &c.url, &token);
+    let mut b = Browser::launch(1280, 900);
+    b.goto(&format!("{studio}#token={CLIENT_TOKEN}"));
+    b.wait_for("both done", "document.getElementById('compare-b').options.length === 2");
+    b.eval(&format!(
+        "document.getElementById('compare-a').value = '{found}'; document.getElementById('compare-b').value = '{cleaned}'"
+    ));
+    b.click("#compare-go");
+    b.wait_for("the statistics", "document.getElementById('compare-stats').dataset.mean");
+    b.wait_for(
+        "both images",
+        "['compare-img-a', 'compare-img-b', 'compare-map'].every(id => { const i = document.getElementById(id); return i.complete && i.naturalWidth === 160; })",
+    );
+    let png_of = |job: &str| {
+        let out = d.join(job);
+        let o = client(&["fetch", job, "--out", out.to_str().unwrap()], &c.url, &token);
+        assert!(o.status.success(), "{}", text(&o));
+        let file = std::fs::read_dir(&out)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .find(|p| {
+                p.extension().is_some_and(|x| x == "png")
+                    && !p.to_string_lossy().contains("retinex")
+            })
+            .unwrap();
+        png_rgb(&std::fs::read(file).unwrap()).0
+    };
+    let (a_png, b_png) = (png_of(&found), png_of(&cleaned));
+    assert!(difference(&a_png, &b_png) > 2.0, "the hypotheses look alike");
+    b.eval("document.getElementById('compare-stage').scrollIntoView({ block: 'center' })");
+    let rect = b.rect("#compare-img-a");
+    assert_eq!((rect[2], rect[3]), (160.0, 90.0), "shown at its own size");
+    let slide = |b: &mut Browser, v: u32| {
+        b.eval(&format!(
+            "(() => {{ const s = document.getElementById('compare-slider'); s.value = {v}; s.dispatchEvent(new Event('input')); }})()"
+        ));
+    };
+    slide(&mut b, 100);
+    let shown = pixels_in(&b.screenshot(&shots().join("21-compare-all-a.png")), rect);
+    assert!(difference(&shown, &a_png) < 0.5, "slider at A: {}", difference(&shown, &a_png));
+    slide(&mut b, 0);
+    let shown = pixels_in(&b.screenshot(&shots().join("22-compare-all-b.png")), rect);
+    assert!(difference(&shown, &b_png) < 0.5, "slider at B: {}", difference(&shown, &b_png));
+    slide(&mut b, 50);
+    b.screenshot(&shots().join("23-compare-half.png"));
+
+    // The ΔE00 layer in place of B: the server's map, its scale and its numbers.
+    b.click("#compare-delta");
+    slide(&mut b, 0);
+    let shown = pixels_in(&b.screenshot(&shots().join("24-compare-delta-e.png")), rect);
+    let auth = [("Authorization", "Bearer client-token-for-tests")];
+    let server = restauro_tests::http::request(
+        c.studio.as_deref().unwrap(),
+        "GET",
+        &format!("/api/compare?a={found}&b={cleaned}"),
+        &auth,
+        b"",
+    )
+    .json();
+    let map = restauro_tests::http::request(
+        c.studio.as_deref().unwrap(),
+        "GET",
+        &format!("/api/compare/delta-e.png?a={found}&b={cleaned}"),
+        &auth,
+        b"",
+    );
+    let layer = png_rgb(&map.body).0;
+    assert!(difference(&shown, &layer) < 0.5, "the layer shows {}", difference(&shown, &layer));
+    let stats = b.eval("document.getElementById('compare-stats').textContent");
+    let mean = server["delta_e00"]["mean"].as_f64().unwrap();
+    assert!(stats.as_str().unwrap().contains(&format!("mean {mean:.2}")), "{stats}");
+    let top = server["scale_max"].as_f64().unwrap();
+    let label = b.eval(
+        "[...document.querySelectorAll('#compare-scale text')].map(t => t.textContent).pop()",
+    );
+    assert_eq!(label, format!("{top} ΔE00"), "the scale's top");
+}

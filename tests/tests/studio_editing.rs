@@ -13,7 +13,7 @@ fn shots() -> PathBuf {
     PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("studio")
 }
 use restauro_tests::http::request;
-use restauro_tests::{CLIENT_TOKEN, Coordinator, Worker, aosta_scene, client, submit, text};
+use restauro_tests::{CLIENT_TOKEN, Coordinator, client, submit, text};
 
 const BEARER: &str = "Bearer client-token-for-tests";
 
@@ -76,10 +76,9 @@ fn a_restorer_swaps_a_stone_sets_the_sun_and_keeps_a_view() {
     }
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let (c, studio) = Coordinator::with_studio(d);
-    let _worker = Worker::start(d, &c.url, "local-1", &[]);
-    let scene = aosta_scene(d, 160, 90);
-    let token = d.join("client.token");
+    let farm = Coordinator::studio_farm(d, 160, 90);
+    let c = &farm.coordinator;
+    let (studio, scene, token) = (farm.page.clone(), farm.scene.clone(), farm.token.clone());
     let first = submit(&scene, &["--spp", "1", "--tile", "32"], &c.url, &token);
     let mut b = Browser::launch(1280, 900);
     b.goto(&format!("{studio}#token={CLIENT_TOKEN}"));

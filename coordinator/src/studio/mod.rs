@@ -5,6 +5,7 @@
 //! but signing in needs the client token or a session made from it ([`session`]).
 
 pub mod api;
+pub mod compare;
 pub mod edits;
 pub mod events;
 pub mod page;
@@ -76,6 +77,8 @@ fn router(studio: Arc<Studio>) -> Router {
         .route("/api/scenes/{id}/download", get(edits::download))
         .route("/api/spectra", get(edits::spectra))
         .route("/api/sun-path", get(edits::sun_path))
+        .route("/api/compare", get(compare::compare))
+        .route("/api/compare/delta-e.png", get(compare::picture))
         .route_layer(middleware::from_fn_with_state(studio.clone(), signed_in));
     Router::new()
         .route("/api/session", post(api::sign_in).delete(api::sign_out))

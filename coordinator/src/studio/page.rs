@@ -25,6 +25,7 @@ const FILES: &[(&str, &str, &str)] = &[
     script!("material.js"),
     script!("light.js"),
     script!("walk.js"),
+    script!("compare.js"),
     script!("vendor/three/three.module.js"),
     script!("vendor/three/three.core.js"),
     script!("vendor/three/addons/controls/OrbitControls.js"),

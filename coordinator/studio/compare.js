@@ -1,0 +1,104 @@
+// Two snapshots compared: A (before) and B (after) stacked, a slider choosing how much of the
+// width shows A; and the CIEDE2000 layer in place of B, the map the server computes as
+// `restauro compare` does, with its viridis scale in ΔE00 and its statistics.
+
+import * as api from './api.js';
+import * as farm from './farm.js';
+
+const $ = (id) => document.getElementById(id);
+const NS = 'http://www.w3.org/2000/svg';
+// matplotlib's viridis at t = 0, 1/8, …, 1 (the server's map uses the same nine).
+const VIRIDIS = ['#440154', '#472d7b', '#3b528b', '#2c728e', '#21918c', '#28ae80', '#5ec962', '#addc30', '#fde725'];
+
+const png = (job) => job.results.find((n) => n.endsWith('.png') && !n.endsWith('-retinex.png'));
+
+// The finished jobs in both pickers (the choices kept while they are still there).
+export function refresh() {
+  const done = farm.doneJobs();
+  for (const [id, fallback] of [['compare-a', 0], ['compare-b', done.length - 1]]) {
+    const picker = $(id);
+    const kept = picker.value;
+    picker.replaceChildren(...done.map((j) => new Option(`${j.name} (${j.width} × ${j.height} px)`, j.id)));
+    if (done.some((j) => j.id === kept)) picker.value = kept;
+    else if (done.length) picker.value = done[Math.max(fallback, 0)].id;
+  }
+}
+
+function slide() {
+  const v = Number($('compare-slider').value);
+  for (const id of ['compare-img-b', 'compare-map']) $(id).style.clipPath = `inset(0 0 0 ${v}%)`;
+  $('compare-line').style.left = `${v}%`;
+  $('compare-line').hidden = v === 0 || v === 100;
+  $('compare-slider-shown').textContent = `${v} % A`;
+}
+
+function scale(top) {
+  const [w, h] = [320, 44];
+  const svg = document.createElementNS(NS, 'svg');
+  svg.setAttribute('viewBox', `0 0 ${w} ${h}`);
+  svg.setAttribute('role', 'img');
+  svg.setAttribute('aria-label', `colour scale: ΔE00 from 0 to ${top}`);
+  svg.classList.add('delta-scale');
+  const defs = document.createElementNS(NS, 'defs');
+  const grad = document.createElementNS(NS, 'linearGradient');
+  grad.id = 'viridis';
+  VIRIDIS.forEach((c, i) => {
+    const stop = document.createElementNS(NS, 'stop');
+    stop.setAttribute('offset', `${(i / 8) * 100}%`);
+    stop.setAttribute('stop-color', c);
+    grad.append(stop);
+  });
+  defs.append(grad);
+  const bar = document.createElementNS(NS, 'rect');
+  Object.entries({ x: 10, y: 4, width: w - 20, height: 16, fill: 'url(#viridis)' }).forEach(([k, v]) => bar.setAttribute(k, v));
+  svg.append(defs, bar);
+  for (const t of [0, 0.5, 1]) {
+    const label = document.createElementNS(NS, 'text');
+    label.setAttribute('x', 10 + t * (w - 20));
+    label.setAttribute('y', 36);
+    label.setAttribute('text-anchor', 'middle');
+    label.textContent = t === 1 ? `${top} ΔE00` : String(top * t);
+    svg.append(label);
+  }
+  $('compare-scale').replaceChildren(svg);
+}
+
+export async function show(onError) {
+  const [a, b] = [farm.jobById($('compare-a').value), farm.jobById($('compare-b').value)];
+  if (!a || !b) return onError(new Error('choose two finished snapshots to compare'));
+  $('compare-stage').hidden = false;
+  $('compare-img-a').src = api.resultUrl(a.id, png(a));
+  $('compare-img-a').alt = `A: ${a.name}, as rendered`;
+  $('compare-img-b').src = api.resultUrl(b.id, png(b));
+  $('compare-img-b').alt = `B: ${b.name}, as rendered`;
+  $('compare-stats').textContent = '';
+  $('compare-scale').replaceChildren();
+  try {
+    const c = await api.compare(a.id, b.id);
+    const s = c.delta_e00;
+    $('compare-map').src = api.compareMapUrl(a.id, b.id);
+    $('compare-map').alt = `CIEDE2000 between ${a.name} and ${b.name}, pixel by pixel`;
+    $('compare-stats').textContent = `ΔE00 of B against A: mean ${s.mean.toFixed(2)}, median ${s.median.toFixed(2)}, ` +
+      `95th percentile ${s.p95.toFixed(2)}, max ${s.max.toFixed(1)}; ${(100 * s.share_above_threshold).toFixed(1)} % of ` +
+      `${s.pixels.toLocaleString('en')} pixels above ${s.threshold} (CIELAB relative to a D65 white of ${c.white_luminance.toPrecision(4)} cd/m²)`;
+    $('compare-stats').dataset.mean = String(s.mean);
+    scale(c.scale_max);
+  } catch (e) {
+    onError(e);
+  }
+  slide();
+}
+
+function layer(on) {
+  $('compare-delta').setAttribute('aria-pressed', String(on));
+  $('compare-map').hidden = !on;
+  $('compare-img-b').hidden = on;
+  $('compare-scale').hidden = !on;
+}
+
+export function init(onError) {
+  $('compare-go').addEventListener('click', () => show(onError));
+  $('compare-slider').addEventListener('input', slide);
+  $('compare-delta').addEventListener('click', () => layer($('compare-delta').getAttribute('aria-pressed') !== 'true'));
+  layer(false);
+}

@@ -6,6 +6,7 @@ import { Viewer } from './viewer.js';
 import * as material from './material.js';
 import * as light from './light.js';
 import * as compare from './compare.js';
+import * as notes from './notes.js';
 
 const $ = (id) => document.getElementById(id);
 let events = null;
@@ -68,6 +69,7 @@ async function open(id, revision) {
       // For the browser's console (and the tests): the view's camera and controls.
       window.studioViewer = viewer;
       viewer.onPick = (p) => { picked = p; showMaterial(); };
+      viewer.onNote = (title) => notes.open(title);
     }
     if (loadedGeometry !== id) {
       $('material').hidden = true;
@@ -105,6 +107,7 @@ async function present(view) {
   $('view').dataset.revision = String(view.revision);
   $('download').href = api.downloadUrl(openScene, view.revision);
   light.show(view, showError);
+  notes.show(view);
   showMaterial();
 }
 
@@ -295,6 +298,15 @@ document.addEventListener('DOMContentLoaded', () => {
   $('set-sun').addEventListener('click', () => viewer && viewer.view && applyEdit(light.edit()));
   light.init(showError);
   compare.init(showError);
+  notes.init({
+    edit: applyEdit,
+    fly: (n) => { if (n.pose && viewer) { viewer.fly(n.pose); walking(false); } },
+    picked: () => picked,
+    pose: () => {
+      const { position, target, up, vertical_fov_deg } = viewer.pose();
+      return { position, target, up, vertical_fov_deg };
+    },
+  });
   $('as-rendered').addEventListener('click', () => shown && show(shown, false));
   $('as-seen').addEventListener('click', () => shown && show(shown, true));
   $('walk').addEventListener('click', () => toggleWalk());

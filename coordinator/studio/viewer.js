@@ -31,6 +31,10 @@ export class Viewer {
     this.renderer.shadowMap.enabled = true;
     this.model = null;
     this.view = null;
+    // The notes' pins, picked before the model.
+    this.pins = new THREE.Group();
+    this.scene.add(this.pins);
+    this.onNote = () => {};
     new ResizeObserver(() => this.resize()).observe(canvas);
     this.onPick = () => {};
     // A click (not the end of a drag) picks the surface under the pointer.
@@ -54,6 +58,8 @@ export class Viewer {
     const ndc = new THREE.Vector2(((e.clientX - r.left) / r.width) * 2 - 1, -((e.clientY - r.top) / r.height) * 2 + 1);
     const ray = new THREE.Raycaster();
     ray.setFromCamera(ndc, this.camera);
+    const pin = ray.intersectObject(this.pins, true)[0];
+    if (pin) { this.onNote(pin.object.userData.note); return; }
     const hit = ray.intersectObject(this.model, true)[0];
     if (!hit) return;
     const extras = hit.object.geometry.userData || {};
@@ -120,7 +126,22 @@ export class Viewer {
       if (rgb) o.material.color.setRGB(...rgb);
     });
     this.placeSun(view.sun);
+    this.placePins(view.annotations);
     this.draw();
+  }
+
+  // A pin for each note: a red ball a little larger than a stone's joint at this scale.
+  placePins(annotations) {
+    this.pins.clear();
+    const radius = this.bounds.getSize(new THREE.Vector3()).length() / 300;
+    const geometry = new THREE.SphereGeometry(radius, 16, 8);
+    const material = new THREE.MeshBasicMaterial({ color: 0xd02020 });
+    for (const a of annotations) {
+      const pin = new THREE.Mesh(geometry, material);
+      pin.position.set(...a.position);
+      pin.userData.note = a.title;
+      this.pins.add(pin);
+    }
   }
 
   // The preview's sun along the scene's sun direction, its shadow camera over the model.

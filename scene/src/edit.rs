@@ -6,7 +6,9 @@
 //! that does not exist is refused with the names that do.
 
 use crate::error::{Result, SceneError};
-use crate::scene_file::{Light, MaterialModel, SceneFile, SiteTime, SpectrumSource, View};
+use crate::scene_file::{
+    Annotation, Light, MaterialModel, SceneFile, SiteTime, SpectrumSource, View,
+};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -19,6 +21,8 @@ pub enum Edit {
     Sun(SunEdit),
     SaveView(SaveView),
     DeleteView(DeleteView),
+    SaveAnnotation(SaveAnnotation),
+    DeleteAnnotation(DeleteAnnotation),
 }
 
 /// A material's surface in one of its states (`base` unless given): a shipped spectrum by its
@@ -64,8 +68,23 @@ pub struct DeleteView {
     pub name: String,
 }
 
+/// A note pinned to the model, saved under its title (replacing a note of that title).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SaveAnnotation {
+    pub annotation: Annotation,
+}
+
+/// A note removed.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DeleteAnnotation {
+    pub title: String,
+}
+
 /// The kinds of edit, as `edit` names them.
-pub const KINDS: [&str; 4] = ["material", "sun", "save-view", "delete-view"];
+pub const KINDS: [&str; 6] =
+    ["material", "sun", "save-view", "delete-view", "save-annotation", "delete-annotation"];
 
 /// Where an edit's refusals say they come from.
 const PLACE: &str = "edit";
@@ -100,24 +119,49 @@ impl Edit {
                 Ok(sun_edit(scene, site))
             }
             Edit::SaveView(SaveView { view }) => {
-                let summary = format!("view `{}` saved", view.name);
-                match scene.views.iter_mut().find(|v| v.name == view.name) {
-                    Some(old) => *old = view.clone(),
-                    None => scene.views.push(view.clone()),
-                }
-                Ok(summary)
+                save(&mut scene.views, view, |v| &v.name);
+                Ok(format!("view `{}` saved", view.name))
             }
             Edit::DeleteView(DeleteView { name }) => {
-                let before = scene.views.len();
-                scene.views.retain(|v| v.name != *name);
-                if scene.views.len() == before {
-                    let names = scene.views.iter().map(|v| v.name.as_str());
-                    return Err(refuse("name", crate::load::unknown("view", name, names)));
-                }
+                delete(&mut scene.views, name, |v| &v.name).map_err(|names| {
+                    refuse("name", crate::load::unknown("view", name, names.into_iter()))
+                })?;
                 Ok(format!("view `{name}` deleted"))
+            }
+            Edit::SaveAnnotation(SaveAnnotation { annotation }) => {
+                save(&mut scene.annotations, annotation, |a| &a.title);
+                Ok(format!("note `{}` saved", annotation.title))
+            }
+            Edit::DeleteAnnotation(DeleteAnnotation { title }) => {
+                delete(&mut scene.annotations, title, |a| &a.title).map_err(|titles| {
+                    refuse("title", crate::load::unknown("note", title, titles.into_iter()))
+                })?;
+                Ok(format!("note `{title}` deleted"))
             }
         }
     }
+}
+
+/// Puts `item` in `list`, in place of the item of the same name.
+fn save<T: Clone>(list: &mut Vec<T>, item: &T, name: impl Fn(&T) -> &String) {
+    match list.iter_mut().find(|x| name(x) == name(item)) {
+        Some(old) => *old = item.clone(),
+        None => list.push(item.clone()),
+    }
+}
+
+/// Removes the item named `key` from `list`; the names there are when there is none.
+fn delete<'a, T>(
+    list: &'a mut Vec<T>,
+    key: &str,
+    name: impl Fn(&T) -> &String,
+) -> std::result::Result<(), Vec<&'a str>> {
+    let before = list.len();
+    list.retain(|x| name(x) != key);
+    if list.len() < before {
+        return Ok(());
+    }
+    Err(list.iter().map(|x| name(x).as_str()).collect())
 }
 
 fn material_edit(

@@ -659,6 +659,74 @@ fn check_pose(ctx: &Ctx, place: &str, pose: &ResolvedCamera) -> Result<()> {
     Ok(())
 }
 
+/// `key` names an object (`name`) or a part of one (`object/part`).
+fn check_part(ctx: &Ctx, place: &str, objects: &[LoadedObject], key: &str) -> Result<()> {
+    let (object, group) = match key.split_once('/') {
+        Some((o, g)) => (o, Some(g)),
+        None => (key, None),
+    };
+    let o = objects.iter().find(|o| o.name == object).ok_or_else(|| {
+        ctx.invalid(place, unknown("object", object, objects.iter().map(|o| o.name.as_str())))
+    })?;
+    if let Some(g) = group
+        && !o.mesh.groups.iter().any(|x| x.name == g)
+    {
+        return Err(ctx.invalid(
+            place,
+            unknown("mesh part", g, o.mesh.groups.iter().map(|x| x.name.as_str())),
+        ));
+    }
+    Ok(())
+}
+
+/// The longest link an annotation may hold, in bytes.
+const MAX_LINK_BYTES: usize = 2048;
+
+/// Every annotation: a title of its own, its pin in range, its part in the scene, its links
+/// web addresses (so that no link runs a script or opens a local file), its pose one the
+/// camera can take.
+fn check_annotations(ctx: &Ctx, file: &SceneFile, objects: &[LoadedObject]) -> Result<()> {
+    let mut seen = BTreeSet::new();
+    for (i, a) in file.annotations.iter().enumerate() {
+        let place = format!("annotations[{i}]");
+        if a.title.trim().is_empty() {
+            return Err(ctx.invalid(format!("{place}.title"), "a note needs a title"));
+        }
+        if !seen.insert(a.title.as_str()) {
+            return Err(ctx.invalid(
+                format!("{place}.title"),
+                format!("a second note titled `{}`; give each note its own title", a.title),
+            ));
+        }
+        check_point(ctx, &format!("{place}.position"), a.position)?;
+        if let Some(part) = &a.part {
+            check_part(ctx, &format!("{place}.part"), objects, part)?;
+        }
+        for (k, link) in a.links.iter().enumerate() {
+            let web = link.starts_with("https://") || link.starts_with("http://");
+            if !web || link.len() > MAX_LINK_BYTES || link.chars().any(char::is_whitespace) {
+                return Err(ctx.invalid(
+                    format!("{place}.links[{k}]"),
+                    format!(
+                        "`{}` is not a web address; give an https:// (or http://) address of at most {MAX_LINK_BYTES} bytes, without spaces",
+                        link.chars().take(80).collect::<String>().escape_debug()
+                    ),
+                ));
+            }
+        }
+        if let Some(p) = &a.pose {
+            let pose = pose_camera(p.position, p.target, p.up, p.vertical_fov_deg);
+            check_pose(ctx, &format!("{place}.pose"), &pose)?;
+        }
+    }
+    Ok(())
+}
+
+/// A pose as a camera, for [`check_pose`] (its image size is not a pose's).
+fn pose_camera(position: [f64; 3], target: [f64; 3], up: [f64; 3], fov: f64) -> ResolvedCamera {
+    ResolvedCamera { position, target, up, vertical_fov_deg: fov, width: 1, height: 1 }
+}
+
 /// Every saved view: a name of its own, and a pose [`check_pose`] accepts.
 fn check_views(ctx: &Ctx, views: &[scene_file::View]) -> Result<()> {
     let mut seen = std::collections::BTreeSet::new();
@@ -673,15 +741,7 @@ fn check_views(ctx: &Ctx, views: &[scene_file::View]) -> Result<()> {
                 format!("a second view named `{}`; give each view its own name", v.name),
             ));
         }
-        let pose = ResolvedCamera {
-            position: v.position,
-            target: v.target,
-            up: v.up,
-            vertical_fov_deg: v.vertical_fov_deg,
-            width: 1,
-            height: 1,
-        };
-        check_pose(ctx, &place, &pose)?;
+        check_pose(ctx, &place, &pose_camera(v.position, v.target, v.up, v.vertical_fov_deg))?;
     }
     Ok(())
 }
@@ -1166,6 +1226,8 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
         ));
     }
 
+    check_annotations(&ctx, &file, &objects)?;
+
     // Variants.
     let states = ["base", "degraded", "cleaned"];
     for (name, v) in &file.variants {
@@ -1184,26 +1246,7 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
         check_state(&v.state)?;
         for (key, state) in &v.states {
             check_state(state)?;
-            let (object, group) = match key.split_once('/') {
-                Some((o, g)) => (o, Some(g)),
-                None => (key.as_str(), None),
-            };
-            let o = objects.iter().find(|o| o.name == object).ok_or_else(|| {
-                SceneError::invalid(
-                    &ctx.path,
-                    &place,
-                    unknown("object", object, objects.iter().map(|o| o.name.as_str())),
-                )
-            })?;
-            if let Some(g) = group
-                && !o.mesh.groups.iter().any(|x| x.name == g)
-            {
-                return Err(SceneError::invalid(
-                    &ctx.path,
-                    &place,
-                    unknown("mesh part", g, o.mesh.groups.iter().map(|x| x.name.as_str())),
-                ));
-            }
+            check_part(&ctx, &place, &objects, key)?;
         }
         // Materials asked for a state they do not have keep their base state; say so.
         let mut lacking = BTreeSet::new();

@@ -79,6 +79,47 @@ pub struct SceneFile {
     /// so a scene without views keeps the identity it had before views existed.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub views: Vec<View>,
+    /// Notes pinned to the model (the studio's annotations). Not written when there are none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub annotations: Vec<Annotation>,
+}
+
+/// A note pinned to a point of the model, or to a part: what a surveyor or a restorer wrote
+/// there, with links to the documents about it (survey reports, photographs, charts) and the
+/// pose to look at it from.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Annotation {
+    /// Its name, one per note.
+    pub title: String,
+    #[serde(default)]
+    pub text: String,
+    /// Where the pin stands (m).
+    #[serde(deserialize_with = "vec3::position")]
+    pub position: [f64; 3],
+    /// What it is about: an object's `name`, or `object/part`.
+    #[serde(default)]
+    pub part: Option<String>,
+    /// Documents about it: `https://` (or `http://`) addresses.
+    #[serde(default)]
+    pub links: Vec<String>,
+    /// Where to look at it from.
+    #[serde(default)]
+    pub pose: Option<Pose>,
+}
+
+/// A camera pose without a name (see [`View`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Pose {
+    #[serde(deserialize_with = "vec3::position")]
+    pub position: [f64; 3],
+    #[serde(deserialize_with = "vec3::target")]
+    pub target: [f64; 3],
+    #[serde(default = "default_up", deserialize_with = "vec3::up")]
+    pub up: [f64; 3],
+    #[serde(default = "default_fov")]
+    pub vertical_fov_deg: f64,
 }
 
 /// A named pose of the camera: where a restorer stood to look at something. The studio lists

@@ -696,3 +696,40 @@ fn a_bundle_written_as_a_folder_reads_back_as_itself() {
     assert_eq!(again.id(), bundle.id());
     assert_eq!(again.files, bundle.files);
 }
+
+/// Notes pinned to the model are checked as the rest of the file: a part that exists, links
+/// that are web addresses, one note per title, a pose the camera can take.
+#[test]
+fn annotations_are_checked_as_the_rest_of_the_scene() {
+    let f = Folder::new();
+    f.write("meshes/wall.obj", QUAD_OBJ);
+    let note = |fields: &str| {
+        scene_toml(
+            OBJ_OBJECT,
+            &format!("[[annotations]]\ntitle = \"crack\"\nposition = [0.0, 0.0, 1.0]\n{fields}\n"),
+        )
+    };
+    let good = note(
+        "part = \"wall/stone\"\nlinks = [\"https://example.org/a.pdf\"]\npose = { position = [0.0, -5.0, 1.6], target = [0.0, 0.0, 1.0] }",
+    );
+    let scene = load(&f, &good).unwrap();
+    assert_eq!(scene.file.annotations[0].links, ["https://example.org/a.pdf"]);
+    for (fields, words) in [
+        ("part = \"wal\"", "annotations[0].part: unknown object `wal`"),
+        ("part = \"wall/stones\"", "unknown mesh part `stones`"),
+        (
+            "links = [\"javascript:alert(1)\"]",
+            "annotations[0].links[0]: `javascript:alert(1)` is not a web address",
+        ),
+        ("links = [\"file:///etc/passwd\"]", "is not a web address"),
+        (
+            "pose = { position = [0.0, 0.0, 1.0], target = [0.0, 0.0, 1.0] }",
+            "annotations[0].pose: the target is where the camera is",
+        ),
+    ] {
+        let message = refused(&f, &note(fields));
+        assert!(message.contains(words), "{fields}: {message}");
+    }
+    let twice = format!("{good}\n[[annotations]]\ntitle = \"crack\"\nposition = [1.0, 0.0, 1.0]\n");
+    assert!(refused(&f, &twice).contains("a second note titled `crack`"));
+}

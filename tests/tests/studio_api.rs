@@ -557,6 +557,36 @@ fn edits_make_revisions_checked_as_scene_files_and_kept_across_a_restart() {
     assert_eq!(list.as_array().unwrap().len(), 5, "{list}");
     let v1 = get(&s, &format!("/api/scenes/{id}?revision=1"), &auth).json();
     assert_eq!(material(&v1, "travertine")["states"][0]["spectrum"], other);
+    // A note pinned in the preview's frame is kept in the world's, its links checked.
+    let note = |links: serde_json::Value| {
+        let body = serde_json::json!({"edit": "save-annotation", "annotation": {
+            "title": "crack", "text": "2 mm", "position": [1.0, 2.0, 3.0], "part": "facade/travertine",
+            "links": links, "pose": {"position": [1.0, 1.6, 9.0], "target": [1.0, 2.0, 3.0], "up": [0.0, 1.0, 0.0]}}});
+        let path = format!("/api/scenes/{id}/edits");
+        request(&s, "POST", &path, &auth, body.to_string().as_bytes())
+    };
+    let r = note(serde_json::json!(["javascript:alert(1)"]));
+    assert_eq!(r.status, 400, "{}", r.text());
+    assert!(error_of(&r).contains("annotations[0].links[0]"), "{}", error_of(&r));
+    let r = note(serde_json::json!(["https://example.org/a.pdf"]));
+    assert_eq!((r.status, r.json()["revision"].as_u64()), (200, Some(5)), "{}", r.text());
+    let manifest = get(&s, &format!("/api/scenes/{id}/scene.json"), &auth).json();
+    let kept = &manifest["annotations"][0];
+    let offset: Vec<f64> = serde_json::from_value(r.json()["offset_m"].clone()).unwrap();
+    let want = [1.0 + offset[0], -3.0 + offset[1], 2.0 + offset[2]];
+    for (k, want) in want.iter().enumerate() {
+        assert!((kept["position"][k].as_f64().unwrap() - want).abs() < 1e-9, "{kept}");
+    }
+    assert_eq!(kept["pose"]["up"], serde_json::json!([0.0, 0.0, 1.0]));
+    let r = request(
+        &s,
+        "POST",
+        &format!("/api/scenes/{id}/edits"),
+        &auth,
+        br#"{"edit": "delete-annotation", "title": "crak"}"#,
+    );
+    assert!(error_of(&r).contains("did you mean `crack`"), "{}", error_of(&r));
+
     // Any revision downloads as a scene folder; one that does not exist is refused.
     let r = get(&s, &format!("/api/scenes/{id}/download?revision=2"), &auth);
     assert_eq!((r.status, r.header("content-type")), (200, Some("application/x-tar")));

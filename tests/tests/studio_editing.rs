@@ -284,3 +284,75 @@ fn a_restorer_swaps_a_stone_sets_the_sun_and_keeps_a_view() {
     b.press("g");
     assert_eq!(b.eval("document.getElementById('walk').getAttribute('aria-pressed')"), "false");
 }
+
+/// A note pinned to the facade in the page is kept with the scene: its pin is drawn where it
+/// was clicked, a link that is not a web address is refused in the server's words, and after
+/// the coordinator restarts the note is listed and opens with its text, its link and its view.
+#[test]
+fn a_note_pinned_to_the_facade_survives_a_restart() {
+    if !available("studio_editing") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let farm = Coordinator::studio_farm(d, 160, 90);
+    submit(&farm.scene, &["--spp", "1", "--tile", "32"], &farm.coordinator.url, &farm.token);
+    let mut b = Browser::launch(1280, 900);
+    b.goto(&format!("{}#token={CLIENT_TOKEN}", farm.page));
+    b.wait_for("the model", "document.getElementById('view').dataset.revision === '0'");
+    b.click("#view");
+    b.wait_for("the surface clicked", "!document.getElementById('material').hidden");
+    set_value(&mut b, "note-new-title", "crack above the third arch");
+    set_value(&mut b, "note-new-text", "Opened 2 mm since the 2019 survey.");
+    set_value(&mut b, "note-new-links", "javascript:alert(1)");
+    b.click("#note-save");
+    b.wait_for("the refusal", "!document.getElementById('problem').hidden");
+    let problem = b.eval("document.getElementById('problem').textContent");
+    assert!(problem.as_str().unwrap().contains("is not a web address"), "{problem}");
+    let link = "https://example.org/survey/2019/arch-3.pdf";
+    set_value(&mut b, "note-new-links", link);
+    b.click("#note-save");
+    b.wait_for("revision 1", "document.getElementById('view').dataset.revision === '1'");
+    let listed =
+        b.eval("[...document.querySelectorAll('#notes-list button')].map(b => b.textContent)");
+    assert_eq!(listed, serde_json::json!(["crack above the third arch"]));
+    // The pin stands where the click landed, and is drawn there in the note's red.
+    let gap = b.eval(
+        "(() => { const v = window.studioViewer; return v.pins.children[0].position.distanceTo(v.picked); })()",
+    );
+    assert!(gap.as_f64().unwrap() < 1e-3, "{gap}");
+    b.eval("document.getElementById('view').scrollIntoView({ block: 'center' })");
+    let at = b.eval("window.studioViewer.onScreen(window.studioViewer.pins.children[0].position)");
+    let (x, y) = (at[0].as_f64().unwrap() as usize, at[1].as_f64().unwrap() as usize);
+    let (rgb, width) = png_rgb(&b.screenshot(&shots().join("16-note-pinned.png")));
+    let [r, g, bl] = rgb[y * width + x];
+    assert!(r > 150 && g < 80 && bl < 80, "the pin's pixel is {:?}", [r, g, bl]);
+    let pose = b.eval("JSON.stringify(window.studioViewer.pose().position.map(v => v.toFixed(5)))");
+
+    // Restarted on the same store, the note is there.
+    drop(farm);
+    let (_c, page) = Coordinator::with_studio(d);
+    b.goto(&format!("{page}#token={CLIENT_TOKEN}"));
+    b.wait_for("the note", "document.querySelectorAll('#notes-list button').length === 1");
+    b.eval("window.studioViewer.camera.position.x += 7; window.studioViewer.controls.update()");
+    b.click("#notes-list button");
+    b.wait_for("the note shown", "!document.getElementById('note-shown').hidden");
+    assert_eq!(
+        b.eval("document.getElementById('note-text').textContent"),
+        "Opened 2 mm since the 2019 survey."
+    );
+    assert_eq!(b.eval("document.querySelector('#note-links a').href"), link);
+    assert_eq!(b.eval("document.querySelector('#note-links a').rel"), "noopener noreferrer");
+    assert!(
+        b.eval("document.getElementById('note-part').textContent")
+            .as_str()
+            .unwrap()
+            .starts_with("About facade/")
+    );
+    assert_eq!(
+        b.eval("JSON.stringify(window.studioViewer.pose().position.map(v => v.toFixed(5)))"),
+        pose,
+        "flown to the note's view"
+    );
+    b.screenshot(&shots().join("17-note-after-restart.png"));
+}

@@ -15,7 +15,7 @@ use axum::Json;
 use axum::body::Bytes;
 use axum::extract::{Path, RawQuery, State};
 use axum::response::{IntoResponse, Response};
-use restauro_scene::edit::{self, Edit, SaveView};
+use restauro_scene::edit::{self, Edit, SaveAnnotation, SaveView};
 use restauro_spectral::library;
 use serde::{Deserialize, Serialize};
 use std::sync::{Arc, OnceLock};
@@ -28,15 +28,34 @@ pub async fn edit(
 ) -> Result<Response> {
     let id = scene_id(&id)?;
     let mut edit = parse_edit(&body)?;
-    if let Edit::SaveView(SaveView { view }) = &mut edit {
+    if matches!(edit, Edit::SaveView(_) | Edit::SaveAnnotation(_)) {
         let offset = studio.previews.get(&studio.farm, id, None).await?.view.offset_m;
-        view.position = to_world(view.position, offset);
-        view.target = to_world(view.target, offset);
-        view.up = to_world(view.up, [0.0; 3]);
+        to_world_edit(&mut edit, offset);
     }
     let made = studio.farm.edit_scene(id, &edit).await?;
     let preview = studio.previews.get(&studio.farm, id, Some(made.number)).await?;
     Ok(Json(&preview.view).into_response())
+}
+
+/// The positions of a view or a note, sent in the preview's frame, in the world's.
+fn to_world_edit(edit: &mut Edit, offset: [f64; 3]) {
+    let pose = |p: &mut [f64; 3], t: &mut [f64; 3], up: &mut [f64; 3]| {
+        *p = to_world(*p, offset);
+        *t = to_world(*t, offset);
+        *up = to_world(*up, [0.0; 3]);
+    };
+    match edit {
+        Edit::SaveView(SaveView { view }) => {
+            pose(&mut view.position, &mut view.target, &mut view.up)
+        }
+        Edit::SaveAnnotation(SaveAnnotation { annotation }) => {
+            annotation.position = to_world(annotation.position, offset);
+            if let Some(p) = &mut annotation.pose {
+                pose(&mut p.position, &mut p.target, &mut p.up);
+            }
+        }
+        _ => {}
+    }
 }
 
 /// An edit from its JSON, refused naming the field that does not parse. serde reads an
@@ -58,6 +77,8 @@ fn parse_edit(body: &[u8]) -> Result<Edit> {
         "sun" => Edit::Sun(parse(&fields, &what)?),
         "save-view" => Edit::SaveView(parse(&fields, &what)?),
         "delete-view" => Edit::DeleteView(parse(&fields, &what)?),
+        "save-annotation" => Edit::SaveAnnotation(parse(&fields, &what)?),
+        "delete-annotation" => Edit::DeleteAnnotation(parse(&fields, &what)?),
         other => {
             let other = other.chars().take(40).collect::<String>();
             return Err(refuse(format!("unknown kind `{}`; use {kinds}", other.escape_debug())));

@@ -26,6 +26,7 @@ const FILES: &[(&str, &str, &str)] = &[
     script!("light.js"),
     script!("walk.js"),
     script!("compare.js"),
+    script!("notes.js"),
     script!("vendor/three/three.module.js"),
     script!("vendor/three/three.core.js"),
     script!("vendor/three/addons/controls/OrbitControls.js"),

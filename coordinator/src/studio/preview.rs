@@ -148,6 +148,8 @@ pub struct SceneView {
     pub variants: Vec<String>,
     /// The scene's saved views (`[[views]]`).
     pub views: Vec<NamedView>,
+    /// Its notes (`[[annotations]]`), positions and poses in the GLB's coordinates.
+    pub annotations: Vec<restauro_scene::scene_file::Annotation>,
     pub sun: Option<SunView>,
     pub notes: Vec<String>,
 }
@@ -237,8 +239,24 @@ fn build(id: &str, revision: u32, scene: &LoadedScene) -> ScenePreview {
             vertical_fov_deg: v.vertical_fov_deg,
         })
         .collect();
+    let annotations = scene
+        .file
+        .annotations
+        .iter()
+        .map(|a| {
+            let mut a = a.clone();
+            a.position = to_glb(a.position, offset_m);
+            if let Some(p) = &mut a.pose {
+                p.position = to_glb(p.position, offset_m);
+                p.target = to_glb(p.target, offset_m);
+                p.up = to_glb(p.up, [0.0; 3]);
+            }
+            a
+        })
+        .collect();
     let view = SceneView {
         id: id.to_owned(),
+        annotations,
         revision,
         views,
         sun: sun_view(scene),

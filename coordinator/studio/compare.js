@@ -4,11 +4,9 @@
 
 import * as api from './api.js';
 import * as farm from './farm.js';
+import { viridisScale } from './colour_scale.js';
 
 const $ = (id) => document.getElementById(id);
-const NS = 'http://www.w3.org/2000/svg';
-// matplotlib's viridis at t = 0, 1/8, …, 1 (the server's map uses the same nine).
-const VIRIDIS = ['#440154', '#472d7b', '#3b528b', '#2c728e', '#21918c', '#28ae80', '#5ec962', '#addc30', '#fde725'];
 
 const png = (job) => job.results.find((n) => n.endsWith('.png') && !n.endsWith('-retinex.png'));
 
@@ -33,34 +31,8 @@ function slide() {
 }
 
 function scale(top) {
-  const [w, h] = [320, 44];
-  const svg = document.createElementNS(NS, 'svg');
-  svg.setAttribute('viewBox', `0 0 ${w} ${h}`);
-  svg.setAttribute('role', 'img');
-  svg.setAttribute('aria-label', `colour scale: ΔE00 from 0 to ${top}`);
-  svg.classList.add('delta-scale');
-  const defs = document.createElementNS(NS, 'defs');
-  const grad = document.createElementNS(NS, 'linearGradient');
-  grad.id = 'viridis';
-  VIRIDIS.forEach((c, i) => {
-    const stop = document.createElementNS(NS, 'stop');
-    stop.setAttribute('offset', `${(i / 8) * 100}%`);
-    stop.setAttribute('stop-color', c);
-    grad.append(stop);
-  });
-  defs.append(grad);
-  const bar = document.createElementNS(NS, 'rect');
-  Object.entries({ x: 10, y: 4, width: w - 20, height: 16, fill: 'url(#viridis)' }).forEach(([k, v]) => bar.setAttribute(k, v));
-  svg.append(defs, bar);
-  for (const t of [0, 0.5, 1]) {
-    const label = document.createElementNS(NS, 'text');
-    label.setAttribute('x', 10 + t * (w - 20));
-    label.setAttribute('y', 36);
-    label.setAttribute('text-anchor', 'middle');
-    label.textContent = t === 1 ? `${top} ΔE00` : String(top * t);
-    svg.append(label);
-  }
-  $('compare-scale').replaceChildren(svg);
+  const ticks = [0, 0.5, 1].map((t) => ({ at: t, text: t === 1 ? `${top} ΔE00` : String(top * t) }));
+  $('compare-scale').replaceChildren(viridisScale('viridis-delta-e', `colour scale: ΔE00 from 0 to ${top}`, ticks));
 }
 
 export async function show(onError) {

@@ -7,6 +7,7 @@ import * as material from './material.js';
 import * as light from './light.js';
 import * as compare from './compare.js';
 import * as notes from './notes.js';
+import * as exposure from './exposure.js';
 
 const $ = (id) => document.getElementById(id);
 let events = null;
@@ -239,6 +240,9 @@ function follow() {
 }
 
 function show(job, seen) {
+  if (shown === null || shown.id !== job.id) {
+    exposure.prepare(job).then(() => shown && shown.id === job.id && show(shown)).catch(showError);
+  }
   shown = job;
   const name = job.results.find((n) => n.endsWith('.png') && !n.endsWith('-retinex.png'));
   const retinex = job.results.find((n) => n.endsWith('-retinex.png'));
@@ -250,9 +254,11 @@ function show(job, seen) {
   $('result').hidden = false;
   $('result-title').textContent = `Snapshot: ${job.name}`;
   const img = $('result-image');
-  img.src = api.resultUrl(job.id, file);
+  const adjusted = file === name ? exposure.url(job) : null;
+  img.src = adjusted ?? api.resultUrl(job.id, file);
   img.alt = `${job.name}, ${file === retinex ? 'as seen after the Retinex' : 'as rendered'}`;
-  $('result-caption').textContent = `${file} — ${job.width} × ${job.height} px`;
+  const how = adjusted ? (adjusted.includes('luminance.png') ? 'false colour by luminance' : `at ${$('exposure-shown').textContent}`) : file;
+  $('result-caption').textContent = `${how} — ${job.width} × ${job.height} px`;
   const downloads = $('result-downloads');
   downloads.replaceChildren('Download: ');
   for (const n of job.results) {
@@ -298,6 +304,7 @@ document.addEventListener('DOMContentLoaded', () => {
   $('set-sun').addEventListener('click', () => viewer && viewer.view && applyEdit(light.edit()));
   light.init(showError);
   compare.init(showError);
+  exposure.init(() => shown && show(shown));
   notes.init({
     edit: applyEdit,
     fly: (n) => { if (n.pose && viewer) { viewer.fly(n.pose); walking(false); } },

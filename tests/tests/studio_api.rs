@@ -672,3 +672,72 @@ fn the_studios_comparison_is_restauro_compares() {
     assert_eq!(r.status, 409, "{}", r.text());
     assert!(error_of(&r).contains("not done"), "{}", error_of(&r));
 }
+
+/// A snapshot at another exposure is what `restauro display --exposure` makes of its EXR, and in
+/// false colour each pixel's luminance sits on the logarithmic scale asked for.
+#[test]
+fn exposure_and_false_colour_are_restauro_displays() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let farm = Coordinator::studio_farm(d, 64, 36);
+    let (c, s) = (&farm.coordinator, farm.coordinator.studio.clone().unwrap());
+    let auth = [("Authorization", BEARER)];
+    let id = submit(&farm.scene, &["--spp", "1"], &c.url, &farm.token);
+    let o = client(&["watch", &id], &c.url, &farm.token);
+    assert!(o.status.success(), "{}", text(&o));
+    let out = d.join("fetched");
+    let o = client(&["fetch", &id, "--out", out.to_str().unwrap()], &c.url, &farm.token);
+    assert!(o.status.success(), "{}", text(&o));
+    let exr = out.join("aosta.exr");
+
+    let l = get(&s, &format!("/api/jobs/{id}/luminance"), &auth).json();
+    let white = l["auto_white_cd_m2"].as_f64().unwrap() / 2.0;
+    let (lo, hi) = (l["scale_min_cd_m2"].as_f64().unwrap(), l["scale_max_cd_m2"].as_f64().unwrap());
+    assert!(lo <= l["p1_cd_m2"].as_f64().unwrap() && l["p99_cd_m2"].as_f64().unwrap() <= hi, "{l}");
+    let r = get(&s, &format!("/api/jobs/{id}/display.png?exposure=absolute:{white}"), &auth);
+    assert_eq!((r.status, r.header("content-type")), (200, Some("image/png")), "{}", r.text());
+    let cli = d.join("display.png");
+    let o = restauro_tests::restauro(&[
+        "display",
+        exr.to_str().unwrap(),
+        "--exposure",
+        &format!("absolute:{white}"),
+        "--out",
+        cli.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let png = restauro_tests::browser::png_rgb;
+    assert!(
+        png(&r.body).0 == png(&std::fs::read(&cli).unwrap()).0,
+        "the studio's pixels differ from restauro display's"
+    );
+    let r = get(&s, &format!("/api/jobs/{id}/display.png?exposure=bright"), &auth);
+    assert_eq!(r.status, 400);
+    assert!(
+        error_of(&r).contains("use auto, auto:<key>, absolute:<cd/m²> or relative"),
+        "{}",
+        error_of(&r)
+    );
+
+    // False colour: the pixel of median luminance is at the middle of a scale centred on it.
+    let image = restauro_image::image_files::read_exr(&exr, 1 << 24).unwrap();
+    let (k, p) = image.pixels.iter().enumerate().find(|(_, p)| p[1] > 0.0).unwrap();
+    let y = f64::from(p[1]);
+    let r = get(
+        &s,
+        &format!("/api/jobs/{id}/luminance.png?min_cd_m2={}&max_cd_m2={}", y / 10.0, y * 10.0),
+        &auth,
+    );
+    assert_eq!(r.status, 200, "{}", r.text());
+    let (pixels, _) = png(&r.body);
+    assert_eq!(
+        pixels[k],
+        restauro_image::delta_e::viridis(0.5),
+        "luminance {y} cd/m² at the scale's middle"
+    );
+    for bad in ["min_cd_m2=0&max_cd_m2=10", "min_cd_m2=10&max_cd_m2=1", "max_cd_m2=10"] {
+        let r = get(&s, &format!("/api/jobs/{id}/luminance.png?{bad}"), &auth);
+        assert_eq!(r.status, 400, "{bad}: {}", r.text());
+        assert!(error_of(&r).contains("min_cd_m2"), "{bad}: {}", error_of(&r));
+    }
+}

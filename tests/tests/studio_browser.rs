@@ -323,4 +323,39 @@ fn a_restorer_compares_two_hypotheses_on_the_slider_and_the_delta_e_layer() {
         "[...document.querySelectorAll('#compare-scale text')].map(t => t.textContent).pop()",
     );
     assert_eq!(label, format!("{top} ΔE00"), "the scale's top");
+
+    // One snapshot shown one stop brighter: the server's picture at half the automatic white,
+    // as the page shows it; then in false colour, with its scale in cd/m².
+    b.click(&format!("#jobs tr[data-job=\"{found}\"] button"));
+    b.wait_for("the snapshot's luminances", "document.getElementById('fc-max').value !== ''");
+    b.eval("(() => { const e = document.getElementById('exposure-ev'); e.value = 1; e.dispatchEvent(new Event('input')); })()");
+    b.wait_for(
+        "one stop brighter",
+        "(() => { const i = document.getElementById('result-image'); return i.src.includes('display.png') && i.complete && i.naturalWidth === 160; })()",
+    );
+    assert_eq!(b.eval("document.getElementById('exposure-shown').textContent"), "+1 EV");
+    let src = b.eval("new URL(document.getElementById('result-image').src).pathname + new URL(document.getElementById('result-image').src).search");
+    b.eval("document.getElementById('result-image').scrollIntoView({ block: 'center' })");
+    // (Inside its 1-px border.)
+    let [x, y, w, h] = b.rect("#result-image");
+    let rect = [x + 1.0, y + 1.0, w - 2.0, h - 2.0];
+    let shown = pixels_in(&b.screenshot(&shots().join("25-one-stop-brighter.png")), rect);
+    let served = restauro_tests::http::request(
+        c.studio.as_deref().unwrap(),
+        "GET",
+        src.as_str().unwrap(),
+        &auth,
+        b"",
+    );
+    assert!(difference(&shown, &png_rgb(&served.body).0) < 0.5, "the page shows another picture");
+    assert!(difference(&shown, &a_png) > 2.0, "no brighter than the farm's PNG");
+    b.click("#false-colour");
+    b.wait_for(
+        "false colour",
+        "(() => { const i = document.getElementById('result-image'); return i.src.includes('luminance.png') && i.complete && i.naturalWidth === 160; })()",
+    );
+    let unit =
+        b.eval("[...document.querySelectorAll('#fc-scale text')].map(t => t.textContent).pop()");
+    assert_eq!(unit, "cd/m²");
+    b.screenshot(&shots().join("26-false-colour.png"));
 }

@@ -14,7 +14,7 @@ use axum::response::{IntoResponse, Response};
 use restauro_image::delta_e::{
     DeltaEMap, DeltaEStats, delta_e_map, map_rgb, scale_max, white_luminance,
 };
-use restauro_image::image_files::{MAX_PIXELS, PngPixels, XyzImage, encode_png, read_exr};
+use restauro_image::image_files::{PngPixels, encode_png};
 use restauro_spectral::appearance::d65_white;
 use restauro_spectral::display::Exposure;
 use restauro_spectral::rgb_space::RgbSpace;
@@ -54,22 +54,12 @@ fn pair(query: Option<&str>) -> Result<(JobId, JobId)> {
     Ok((job("a")?, job("b")?))
 }
 
-/// The rendered image (absolute XYZ) of a finished job.
-fn rendered(studio: &Studio, id: &JobId) -> Result<(String, XyzImage)> {
-    let job = studio.farm.jobs().into_iter().find(|j| j.id == *id);
-    let job = job.ok_or_else(|| CoordinatorError::NoSuchJob(id.clone()))?;
-    let name = format!("{}.exr", job.name);
-    let path = studio.farm.result_path(id, &name)?;
-    let image = read_exr(&path, MAX_PIXELS)
-        .map_err(|e| CoordinatorError::Internal(format!("{}: {e}", path.display())))?;
-    Ok((job.name, image))
-}
-
 async fn compared(studio: &Arc<Studio>, query: Option<&str>) -> Result<Compared> {
     let (a, b) = pair(query)?;
     let studio = studio.clone();
     tokio::task::spawn_blocking(move || -> Result<Compared> {
-        let ((a_name, a), (b_name, b)) = (rendered(&studio, &a)?, rendered(&studio, &b)?);
+        let ((a_name, a), (b_name, b)) =
+            (super::display::rendered(&studio, &a)?, super::display::rendered(&studio, &b)?);
         if (a.width, a.height) != (b.width, b.height) {
             return Err(CoordinatorError::Request(format!(
                 "b: {b_name} is {}×{} px and {a_name} {}×{} px; compare snapshots of one size",

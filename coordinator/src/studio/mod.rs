@@ -6,6 +6,7 @@
 
 pub mod api;
 pub mod compare;
+pub mod display;
 pub mod edits;
 pub mod events;
 pub mod page;
@@ -77,6 +78,9 @@ fn router(studio: Arc<Studio>) -> Router {
         .route("/api/scenes/{id}/download", get(edits::download))
         .route("/api/spectra", get(edits::spectra))
         .route("/api/sun-path", get(edits::sun_path))
+        .route("/api/jobs/{id}/display.png", get(display::display))
+        .route("/api/jobs/{id}/luminance", get(display::luminance))
+        .route("/api/jobs/{id}/luminance.png", get(display::false_colour))
         .route("/api/compare", get(compare::compare))
         .route("/api/compare/delta-e.png", get(compare::picture))
         .route_layer(middleware::from_fn_with_state(studio.clone(), signed_in));

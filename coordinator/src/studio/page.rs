@@ -27,6 +27,8 @@ const FILES: &[(&str, &str, &str)] = &[
     script!("walk.js"),
     script!("compare.js"),
     script!("notes.js"),
+    script!("exposure.js"),
+    script!("colour_scale.js"),
     script!("vendor/three/three.module.js"),
     script!("vendor/three/three.core.js"),
     script!("vendor/three/addons/controls/OrbitControls.js"),

@@ -1,0 +1,128 @@
+//! A snapshot shown as the lighting designer needs it: at a chosen exposure (the display
+//! transform `restauro display` applies: `restauro_spectral::display`, the same tone curve and
+//! gamut mapping), and in false colour by luminance, cd/m², on a logarithmic viridis scale whose
+//! ends the page chooses.
+
+use super::Studio;
+use super::api::query_value;
+use crate::error::{CoordinatorError, Result};
+use crate::ids::JobId;
+use axum::Json;
+use axum::extract::{Path, RawQuery, State};
+use axum::http::header;
+use axum::response::{IntoResponse, Response};
+use restauro_image::delta_e::viridis;
+use restauro_image::image_files::{MAX_PIXELS, PngPixels, XyzImage, encode_png, read_exr};
+use restauro_spectral::display::{DisplayParams, Exposure, encode, exposure_scale, to_u8};
+use restauro_spectral::rgb_space::RgbSpace;
+use serde::Serialize;
+use std::sync::Arc;
+
+/// The rendered image (absolute XYZ, cd/m² in Y) of a finished job.
+pub(super) fn rendered(studio: &Studio, id: &JobId) -> Result<(String, XyzImage)> {
+    let job = studio.farm.jobs().into_iter().find(|j| j.id == *id);
+    let job = job.ok_or_else(|| CoordinatorError::NoSuchJob(id.clone()))?;
+    let path = studio.farm.result_path(id, &format!("{}.exr", job.name))?;
+    let image = read_exr(&path, MAX_PIXELS)
+        .map_err(|e| CoordinatorError::Internal(format!("{}: {e}", path.display())))?;
+    Ok((job.name, image))
+}
+
+async fn image_of(studio: &Arc<Studio>, id: &str) -> Result<XyzImage> {
+    let (studio, id) = (studio.clone(), JobId::parse(id)?);
+    tokio::task::spawn_blocking(move || rendered(&studio, &id).map(|(_, image)| image))
+        .await
+        .map_err(|e| CoordinatorError::Internal(e.to_string()))?
+}
+
+fn png(width: usize, height: usize, rgb: Vec<u8>) -> Result<Response> {
+    let bytes = encode_png(width, height, &PngPixels::Eight(rgb), RgbSpace::Srgb)
+        .map_err(|e| CoordinatorError::Internal(format!("the PNG: {e}")))?;
+    Ok(([(header::CONTENT_TYPE, "image/png")], bytes).into_response())
+}
+
+/// `GET /api/jobs/{id}/display.png?exposure=auto|auto:KEY|absolute:CD_M2|relative`: the
+/// rendered image at that exposure, as `restauro display --exposure` shows it.
+pub async fn display(
+    State(studio): State<Arc<Studio>>,
+    Path(id): Path<String>,
+    RawQuery(query): RawQuery,
+) -> Result<Response> {
+    let text = query_value(query.as_deref(), "exposure").unwrap_or_else(|| "auto".into());
+    let exposure: Exposure =
+        text.parse().map_err(|e| CoordinatorError::Request(format!("exposure: {e}")))?;
+    let image = image_of(&studio, &id).await?;
+    let encoded = encode(&image.pixels, &DisplayParams { space: RgbSpace::Srgb, exposure });
+    png(image.width, image.height, to_u8(&encoded))
+}
+
+/// The luminances of an image, for the exposure and false-colour controls.
+#[derive(Serialize)]
+pub struct Luminance {
+    /// The reference white `auto` exposure chooses, cd/m².
+    pub auto_white_cd_m2: f64,
+    /// The 1st, 50th and 99th percentiles of the luminances above zero, cd/m².
+    pub p1_cd_m2: f64,
+    pub p50_cd_m2: f64,
+    pub p99_cd_m2: f64,
+    /// A default scale for false colour: whole decades around the 1st and 99th percentiles.
+    pub scale_min_cd_m2: f64,
+    pub scale_max_cd_m2: f64,
+}
+
+/// `GET /api/jobs/{id}/luminance`
+pub async fn luminance(
+    State(studio): State<Arc<Studio>>,
+    Path(id): Path<String>,
+) -> Result<Json<Luminance>> {
+    let image = image_of(&studio, &id).await?;
+    let mut y: Vec<f64> =
+        image.pixels.iter().map(|p| f64::from(p[1])).filter(|v| *v > 0.0).collect();
+    y.sort_by(f64::total_cmp);
+    let at = |q: f64| y.get(((y.len() as f64 * q) as usize).min(y.len().saturating_sub(1)));
+    let (p1, p50, p99) = (at(0.01), at(0.5), at(0.99));
+    let (p1, p50, p99) = (*p1.unwrap_or(&1.0), *p50.unwrap_or(&1.0), *p99.unwrap_or(&1.0));
+    Ok(Json(Luminance {
+        auto_white_cd_m2: 1.0 / exposure_scale(&image.pixels, Exposure::default()),
+        p1_cd_m2: p1,
+        p50_cd_m2: p50,
+        p99_cd_m2: p99,
+        scale_min_cd_m2: 10f64.powf(p1.log10().floor()),
+        scale_max_cd_m2: 10f64.powf(p99.log10().ceil()),
+    }))
+}
+
+/// Where luminance `y` falls on a logarithmic scale from `min` to `max` (0–1, clamped).
+pub fn log_position(y: f64, min: f64, max: f64) -> f64 {
+    if y <= 0.0 {
+        return 0.0;
+    }
+    ((y.log10() - min.log10()) / (max.log10() - min.log10())).clamp(0.0, 1.0)
+}
+
+/// `GET /api/jobs/{id}/luminance.png?min_cd_m2=…&max_cd_m2=…`: each pixel's luminance in false
+/// colour, viridis from `min` (and below) to `max` (and above) on a logarithmic scale.
+pub async fn false_colour(
+    State(studio): State<Arc<Studio>>,
+    Path(id): Path<String>,
+    RawQuery(query): RawQuery,
+) -> Result<Response> {
+    let bound = |name: &str| -> Result<f64> {
+        let text = query_value(query.as_deref(), name)
+            .ok_or_else(|| CoordinatorError::Request(format!("{name}: missing from the query")))?;
+        text.parse::<f64>().ok().filter(|v| v.is_finite() && *v > 0.0).ok_or_else(|| {
+            CoordinatorError::Request(format!("{name}: `{text}` is not a luminance above 0 cd/m²"))
+        })
+    };
+    let (min, max) = (bound("min_cd_m2")?, bound("max_cd_m2")?);
+    if min >= max {
+        return Err(CoordinatorError::Request("min_cd_m2 must be below max_cd_m2".to_owned()));
+    }
+    let image = image_of(&studio, &id).await?;
+    let rgb = image
+        .pixels
+        .iter()
+        .flat_map(|p| viridis(log_position(f64::from(p[1]), min, max)))
+        .collect();
+    png(image.width, image.height, rgb)
+}

@@ -18,7 +18,22 @@ pub fn assemble(farm: &Arc<Farm>, id: &JobId) {
     let _span = tracing::info_span!("assemble", job = %id).entered();
     let started = Instant::now();
     let Some(record) = farm.jobs_record(id) else { return };
-    match files(farm, &record) {
+    // A panic here is a defect, but it must not leave the job assembling for ever, with every
+    // client watching it waiting: the job fails with the panic's words (the panic hook has
+    // written where it happened to the log).
+    let assembled = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| files(farm, &record)))
+        .unwrap_or_else(|panic| {
+            let what = panic
+                .downcast_ref::<&str>()
+                .map(|s| (*s).to_owned())
+                .or_else(|| panic.downcast_ref::<String>().cloned())
+                .unwrap_or_default();
+            Err(Outcome::Failed(format!(
+                "assembling the image stopped on an internal error ({what}); this is a defect \
+                 of restauro: please report it with the coordinator's log"
+            )))
+        });
+    match assembled {
         Ok(files) => match farm.finish_job(id, files) {
             Ok(()) => info!(seconds = started.elapsed().as_secs_f64(), "job done"),
             Err(e) => {

@@ -53,6 +53,8 @@ pub struct Config {
     pub scheduler: scheduler::Config,
     /// Run the Retinex stage and write its files.
     pub retinex: bool,
+    /// Fault injection for tests: every store commit waits this long first (a slow disk).
+    pub commit_delay: Duration,
 }
 
 pub struct Farm {
@@ -169,8 +171,8 @@ impl Farm {
             info!(assets = moved, "moved the assets of an earlier release out of the store");
         }
         remove_leftover_results(&jobs_dir);
-        let commits =
-            TileCommits::start(store.clone()).context("starting the store's committer")?;
+        let commits = TileCommits::start(store.clone(), config.commit_delay)
+            .context("starting the store's committer")?;
         let farm = Arc::new(Farm {
             store,
             assets,
@@ -728,6 +730,26 @@ impl Farm {
             // Queued under the lock: ordered before any later removal of the job's tiles.
             self.commits.put(claim.job.clone(), tile, data)
         };
+        // From here the tile is the scheduler's "committing" and only `settle` moves it on. The
+        // caller's future may be dropped at any await (tonic drops a call whose worker hung up,
+        // as a killed worker does mid-report), so the rest runs as a task of its own: otherwise
+        // the tile would stay committing, never done nor requeued, and its job never end.
+        let (farm, claim, worker) = (self.clone(), claim.clone(), session.worker);
+        tokio::spawn(async move { farm.settle(committed, &claim, worker, render_s).await })
+            .await
+            .map_err(|e| CoordinatorError::Internal(format!("settling a tile: {e}")))?
+    }
+
+    /// The end of a report: once the store has the tile (or could not take it), the scheduler
+    /// hears of it, and the last tile of a job starts its assembly.
+    async fn settle(
+        self: &Arc<Self>,
+        committed: crate::group_commit::Committed,
+        claim: &LeaseClaim,
+        worker: WorkerId,
+        render_s: f64,
+    ) -> Result<Reported> {
+        let tile = claim.tile;
         match committed.wait().await {
             Ok(()) => {
                 let finished = {
@@ -736,7 +758,7 @@ impl Farm {
                     finished
                         && st.jobs.get_mut(&claim.job).is_some_and(|r| r.begin_assembly().is_ok())
                 };
-                debug!(job = %claim.job, tile, worker = %session.worker, render_s, "tile done");
+                debug!(job = %claim.job, tile, %worker, render_s, "tile done");
                 if finished {
                     self.persist(&claim.job);
                     let (farm, id) = (self.clone(), claim.job.clone());
@@ -976,6 +998,7 @@ mod tests {
             max_upload_bytes: 1 << 20,
             scheduler: scheduler::Config::default(),
             retinex: false,
+            commit_delay: Duration::ZERO,
         })
         .unwrap()
     }

@@ -12,6 +12,7 @@ use crate::ids::JobId;
 use crate::store::{Store, StoreError};
 use std::sync::Arc;
 use std::sync::mpsc;
+use std::time::Duration;
 use tokio::sync::oneshot;
 
 /// A batch stops growing at this many bytes of pixel data.
@@ -39,7 +40,8 @@ pub struct TileCommits {
 
 impl TileCommits {
     /// Starts the committing thread; dropping the handle commits what is queued and stops it.
-    pub fn start(store: Arc<Store>) -> std::io::Result<TileCommits> {
+    /// Each transaction waits `delay` first (fault injection for tests; zero otherwise).
+    pub fn start(store: Arc<Store>, delay: Duration) -> std::io::Result<TileCommits> {
         let (queue, incoming) = mpsc::channel::<Pending>();
         let thread = std::thread::Builder::new().name("store-commit".into()).spawn(move || {
             let mut next = incoming.recv().ok();
@@ -68,6 +70,9 @@ impl TileCommits {
                         }
                         Err(_) => break,
                     }
+                }
+                if !delay.is_zero() {
+                    std::thread::sleep(delay);
                 }
                 let result = store.put_tiles(batch.iter().filter_map(|p| match p {
                     Pending::Tile { job, tile, data, .. } => Some((&**job, *tile, data.as_slice())),
@@ -144,7 +149,7 @@ mod tests {
         let path = dir.path().join("store.redb");
         {
             let store = Arc::new(Store::open(&path).unwrap());
-            let commits = Arc::new(TileCommits::start(store).unwrap());
+            let commits = Arc::new(TileCommits::start(store, Duration::ZERO).unwrap());
             let job = JobId::from("job-a");
             let mut tasks = Vec::new();
             for tile in 0..200u32 {
@@ -169,7 +174,7 @@ mod tests {
     async fn a_removal_drops_what_came_before_it_and_nothing_after() {
         let dir = tempfile::tempdir().unwrap();
         let store = Arc::new(Store::open(&dir.path().join("store.redb")).unwrap());
-        let commits = TileCommits::start(store.clone()).unwrap();
+        let commits = TileCommits::start(store.clone(), Duration::ZERO).unwrap();
         let job = JobId::from("job-a");
         let before: Vec<_> = (0..50).map(|t| commits.put(job.clone(), t, vec![1; 64])).collect();
         let removal = commits.remove_job(job.clone());

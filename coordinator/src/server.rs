@@ -75,6 +75,10 @@ pub struct CoordinatorArgs {
     /// Exit when standard input closes (an embedded cluster's processes end with their parent).
     #[arg(long, hide = true)]
     pub exit_with_stdin: bool,
+    /// Fault injection for tests: hold every store commit this many milliseconds (a slow
+    /// disk), so that a test can act while a tile is being committed.
+    #[arg(long, hide = true, default_value_t = 0)]
+    pub fault_commit_delay_ms: u64,
 }
 
 /// The server's TLS identity, read and checked before anything listens.
@@ -128,6 +132,7 @@ pub fn run(args: &CoordinatorArgs) -> Result<()> {
             ..scheduler::Config::default()
         },
         retinex: !args.no_retinex,
+        commit_delay: Duration::from_millis(args.fault_commit_delay_ms),
     };
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)

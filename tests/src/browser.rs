@@ -13,6 +13,9 @@ use std::time::{Duration, Instant};
 use tungstenite::stream::MaybeTlsStream;
 use tungstenite::{Message, WebSocket};
 
+/// How long one DevTools command may take before the test fails.
+const CDP_PATIENCE: Duration = Duration::from_secs(120);
+
 pub struct Browser {
     child: Child,
     socket: WebSocket<MaybeTlsStream<TcpStream>>,
@@ -64,6 +67,11 @@ impl Browser {
                 "--enable-unsafe-swiftshader",
                 "--no-first-run",
                 "--no-default-browser-check",
+                // Nothing but the page under test: no update checks, sync or field trials, whose
+                // connections a machine without a network refuses (and some wait on).
+                "--disable-background-networking",
+                "--disable-component-update",
+                "--disable-sync",
                 "--disable-extensions",
                 "--hide-scrollbars",
                 "--remote-debugging-port=0",
@@ -78,6 +86,10 @@ impl Browser {
         let (port, path) = devtools_address(profile.path());
         let (socket, _) =
             tungstenite::connect(format!("ws://127.0.0.1:{port}{path}")).expect("CDP socket");
+        // A browser that stops answering fails the test instead of holding it for ever.
+        if let MaybeTlsStream::Plain(stream) = socket.get_ref() {
+            stream.set_read_timeout(Some(CDP_PATIENCE)).expect("a socket timeout");
+        }
         let mut browser =
             Browser { child, socket, session: String::new(), next_id: 1, _profile: profile };
         let targets = browser.call("Target.getTargets", json!({}));
@@ -105,7 +117,9 @@ impl Browser {
         }
         self.socket.send(Message::text(message.to_string())).expect("sending to Chromium");
         loop {
-            let reply = self.socket.read().expect("reading from Chromium");
+            let reply = self.socket.read().unwrap_or_else(|e| {
+                panic!("{method}: no answer from Chromium within {CDP_PATIENCE:?}: {e}")
+            });
             let Message::Text(text) = reply else { continue };
             let value: Value = serde_json::from_str(&text).unwrap();
             if value["id"] == id {
@@ -190,6 +204,28 @@ impl Browser {
         self.call("Input.dispatchKeyEvent", json!({ "type": "keyDown", "key": key, "code": key }));
         std::thread::sleep(time);
         self.call("Input.dispatchKeyEvent", json!({ "type": "keyUp", "key": key, "code": key }));
+    }
+
+    /// Holds a key down until what it drives has moved and stopped: until the JavaScript
+    /// `expression`, once changed, gives the same value twice a second apart (or `limit` has
+    /// passed); then lets it go and
+    /// returns that value. A walk is judged by where it ends, whatever the frame rate of a
+    /// loaded machine's software GL.
+    pub fn hold_until_still(&mut self, key: &str, expression: &str, limit: Duration) -> Value {
+        self.call("Input.dispatchKeyEvent", json!({ "type": "keyDown", "key": key, "code": key }));
+        let deadline = Instant::now() + limit;
+        let first = self.eval(expression);
+        let mut last = first.clone();
+        loop {
+            std::thread::sleep(Duration::from_secs(1));
+            let now = self.eval(expression);
+            if (now == last && now != first) || Instant::now() >= deadline {
+                break;
+            }
+            last = now;
+        }
+        self.call("Input.dispatchKeyEvent", json!({ "type": "keyUp", "key": key, "code": key }));
+        self.eval(expression)
     }
 
     /// Writes what the page shows now to `path` as a PNG, and returns its bytes.

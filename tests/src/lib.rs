@@ -11,6 +11,7 @@ pub mod wire;
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
 
 /// The path of one of restauro's binaries, built by `cargo test --workspace`.
 pub fn binary(name: &str) -> PathBuf {
@@ -34,6 +35,8 @@ pub struct Coordinator {
     pub metrics: Option<String>,
     /// The studio's `HOST:PORT`, when started with `--studio-listen`.
     pub studio: Option<String>,
+    /// The folder of its log (and of its workers' logs), shown when a test fails.
+    dir: PathBuf,
 }
 
 pub const CLIENT_TOKEN: &str = "client-token-for-tests";
@@ -128,7 +131,7 @@ impl Coordinator {
             let url = line.trim().strip_prefix("studio on http://").expect("the studio's address");
             url.trim_end_matches('/').to_owned()
         });
-        Coordinator { child, url, metrics, studio }
+        Coordinator { child, url, metrics, studio, dir: dir.to_owned() }
     }
 }
 
@@ -145,6 +148,11 @@ impl Drop for Coordinator {
     fn drop(&mut self) {
         let _ = self.child.kill();
         let _ = self.child.wait();
+        // A failing test says what its processes were doing (the harness shows what a failed
+        // test wrote).
+        if std::thread::panicking() {
+            eprintln!("the processes' logs:\n{}", logs(&self.dir));
+        }
     }
 }
 
@@ -217,7 +225,65 @@ impl Drop for Worker {
 
 /// Runs the `restauro` client with `args`.
 pub fn restauro(args: &[&str]) -> Output {
-    Command::new(binary("restauro")).args(args).env_remove("RESTAURO_COORDINATOR").output().unwrap()
+    let mut command = Command::new(binary("restauro"));
+    command.args(args).env_remove("RESTAURO_COORDINATOR");
+    output_within(&mut command, patience())
+}
+
+/// How long a test waits for one command before it kills it and fails: ten minutes, or
+/// `RESTAURO_TEST_PATIENCE_S` seconds. A command that hangs fails its test with what it had
+/// written, rather than holding the whole test run until CI gives up on it.
+pub fn patience() -> Duration {
+    let seconds = std::env::var("RESTAURO_TEST_PATIENCE_S").ok().and_then(|s| s.parse().ok());
+    Duration::from_secs(seconds.unwrap_or(600))
+}
+
+/// Runs `command` to its end as `Command::output` does, killing it after `limit`, with every
+/// process it started (its own process group): then the test fails, showing the command and
+/// what it wrote.
+pub fn output_within(command: &mut Command, limit: Duration) -> Output {
+    use std::os::unix::process::CommandExt as _;
+    let mut child = command
+        .process_group(0)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap_or_else(|e| panic!("starting {command:?}: {e}"));
+    let drain = |mut pipe: Box<dyn std::io::Read + Send>| {
+        std::thread::spawn(move || {
+            let mut bytes = Vec::new();
+            let _ = pipe.read_to_end(&mut bytes);
+            bytes
+        })
+    };
+    let stdout = drain(Box::new(child.stdout.take().expect("piped")));
+    let stderr = drain(Box::new(child.stderr.take().expect("piped")));
+    let deadline = Instant::now() + limit;
+    let status = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break Some(status);
+        }
+        if Instant::now() >= deadline {
+            let group = format!("-{}", child.id());
+            let _ = Command::new("kill").args(["-KILL", "--", &group]).status();
+            let _ = child.kill();
+            let _ = child.wait();
+            break None;
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    };
+    let stdout = stdout.join().unwrap_or_default();
+    let stderr = stderr.join().unwrap_or_default();
+    let Some(status) = status else {
+        panic!(
+            "{command:?} was still running after {} s and was killed; it had written:\n{}{}",
+            limit.as_secs(),
+            String::from_utf8_lossy(&stdout),
+            String::from_utf8_lossy(&stderr)
+        );
+    };
+    Output { status, stdout, stderr }
 }
 
 /// Runs a client command of `restauro` against the coordinator at `url`, with the client

@@ -4,7 +4,7 @@
 
 use restauro_proto as pb;
 use restauro_scene::job::{JobSpec, RetinexOptions};
-use restauro_scene::plan::RenderOptions;
+use restauro_scene::plan::{Rect, RenderOptions};
 use restauro_scene::scene_file::Integrator;
 use restauro_tests::wire::{self, is_final, spec};
 use restauro_tests::{Coordinator, Worker, http_get, sample, signal, wait_for};
@@ -53,6 +53,33 @@ async fn a_cancel_during_post_processing_is_not_overturned() {
         .await
         .unwrap_err();
     assert_eq!(e.code(), tonic::Code::FailedPrecondition, "{e:?}");
+}
+
+/// A worker that hangs up while its tile is being committed (killed mid-report: tonic then
+/// drops the call) must not leave the tile half-done, neither done nor requeued: the tile is done
+/// once the store has it, and the job ends. Before, the call's end was the only way out of
+/// "committing", and the cluster test's killed worker once held its job running for an hour.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_report_abandoned_while_its_tile_is_committed_still_completes_the_tile() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // Each commit takes 1.5 s (a slow disk): the worker hangs up in the middle of it.
+    let slow_disk = ["--fault-commit-delay-ms", "1500"];
+    let (coordinator, mut client, bundle) = wire::farm(d, 32, 32, &slow_disk).await;
+    let job = wire::submit(&mut client, &bundle, &spec("aosta", 32, 1)).await.unwrap();
+    assert_eq!(job.tiles_total, 1);
+    let mut work = wire::work_client(&coordinator.url).await;
+    let session = wire::register(&mut work, "w").await;
+    let lease = wire::lease(&mut work, &session, 1).await.remove(0);
+    let rect = Rect::from(lease.rect.unwrap());
+    let data = wire::tile_data(&rect, wire::AOSTA_TILES, 1.0);
+    let report = wire::report(&mut work, &session, &lease, data);
+    let abandoned = tokio::time::timeout(Duration::from_millis(500), report).await;
+    assert!(abandoned.is_err(), "answered within the commit's delay: {abandoned:?}");
+    drop(work);
+    let end = wire::wait_end_logged(&mut client, &job.job_id, Duration::from_secs(60), d).await;
+    assert_eq!(end.state, pb::JobState::Done as i32, "{end:?}");
+    assert_eq!(end.tiles_done, 1);
 }
 
 /// Defect 8: watchers opened while jobs end all see the end (none waits for a change that

@@ -75,16 +75,15 @@ fn every_readme_command_runs_in_order() {
         body.join("\n")
     );
     let dir = tempfile::tempdir().unwrap();
-    let out = Command::new("bash")
-        .arg("-c")
+    let mut bash = Command::new("bash");
+    bash.arg("-c")
         .arg(&script)
         .current_dir(dir.path())
         .env("RESTAURO", binary("restauro"))
         .env("RESTAURO_PROGRESS_INTERVAL_S", "30")
         .env_remove("RESTAURO_COORDINATOR")
-        .env_remove("RESTAURO_TOKEN")
-        .output()
-        .unwrap();
+        .env_remove("RESTAURO_TOKEN");
+    let out = restauro_tests::output_within(&mut bash, restauro_tests::patience());
     assert!(
         out.status.success(),
         "the README's commands failed:\n{}\n--- stdout\n{}\n--- stderr\n{}",

@@ -95,13 +95,14 @@ fn files_that_are_not_pem_are_refused_naming_the_file() {
     std::fs::write(&junk, "not a certificate").unwrap();
     let junk = junk.to_str().unwrap();
     // The coordinator checks its certificate before it listens.
-    let o = std::process::Command::new(restauro_tests::binary("restauro-coordinator"))
+    let mut coordinator =
+        std::process::Command::new(restauro_tests::binary("restauro-coordinator"));
+    coordinator
         .args(["--listen", "127.0.0.1:0", "--data", d.join("data").to_str().unwrap()])
         .args(["--client-token-file", client_token.to_str().unwrap()])
         .args(["--worker-token-file", worker_token.to_str().unwrap()])
-        .args(["--tls-cert", junk, "--tls-key", junk])
-        .output()
-        .unwrap();
+        .args(["--tls-cert", junk, "--tls-key", junk]);
+    let o = restauro_tests::output_within(&mut coordinator, restauro_tests::patience());
     assert!(!o.status.success(), "{}", text(&o));
     assert!(text(&o).contains(&format!("the TLS certificate {junk} is not PEM")), "{}", text(&o));
     // A client given a CA file that is not a certificate says which file.

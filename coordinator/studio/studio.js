@@ -8,6 +8,7 @@ import * as light from './light.js';
 import * as compare from './compare.js';
 import * as notes from './notes.js';
 import * as exposure from './exposure.js';
+import * as variants from './variants.js';
 
 const $ = (id) => document.getElementById(id);
 let events = null;
@@ -94,10 +95,8 @@ async function open(id, revision) {
 // hypotheses, views and revisions, the sun panel, the material panel of the surface clicked.
 async function present(view) {
   viewer.update(view);
-  const variant = $('snap-variant');
-  const chosen = variant.value;
-  variant.replaceChildren(new Option('as the scene is', ''), ...view.variants.map((v) => new Option(v, v)));
-  if (view.variants.includes(chosen)) variant.value = chosen;
+  variants.show(view);
+  viewer.colour(variants.chosen());
   const views = $('view-picker');
   views.replaceChildren(new Option("the scene's camera", ''), ...view.views.map((v) => new Option(v.name, v.name)));
   const list = await api.revisions(openScene);
@@ -116,9 +115,10 @@ async function showMaterial() {
   if (!picked || !viewer || !viewer.view) return;
   if (!library) library = await api.spectra().catch((e) => { showError(e); return null; });
   material.show($('material'), picked, viewer.view, library, applyEdit);
+  $('material').querySelector('.body').append(variants.partControls(picked));
 }
 
-// Sends one edit; the page then shows the revision it made.
+// Sends one edit; the page then shows the revision it made. True when it was made.
 async function applyEdit(change) {
   try {
     const view = await api.edit(openScene, change);
@@ -126,8 +126,10 @@ async function applyEdit(change) {
     await present(view);
     const list = await api.revisions(openScene);
     $('scene-status').textContent = `revision ${view.revision}: ${list[list.length - 1].summary}`;
+    return true;
   } catch (e) {
     showError(e);
+    return false;
   }
 }
 
@@ -304,6 +306,11 @@ document.addEventListener('DOMContentLoaded', () => {
   $('set-sun').addEventListener('click', () => viewer && viewer.view && applyEdit(light.edit()));
   light.init(showError);
   compare.init(showError);
+  variants.init({
+    edit: applyEdit,
+    error: showError,
+    changed: (v) => { if (viewer && viewer.view) { viewer.colour(v); showMaterial(); } },
+  });
   exposure.init(() => shown && show(shown));
   notes.init({
     edit: applyEdit,
@@ -323,6 +330,7 @@ document.addEventListener('DOMContentLoaded', () => {
     if (e.key === '?') shortcuts();
     if ((e.key === 'h' || e.key === 'H') && viewer && viewer.view) { viewer.home(); walking(false); }
     if (e.key === 'g' || e.key === 'G') toggleWalk();
+    if ((e.key === 'v' || e.key === 'V') && viewer && viewer.view) variants.next();
     if (e.key === 'Escape' && viewer && viewer.walker.active) toggleWalk();
   });
   document.addEventListener('keyup', (e) => { if (viewer) viewer.walker.key(e, false); });

@@ -96,6 +96,8 @@ export class Viewer {
     this.scene.add(this.model);
     // A Lambert material is drawn as one (no highlight), so that its pixels scale with its
     // colour as restauro's matte surfaces do; Cook–Torrance keeps glTF's rough metal-free PBR.
+    // Each part gets its own material: a hypothesis may put two parts of one material in
+    // different states.
     const lambert = new Set(view.materials.filter((m) => m.model === 'lambert').map((m) => m.name));
     this.model.traverse((o) => {
       if (!o.isMesh) return;
@@ -104,6 +106,8 @@ export class Viewer {
       if (lambert.has(o.material.name)) {
         const { name, color, side } = o.material;
         o.material = new THREE.MeshLambertMaterial({ name, color, side });
+      } else {
+        o.material = o.material.clone();
       }
     });
     const box = new THREE.Box3().setFromObject(this.model);
@@ -119,14 +123,27 @@ export class Viewer {
   // A new revision of the open scene (same geometry): its materials' colours and its sun.
   update(view) {
     this.view = view;
-    const colours = new Map(view.materials.map((m) => [m.name, m.colour_linear_srgb]));
-    this.model.traverse((o) => {
-      if (!o.isMesh) return;
-      const rgb = colours.get(o.material.name);
-      if (rgb) o.material.color.setRGB(...rgb);
-    });
+    this.colour();
     this.placeSun(view.sun);
     this.placePins(view.annotations);
+    this.draw();
+  }
+
+  // Each part in the colour of its material in the state `variant` gives it (a `VariantView`;
+  // null: every part in its base state). A material without that state keeps its base, as in
+  // the render.
+  colour(variant = this.variant) {
+    this.variant = variant;
+    const materials = new Map(this.view.materials.map((m) => [m.name, m]));
+    this.model.traverse((o) => {
+      if (!o.isMesh) return;
+      const extras = o.geometry.userData || {};
+      const m = materials.get(extras.material ?? o.material.name);
+      if (!m) return;
+      const state = variant ? variant.parts[`${extras.object}/${extras.part}`] : 'base';
+      const s = m.states.find((x) => x.state === state);
+      o.material.color.setRGB(...(s ? s.colour_linear_srgb : m.colour_linear_srgb));
+    });
     this.draw();
   }
 

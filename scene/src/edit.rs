@@ -7,13 +7,13 @@
 
 use crate::error::{Result, SceneError};
 use crate::scene_file::{
-    Annotation, Light, MaterialModel, SceneFile, SiteTime, SpectrumSource, View,
+    Annotation, Light, MaterialModel, SceneFile, SiteTime, SpectrumSource, Variant, View,
 };
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 /// One change to a scene. As JSON, an object whose `edit` names the kind (`material`, `sun`,
-/// `save-view`, `delete-view`) beside the kind's own fields.
+/// `save-view`, …: [`KINDS`]) beside the kind's own fields.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "edit", rename_all = "kebab-case")]
 pub enum Edit {
@@ -23,6 +23,9 @@ pub enum Edit {
     DeleteView(DeleteView),
     SaveAnnotation(SaveAnnotation),
     DeleteAnnotation(DeleteAnnotation),
+    SaveVariant(SaveVariant),
+    RenameVariant(RenameVariant),
+    DeleteVariant(DeleteVariant),
 }
 
 /// A material's surface in one of its states (`base` unless given): a shipped spectrum by its
@@ -82,9 +85,54 @@ pub struct DeleteAnnotation {
     pub title: String,
 }
 
+/// A hypothesis (`[variants.NAME]`) saved under its name, replacing one of that name: the
+/// state of everything, and of the objects and parts named in `states`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SaveVariant {
+    pub name: String,
+    /// `base`, `degraded` or `cleaned`.
+    #[serde(default = "base")]
+    pub state: String,
+    /// Per object name, or per `object/part`, the state.
+    #[serde(default)]
+    pub states: std::collections::BTreeMap<String, String>,
+}
+
+fn base() -> String {
+    "base".to_owned()
+}
+
+/// A hypothesis given another name; refused when that name is taken.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RenameVariant {
+    pub name: String,
+    pub to: String,
+}
+
+/// A hypothesis removed.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DeleteVariant {
+    pub name: String,
+}
+
 /// The kinds of edit, as `edit` names them.
-pub const KINDS: [&str; 6] =
-    ["material", "sun", "save-view", "delete-view", "save-annotation", "delete-annotation"];
+pub const KINDS: [&str; 9] = [
+    "material",
+    "sun",
+    "save-view",
+    "delete-view",
+    "save-annotation",
+    "delete-annotation",
+    "save-variant",
+    "rename-variant",
+    "delete-variant",
+];
+
+/// The longest name of a hypothesis, in characters.
+pub const MAX_VARIANT_NAME: usize = 64;
 
 /// Where an edit's refusals say they come from.
 const PLACE: &str = "edit";
@@ -138,8 +186,57 @@ impl Edit {
                 })?;
                 Ok(format!("note `{title}` deleted"))
             }
+            Edit::SaveVariant(SaveVariant { name, state, states }) => {
+                check_variant_name(name, "name")?;
+                let variant = Variant { state: state.clone(), states: states.clone() };
+                scene.variants.insert(name.clone(), variant);
+                Ok(format!("hypothesis `{name}` saved"))
+            }
+            Edit::RenameVariant(RenameVariant { name, to }) => {
+                check_variant_name(to, "to")?;
+                if scene.variants.contains_key(to) {
+                    return Err(refuse(
+                        "to",
+                        format!("a hypothesis named `{to}` exists; choose another name"),
+                    ));
+                }
+                let variant = take_variant(scene, name)?;
+                scene.variants.insert(to.clone(), variant);
+                Ok(format!("hypothesis `{name}` renamed `{to}`"))
+            }
+            Edit::DeleteVariant(DeleteVariant { name }) => {
+                take_variant(scene, name)?;
+                Ok(format!("hypothesis `{name}` deleted"))
+            }
         }
     }
+}
+
+/// A hypothesis's name: the `NAME` of `[variants.NAME]` and of `restauro render --variant`, so
+/// printable, on one line, and short.
+fn check_variant_name(name: &str, field: &str) -> Result<()> {
+    if name.trim().is_empty() {
+        return Err(refuse(field, "a hypothesis needs a name, e.g. `cleaned`"));
+    }
+    if name.chars().count() > MAX_VARIANT_NAME {
+        return Err(refuse(field, format!("at most {MAX_VARIANT_NAME} characters")));
+    }
+    if name.chars().any(char::is_control) || name.trim() != name {
+        return Err(refuse(
+            field,
+            "no control characters, and no spaces at either end: the name is typed after \
+             `restauro render --variant`",
+        ));
+    }
+    Ok(())
+}
+
+/// Removes hypothesis `name`, refusing a name the scene does not have with those it has.
+fn take_variant(scene: &mut SceneFile, name: &str) -> Result<Variant> {
+    scene.variants.remove(name).ok_or_else(|| {
+        let names = scene.variants.keys().map(String::as_str);
+        refuse("name", crate::load::unknown("hypothesis", name, names))
+    })
 }
 
 /// Puts `item` in `list`, in place of the item of the same name.
@@ -380,5 +477,38 @@ mod tests {
         assert_eq!(s.views[0].position, [2.0, -10.0, 1.6]);
         edit(r#"{"edit":"delete-view","name":"portal"}"#).apply(&mut s).unwrap();
         assert!(s.views.is_empty());
+    }
+
+    #[test]
+    fn hypotheses_are_saved_renamed_and_deleted_and_bad_names_refused() {
+        let mut s = scene();
+        edit(r#"{"edit":"save-variant","name":"portal first","state":"degraded","states":{"facade/travertine":"cleaned"}}"#)
+            .apply(&mut s)
+            .unwrap();
+        let v = &s.variants["portal first"];
+        assert_eq!(v.state_for("facade", "travertine"), "cleaned");
+        assert_eq!(v.state_for("facade", "mortar"), "degraded");
+        let message = edit(r#"{"edit":"rename-variant","name":"portal first","to":"cleaned"}"#)
+            .apply(&mut s.clone())
+            .unwrap_err()
+            .to_string();
+        assert!(message.contains("a hypothesis named `cleaned` exists"), "{message}");
+        edit(r#"{"edit":"rename-variant","name":"portal first","to":"campaign 1"}"#)
+            .apply(&mut s)
+            .unwrap();
+        assert!(s.variants.contains_key("campaign 1") && !s.variants.contains_key("portal first"));
+        let message = edit(r#"{"edit":"delete-variant","name":"campain 1"}"#)
+            .apply(&mut s.clone())
+            .unwrap_err()
+            .to_string();
+        assert!(message.contains("did you mean `campaign 1`"), "{message}");
+        edit(r#"{"edit":"delete-variant","name":"campaign 1"}"#).apply(&mut s).unwrap();
+        assert_eq!(s, scene(), "saved, renamed and deleted: as it was");
+        for bad in ["", "  ", " lead", "line\\nbreak", &"x".repeat(65)] {
+            let json = format!(r#"{{"edit":"save-variant","name":"{bad}"}}"#);
+            let message = edit(&json).apply(&mut s).unwrap_err().to_string();
+            assert!(message.contains("edit: name"), "{bad:?}: {message}");
+        }
+        assert_eq!(s, scene(), "a refused name changes nothing");
     }
 }

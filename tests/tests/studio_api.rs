@@ -427,7 +427,7 @@ fn edits_make_revisions_checked_as_scene_files_and_kept_across_a_restart() {
         (
             serde_json::json!({"edit": "paint", "colour": "red"}),
             400,
-            "unknown kind `paint`; use material, sun, save-view, delete-view",
+            "unknown kind `paint`; use material, sun, save-view, delete-view, save-annotation, delete-annotation, save-variant, rename-variant, delete-variant",
         ),
         (serde_json::json!({"edit": "delete-view", "name": "portal"}), 400, "view"),
         (serde_json::json!({"edit": "sun", "latitude_deg": "north"}), 400, "latitude_deg"),
@@ -604,6 +604,89 @@ fn edits_make_revisions_checked_as_scene_files_and_kept_across_a_restart() {
     let shipped = library.as_array().unwrap().iter().find(|x| x["name"] == other).unwrap();
     assert_eq!(shipped["reflectance"].as_array().unwrap().len(), 81);
     assert!(shipped["material"].as_str().unwrap().contains("travertine"), "{shipped}");
+}
+
+/// Hypotheses from the page: saved, renamed and deleted as edits, checked as the scene file's
+/// `[variants]` are (an unknown part or state refused in `scene check`'s words), and each sent
+/// back with the state it gives every part of the model.
+#[test]
+fn hypotheses_are_edits_checked_as_the_scene_file_is() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (c, _) = Coordinator::with_studio(d);
+    let s = c.studio.clone().unwrap();
+    let auth = [("Authorization", BEARER)];
+    submit(
+        &aosta_scene(d, 64, 36),
+        &["--spp", "1", "--tile", "32"],
+        &c.url,
+        &d.join("client.token"),
+    );
+    let id = get(&s, "/api/scenes", &auth).json()[0]["id"].as_str().unwrap().to_owned();
+    let edit = |body: serde_json::Value| {
+        request(&s, "POST", &format!("/api/scenes/{id}/edits"), &auth, body.to_string().as_bytes())
+    };
+    let first = get(&s, &format!("/api/scenes/{id}"), &auth).json();
+    let found = first["variants"].as_array().unwrap().iter().find(|v| v["name"] == "as-found");
+    let found = found.unwrap();
+    assert_eq!(found["parts"]["facade/travertine"], "degraded", "{found}");
+
+    let r = edit(serde_json::json!({"edit": "save-variant", "name": "portal first",
+        "state": "degraded", "states": {"facade/travertine": "cleaned", "facade/paving": "base"}}));
+    assert_eq!(r.status, 200, "{}", r.text());
+    let v = r.json();
+    let saved = v["variants"].as_array().unwrap().iter().find(|v| v["name"] == "portal first");
+    let parts = &saved.unwrap()["parts"];
+    assert_eq!(
+        (&parts["facade/travertine"], &parts["facade/paving"], &parts["facade/mortar"]),
+        (&serde_json::json!("cleaned"), &serde_json::json!("base"), &serde_json::json!("degraded")),
+        "{parts}"
+    );
+    let manifest = get(&s, &format!("/api/scenes/{id}/scene.json"), &auth).json();
+    assert_eq!(manifest["variants"]["portal first"]["states"]["facade/travertine"], "cleaned");
+
+    for (body, words) in [
+        (
+            serde_json::json!({"edit": "save-variant", "name": "x", "states": {"facade/travertin": "cleaned"}}),
+            "travertin",
+        ),
+        (
+            serde_json::json!({"edit": "save-variant", "name": "x", "state": "polished"}),
+            "unknown state `polished`; use base, degraded or cleaned",
+        ),
+        (serde_json::json!({"edit": "save-variant", "name": " "}), "a hypothesis needs a name"),
+        (serde_json::json!({"edit": "save-variant", "name": "x", "colour": 1}), "colour"),
+        (
+            serde_json::json!({"edit": "rename-variant", "name": "portal first", "to": "as-found"}),
+            "a hypothesis named `as-found` exists",
+        ),
+        (
+            serde_json::json!({"edit": "rename-variant", "name": "portal frist", "to": "y"}),
+            "did you mean `portal first`",
+        ),
+        (serde_json::json!({"edit": "delete-variant", "name": "clean"}), "did you mean `cleaned`"),
+    ] {
+        let r = edit(body.clone());
+        assert_eq!(r.status, 400, "{body}: {}", r.text());
+        assert!(error_of(&r).contains(words), "{body}: {}", error_of(&r));
+    }
+    let r = edit(
+        serde_json::json!({"edit": "rename-variant", "name": "portal first", "to": "campaign 1"}),
+    );
+    assert_eq!((r.status, r.json()["revision"].as_u64()), (200, Some(2)), "{}", r.text());
+    let r = edit(serde_json::json!({"edit": "delete-variant", "name": "campaign 1"}));
+    assert_eq!((r.status, r.json()["revision"].as_u64()), (200, Some(3)), "{}", r.text());
+    let names: Vec<String> = r.json()["variants"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v["name"].as_str().unwrap().to_owned())
+        .collect();
+    assert_eq!(names, ["as-found", "cleaned"]);
+    let summaries = get(&s, &format!("/api/scenes/{id}/revisions"), &auth).json();
+    let summaries: Vec<&str> =
+        summaries.as_array().unwrap().iter().map(|r| r["summary"].as_str().unwrap()).collect();
+    assert!(summaries[2].contains("renamed `campaign 1`"), "{summaries:?}");
 }
 
 /// The studio's comparison of two snapshots is `restauro compare`'s: the same ΔE00 statistics

@@ -69,6 +69,18 @@ fn set_value(b: &mut Browser, id: &str, value: &str) {
     ));
 }
 
+/// The studio with the Aosta scene (160 × 90 px) rendered once, open in a browser signed in:
+/// the farm, the browser and the first job.
+fn opened(d: &std::path::Path) -> (restauro_tests::StudioFarm, Browser, String) {
+    let farm = Coordinator::studio_farm(d, 160, 90);
+    let c = &farm.coordinator;
+    let first = submit(&farm.scene, &["--spp", "1", "--tile", "32"], &c.url, &farm.token);
+    let mut b = Browser::launch(1280, 900);
+    b.goto(&format!("{}#token={CLIENT_TOKEN}", farm.page));
+    b.wait_for("the model", "document.getElementById('view').dataset.revision === '0'");
+    (farm, b, first)
+}
+
 #[test]
 fn a_restorer_swaps_a_stone_sets_the_sun_and_keeps_a_view() {
     if !available("studio_editing") {
@@ -76,13 +88,9 @@ fn a_restorer_swaps_a_stone_sets_the_sun_and_keeps_a_view() {
     }
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let farm = Coordinator::studio_farm(d, 160, 90);
+    let (farm, mut b, first) = opened(d);
     let c = &farm.coordinator;
-    let (studio, scene, token) = (farm.page.clone(), farm.scene.clone(), farm.token.clone());
-    let first = submit(&scene, &["--spp", "1", "--tile", "32"], &c.url, &token);
-    let mut b = Browser::launch(1280, 900);
-    b.goto(&format!("{studio}#token={CLIENT_TOKEN}"));
-    b.wait_for("the model", "document.getElementById('view').dataset.revision === '0'");
+    let (scene, token) = (farm.scene.clone(), farm.token.clone());
     b.wait_for("the sun's path", "document.querySelector('#sun-chart svg polyline')");
 
     // Click the facade; the material panel opens with the controls that change it.
@@ -354,4 +362,146 @@ fn a_note_pinned_to_the_facade_survives_a_restart() {
         "flown to the note's view"
     );
     b.screenshot(&shots().join("17-note-after-restart.png"));
+}
+
+/// The linear RGB, over the 21 × 21 pixels of `after`, of the pixels that were within 2 % of
+/// the clicked pixel's colour in `before` (the clicked part, in the same light), as the ratio
+/// `after / before` per channel (the median).
+fn part_ratio(before: &[[f64; 3]], after: &[[f64; 3]]) -> [f64; 3] {
+    let centre = before[before.len() / 2];
+    let same: Vec<usize> = (0..before.len())
+        .filter(|&i| (0..3).all(|k| (before[i][k] / centre[k] - 1.0).abs() < 0.02))
+        .collect();
+    assert!(same.len() >= 20, "only {} pixels of the clicked part", same.len());
+    std::array::from_fn(|k| {
+        let mut r: Vec<f64> = same.iter().map(|&i| after[i][k] / before[i][k]).collect();
+        r.sort_by(f64::total_cmp);
+        r[r.len() / 2]
+    })
+}
+
+/// Hypotheses built in the page: a new one puts every part in one state and the real-time
+/// view shows each part in that state's colour; the clicked part alone is then set to another
+/// state; a name that is taken is refused in the server's words; the hypothesis is renamed,
+/// downloaded in the scene file that `scene check` accepts, and deleted.
+#[test]
+fn a_restorer_builds_a_hypothesis_part_by_part() {
+    if !available("studio_editing") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (farm, mut b, _) = opened(d);
+    let c = &farm.coordinator;
+    b.click("#view");
+    b.wait_for("the material panel", "document.querySelector('#material .variant-part')");
+    let picked = b.eval("(() => { const r = [...document.querySelectorAll('#material .body > table:first-child tr')].map(r => r.cells[1].textContent); return r; })()");
+    let (object, part, material) = (
+        picked[0].as_str().unwrap().to_owned(),
+        picked[1].as_str().unwrap().to_owned(),
+        picked[2].as_str().unwrap().to_owned(),
+    );
+    // Up close (1.5 m from the point clicked), so that the pixels read are of that part.
+    b.eval(
+        "(() => { const v = window.studioViewer, p = v.picked.clone(); \
+         const from = v.camera.position.clone().sub(p).normalize().multiplyScalar(1.5).add(p); \
+         v.fly({ position: from.toArray(), target: p.toArray(), up: [0, 1, 0], vertical_fov_deg: 40 }); })()",
+    );
+    let before = around_pick(&mut b, "31-hypothesis-before.png");
+    // The colours restauro gives the clicked material's states, from the scene's view.
+    let state_rgb = |b: &mut Browser, state: &str| -> [f64; 3] {
+        let rgb = b.eval(&format!(
+            "(() => {{ const m = window.studioViewer.view.materials.find(m => m.name === '{material}'); \
+             return (m.states.find(s => s.state === '{state}') || m.states[0]).colour_linear_srgb; }})()"
+        ));
+        std::array::from_fn(|k| rgb[k].as_f64().unwrap())
+    };
+    let (base, degraded) = (state_rgb(&mut b, "base"), state_rgb(&mut b, "degraded"));
+    assert_ne!(base, degraded, "{material} has a degraded state in the Aosta scene");
+
+    // A new hypothesis, every part as found: the clicked part takes its degraded colour.
+    set_value(&mut b, "variant-name", "first campaign");
+    set_value(&mut b, "variant-state", "degraded");
+    b.click("#new-variant");
+    b.wait_for("revision 1", "document.getElementById('view').dataset.revision === '1'");
+    assert_eq!(b.eval("document.getElementById('snap-variant').value"), "first campaign");
+    let options = b.eval("[...document.getElementById('snap-variant').options].map(o => o.value)");
+    assert_eq!(options, serde_json::json!(["", "as-found", "cleaned", "first campaign"]));
+    let after = around_pick(&mut b, "32-hypothesis-degraded.png");
+    let seen = part_ratio(&before, &after);
+    for k in 0..3 {
+        let expected = degraded[k] / base[k];
+        assert!(
+            (seen[k] / expected - 1.0).abs() < 0.05,
+            "channel {k}: the part's colour scaled by {:.3}, its degraded state by {expected:.3}",
+            seen[k]
+        );
+    }
+    b.wait_for("the part's state", "document.getElementById('part-state-now')");
+    assert_eq!(b.eval("document.getElementById('part-state-now').textContent"), "degraded");
+
+    // The clicked part alone set to its base state in this hypothesis: its colour as before.
+    set_value(&mut b, "part-state", "base");
+    b.click("#part-state-part");
+    b.wait_for("revision 2", "document.getElementById('view').dataset.revision === '2'");
+    b.wait_for(
+        "the panel redrawn",
+        "document.getElementById('part-state-now') && document.getElementById('part-state-now').textContent === 'base'",
+    );
+    let back = part_ratio(&before, &around_pick(&mut b, "33-hypothesis-part.png"));
+    assert!(back.iter().all(|r| (r - 1.0).abs() < 0.02), "{back:?}");
+    let variant =
+        b.eval("window.studioViewer.view.variants.find(v => v.name === 'first campaign')");
+    assert_eq!(variant["state"], "degraded", "{variant}");
+    assert_eq!(variant["states"], serde_json::json!({ format!("{object}/{part}"): "base" }));
+
+    // "As the scene is" shows every part in its base state; V steps to the next hypothesis.
+    set_value(&mut b, "snap-variant", "");
+    let plain = part_ratio(&before, &around_pick(&mut b, "34-as-the-scene-is.png"));
+    assert!(plain.iter().all(|r| (r - 1.0).abs() < 0.02), "{plain:?}");
+    b.press("v");
+    assert_eq!(b.eval("document.getElementById('snap-variant').value"), "as-found");
+    let found = part_ratio(&before, &around_pick(&mut b, "35-as-found.png"));
+    assert!((found[1] / (degraded[1] / base[1]) - 1.0).abs() < 0.05, "{found:?}");
+
+    // A name that is taken is refused, in the server's words, and nothing changes.
+    set_value(&mut b, "snap-variant", "first campaign");
+    set_value(&mut b, "variant-name", "cleaned");
+    b.click("#rename-variant");
+    b.wait_for("the refusal", "!document.getElementById('problem').hidden");
+    let problem = b.eval("document.getElementById('problem').textContent");
+    assert!(problem.as_str().unwrap().contains("a hypothesis named `cleaned` exists"), "{problem}");
+    assert_eq!(b.eval("document.getElementById('view').dataset.revision"), "2");
+
+    // Renamed; the downloaded scene holds it, and `scene check` accepts it.
+    set_value(&mut b, "variant-name", "portal first");
+    b.click("#rename-variant");
+    b.wait_for("revision 3", "document.getElementById('view').dataset.revision === '3'");
+    assert_eq!(b.eval("document.getElementById('snap-variant').value"), "portal first");
+    b.screenshot(&shots().join("36-hypothesis-renamed.png"));
+    let href = b.eval("document.getElementById('download').getAttribute('href')");
+    let tar = request(
+        &c.studio.clone().unwrap(),
+        "GET",
+        href.as_str().unwrap(),
+        &[("Authorization", BEARER)],
+        b"",
+    );
+    assert_eq!(tar.status, 200, "{}", tar.text());
+    tar::Archive::new(std::io::Cursor::new(tar.body)).unpack(d.join("downloaded")).unwrap();
+    let folder = d.join("downloaded/aosta-revision-3/scene.toml");
+    let toml: toml::Table = toml::from_str(&std::fs::read_to_string(&folder).unwrap()).unwrap();
+    let saved = &toml["variants"]["portal first"];
+    assert_eq!(saved["state"].as_str(), Some("degraded"), "{saved}");
+    assert_eq!(saved["states"][&format!("{object}/{part}")].as_str(), Some("base"), "{saved}");
+    assert!(toml["variants"].get("first campaign").is_none());
+    let o = restauro_tests::restauro(&["scene", "check", folder.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+
+    // Deleted: the picker goes back to the scene as it is.
+    b.click("#delete-variant");
+    b.wait_for("revision 4", "document.getElementById('view').dataset.revision === '4'");
+    assert_eq!(b.eval("document.getElementById('snap-variant').value"), "");
+    let options = b.eval("[...document.getElementById('snap-variant').options].map(o => o.value)");
+    assert_eq!(options, serde_json::json!(["", "as-found", "cleaned"]));
 }

@@ -79,6 +79,9 @@ fn parse_edit(body: &[u8]) -> Result<Edit> {
         "delete-view" => Edit::DeleteView(parse(&fields, &what)?),
         "save-annotation" => Edit::SaveAnnotation(parse(&fields, &what)?),
         "delete-annotation" => Edit::DeleteAnnotation(parse(&fields, &what)?),
+        "save-variant" => Edit::SaveVariant(parse(&fields, &what)?),
+        "rename-variant" => Edit::RenameVariant(parse(&fields, &what)?),
+        "delete-variant" => Edit::DeleteVariant(parse(&fields, &what)?),
         other => {
             let other = other.chars().take(40).collect::<String>();
             return Err(refuse(format!("unknown kind `{}`; use {kinds}", other.escape_debug())));

@@ -29,6 +29,7 @@ const FILES: &[(&str, &str, &str)] = &[
     script!("notes.js"),
     script!("exposure.js"),
     script!("colour_scale.js"),
+    script!("variants.js"),
     script!("vendor/three/three.module.js"),
     script!("vendor/three/three.core.js"),
     script!("vendor/three/addons/controls/OrbitControls.js"),

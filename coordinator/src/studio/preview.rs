@@ -144,14 +144,48 @@ pub struct SceneView {
     pub triangles: usize,
     pub camera: CameraView,
     pub materials: Vec<MaterialView>,
-    /// The scene's hypotheses (variants), by name.
-    pub variants: Vec<String>,
+    /// The scene's hypotheses (variants).
+    pub variants: Vec<VariantView>,
     /// The scene's saved views (`[[views]]`).
     pub views: Vec<NamedView>,
     /// Its notes (`[[annotations]]`), positions and poses in the GLB's coordinates.
     pub annotations: Vec<restauro_scene::scene_file::Annotation>,
     pub sun: Option<SunView>,
     pub notes: Vec<String>,
+}
+
+/// A hypothesis as the file holds it, and the state it gives every part of the model, so
+/// that the page colours each part with that state's colour.
+#[derive(Serialize)]
+pub struct VariantView {
+    pub name: String,
+    pub state: String,
+    pub states: std::collections::BTreeMap<String, String>,
+    /// `object/part` → `base`, `degraded` or `cleaned`, as the render resolves it.
+    pub parts: std::collections::BTreeMap<String, String>,
+}
+
+fn variant_views(scene: &LoadedScene) -> Vec<VariantView> {
+    let parts = |variant: &restauro_scene::scene_file::Variant| {
+        let mut out = std::collections::BTreeMap::new();
+        for o in &scene.objects {
+            for g in &o.mesh.groups {
+                let state = variant.state_for(&o.name, &g.name);
+                out.insert(format!("{}/{}", o.name, g.name), state.to_owned());
+            }
+        }
+        out
+    };
+    let variants = &scene.file.variants;
+    variants
+        .iter()
+        .map(|(name, v)| VariantView {
+            name: name.clone(),
+            state: v.state.clone(),
+            states: v.states.clone(),
+            parts: parts(v),
+        })
+        .collect()
 }
 
 pub struct ScenePreview {
@@ -264,7 +298,7 @@ fn build(id: &str, revision: u32, scene: &LoadedScene) -> ScenePreview {
         triangles,
         camera,
         materials,
-        variants: scene.file.variants.keys().cloned().collect(),
+        variants: variant_views(scene),
         notes: scene.notes.clone(),
     };
     ScenePreview { view, glb }

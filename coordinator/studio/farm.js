@@ -37,7 +37,7 @@ function cell(text, cls) {
   return td;
 }
 
-function duration(s) {
+export function duration(s) {
   if (!Number.isFinite(s)) return '–';
   if (s < 60) return `${s.toFixed(1)} s`;
   const m = Math.floor(s / 60);
@@ -50,12 +50,18 @@ function progressCell(j) {
   bar.max = Math.max(j.tiles_total, 1);
   bar.value = j.tiles_done;
   bar.setAttribute('aria-label', `${j.name}: tiles done`);
-  td.append(bar, ` ${j.tiles_done}/${j.tiles_total} tiles`);
+  td.append(` ${progressText(j)}`);
+  return td;
+}
+
+// `12/60 tiles`, and while it renders `, about 20.5 s left` (from the time per tile so far).
+export function progressText(j) {
+  let text = `${j.tiles_done}/${j.tiles_total} tiles`;
   if (!j.finished && j.tiles_done > 0 && j.tiles_done < j.tiles_total) {
     const eta = j.elapsed_s * (j.tiles_total - j.tiles_done) / j.tiles_done;
-    td.append(`, about ${duration(eta)} left`);
+    text += `, about ${duration(eta)} left`;
   }
-  return td;
+  return text;
 }
 
 function button(text, label, onClick) {

@@ -9,6 +9,7 @@ import * as compare from './compare.js';
 import * as notes from './notes.js';
 import * as exposure from './exposure.js';
 import * as variants from './variants.js';
+import * as painting from './painting.js';
 
 const $ = (id) => document.getElementById(id);
 let events = null;
@@ -39,6 +40,7 @@ async function takeSnapshot() {
     const job = await api.takeSnapshot(openScene, request);
     awaited = job.id;
     farm.job(job);
+    painting.follow(job);
     problem('');
   } catch (e) {
     showError(e);
@@ -221,6 +223,7 @@ function follow() {
   on('job', (j) => {
     const isNew = !farm.jobById(j.id);
     farm.job(j);
+    painting.update(j);
     if (j.state === 'done') compare.refresh();
     if (shown && shown.id === j.id) show(j);
     if (awaited === j.id && j.state === 'done') { awaited = null; show(j); }

@@ -399,6 +399,8 @@ pub fn write_spectral_exr(
 pub enum PngPixels {
     Eight(Vec<u8>),
     Sixteen(Vec<u16>),
+    /// 8-bit RGB with alpha (0: transparent), four values a pixel.
+    EightWithAlpha(Vec<u8>),
 }
 
 /// Write an RGB PNG in the given display space: sRGB is marked with an sRGB chunk; the other
@@ -453,6 +455,11 @@ pub fn encode_png(
             PngPixels::Sixteen(v) => {
                 encoder.set_depth(png::BitDepth::Sixteen);
                 v.iter().flat_map(|x| x.to_be_bytes()).collect()
+            }
+            PngPixels::EightWithAlpha(v) => {
+                encoder.set_color(png::ColorType::Rgba);
+                encoder.set_depth(png::BitDepth::Eight);
+                v.clone()
             }
         };
         let mut writer = encoder.write_header()?;
@@ -694,6 +701,11 @@ mod tests {
         for (name, pixels, space) in [
             ("a8.png", PngPixels::Eight(vec![255, 0, 10, 1, 2, 3]), RgbSpace::Srgb),
             ("a16.png", PngPixels::Sixteen(vec![65535, 0, 1000, 1, 2, 3]), RgbSpace::DisplayP3),
+            (
+                "rgba.png",
+                PngPixels::EightWithAlpha(vec![255, 0, 10, 0, 1, 2, 3, 255]),
+                RgbSpace::Srgb,
+            ),
         ] {
             let path = dir.join(name);
             write_png(&path, 2, 1, &pixels, space).unwrap();
@@ -717,6 +729,13 @@ mod tests {
                     let back: Vec<u16> =
                         buf.chunks(2).map(|b| u16::from_be_bytes([b[0], b[1]])).collect();
                     assert_eq!(back, v);
+                }
+                PngPixels::EightWithAlpha(v) => {
+                    assert_eq!(
+                        (info.color_type, info.bit_depth),
+                        (png::ColorType::Rgba, png::BitDepth::Eight)
+                    );
+                    assert_eq!(buf, v);
                 }
             }
         }

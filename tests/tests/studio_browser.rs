@@ -359,3 +359,67 @@ fn a_restorer_compares_two_hypotheses_on_the_slider_and_the_delta_e_layer() {
     assert_eq!(unit, "cd/m²");
     b.screenshot(&shots().join("26-false-colour.png"));
 }
+
+/// A snapshot paints into the view as the farm renders it: while it runs, the picture over the
+/// view holds whole tiles (opaque) where tiles are done and shows the preview through the rest
+/// (transparent), with the progress and time left beside it; when it is done the picture goes
+/// and the result is shown. The store is slowed (each commit 300 ms) so that it can be seen.
+#[test]
+fn a_snapshot_paints_into_the_view_tile_by_tile() {
+    if !available("studio_browser") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let slow = ["--studio-listen", "127.0.0.1:0", "--fault-commit-delay-ms", "300"];
+    let c = Coordinator::start(d, &d.join("data"), "127.0.0.1:0", &slow);
+    let _worker = Worker::start(d, &c.url, "local-1", &[]);
+    let scene = aosta_scene(d, 160, 90);
+    submit(&scene, &["--spp", "1", "--tile", "160"], &c.url, &d.join("client.token"));
+    let mut b = Browser::launch(1280, 900);
+    b.goto(&format!("http://{}/#token={CLIENT_TOKEN}", c.studio.as_deref().unwrap()));
+    b.wait_for("the model", "document.getElementById('view').dataset.revision === '0'");
+    b.eval("document.getElementById('snap-spp').value = 1");
+    b.click("#take-snapshot");
+    b.wait_for(
+        "a few tiles painted",
+        "(() => { const i = document.getElementById('painting'); \
+         return !i.hidden && i.complete && Number(i.dataset.tiles) >= 3; })()",
+    );
+    let caption = b.eval("document.getElementById('painting-progress').textContent");
+    assert!(caption.as_str().unwrap().contains("/60 tiles, about"), "{caption}");
+    let shown_tiles = b.eval("Number(document.getElementById('painting').dataset.tiles)");
+    b.eval("document.getElementById('view').scrollIntoView()");
+    b.screenshot(&shots().join("09-painting.png"));
+    // Per tile (the snapshot's tiles: 16 px for 160 × 90), how many of its pixels are opaque,
+    // and the spread of the opaque pixels' green.
+    let edge = restauro_scene::plan::auto_tile(160, 90) as usize;
+    let read = b.eval(&format!(
+        "(() => {{ const i = document.getElementById('painting'); const c = document.createElement('canvas'); \
+         c.width = i.naturalWidth; c.height = i.naturalHeight; const g = c.getContext('2d'); g.drawImage(i, 0, 0); \
+         const d = g.getImageData(0, 0, c.width, c.height).data; const tiles = {{}}; const greens = []; \
+         for (let y = 0; y < c.height; y++) for (let x = 0; x < c.width; x++) {{ \
+           const a = d[4 * (y * c.width + x) + 3]; const k = `${{Math.floor(x / {edge})}},${{Math.floor(y / {edge})}}`; \
+           tiles[k] = tiles[k] || [0, 0]; tiles[k][a === 255 ? 0 : 1] += 1; \
+           if (a !== 0 && a !== 255) return 'alpha ' + a; \
+           if (a === 255) greens.push(d[4 * (y * c.width + x) + 1]); }} \
+         const mean = greens.reduce((s, v) => s + v, 0) / greens.length; \
+         const sd = Math.sqrt(greens.reduce((s, v) => s + (v - mean) ** 2, 0) / greens.length); \
+         return [c.width, c.height, Object.values(tiles), sd]; }})()"
+    ));
+    assert_eq!((read[0].as_u64(), read[1].as_u64()), (Some(160), Some(90)), "{read}");
+    let tiles = read[2].as_array().unwrap();
+    assert_eq!(tiles.len(), 60);
+    let opaque = tiles.iter().filter(|t| t[1] == 0).count();
+    let transparent = tiles.iter().filter(|t| t[0] == 0).count();
+    assert_eq!(opaque + transparent, 60, "a tile is partly painted: {tiles:?}");
+    let shown_tiles = shown_tiles.as_u64().unwrap() as usize;
+    assert!((shown_tiles..60).contains(&opaque), "{opaque} tiles painted, {shown_tiles} done");
+    assert!(read[3].as_f64().unwrap() > 5.0, "the painted tiles show the model: {read}");
+    // Done: the picture goes, the result takes its place.
+    b.wait_for(
+        "the result",
+        "document.getElementById('painting').hidden && !document.getElementById('result').hidden",
+    );
+    assert_eq!(b.eval("document.getElementById('painting-progress').hidden"), true);
+}

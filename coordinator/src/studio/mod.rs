@@ -10,6 +10,7 @@ pub mod display;
 pub mod edits;
 pub mod events;
 pub mod page;
+pub mod painting;
 pub mod preview;
 pub mod session;
 pub mod snapshot;
@@ -81,6 +82,7 @@ fn router(studio: Arc<Studio>) -> Router {
         .route("/api/jobs/{id}/display.png", get(display::display))
         .route("/api/jobs/{id}/luminance", get(display::luminance))
         .route("/api/jobs/{id}/luminance.png", get(display::false_colour))
+        .route("/api/jobs/{id}/painting.png", get(painting::painting))
         .route("/api/compare", get(compare::compare))
         .route("/api/compare/delta-e.png", get(compare::picture))
         .route_layer(middleware::from_fn_with_state(studio.clone(), signed_in));

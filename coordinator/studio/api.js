@@ -10,7 +10,10 @@ export class ServerError extends Error {
 
 export async function call(method, path, body) {
   const init = { method, credentials: 'same-origin', headers: {} };
-  if (body !== undefined) {
+  if (body instanceof ArrayBuffer) {
+    init.headers['content-type'] = 'application/octet-stream';
+    init.body = body;
+  } else if (body !== undefined) {
     init.headers['content-type'] = 'application/json';
     init.body = JSON.stringify(body);
   }
@@ -44,6 +47,10 @@ export const scene = (id, revision) => call('GET', `${sceneUrl(id)}${at(revision
 export const sceneGlbUrl = (id, revision) => `${sceneUrl(id)}/preview.glb${at(revision)}`;
 // One edit of the scene (restauro_scene::edit::Edit as JSON); the new revision's view.
 export const edit = (id, change) => call('POST', `${sceneUrl(id)}/edits`, change);
+// A photometric file (IES or EULUMDAT, an ArrayBuffer) read and kept by the server: its
+// reference and what it says.
+export const uploadPhotometry = (id, name, bytes) =>
+  call('POST', `${sceneUrl(id)}/photometry?name=${encodeURIComponent(name)}`, bytes);
 export const revert = (id, revision) => call('POST', `${sceneUrl(id)}/revert`, { revision });
 export const downloadUrl = (id, revision) => `${sceneUrl(id)}/download${at(revision)}`;
 export const revisions = (id) => call('GET', `${sceneUrl(id)}/revisions`);

@@ -10,6 +10,7 @@ import * as notes from './notes.js';
 import * as exposure from './exposure.js';
 import * as variants from './variants.js';
 import * as painting from './painting.js';
+import * as luminaires from './luminaires.js';
 
 const $ = (id) => document.getElementById(id);
 let events = null;
@@ -109,6 +110,7 @@ async function present(view) {
   $('view').dataset.revision = String(view.revision);
   $('download').href = api.downloadUrl(openScene, view.revision);
   light.show(view, showError);
+  luminaires.show(view);
   notes.show(view);
   showMaterial();
 }
@@ -309,6 +311,12 @@ document.addEventListener('DOMContentLoaded', () => {
   $('set-sun').addEventListener('click', () => viewer && viewer.view && applyEdit(light.edit()));
   light.init(showError);
   compare.init(showError);
+  luminaires.init({
+    edit: applyEdit,
+    error: showError,
+    picked: () => picked,
+    scene: () => openScene,
+  });
   variants.init({
     edit: applyEdit,
     error: showError,

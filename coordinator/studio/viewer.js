@@ -24,8 +24,9 @@ export class Viewer {
     this.sun.position.set(-0.5, 1.0, 0.8);
     this.sun.castShadow = true;
     this.sun.shadow.mapSize.set(2048, 2048);
-    // Offsets against shadow acne (a surface shadowing itself in bands).
-    this.sun.shadow.bias = -0.0005;
+    // Offsets against shadow acne (a surface shadowing itself in bands that move with the
+    // canvas's size): the normal offset is a few texels of the shadow map, which spans the model.
+    this.sun.shadow.bias = -0.001;
     this.sun.shadow.normalBias = 0.05;
     this.scene.add(this.sun, this.sun.target);
     this.renderer.shadowMap.enabled = true;
@@ -34,6 +35,9 @@ export class Viewer {
     // The notes' pins, picked before the model.
     this.pins = new THREE.Group();
     this.scene.add(this.pins);
+    // The luminaires: a bulb, a line to what each aims at, its photometric solid or its cone.
+    this.lamps = new THREE.Group();
+    this.scene.add(this.lamps);
     this.onNote = () => {};
     new ResizeObserver(() => this.resize()).observe(canvas);
     this.onPick = () => {};
@@ -126,6 +130,7 @@ export class Viewer {
     this.colour();
     this.placeSun(view.sun);
     this.placePins(view.annotations);
+    this.placeLamps(view.lights);
     this.draw();
   }
 
@@ -161,6 +166,55 @@ export class Viewer {
     }
   }
 
+  // Each luminaire (`LightView`s with a position): a yellow bulb, a yellow line to the point it
+  // aims at, and in orange its photometric solid — the distance from the bulb in each direction
+  // proportional to the intensity there, the peak 1/25 of the model's size — or a spot's cone.
+  placeLamps(lights) {
+    this.lamps.clear();
+    const size = this.bounds.getSize(new THREE.Vector3()).length();
+    const bulb = new THREE.SphereGeometry(size / 400, 12, 6);
+    const yellow = new THREE.MeshBasicMaterial({ color: 0xffd000 });
+    const orange = new THREE.LineBasicMaterial({ color: 0xff8800 });
+    const line = (points, material) => new THREE.LineSegments(new THREE.BufferGeometry().setFromPoints(points), material);
+    for (const l of lights) {
+      if (!l.position) continue;
+      const p = new THREE.Vector3(...l.position);
+      const b = new THREE.Mesh(bulb, yellow);
+      b.position.copy(p);
+      this.lamps.add(b);
+      const aim = l.aim ? new THREE.Vector3(...l.aim) : null;
+      if (aim) this.lamps.add(line([p, aim], new THREE.LineBasicMaterial({ color: 0xffd000 })));
+      const segments = [];
+      if (l.solid) {
+        const [rows, cols, scale] = [l.solid.length / 36, 36, size / 25];
+        const at = (g, c) => p.clone().addScaledVector(new THREE.Vector3(...l.solid[g * cols + (c % cols)]), scale);
+        for (let g = 0; g < rows; g++) {
+          for (let c = 0; c < cols; c++) {
+            segments.push(at(g, c), at(g, c + 1));
+            if (g + 1 < rows) segments.push(at(g, c), at(g + 1, c));
+          }
+        }
+      } else if (l.light.kind === 'spot' && aim) {
+        const axis = aim.clone().sub(p);
+        const length = axis.length();
+        axis.normalize();
+        const side = new THREE.Vector3(0, 1, 0).cross(axis);
+        if (side.lengthSq() < 1e-6) side.set(1, 0, 0);
+        side.normalize();
+        const edge = axis.clone().applyAxisAngle(side, THREE.MathUtils.degToRad(l.light.cone_deg));
+        let last = null;
+        for (let k = 0; k <= 24; k++) {
+          const d = edge.clone().applyAxisAngle(axis, (2 * Math.PI * k) / 24);
+          const end = p.clone().addScaledVector(d, length);
+          if (k % 4 === 0) segments.push(p, end);
+          if (last) segments.push(last, end);
+          last = end;
+        }
+      }
+      if (segments.length) this.lamps.add(line(segments, orange));
+    }
+  }
+
   // The preview's sun along the scene's sun direction, its shadow camera over the model.
   placeSun(sun) {
     const box = this.bounds;
@@ -173,6 +227,7 @@ export class Viewer {
     const c = this.sun.shadow.camera;
     [c.left, c.right, c.top, c.bottom, c.near, c.far] = [-radius, radius, radius, -radius, radius * 0.5, radius * 4];
     c.updateProjectionMatrix();
+    this.sun.shadow.normalBias = (3 * 2 * radius) / this.sun.shadow.mapSize.x;
   }
 
   // Walking on (true: false when there is no ground under the camera) or off; orbiting then

@@ -254,21 +254,10 @@ fn luminous(scene: &LoadedScene, spectrum: &str) -> Result<Spectrum, TraceError>
         .map_err(|e| TraceError::Scene(e.to_string()))
 }
 
-/// The photometric frame of a luminaire at `position` aimed at `aim` (γ = 0 towards the aim,
-/// world down by default): rows map world directions to the frame.
+/// The photometric frame of a luminaire (`restauro_scene::photometric::luminaire_frame`).
 fn frame(position: [f64; 3], aim: Option<[f64; 3]>) -> [Vec3A; 3] {
-    let nadir = match aim {
-        Some(a) => {
-            (Vec3A::from(a.map(|v| v as f32)) - Vec3A::from(position.map(|v| v as f32))).normalize()
-        }
-        None => Vec3A::NEG_Z,
-    };
-    let z = -nadir;
-    // C = 0 along world +X as seen in the luminaire's plane (or +Y when aimed along X).
-    let reference = if z.x.abs() > 0.9 { Vec3A::Y } else { Vec3A::X };
-    let x = (reference - z * reference.dot(z)).normalize();
-    let y = z.cross(x);
-    [x, y, z]
+    restauro_scene::photometric::luminaire_frame(position, aim)
+        .map(|row| Vec3A::from(row.map(|v| v as f32)))
 }
 
 /// A measured distribution, its peak scaled to the luminaire's `intensity_cd`.

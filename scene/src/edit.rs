@@ -26,6 +26,8 @@ pub enum Edit {
     SaveVariant(SaveVariant),
     RenameVariant(RenameVariant),
     DeleteVariant(DeleteVariant),
+    SaveLight(SaveLight),
+    DeleteLight(DeleteLight),
 }
 
 /// A material's surface in one of its states (`base` unless given): a shipped spectrum by its
@@ -118,8 +120,27 @@ pub struct DeleteVariant {
     pub name: String,
 }
 
+/// A light (`[[lights]]`) as the scene file gives it, in place of light `index` (counted
+/// from 0 in the file's order), or added after the others without one. Its `spectrum` is a
+/// name in `[spectra]`, or `cie:NAME` for a CIE illuminant (A, D65, F11, `daylight:4000`,
+/// `blackbody:3000`, …) that the edit adds to `[spectra]` as `cie_NAME`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SaveLight {
+    #[serde(default)]
+    pub index: Option<usize>,
+    pub light: Light,
+}
+
+/// Light `index` removed (a scene keeps at least one light).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DeleteLight {
+    pub index: usize,
+}
+
 /// The kinds of edit, as `edit` names them.
-pub const KINDS: [&str; 9] = [
+pub const KINDS: [&str; 11] = [
     "material",
     "sun",
     "save-view",
@@ -129,6 +150,8 @@ pub const KINDS: [&str; 9] = [
     "save-variant",
     "rename-variant",
     "delete-variant",
+    "save-light",
+    "delete-light",
 ];
 
 /// The longest name of a hypothesis, in characters.
@@ -208,6 +231,69 @@ impl Edit {
                 take_variant(scene, name)?;
                 Ok(format!("hypothesis `{name}` deleted"))
             }
+            Edit::SaveLight(SaveLight { index, light }) => save_light(scene, *index, light),
+            Edit::DeleteLight(DeleteLight { index }) => {
+                light_index(scene, *index)?;
+                let gone = scene.lights.remove(*index);
+                Ok(format!("light {index} ({}) deleted", light_kind(&gone)))
+            }
+        }
+    }
+}
+
+fn light_kind(light: &Light) -> &'static str {
+    match light {
+        Light::Point { .. } => "point",
+        Light::Spot { .. } => "spot",
+        Light::Sun { .. } => "sun",
+        Light::Sky { .. } => "sky",
+    }
+}
+
+/// Refuses an index past the scene's lights.
+fn light_index(scene: &SceneFile, index: usize) -> Result<()> {
+    if index < scene.lights.len() {
+        return Ok(());
+    }
+    let n = scene.lights.len();
+    Err(refuse(
+        "index",
+        format!("the scene has {n} lights (0 to {}); no light {index}", n.max(1) - 1),
+    ))
+}
+
+fn save_light(scene: &mut SceneFile, index: Option<usize>, light: &Light) -> Result<String> {
+    let mut light = light.clone();
+    let spectrum = match &mut light {
+        Light::Point { spectrum, .. }
+        | Light::Spot { spectrum, .. }
+        | Light::Sun { spectrum, .. }
+        | Light::Sky { spectrum, .. } => spectrum,
+    };
+    if let Some(name) = spectrum.strip_prefix("cie:") {
+        let key = format!("cie_{}", name.replace(|c: char| !c.is_ascii_alphanumeric(), "_"));
+        let source = SpectrumSource::Illuminant { illuminant: name.to_owned() };
+        match scene.spectra.get(&key) {
+            Some(s) if *s != source => {
+                return Err(refuse(
+                    "light.spectrum",
+                    format!("`{key}` in [spectra] is another spectrum"),
+                ));
+            }
+            _ => scene.spectra.insert(key.clone(), source),
+        };
+        *spectrum = key;
+    }
+    let kind = light_kind(&light);
+    match index {
+        Some(i) => {
+            light_index(scene, i)?;
+            scene.lights[i] = light;
+            Ok(format!("light {i} ({kind}) changed"))
+        }
+        None => {
+            scene.lights.push(light);
+            Ok(format!("light {} ({kind}) added", scene.lights.len() - 1))
         }
     }
 }

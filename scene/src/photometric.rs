@@ -298,6 +298,28 @@ fn normalise_c(c: f64) -> f64 {
     if r >= 360.0 - 1e-9 { 0.0 } else { r }
 }
 
+/// The photometric frame of a luminaire at `position` aimed at `aim`: rows `[x, y, z]` that map
+/// world directions to the frame, in which γ = 0 (the nadir) is −z, pointing at the aim (world
+/// down without one), and C = 0 is +x, towards world +X as seen in the luminaire's plane (or +Y
+/// when aimed along X) — the convention of LM-63 and EULUMDAT files for a luminaire hung
+/// pointing down, kept when it is tilted.
+pub fn luminaire_frame(position: [f64; 3], aim: Option<[f64; 3]>) -> [[f64; 3]; 3] {
+    let unit = |v: [f64; 3]| {
+        let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        v.map(|c| c / n)
+    };
+    let nadir = match aim {
+        Some(a) => unit([a[0] - position[0], a[1] - position[1], a[2] - position[2]]),
+        None => [0.0, 0.0, -1.0],
+    };
+    let z = nadir.map(|c| -c);
+    let reference = if z[0].abs() > 0.9 { [0.0, 1.0, 0.0] } else { [1.0, 0.0, 0.0] };
+    let along = reference[0] * z[0] + reference[1] * z[1] + reference[2] * z[2];
+    let x = unit(std::array::from_fn(|k| reference[k] - z[k] * along));
+    let y = [z[1] * x[2] - z[2] * x[1], z[2] * x[0] - z[0] * x[2], z[0] * x[1] - z[1] * x[0]];
+    [x, y, z]
+}
+
 // ------------------------------------------------------------------------------------------
 // Loading
 // ------------------------------------------------------------------------------------------
@@ -338,7 +360,7 @@ pub fn load(path: &std::path::Path) -> crate::Result<Photometry> {
 
 /// UTF-8 if the bytes are UTF-8, else Latin-1 (each byte one character), which is what
 /// EULUMDAT and older IES files written on Windows mostly are; the numbers are ASCII either way.
-pub(crate) fn decode_text(bytes: Vec<u8>) -> String {
+pub fn decode_text(bytes: Vec<u8>) -> String {
     match String::from_utf8(bytes) {
         Ok(text) => text,
         Err(e) => e.into_bytes().iter().map(|&b| char::from(b)).collect(),
@@ -1504,6 +1526,24 @@ fn read_ldt(text: &str, path: &Path) -> Result<LdtFile> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_luminaire_frame_points_its_nadir_at_the_aim_with_c0_towards_east() {
+        let close = |a: [f64; 3], b: [f64; 3]| (0..3).all(|k| (a[k] - b[k]).abs() < 1e-12);
+        // Hung pointing down: the file's own frame, C = 0 east.
+        let [x, y, z] = luminaire_frame([1.0, 2.0, 5.0], None);
+        assert!(
+            close(x, [1.0, 0.0, 0.0]) && close(y, [0.0, 1.0, 0.0]) && close(z, [0.0, 0.0, 1.0])
+        );
+        // Aimed north and level: the nadir (−z) points north, C = 0 still east, and C = 90°
+        // (y = z × x, a right-handed frame) up.
+        let [x, y, z] = luminaire_frame([0.0, 0.0, 1.0], Some([0.0, 10.0, 1.0]));
+        assert!(close(z, [0.0, -1.0, 0.0]) && close(x, [1.0, 0.0, 0.0]), "{x:?} {z:?}");
+        assert!(close(y, [0.0, 0.0, 1.0]), "{y:?}");
+        // Aimed east: C = 0 falls back to north.
+        let [x, _, z] = luminaire_frame([0.0, 0.0, 1.0], Some([3.0, 0.0, 1.0]));
+        assert!(close(z, [-1.0, 0.0, 0.0]) && close(x, [0.0, 1.0, 0.0]), "{x:?} {z:?}");
+    }
     use std::path::PathBuf;
 
     const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/photometric");

@@ -183,6 +183,20 @@ impl Browser {
         self.call("Input.insertText", json!({ "text": text }));
     }
 
+    /// Chooses `file` in the file input `selector`, as a person picking it would (the page is
+    /// sent its `change` event).
+    pub fn choose_file(&mut self, selector: &str, file: &Path) {
+        let root = self.call("DOM.getDocument", json!({}));
+        let node = self.call(
+            "DOM.querySelector",
+            json!({ "nodeId": root["root"]["nodeId"], "selector": selector }),
+        );
+        self.call(
+            "DOM.setFileInputFiles",
+            json!({ "nodeId": node["nodeId"], "files": [file.to_str().unwrap()] }),
+        );
+    }
+
     /// Presses and releases a key (`"Enter"`, `"?"`, …).
     pub fn press(&mut self, key: &str) {
         let text = if key.chars().count() == 1 { key } else { "" };

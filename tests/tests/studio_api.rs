@@ -61,6 +61,13 @@ fn every_route_needs_the_client_token_and_refuses_in_the_servers_words() {
         ("GET", format!("/api/scenes/{}/download", "0".repeat(64))),
         ("GET", "/api/spectra".to_owned()),
         ("GET", "/api/sun-path".to_owned()),
+        ("POST", format!("/api/scenes/{}/photometry?name=a.ies", "0".repeat(64))),
+        ("GET", format!("/api/jobs/{id}/painting.png")),
+        ("GET", format!("/api/jobs/{id}/display.png")),
+        ("GET", format!("/api/jobs/{id}/luminance")),
+        ("GET", format!("/api/jobs/{id}/luminance.png")),
+        ("GET", format!("/api/compare?a={id}&b={id}")),
+        ("GET", format!("/api/compare/delta-e.png?a={id}&b={id}")),
     ];
     let worker = format!("Bearer {WORKER_TOKEN}");
     for (method, path) in &routes {
@@ -87,6 +94,8 @@ fn every_route_needs_the_client_token_and_refuses_in_the_servers_words() {
     let r = request(s, "POST", &format!("/api/jobs/{id}/cancel"), &auth, b"");
     assert_eq!(r.status, 404);
     assert_eq!(get(s, &format!("/api/jobs/{id}/results/a.png"), &auth).status, 404);
+    let r = get(s, &format!("/api/jobs/{id}/painting.png"), &auth);
+    assert_eq!((r.status, error_of(&r)), (404, format!("no job {id}")));
     assert_eq!(request(s, "DELETE", "/api/jobs", &auth, b"").status, 405);
     assert_eq!(get(s, "/api/scenes", &auth).json(), serde_json::json!([]));
     let r = get(s, "/api/scenes/../../etc", &auth);
@@ -427,7 +436,7 @@ fn edits_make_revisions_checked_as_scene_files_and_kept_across_a_restart() {
         (
             serde_json::json!({"edit": "paint", "colour": "red"}),
             400,
-            "unknown kind `paint`; use material, sun, save-view, delete-view, save-annotation, delete-annotation, save-variant, rename-variant, delete-variant",
+            "unknown kind `paint`; use material, sun, save-view, delete-view, save-annotation, delete-annotation, save-variant, rename-variant, delete-variant, save-light, delete-light",
         ),
         (serde_json::json!({"edit": "delete-view", "name": "portal"}), 400, "view"),
         (serde_json::json!({"edit": "sun", "latitude_deg": "north"}), 400, "latitude_deg"),
@@ -606,6 +615,18 @@ fn edits_make_revisions_checked_as_scene_files_and_kept_across_a_restart() {
     assert!(shipped["material"].as_str().unwrap().contains("travertine"), "{shipped}");
 }
 
+/// A coordinator serving the studio, holding the Aosta scene (64 × 36 px, rendered once): the
+/// coordinator, the studio's address and the scene's id.
+fn studio_with_scene(d: &std::path::Path) -> (Coordinator, String, String) {
+    let (c, _) = Coordinator::with_studio(d);
+    let s = c.studio.clone().unwrap();
+    let scene = aosta_scene(d, 64, 36);
+    submit(&scene, &["--spp", "1", "--tile", "32"], &c.url, &d.join("client.token"));
+    let auth = [("Authorization", BEARER)];
+    let id = get(&s, "/api/scenes", &auth).json()[0]["id"].as_str().unwrap().to_owned();
+    (c, s, id)
+}
+
 /// Hypotheses from the page: saved, renamed and deleted as edits, checked as the scene file's
 /// `[variants]` are (an unknown part or state refused in `scene check`'s words), and each sent
 /// back with the state it gives every part of the model.
@@ -613,16 +634,8 @@ fn edits_make_revisions_checked_as_scene_files_and_kept_across_a_restart() {
 fn hypotheses_are_edits_checked_as_the_scene_file_is() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let (c, _) = Coordinator::with_studio(d);
-    let s = c.studio.clone().unwrap();
+    let (_c, s, id) = studio_with_scene(d);
     let auth = [("Authorization", BEARER)];
-    submit(
-        &aosta_scene(d, 64, 36),
-        &["--spp", "1", "--tile", "32"],
-        &c.url,
-        &d.join("client.token"),
-    );
-    let id = get(&s, "/api/scenes", &auth).json()[0]["id"].as_str().unwrap().to_owned();
     let edit = |body: serde_json::Value| {
         request(&s, "POST", &format!("/api/scenes/{id}/edits"), &auth, body.to_string().as_bytes())
     };
@@ -687,6 +700,115 @@ fn hypotheses_are_edits_checked_as_the_scene_file_is() {
     let summaries: Vec<&str> =
         summaries.as_array().unwrap().iter().map(|r| r["summary"].as_str().unwrap()).collect();
     assert!(summaries[2].contains("renamed `campaign 1`"), "{summaries:?}");
+}
+
+/// Light from the page: a photometric file read and kept (refused, naming it, when it is not
+/// one), a luminaire saved with it (its figures and solid in the scene's view), a CIE
+/// illuminant added by name, and every refusal of a light edit in the scene file's words.
+#[test]
+fn lights_and_photometric_files_are_checked_as_the_scene_file_is() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (_c, s, id) = studio_with_scene(d);
+    let auth = [("Authorization", BEARER)];
+    let upload = |name: &str, bytes: &[u8]| {
+        let path = format!("/api/scenes/{id}/photometry?name={name}");
+        request(&s, "POST", &path, &auth, bytes)
+    };
+    let ldt = std::fs::read(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../scene/tests/data/photometric/ldt_isym1_absolute.ldt"),
+    )
+    .unwrap();
+    for (name, bytes, words) in [
+        ("lamp.txt", &ldt[..], "ending in .ies (IES LM-63) or .ldt (EULUMDAT)"),
+        ("../lamp.ldt", &ldt[..], "ending in .ies"),
+        ("lamp.ies", b"not a photometric file".as_slice(), "lamp.ies"),
+        ("lamp.ldt", &vec![b'1'; (1 << 20) + 1][..], "at most 1048576"),
+    ] {
+        let r = upload(name, bytes);
+        assert_eq!(r.status, 400, "{name}: {}", r.text());
+        assert!(error_of(&r).contains(words), "{name}: {}", error_of(&r));
+    }
+    let r = request(
+        &s,
+        "POST",
+        &format!("/api/scenes/{}/photometry?name=a.ldt", "0".repeat(64)),
+        &auth,
+        &ldt,
+    );
+    assert_eq!(r.status, 404, "{}", r.text());
+    let r = upload("wallwasher.ldt", &ldt);
+    assert_eq!(r.status, 200, "{}", r.text());
+    let file = r.json();
+    let reference = file["reference"].as_str().unwrap().to_owned();
+    assert!(reference.starts_with("blake3:") && reference.ends_with(".ldt"), "{file}");
+
+    let edit = |body: serde_json::Value| {
+        request(&s, "POST", &format!("/api/scenes/{id}/edits"), &auth, body.to_string().as_bytes())
+    };
+    let lamp = serde_json::json!({"kind": "point", "position": [0.0, -8.0, 0.3],
+        "aim": [0.0, 0.0, 6.0], "ies": reference, "spectrum": "cie:A"});
+    let r = edit(serde_json::json!({"edit": "save-light", "light": lamp}));
+    assert_eq!(r.status, 200, "{}", r.text());
+    let view = r.json();
+    let shown = view["lights"].as_array().unwrap().iter().find(|l| l["index"] == 2).unwrap();
+    assert_eq!(shown["light"]["spectrum"], "cie_A");
+    let near = |a: &serde_json::Value, b: &serde_json::Value| {
+        (a.as_f64().unwrap() / b.as_f64().unwrap() - 1.0).abs() < 1e-9
+    };
+    assert!(near(&shown["flux_lm"], &file["flux_lm"]), "{shown} {file}");
+    assert!(near(&shown["intensity_cd"], &file["peak_cd"]), "{shown} {file}");
+    assert_eq!(shown["solid"].as_array().unwrap().len(), 37 * 36);
+    let manifest = get(&s, &format!("/api/scenes/{id}/scene.json"), &auth).json();
+    assert_eq!(manifest["spectra"]["cie_A"]["illuminant"], "A");
+
+    for (body, words) in [
+        (
+            serde_json::json!({"edit": "save-light", "index": 9, "light": lamp}),
+            "the scene has 3 lights (0 to 2); no light 9",
+        ),
+        (serde_json::json!({"edit": "delete-light", "index": 3}), "no light 3"),
+        (
+            serde_json::json!({"edit": "save-light", "light": {"kind": "point", "position": [0.0, 0.0, 1.0], "spectrum": "cie:Q"}}),
+            "cie_Q",
+        ),
+        (
+            serde_json::json!({"edit": "save-light", "light": {"kind": "spot", "position": [0.0, 0.0, 1.0], "aim": [0.0, 0.0, 1.0], "cone_deg": 10.0, "intensity_cd": 100.0, "spectrum": "cie:A"}}),
+            "aim",
+        ),
+        (
+            serde_json::json!({"edit": "save-light", "light": {"kind": "point", "position": [0.0, 0.0, 1.0], "ies": format!("blake3:{}.ies", "0".repeat(64)), "spectrum": "cie:A"}}),
+            "blake3:",
+        ),
+        (
+            serde_json::json!({"edit": "save-light", "light": {"kind": "sky", "illuminance_lux": -5.0, "spectrum": "skylight"}}),
+            "illuminance_lux",
+        ),
+        (serde_json::json!({"edit": "save-light", "light": {"kind": "lamp"}}), "lamp"),
+    ] {
+        let r = edit(body.clone());
+        assert!([400, 404, 409].contains(&r.status), "{body}: {}", r.text());
+        assert!(error_of(&r).contains(words), "{body}: {}", error_of(&r));
+    }
+    // A second sky is refused; the one there is changed in place, and a light deleted.
+    let sky = serde_json::json!({"kind": "sky", "illuminance_lux": 20000.0, "model": "uniform", "spectrum": "skylight"});
+    let r = edit(serde_json::json!({"edit": "save-light", "light": sky}));
+    assert_eq!(r.status, 400, "{}", r.text());
+    let r = edit(serde_json::json!({"edit": "save-light", "index": 1, "light": sky}));
+    assert_eq!(r.status, 200, "{}", r.text());
+    let v = r.json();
+    assert_eq!(
+        (v["lights"][1]["illuminance_lux"].as_f64(), v["lights"][1]["model"].as_str()),
+        (Some(20000.0), Some("uniform sky"))
+    );
+    let r = edit(serde_json::json!({"edit": "delete-light", "index": 2}));
+    assert_eq!(
+        (r.status, r.json()["lights"].as_array().map(Vec::len)),
+        (200, Some(2)),
+        "{}",
+        r.text()
+    );
 }
 
 /// The studio's comparison of two snapshots is `restauro compare`'s: the same ΔE00 statistics

@@ -23,19 +23,22 @@ fn linear(v: u8) -> f64 {
     if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
 }
 
-/// The linear RGB of the 21 × 21 screen pixels around where the surface last clicked is drawn
-/// now (the view may have moved on the page since).
+/// The linear RGB of the 21 × 21 pixels the view draws around the point last clicked (the view
+/// may have moved since), read from the view's canvas right after it draws (a screenshot, saved
+/// as `name` for people, is resampled when the page puts the canvas at a fraction of a pixel).
 fn around_pick(b: &mut Browser, name: &str) -> Vec<[f64; 3]> {
-    let at = b.eval("window.studioViewer.onScreen(window.studioViewer.picked)");
-    let (cx, cy) = (at[0].as_f64().unwrap() as usize, at[1].as_f64().unwrap() as usize);
-    let (rgb, width) = png_rgb(&b.screenshot(&shots().join(name)));
-    let mut out = Vec::new();
-    for py in cy - 10..=cy + 10 {
-        for px in cx - 10..=cx + 10 {
-            out.push(rgb[py * width + px].map(linear));
-        }
-    }
-    out
+    b.eval("document.getElementById('view').scrollIntoView({ block: 'nearest' })");
+    b.screenshot(&shots().join(name));
+    let read = b.eval(
+        "(() => { const v = window.studioViewer, c = v.canvas; v.draw(); \
+         const q = v.picked.clone().project(v.camera); \
+         const x = Math.round((q.x + 1) / 2 * c.width), y = Math.round((1 - q.y) / 2 * c.height); \
+         const t = document.createElement('canvas'); t.width = 21; t.height = 21; \
+         const g = t.getContext('2d'); g.drawImage(c, x - 10, y - 10, 21, 21, 0, 0, 21, 21); \
+         return Array.from(g.getImageData(0, 0, 21, 21).data); })()",
+    );
+    let bytes: Vec<u8> = serde_json::from_value(read).unwrap();
+    bytes.chunks_exact(4).map(|p| [linear(p[0]), linear(p[1]), linear(p[2])]).collect()
 }
 
 /// Per channel, the median of after/before over the pixels whose colour changed: those of the
@@ -67,6 +70,29 @@ fn set_value(b: &mut Browser, id: &str, value: &str) {
         "(() => {{ const e = document.getElementById('{id}'); e.value = {value:?}; \
          e.dispatchEvent(new Event('input')); e.dispatchEvent(new Event('change')); }})()"
     ));
+}
+
+/// Downloads the revision the page shows with its link, as a folder under `d/downloaded`:
+/// the path of its `scene.toml`.
+fn download_shown(b: &mut Browser, c: &Coordinator, d: &std::path::Path) -> PathBuf {
+    let href = b.eval("document.getElementById('download').getAttribute('href')");
+    let auth = [("Authorization", BEARER)];
+    let tar = request(c.studio.as_deref().unwrap(), "GET", href.as_str().unwrap(), &auth, b"");
+    assert_eq!(tar.status, 200, "{}", tar.text());
+    let disposition = tar.header("content-disposition").unwrap().to_owned();
+    let name = disposition.split('"').nth(1).unwrap().trim_end_matches(".tar").to_owned();
+    tar::Archive::new(std::io::Cursor::new(tar.body)).unpack(d.join("downloaded")).unwrap();
+    d.join("downloaded").join(name).join("scene.toml")
+}
+
+/// Clicks `button` and finds the edit refused: the page shows the server's words, with
+/// `words` among them, and stays at revision `revision`.
+fn refused(b: &mut Browser, button: &str, words: &str, revision: &str) {
+    b.click(button);
+    b.wait_for("the refusal", "!document.getElementById('problem').hidden");
+    let problem = b.eval("document.getElementById('problem').textContent");
+    assert!(problem.as_str().unwrap().contains(words), "{problem}");
+    assert_eq!(b.eval("document.getElementById('view').dataset.revision"), revision);
 }
 
 /// The studio with the Aosta scene (160 × 90 px) rendered once, open in a browser signed in:
@@ -172,18 +198,8 @@ fn a_restorer_swaps_a_stone_sets_the_sun_and_keeps_a_view() {
     let ratio = |k: usize| total(&shot, k) / total(&original, k);
     let (x, y, z) = (ratio(0), ratio(1), ratio(2));
     assert!(y < 0.99 && z < x, "X, Y, Z of the snapshot over the original: {x}, {y}, {z}");
-    let href = b.eval("document.getElementById('download').getAttribute('href')");
-    let tar = request(
-        &c.studio.clone().unwrap(),
-        "GET",
-        href.as_str().unwrap(),
-        &[("Authorization", BEARER)],
-        b"",
-    );
-    assert_eq!(tar.status, 200, "{}", tar.text());
-    assert!(tar.header("content-disposition").unwrap().contains("aosta-revision-1.tar"));
-    tar::Archive::new(std::io::Cursor::new(tar.body)).unpack(d.join("downloaded")).unwrap();
-    let folder = d.join("downloaded/aosta-revision-1/scene.toml");
+    let folder = download_shown(&mut b, c, d);
+    assert!(folder.ends_with("aosta-revision-1/scene.toml"), "{}", folder.display());
     let o = restauro_tests::restauro(&["scene", "check", folder.to_str().unwrap()]);
     assert!(o.status.success(), "{}", text(&o));
     let out = d.join("rendered");
@@ -229,11 +245,7 @@ fn a_restorer_swaps_a_stone_sets_the_sun_and_keeps_a_view() {
     b.screenshot(&shots().join("13-sun-at-dusk.png"));
     // A latitude off the Earth is refused, in the server's words, and shown.
     b.eval("document.getElementById('sun-latitude').value = '100'");
-    b.click("#set-sun");
-    b.wait_for("the refusal", "!document.getElementById('problem').hidden");
-    let problem = b.eval("document.getElementById('problem').textContent");
-    assert!(problem.as_str().unwrap().contains("lights[0].site"), "{problem}");
-    assert_eq!(b.eval("document.getElementById('view').dataset.revision"), "2");
+    refused(&mut b, "#set-sun", "lights[0].site", "2");
     set_value(&mut b, "sun-latitude", "45.7371");
 
     // A view saved under a name, then flown to from the scene's camera.
@@ -448,7 +460,8 @@ fn a_restorer_builds_a_hypothesis_part_by_part() {
         "the panel redrawn",
         "document.getElementById('part-state-now') && document.getElementById('part-state-now').textContent === 'base'",
     );
-    let back = part_ratio(&before, &around_pick(&mut b, "33-hypothesis-part.png"));
+    let after2 = around_pick(&mut b, "33-hypothesis-part.png");
+    let back = part_ratio(&before, &after2);
     assert!(back.iter().all(|r| (r - 1.0).abs() < 0.02), "{back:?}");
     let variant =
         b.eval("window.studioViewer.view.variants.find(v => v.name === 'first campaign')");
@@ -467,11 +480,7 @@ fn a_restorer_builds_a_hypothesis_part_by_part() {
     // A name that is taken is refused, in the server's words, and nothing changes.
     set_value(&mut b, "snap-variant", "first campaign");
     set_value(&mut b, "variant-name", "cleaned");
-    b.click("#rename-variant");
-    b.wait_for("the refusal", "!document.getElementById('problem').hidden");
-    let problem = b.eval("document.getElementById('problem').textContent");
-    assert!(problem.as_str().unwrap().contains("a hypothesis named `cleaned` exists"), "{problem}");
-    assert_eq!(b.eval("document.getElementById('view').dataset.revision"), "2");
+    refused(&mut b, "#rename-variant", "a hypothesis named `cleaned` exists", "2");
 
     // Renamed; the downloaded scene holds it, and `scene check` accepts it.
     set_value(&mut b, "variant-name", "portal first");
@@ -479,17 +488,8 @@ fn a_restorer_builds_a_hypothesis_part_by_part() {
     b.wait_for("revision 3", "document.getElementById('view').dataset.revision === '3'");
     assert_eq!(b.eval("document.getElementById('snap-variant').value"), "portal first");
     b.screenshot(&shots().join("36-hypothesis-renamed.png"));
-    let href = b.eval("document.getElementById('download').getAttribute('href')");
-    let tar = request(
-        &c.studio.clone().unwrap(),
-        "GET",
-        href.as_str().unwrap(),
-        &[("Authorization", BEARER)],
-        b"",
-    );
-    assert_eq!(tar.status, 200, "{}", tar.text());
-    tar::Archive::new(std::io::Cursor::new(tar.body)).unpack(d.join("downloaded")).unwrap();
-    let folder = d.join("downloaded/aosta-revision-3/scene.toml");
+    let folder = download_shown(&mut b, c, d);
+    assert!(folder.ends_with("aosta-revision-3/scene.toml"), "{}", folder.display());
     let toml: toml::Table = toml::from_str(&std::fs::read_to_string(&folder).unwrap()).unwrap();
     let saved = &toml["variants"]["portal first"];
     assert_eq!(saved["state"].as_str(), Some("degraded"), "{saved}");
@@ -504,4 +504,121 @@ fn a_restorer_builds_a_hypothesis_part_by_part() {
     assert_eq!(b.eval("document.getElementById('snap-variant').value"), "");
     let options = b.eval("[...document.getElementById('snap-variant').options].map(o => o.value)");
     assert_eq!(options, serde_json::json!(["", "as-found", "cleaned"]));
+}
+
+/// The text of cell `k` of each row of the luminaires' table.
+fn luminaire_cells(b: &mut Browser) -> Vec<Vec<String>> {
+    let rows = b.eval(
+        "[...document.querySelectorAll('#luminaires tbody tr')].map(r => [...r.cells].map(c => c.textContent))",
+    );
+    serde_json::from_value(rows).unwrap()
+}
+
+/// A number as the page shows it (`12,345`).
+fn shown_number(text: &str) -> f64 {
+    text.replace(',', "").parse().unwrap_or_else(|_| panic!("`{text}` is not a number"))
+}
+
+/// Light set from the page: the sky's model and illuminance (a negative one refused in the
+/// server's words), and a luminaire placed by hand, aimed at the point clicked, shaped by an
+/// EULUMDAT file read by the server, with a CIE illuminant by name. Its figures in the page
+/// are `scene check`'s for the downloaded scene, its photometric solid is drawn in the view,
+/// and it is deleted again.
+#[test]
+fn a_lighting_designer_sets_the_sky_and_aims_a_luminaire_with_its_file() {
+    if !available("studio_editing") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (farm, mut b, _) = opened(d);
+    let c = &farm.coordinator;
+
+    // The sky: uniform, 20 000 lx.
+    set_value(&mut b, "sky-model", "uniform");
+    set_value(&mut b, "sky-lux", "20000");
+    b.click("#set-sky");
+    b.wait_for("revision 1", "document.getElementById('view').dataset.revision === '1'");
+    let now = b.eval("document.getElementById('sky-now').textContent");
+    assert!(now.as_str().unwrap().contains("uniform sky, 20,000 lx on the horizontal"), "{now}");
+    set_value(&mut b, "sky-lux", "-5");
+    refused(&mut b, "#set-sky", "illuminance_lux", "1");
+
+    // A luminaire on the paving 8 m in front of the facade, aimed at the point clicked.
+    b.click("#view");
+    b.wait_for("the material panel", "!document.getElementById('material').hidden");
+    for (id, v) in [("lum-x", "0"), ("lum-y", "-8"), ("lum-z", "0.3")] {
+        set_value(&mut b, id, v);
+    }
+    b.click("#lum-aim");
+    let picked = b.eval(
+        "(() => { const v = window.studioViewer, p = v.picked, o = v.view.offset_m; \
+         return [p.x + o[0], -p.z + o[1], p.y + o[2]]; })()",
+    );
+    let aim: Vec<f64> = (0..3).map(|k| picked[k].as_f64().unwrap()).collect();
+    let ldt = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../scene/tests/data/photometric/ldt_isym1_absolute.ldt")
+        .canonicalize()
+        .unwrap();
+    b.choose_file("#lum-file", &ldt);
+    b.wait_for(
+        "the file read",
+        "document.getElementById('lum-file-info').textContent.includes(' lm, peak ')",
+    );
+    set_value(&mut b, "lum-kind", "point");
+    set_value(&mut b, "lum-spectrum", "cie:A");
+    b.click("#lum-save");
+    b.wait_for("revision 2", "document.getElementById('view').dataset.revision === '2'");
+    let rows = luminaire_cells(&mut b);
+    assert_eq!(rows.len(), 1, "{rows:?}");
+    assert_eq!((rows[0][1].as_str(), rows[0][2].as_str()), ("point", "0.00, -8.00, 0.30"));
+    assert_eq!(rows[0][7], "cie_A");
+    let (peak, flux, beam) =
+        (shown_number(&rows[0][4]), shown_number(&rows[0][5]), shown_number(&rows[0][6]));
+
+    // The downloaded scene holds it as the file says, and `scene check` gives the same figures.
+    let folder = download_shown(&mut b, c, d);
+    assert!(folder.ends_with("aosta-revision-2/scene.toml"), "{}", folder.display());
+    let toml: toml::Table = toml::from_str(&std::fs::read_to_string(&folder).unwrap()).unwrap();
+    let lights = toml["lights"].as_array().unwrap();
+    let lamp = lights.iter().find(|l| l["kind"].as_str() == Some("point")).unwrap();
+    let coords = |key: &str| -> Vec<f64> {
+        lamp[key].as_array().unwrap().iter().map(|v| v.as_float().unwrap()).collect()
+    };
+    assert_eq!(coords("position"), [0.0, -8.0, 0.3]);
+    for (k, (got, want)) in coords("aim").iter().zip(&aim).enumerate() {
+        assert!((got - want).abs() < 1e-3, "aim[{k}]: {got} in the file, {want} clicked");
+    }
+    assert!(lamp["ies"].as_str().unwrap().ends_with(".ldt"), "{lamp}");
+    assert_eq!(toml["spectra"]["cie_A"]["illuminant"].as_str(), Some("A"));
+    let o = restauro_tests::restauro(&["scene", "check", folder.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+    let said = text(&o);
+    let line =
+        said.lines().find(|l| l.contains("photometric file:")).unwrap_or_else(|| panic!("{said}"));
+    let figures: Vec<f64> = line
+        .split("photometric file: ")
+        .nth(1)
+        .unwrap()
+        .split(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .filter(|t| !t.is_empty() && t != &".")
+        .map(|t| t.parse().unwrap())
+        .collect();
+    assert_eq!(figures[..3], [flux, peak, beam], "page {flux} lm, {peak} cd, {beam}°; {line}");
+
+    // Its photometric solid is drawn, in orange, around the bulb.
+    b.eval(
+        "(() => { const v = window.studioViewer, p = v.lamps.children[0].position; \
+         v.fly({ position: [p.x + 3, p.y + 4, p.z + 9], target: p.toArray(), up: [0, 1, 0], vertical_fov_deg: 50 }); })()",
+    );
+    b.eval("document.getElementById('view').scrollIntoView()");
+    let (rgb, _) = png_rgb(&b.screenshot(&shots().join("37-luminaire.png")));
+    let orange =
+        rgb.iter().filter(|p| p[0] > 230 && (110..=160).contains(&p[1]) && p[2] < 60).count();
+    assert!(orange > 100, "{orange} orange pixels: the solid is not drawn");
+
+    // Deleted: no luminaire left.
+    b.click("#luminaires tbody button[aria-label='Delete luminaire 2']");
+    b.wait_for("revision 3", "document.getElementById('view').dataset.revision === '3'");
+    assert!(luminaire_cells(&mut b).is_empty());
 }

@@ -302,3 +302,67 @@ impl Farm {
         Ok(made)
     }
 }
+
+/// The largest photometric file the studio takes, in bytes (an IES file of a fine web is a
+/// few hundred kilobytes).
+pub const MAX_PHOTOMETRY_BYTES: usize = 1 << 20;
+
+/// A photometric file taken from the studio: its reference in a scene, and what it says.
+#[derive(Serialize)]
+pub struct PhotometryInfo {
+    /// `blake3:<hash>.ies` or `.ldt`: what a light's `ies` names in the scene.
+    pub reference: String,
+    pub file_name: String,
+    pub flux_lm: f64,
+    pub peak_cd: f64,
+    pub beam_angle_deg: f64,
+    pub description: String,
+}
+
+impl Farm {
+    /// Reads an IES (LM-63) or EULUMDAT file named `file_name` as a scene would, and keeps it
+    /// among the assets; refused with the reader's message, naming the file.
+    pub fn keep_photometry(&self, file_name: &str, bytes: &[u8]) -> Result<PhotometryInfo> {
+        use restauro_scene::photometric;
+        type Reader = fn(&str, &std::path::Path) -> restauro_scene::Result<photometric::Photometry>;
+        let sane = !file_name.is_empty()
+            && file_name.len() <= 100
+            && file_name.chars().all(|c| c.is_ascii_alphanumeric() || "._- ".contains(c));
+        let extension = file_name.rsplit_once('.').map(|(_, e)| e.to_ascii_lowercase());
+        let parse = match extension.as_deref() {
+            _ if !sane => None,
+            Some("ies") => Some(photometric::parse_ies as Reader),
+            Some("ldt") => Some(photometric::parse_ldt as Reader),
+            _ => None,
+        };
+        let parse = parse.ok_or_else(|| {
+            CoordinatorError::Request(
+                "name: give the file's name, ending in .ies (IES LM-63) or .ldt (EULUMDAT), \
+                 in letters, digits, `.`, `_` and `-`"
+                    .to_owned(),
+            )
+        })?;
+        if bytes.len() > MAX_PHOTOMETRY_BYTES {
+            return Err(CoordinatorError::Request(format!(
+                "{file_name}: {} bytes; a photometric file may have at most {MAX_PHOTOMETRY_BYTES}",
+                bytes.len()
+            )));
+        }
+        let text = photometric::decode_text(bytes.to_vec());
+        let p = parse(&text, std::path::Path::new(file_name))?;
+        let hash = blake3::hash(bytes).to_hex().to_string();
+        self.assets
+            .keep(&hash, bytes)
+            .map_err(|e| CoordinatorError::Internal(format!("keeping {file_name}: {e}")))?;
+        let extension = extension.unwrap_or_default();
+        info!(file = file_name, hash = %&hash[..12], "photometric file kept");
+        Ok(PhotometryInfo {
+            reference: format!("blake3:{hash}.{extension}"),
+            file_name: file_name.to_owned(),
+            flux_lm: p.flux_lm(),
+            peak_cd: p.peak_cd(),
+            beam_angle_deg: p.beam_angle_deg(),
+            description: p.description.clone(),
+        })
+    }
+}

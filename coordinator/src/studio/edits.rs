@@ -82,11 +82,31 @@ fn parse_edit(body: &[u8]) -> Result<Edit> {
         "save-variant" => Edit::SaveVariant(parse(&fields, &what)?),
         "rename-variant" => Edit::RenameVariant(parse(&fields, &what)?),
         "delete-variant" => Edit::DeleteVariant(parse(&fields, &what)?),
+        "save-light" => Edit::SaveLight(parse(&fields, &what)?),
+        "delete-light" => Edit::DeleteLight(parse(&fields, &what)?),
         other => {
             let other = other.chars().take(40).collect::<String>();
             return Err(refuse(format!("unknown kind `{}`; use {kinds}", other.escape_debug())));
         }
     })
+}
+
+/// `POST /api/scenes/{id}/photometry?name=FILE.ies` (or `.ldt`), the file as the body: read
+/// as a scene reads it and kept; its reference (for a light's `ies`) and what it says (flux,
+/// peak intensity, beam angle).
+pub async fn photometry(
+    State(studio): State<Arc<Studio>>,
+    Path(id): Path<String>,
+    RawQuery(query): RawQuery,
+    body: Bytes,
+) -> Result<Json<crate::farm::PhotometryInfo>> {
+    studio.farm.scene_revision(scene_id(&id)?, None)?;
+    let name = super::api::query_value(query.as_deref(), "name").unwrap_or_default();
+    let farm = studio.farm.clone();
+    let info = tokio::task::spawn_blocking(move || farm.keep_photometry(&name, &body))
+        .await
+        .map_err(|e| CoordinatorError::Internal(e.to_string()))??;
+    Ok(Json(info))
 }
 
 #[derive(Deserialize)]

@@ -31,6 +31,7 @@ const FILES: &[(&str, &str, &str)] = &[
     script!("colour_scale.js"),
     script!("variants.js"),
     script!("painting.js"),
+    script!("luminaires.js"),
     script!("vendor/three/three.module.js"),
     script!("vendor/three/three.core.js"),
     script!("vendor/three/addons/controls/OrbitControls.js"),

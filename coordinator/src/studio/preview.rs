@@ -135,6 +135,132 @@ fn sun_view(scene: &LoadedScene) -> Option<SunView> {
     })
 }
 
+/// A light of the scene: as the file holds it (the page's form shows and sends this), and for a
+/// luminaire where it is and what it aims at in the GLB's coordinates, the intensity rendered,
+/// and, shaped by a file, its flux, beam angle and photometric solid.
+#[derive(Serialize)]
+pub struct LightView {
+    /// Its place among the file's `[[lights]]`, from 0.
+    pub index: usize,
+    pub light: restauro_scene::scene_file::Light,
+    pub position: Option<[f64; 3]>,
+    pub aim: Option<[f64; 3]>,
+    /// A luminaire's peak intensity as rendered, cd.
+    pub intensity_cd: Option<f64>,
+    pub flux_lm: Option<f64>,
+    pub beam_angle_deg: Option<f64>,
+    /// The photometric solid: for γ = 0, 5, … 180° (rows) and C = 0, 10, … 350° (columns), the
+    /// direction (GLB, unit) times I(C, γ) / I_peak.
+    pub solid: Option<Vec<[f32; 3]>>,
+    /// A sky's diffuse horizontal illuminance (lux) and model, as rendered.
+    pub illuminance_lux: Option<f64>,
+    pub model: Option<String>,
+}
+
+/// The rows and columns of [`LightView::solid`].
+pub const SOLID_GAMMA_STEP_DEG: usize = 5;
+pub const SOLID_C_STEP_DEG: usize = 10;
+
+fn solid(p: &restauro_scene::photometric::Photometry, frame: [[f64; 3]; 3]) -> Vec<[f32; 3]> {
+    let peak = p.peak_cd().max(1e-12);
+    let mut out = Vec::new();
+    for g in (0..=180).step_by(SOLID_GAMMA_STEP_DEG) {
+        for c in (0..360).step_by(SOLID_C_STEP_DEG) {
+            let (gamma, c_rad) = ((g as f64).to_radians(), (c as f64).to_radians());
+            // In the frame: γ from the nadir (−z), C from +x towards +y.
+            let local = [gamma.sin() * c_rad.cos(), gamma.sin() * c_rad.sin(), -gamma.cos()];
+            let r = p.intensity_at(c as f64, g as f64) / peak;
+            let world: [f64; 3] =
+                std::array::from_fn(|k| (0..3).map(|i| frame[i][k] * local[i]).sum::<f64>() * r);
+            out.push(to_glb(world, [0.0; 3]).map(|v| v as f32));
+        }
+    }
+    out
+}
+
+fn light_views(scene: &LoadedScene, offset: [f64; 3]) -> Vec<LightView> {
+    use restauro_scene::load::ResolvedLight;
+    use restauro_scene::photometric::luminaire_frame;
+    use restauro_scene::scene_file::Light;
+    // Luminaires resolve one to one and in order (a sun after sunset is left out, a luminaire
+    // never is).
+    let mut luminaires = scene
+        .lights
+        .iter()
+        .filter(|l| matches!(l, ResolvedLight::Point { .. } | ResolvedLight::Spot { .. }));
+    let sky = scene.lights.iter().find_map(|l| match l {
+        ResolvedLight::Sky { illuminance_lux, model, .. } => {
+            Some((*illuminance_lux, model.to_string()))
+        }
+        _ => None,
+    });
+    let mut out = Vec::new();
+    for (index, light) in scene.file.lights.iter().enumerate() {
+        let mut view = LightView {
+            index,
+            light: light.clone(),
+            position: None,
+            aim: None,
+            intensity_cd: None,
+            flux_lm: None,
+            beam_angle_deg: None,
+            solid: None,
+            illuminance_lux: None,
+            model: None,
+        };
+        match light {
+            Light::Point { .. } | Light::Spot { .. } => {
+                let (position, intensity_cd, photometry, aim) = match luminaires.next() {
+                    Some(ResolvedLight::Point {
+                        position, intensity_cd, photometry, aim, ..
+                    }) => (*position, *intensity_cd, photometry, *aim),
+                    Some(ResolvedLight::Spot {
+                        position, intensity_cd, photometry, aim, ..
+                    }) => (*position, *intensity_cd, photometry, Some(*aim)),
+                    _ => continue,
+                };
+                view.position = Some(to_glb(position, offset));
+                view.aim = aim.map(|a| to_glb(a, offset));
+                view.intensity_cd = Some(intensity_cd);
+                if let Some(p) = photometry {
+                    let scale = intensity_cd / p.peak_cd().max(1e-12);
+                    view.flux_lm = Some(p.flux_lm() * scale);
+                    view.beam_angle_deg = Some(p.beam_angle_deg());
+                    view.solid = Some(solid(p, luminaire_frame(position, aim)));
+                }
+            }
+            Light::Sky { .. } => {
+                if let Some((lux, model)) = &sky {
+                    view.illuminance_lux = Some(*lux);
+                    view.model = Some(model.clone());
+                }
+            }
+            Light::Sun { .. } => {}
+        }
+        out.push(view);
+    }
+    out
+}
+
+/// The spectra a light may take: the scene's illuminants and those its lights use.
+fn light_spectra(scene: &LoadedScene) -> Vec<String> {
+    use restauro_scene::scene_file::{Light, SpectrumSource};
+    let used = scene.file.lights.iter().map(|l| match l {
+        Light::Point { spectrum, .. }
+        | Light::Spot { spectrum, .. }
+        | Light::Sun { spectrum, .. }
+        | Light::Sky { spectrum, .. } => spectrum.clone(),
+    });
+    let illuminants = scene
+        .file
+        .spectra
+        .iter()
+        .filter(|(_, source)| matches!(source, SpectrumSource::Illuminant { .. }))
+        .map(|(name, _)| name.clone());
+    let all: std::collections::BTreeSet<String> = used.chain(illuminants).collect();
+    all.into_iter().collect()
+}
+
 #[derive(Serialize)]
 pub struct SceneView {
     pub id: String,
@@ -151,6 +277,9 @@ pub struct SceneView {
     /// Its notes (`[[annotations]]`), positions and poses in the GLB's coordinates.
     pub annotations: Vec<restauro_scene::scene_file::Annotation>,
     pub sun: Option<SunView>,
+    /// Every light of the file, in its order.
+    pub lights: Vec<LightView>,
+    pub light_spectra: Vec<String>,
     pub notes: Vec<String>,
 }
 
@@ -294,6 +423,8 @@ fn build(id: &str, revision: u32, scene: &LoadedScene) -> ScenePreview {
         revision,
         views,
         sun: sun_view(scene),
+        lights: light_views(scene, offset_m),
+        light_spectra: light_spectra(scene),
         offset_m,
         triangles,
         camera,

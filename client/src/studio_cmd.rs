@@ -20,13 +20,7 @@ async fn open_scene(cluster: &LocalCluster, scene: &Path) -> Result<String> {
     let stem = scene.file_stem().and_then(|s| s.to_str()).unwrap_or("scene");
     let name = JobName::new(stem)
         .map_err(|e| anyhow::anyhow!("the scene's name `{stem}`: {}", e.problem))?;
-    let render = RenderOptions {
-        samples_per_pixel: Some(1),
-        width: Some(160),
-        height: Some(90),
-        ..RenderOptions::default()
-    };
-    let spec = JobSpec { name, render, ..JobSpec::default() };
+    let spec = JobSpec { name, render: RenderOptions::quick_preview(), ..JobSpec::default() };
     let mut client = cluster::connect(&cluster.url, &cluster.client_token).await?;
     cluster::upload(&mut client, &bundle).await?;
     let what = format!("opening {}", scene.display());

@@ -51,6 +51,9 @@ export const edit = (id, change) => call('POST', `${sceneUrl(id)}/edits`, change
 // reference and what it says.
 export const uploadPhotometry = (id, name, bytes) =>
   call('POST', `${sceneUrl(id)}/photometry?name=${encodeURIComponent(name)}`, bytes);
+// A scene folder as one tar (an ArrayBuffer): its preview job and the scene's id.
+export const openFolder = (name, bytes, scene) => call('POST',
+  `/api/scenes?${new URLSearchParams(scene ? { name, scene } : { name })}`, bytes);
 export const revert = (id, revision) => call('POST', `${sceneUrl(id)}/revert`, { revision });
 export const downloadUrl = (id, revision) => `${sceneUrl(id)}/download${at(revision)}`;
 export const revisions = (id) => call('GET', `${sceneUrl(id)}/revisions`);

@@ -11,6 +11,7 @@ import * as exposure from './exposure.js';
 import * as variants from './variants.js';
 import * as painting from './painting.js';
 import * as luminaires from './luminaires.js';
+import * as upload from './upload.js';
 
 const $ = (id) => document.getElementById(id);
 let events = null;
@@ -311,6 +312,15 @@ document.addEventListener('DOMContentLoaded', () => {
   $('set-sun').addEventListener('click', () => viewer && viewer.view && applyEdit(light.edit()));
   light.init(showError);
   compare.init(showError);
+  upload.init({
+    error: showError,
+    opened: async ({ job, scene }) => {
+      farm.job(job);
+      await listScenes();
+      $('scene-picker').value = scene;
+      await open(scene);
+    },
+  });
   luminaires.init({
     edit: applyEdit,
     error: showError,

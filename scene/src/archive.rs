@@ -132,7 +132,12 @@ pub fn read_archive(path: &Path, limits: &Limits) -> Result<Bundle> {
 }
 
 /// The archive's entries, names and bytes, each within `max_bytes`; no name twice.
-fn entries(bytes: &[u8], max_bytes: u64) -> std::result::Result<Vec<(String, Vec<u8>)>, String> {
+/// The regular files of the tar `bytes` (directory entries skipped; anything else, or a file
+/// above `max_bytes`, or a name twice, refused), each with its name.
+pub(crate) fn entries(
+    bytes: &[u8],
+    max_bytes: u64,
+) -> std::result::Result<Vec<(String, Vec<u8>)>, String> {
     let mut archive = tar::Archive::new(bytes);
     let mut out: Vec<(String, Vec<u8>)> = Vec::new();
     for entry in archive.entries().map_err(|e| format!("it is not a tar archive: {e}"))? {
@@ -142,8 +147,10 @@ fn entries(bytes: &[u8], max_bytes: u64) -> std::result::Result<Vec<(String, Vec
             .map_err(|e| format!("an entry with an unreadable name: {e}"))?
             .to_string_lossy()
             .into_owned();
-        if entry.header().entry_type() != tar::EntryType::Regular {
-            return Err(format!("`{name}` is not a regular file"));
+        match entry.header().entry_type() {
+            tar::EntryType::Regular => {}
+            tar::EntryType::Directory => continue,
+            _ => return Err(format!("`{name}` is not a regular file")),
         }
         let size = entry.header().size().map_err(|e| format!("`{name}`: {e}"))?;
         if size > max_bytes {

@@ -32,6 +32,14 @@ pub struct RenderOptions {
     pub tile: Option<u32>,
 }
 
+impl RenderOptions {
+    /// The quick render a scene opened in the studio gets first (160 × 90 px, 1 sample per
+    /// pixel), so that the studio holds it and shows it at once.
+    pub fn quick_preview() -> Self {
+        Self { samples_per_pixel: Some(1), width: Some(160), height: Some(90), ..Self::default() }
+    }
+}
+
 /// The resolved render.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Plan {

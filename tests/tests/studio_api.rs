@@ -51,6 +51,7 @@ fn every_route_needs_the_client_token_and_refuses_in_the_servers_words() {
         ("GET", "/api/workers".to_owned()),
         ("GET", "/api/events".to_owned()),
         ("GET", "/api/scenes".to_owned()),
+        ("POST", "/api/scenes?name=x".to_owned()),
         ("GET", format!("/api/scenes/{}", "0".repeat(64))),
         ("GET", format!("/api/scenes/{}/preview.glb", "0".repeat(64))),
         ("POST", format!("/api/scenes/{}/snapshots", "0".repeat(64))),
@@ -809,6 +810,85 @@ fn lights_and_photometric_files_are_checked_as_the_scene_file_is() {
         "{}",
         r.text()
     );
+}
+
+/// A tar of the folder `dir` (its entries under `top/`).
+fn folder_tar(dir: &std::path::Path, top: &str) -> Vec<u8> {
+    let mut b = tar::Builder::new(Vec::new());
+    b.append_dir_all(top, dir).unwrap();
+    b.into_inner().unwrap()
+}
+
+/// A tar of the `(path, bytes)` entries, written as given (the tar crate's writer refuses
+/// `..` in a path, so the header's name is set by hand).
+fn raw_tar(entries: &[(&str, &[u8])]) -> Vec<u8> {
+    let mut b = tar::Builder::new(Vec::new());
+    for (path, bytes) in entries {
+        let mut h = tar::Header::new_ustar();
+        h.as_ustar_mut().unwrap().name[..path.len()].copy_from_slice(path.as_bytes());
+        h.set_size(bytes.len() as u64);
+        h.set_mode(0o644);
+        h.set_entry_type(tar::EntryType::Regular);
+        h.set_cksum();
+        b.append(&h, *bytes).unwrap();
+    }
+    b.into_inner().unwrap()
+}
+
+/// A scene folder sent as a tar becomes one of the studio's scenes (bundled as `restauro
+/// scene bundle` bundles it, the same identity), with a preview job; a bundle archive too; and
+/// what is not a scene folder is refused in words that name the problem.
+#[test]
+fn a_scene_folder_sent_as_a_tar_opens_as_a_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (c, _) = Coordinator::with_studio(d);
+    let s = c.studio.clone().unwrap();
+    let auth = [("Authorization", BEARER)];
+    let scene = aosta_scene(d, 64, 36);
+    let folder = std::path::Path::new(&scene).parent().unwrap().to_owned();
+    let send = |name: &str, body: &[u8]| {
+        request(&s, "POST", &format!("/api/scenes?name={name}"), &auth, body)
+    };
+    // The generator writes two scenes into the folder: one is chosen.
+    let r = send("aosta-sent", &folder_tar(&folder, "aosta"));
+    assert_eq!(r.status, 400, "{}", r.text());
+    assert!(error_of(&r).contains("2 scene files at the same level"), "{}", error_of(&r));
+    let r = send("aosta-sent&scene=aosta/nothing.toml", &folder_tar(&folder, "aosta"));
+    assert!(error_of(&r).contains("no scene file `aosta/nothing.toml`"), "{}", error_of(&r));
+    let r = send("aosta-sent&scene=aosta/aosta.toml", &folder_tar(&folder, "aosta"));
+    assert_eq!(r.status, 200, "{}", r.text());
+    let opened = r.json();
+    assert_eq!(opened["job"]["name"], "aosta-sent", "{opened}");
+    let id = opened["scene"].as_str().unwrap().to_owned();
+    let scenes = get(&s, "/api/scenes", &auth).json();
+    assert!(scenes.as_array().unwrap().iter().any(|x| x["id"] == id.as_str()), "{scenes}");
+    // `restauro scene bundle` gives the scene the same identity, and its archive opens as the
+    // same scene.
+    let archive = d.join("aosta.tar");
+    let o =
+        restauro_tests::restauro(&["scene", "bundle", &scene, "--out", archive.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+    let r = send("aosta-archive", &std::fs::read(&archive).unwrap());
+    assert_eq!((r.status, r.json()["scene"].as_str()), (200, Some(id.as_str())), "{}", r.text());
+
+    let toml = std::fs::read(&scene).unwrap();
+    for (name, body, words) in [
+        (
+            "x",
+            b"not a tar at all, but long enough to be read as one? no".repeat(20),
+            "the folder sent",
+        ),
+        ("x", raw_tar(&[("../scene.toml", &toml)]), "is not a path inside the folder"),
+        ("x", raw_tar(&[("a/readme.txt", b"hello")]), "it has no scene file"),
+        ("x", raw_tar(&[("a.toml", &toml), ("b.toml", &toml)]), "2 scene files at the same level"),
+        ("x", raw_tar(&[("aosta/scene.toml", &toml)]), "meshes/facade.obj"),
+        ("bad%0Aname&scene=aosta/aosta.toml", folder_tar(&folder, "aosta"), "name"),
+    ] {
+        let r = send(name, &body);
+        assert_eq!(r.status, 400, "{words}: {}", r.text());
+        assert!(error_of(&r).contains(words), "{words}: {}", error_of(&r));
+    }
 }
 
 /// The studio's comparison of two snapshots is `restauro compare`'s: the same ΔE00 statistics

@@ -423,3 +423,71 @@ fn a_snapshot_paints_into_the_view_tile_by_tile() {
     );
     assert_eq!(b.eval("document.getElementById('painting-progress').hidden"), true);
 }
+
+/// A scene folder opened from the page: a `.tar` of it chosen in the dialog is sent, checked and
+/// opened in the view; and the tar the page itself packs of a picked folder holds each file
+/// under its path in the folder (long paths too), as a tar reader reads it.
+#[test]
+fn a_scene_folder_is_opened_from_the_page() {
+    if !available("studio_browser") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let farm = Coordinator::studio_farm(d, 160, 90);
+    let c = &farm.coordinator;
+    let first = submit(&farm.scene, &["--spp", "1"], &c.url, &farm.token);
+    let mut b = Browser::launch(1280, 900);
+    b.goto(&format!("{}#token={CLIENT_TOKEN}", farm.page));
+    b.wait_for("the model", "document.getElementById('view').dataset.scene");
+    let old = b.eval("document.getElementById('view').dataset.scene");
+
+    // Another scene: the same facade under an overcast sky, as a tar of its folder.
+    let folder = std::path::Path::new(&farm.scene).parent().unwrap();
+    let toml = std::fs::read_to_string(&farm.scene).unwrap();
+    let overcast = toml.replace("preset = \"clear\"", "preset = \"overcast\"");
+    assert_ne!(overcast, toml);
+    let other = d.join("overcast");
+    std::fs::create_dir_all(other.join("meshes")).unwrap();
+    std::fs::write(other.join("scene.toml"), overcast).unwrap();
+    std::fs::copy(folder.join("meshes/facade.obj"), other.join("meshes/facade.obj")).unwrap();
+    let mut t = tar::Builder::new(Vec::new());
+    t.append_dir_all("overcast", &other).unwrap();
+    let archive = d.join("overcast.tar");
+    std::fs::write(&archive, t.into_inner().unwrap()).unwrap();
+
+    b.click("#open-folder");
+    b.wait_for("the dialog", "document.getElementById('open-folder-dialog').open");
+    b.screenshot(&shots().join("27-open-folder.png"));
+    b.choose_file("#upload-archive", &archive);
+    b.wait_for(
+        "the new scene in the view",
+        &format!("(() => {{ const v = document.getElementById('view').dataset.scene; return v && v !== {old}; }})()"),
+    );
+    let picked = b.eval("document.getElementById('scene-picker').selectedOptions[0].textContent");
+    assert!(picked.as_str().unwrap().starts_with("overcast"), "{picked}");
+    assert_eq!(b.eval("document.getElementById('open-folder-dialog').open"), false);
+    let row =
+        b.eval("[...document.querySelectorAll('#jobs tbody tr')].map(r => r.cells[0].textContent)");
+    assert!(row.as_array().unwrap().iter().any(|n| n == "overcast"), "{row} {first}");
+
+    // The page's own tar of a picked folder.
+    let long = format!("overcast/{}facade.obj", "very-long-folder-name/".repeat(6));
+    let bytes = b.eval(&format!(
+        "import('/static/upload.js').then(m => Array.from(m.tarOf([\
+           {{ name: 'overcast/scene.toml', bytes: new TextEncoder().encode('format = 1\\n') }}, \
+           {{ name: '{long}', bytes: new Uint8Array(1000).fill(7) }}])))"
+    ));
+    let bytes: Vec<u8> = serde_json::from_value(bytes).unwrap();
+    let mut read = Vec::new();
+    for entry in tar::Archive::new(bytes.as_slice()).entries().unwrap() {
+        let mut entry = entry.unwrap();
+        let name = entry.path().unwrap().to_string_lossy().into_owned();
+        let mut data = Vec::new();
+        std::io::Read::read_to_end(&mut entry, &mut data).unwrap();
+        read.push((name, data));
+    }
+    assert_eq!(read.len(), 2);
+    assert_eq!(read[0], ("overcast/scene.toml".to_owned(), b"format = 1\n".to_vec()));
+    assert_eq!(read[1], (long, vec![7u8; 1000]));
+}

@@ -366,3 +366,44 @@ impl Farm {
         })
     }
 }
+
+/// The largest scene folder the studio takes in one upload, in bytes.
+pub const MAX_FOLDER_BYTES: usize = 512 << 20;
+
+impl Farm {
+    /// Takes a scene folder sent as one tar (or a bundle archive): bundled and checked as the
+    /// command line bundles a folder, its files kept among the assets, and sent to the farm with
+    /// a quick preview render (160 × 90 px, 1 sample per pixel, as `restauro studio` sends a
+    /// scene), so that it is one of the studio's scenes. The preview job and the scene's id.
+    pub async fn open_folder(
+        self: &Arc<Self>,
+        name: &str,
+        scene: Option<String>,
+        tar: Vec<u8>,
+    ) -> Result<(crate::job::JobStatus, String)> {
+        use restauro_scene::job::{JobName, JobSpec};
+        use restauro_scene::plan::RenderOptions;
+        let name = JobName::new(name)
+            .map_err(|e| CoordinatorError::Request(format!("name: {}", e.problem)))?;
+        let farm = self.clone();
+        let bundle = tokio::task::spawn_blocking(move || -> Result<Bundle> {
+            let limits = &farm.config.limits;
+            let bundle = restauro_scene::folder::bundle_folder_tar(&tar, scene.as_deref(), limits)?;
+            for (hash, bytes) in &bundle.files {
+                if !farm.assets.has(hash) {
+                    farm.assets.keep(hash, bytes).map_err(|e| {
+                        CoordinatorError::Internal(format!("keeping file {hash}: {e}"))
+                    })?;
+                }
+            }
+            Ok(bundle)
+        })
+        .await
+        .map_err(|e| CoordinatorError::Internal(e.to_string()))??;
+        let spec = JobSpec { name, render: RenderOptions::quick_preview(), ..JobSpec::default() };
+        info!(files = bundle.files.len(), "scene folder taken");
+        let manifest = bundle.canonical_json();
+        let scene = scene_identity(&manifest);
+        Ok((self.submit(manifest, spec).await?, scene))
+    }
+}

@@ -109,6 +109,27 @@ pub async fn photometry(
     Ok(Json(info))
 }
 
+/// `POST /api/scenes?name=NAME[&scene=PATH]`, a scene folder as a tar (or a bundle archive from `restauro
+/// scene bundle --out`) as the body: bundled, checked and sent to the farm with a quick preview
+/// render; that job, whose scene the studio then holds.
+pub async fn open_folder(
+    State(studio): State<Arc<Studio>>,
+    RawQuery(query): RawQuery,
+    body: Bytes,
+) -> Result<Json<OpenedFolder>> {
+    let name = super::api::query_value(query.as_deref(), "name").unwrap_or_else(|| "scene".into());
+    let chosen = super::api::query_value(query.as_deref(), "scene");
+    let (job, scene) = studio.farm.open_folder(&name, chosen, body.to_vec()).await?;
+    Ok(Json(OpenedFolder { job: job.into(), scene }))
+}
+
+/// A scene folder taken: its preview job and the scene's id.
+#[derive(Serialize)]
+pub struct OpenedFolder {
+    pub job: super::views::JobView,
+    pub scene: String,
+}
+
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct Revert {

@@ -68,7 +68,12 @@ fn router(studio: Arc<Studio>) -> Router {
         .route("/api/jobs/{id}/results/{name}", get(api::result))
         .route("/api/workers", get(api::workers))
         .route("/api/events", get(api::events))
-        .route("/api/scenes", get(api::scenes))
+        .route(
+            "/api/scenes",
+            get(api::scenes)
+                .post(edits::open_folder)
+                .layer(axum::extract::DefaultBodyLimit::max(crate::farm::MAX_FOLDER_BYTES)),
+        )
         .route("/api/scenes/{id}", get(api::scene))
         .route("/api/scenes/{id}/preview.glb", get(api::scene_glb))
         .route("/api/scenes/{id}/snapshots", post(api::take_snapshot))

@@ -32,6 +32,7 @@ const FILES: &[(&str, &str, &str)] = &[
     script!("variants.js"),
     script!("painting.js"),
     script!("luminaires.js"),
+    script!("upload.js"),
     script!("vendor/three/three.module.js"),
     script!("vendor/three/three.core.js"),
     script!("vendor/three/addons/controls/OrbitControls.js"),

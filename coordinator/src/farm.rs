@@ -36,7 +36,9 @@ use tokio::sync::{Notify, mpsc, watch};
 use tracing::{debug, info, warn};
 
 mod scenes;
-pub use scenes::{MAX_FOLDER_BYTES, PhotometryInfo, RevisionInfo, SceneEntry, scene_identity};
+pub use scenes::{
+    MAX_FOLDER_BYTES, PhotometryInfo, RevisionInfo, SceneEntry, scene_identity, sent_file,
+};
 
 /// How the coordinator runs.
 #[derive(Clone)]

@@ -54,6 +54,10 @@ export const uploadPhotometry = (id, name, bytes) =>
 // A scene folder as one tar (an ArrayBuffer): its preview job and the scene's id.
 export const openFolder = (name, bytes, scene) => call('POST',
   `/api/scenes?${new URLSearchParams(scene ? { name, scene } : { name })}`, bytes);
+// A measured reflectance (CSV, an ArrayBuffer) read and kept by the server: its reference, curve
+// and colour.
+export const uploadSpectrum = (id, name, bytes) =>
+  call('POST', `${sceneUrl(id)}/spectrum?name=${encodeURIComponent(name)}`, bytes);
 export const revert = (id, revision) => call('POST', `${sceneUrl(id)}/revert`, { revision });
 export const downloadUrl = (id, revision) => `${sceneUrl(id)}/download${at(revision)}`;
 export const revisions = (id) => call('GET', `${sceneUrl(id)}/revisions`);

@@ -61,8 +61,9 @@ function row(table, label, value) {
   table.append(tr);
 }
 
-// The controls that change material `m`: `library` is /api/spectra, `onEdit` sends an edit.
-function editor(m, library, onEdit) {
+// The controls that change material `m`: `library` is /api/spectra, `onEdit` sends an edit,
+// `upload(name, bytes)` sends a measured spectrum (CSV) and answers what the server read.
+function editor(m, library, onEdit, upload) {
   const form = document.createElement('form');
   form.className = 'material-edit';
   form.setAttribute('aria-label', `Change ${m.name}`);
@@ -75,6 +76,8 @@ function editor(m, library, onEdit) {
     <input id="${id('search')}" type="search" placeholder="travertine, marble, brick…" autocomplete="off">
     <label for="${id('spectrum')}">Spectrum</label>
     <select id="${id('spectrum')}" size="6"></select>
+    <label for="${id('csv')}">Or a measured spectrum: a CSV file of wavelength (nm) and reflectance (0–1)</label>
+    <input id="${id('csv')}" type="file" accept=".csv,.txt">
     <p id="${id('candidate')}" class="candidate" aria-live="polite"></p>
     <button type="button" id="${id('assign')}">Assign spectrum</button>
     <label for="${id('model')}">Model</label>
@@ -91,19 +94,41 @@ function editor(m, library, onEdit) {
     const match = (s) => words.every((w) => `${s.name} ${s.material}`.toLowerCase().includes(w));
     $('spectrum').replaceChildren(...library.filter(match).map((s) => new Option(`${s.name} — ${s.material}`, s.name)));
   };
-  const candidate = () => library.find((s) => s.name === $('spectrum').value);
-  $('search').addEventListener('input', fill);
-  $('spectrum').addEventListener('change', () => {
-    const c = candidate();
-    if (!c) return;
-    $('candidate').textContent = `${c.name}: L* ${c.lab[0].toFixed(1)}, a* ${c.lab[1].toFixed(1)}, b* ${c.lab[2].toFixed(1)}`;
+  // The spectrum to assign: one of the list, or the file sent last (until one is chosen).
+  let sent = null;
+  const candidate = () => sent || library.find((s) => s.name === $('spectrum').value);
+  const propose = (c) => {
+    $('candidate').textContent = `${c.name}: L* ${c.lab[0].toFixed(1)}, a* ${c.lab[1].toFixed(1)}, b* ${c.lab[2].toFixed(1)}` +
+      (c.notes && c.notes.length ? ` (${c.notes.join('; ')})` : '');
     const plotted = form.parentElement.querySelector('svg.spectrum');
     if (plotted) plotted.replaceWith(plot([...m.states, { ...c, state: 'candidate' }]));
+  };
+  $('search').addEventListener('input', fill);
+  $('spectrum').addEventListener('change', () => {
+    sent = null;
+    const c = candidate();
+    if (c) propose(c);
+  });
+  $('csv').addEventListener('change', async () => {
+    const file = $('csv').files[0];
+    if (!file || !upload) return;
+    $('candidate').textContent = `reading ${file.name}…`;
+    try {
+      const info = await upload(file.name, await file.arrayBuffer());
+      sent = { ...info, name: info.file_name };
+      propose(sent);
+    } catch (e) {
+      sent = null;
+      $('candidate').textContent = e.message;
+    }
   });
   $('assign').addEventListener('click', () => {
     const c = candidate();
-    if (!c) { $('candidate').textContent = 'choose a spectrum in the list first'; return; }
-    onEdit({ edit: 'material', material: m.name, state: $('state').value, spectrum: c.name });
+    if (!c) { $('candidate').textContent = 'choose a spectrum in the list, or send a file, first'; return; }
+    const change = { edit: 'material', material: m.name, state: $('state').value };
+    if (c.reference) Object.assign(change, { file: c.reference, file_name: c.file_name });
+    else change.spectrum = c.name;
+    onEdit(change);
   });
   $('apply-model').addEventListener('click', () => {
     const model = $('model').value;
@@ -116,8 +141,8 @@ function editor(m, library, onEdit) {
 }
 
 // Shows the surface `picked` ({object, part, material}) of the scene `view`; with `library`
-// and `onEdit`, the controls that change its material.
-export function show(panel, picked, view, library, onEdit) {
+// and `onEdit` (and `upload`, for a measured spectrum), the controls that change its material.
+export function show(panel, picked, view, library, onEdit, upload) {
   const m = view.materials.find((x) => x.name === picked.material);
   panel.hidden = false;
   const body = panel.querySelector('.body');
@@ -153,5 +178,5 @@ export function show(panel, picked, view, library, onEdit) {
   }
   states.append(tbody);
   body.append(states, plot(m.states));
-  if (library && onEdit) body.append(editor(m, library, onEdit));
+  if (library && onEdit) body.append(editor(m, library, onEdit, upload));
 }

@@ -119,7 +119,8 @@ async function present(view) {
 async function showMaterial() {
   if (!picked || !viewer || !viewer.view) return;
   if (!library) library = await api.spectra().catch((e) => { showError(e); return null; });
-  material.show($('material'), picked, viewer.view, library, applyEdit);
+  const upload = (name, bytes) => api.uploadSpectrum(openScene, name, bytes);
+  material.show($('material'), picked, viewer.view, library, applyEdit, upload);
   $('material').querySelector('.body').append(variants.partControls(picked));
 }
 

@@ -31,7 +31,8 @@ pub enum Edit {
 }
 
 /// A material's surface in one of its states (`base` unless given): a shipped spectrum by its
-/// name (`restauro color --list`), the reflection model, the roughness.
+/// name (`restauro color --list`) or a measured one sent as a file (`file`, the reference the
+/// studio gave it, named in `[spectra]` after `file_name`), the reflection model, the roughness.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialEdit {
@@ -40,6 +41,13 @@ pub struct MaterialEdit {
     pub state: Option<String>,
     #[serde(default)]
     pub spectrum: Option<String>,
+    #[serde(default)]
+    pub file: Option<String>,
+    #[serde(default)]
+    pub file_name: Option<String>,
+    /// With `file`: hold its end values where it stops short of 380 or 780 nm.
+    #[serde(default)]
+    pub extrapolate: bool,
     #[serde(default)]
     pub model: Option<MaterialModel>,
     #[serde(default)]
@@ -171,14 +179,19 @@ impl Edit {
         match self {
             Edit::Material(e) => {
                 let state = e.state.as_deref().unwrap_or("base");
-                material_edit(
-                    scene,
-                    &e.material,
-                    state,
-                    e.spectrum.as_deref(),
-                    e.model,
-                    e.roughness,
-                )
+                known_material(scene, &e.material)?;
+                let spectrum = match (&e.spectrum, &e.file) {
+                    (Some(_), Some(_)) => {
+                        return Err(refuse("file", "give a shipped spectrum or a file, not both"));
+                    }
+                    (Some(stem), None) => Some(library_spectrum(scene, stem)?),
+                    (None, Some(file)) => {
+                        let name = e.file_name.as_deref().unwrap_or("measured");
+                        Some(file_spectrum(scene, file, name, e.extrapolate)?)
+                    }
+                    (None, None) => None,
+                };
+                material_edit(scene, &e.material, state, spectrum, e.model, e.roughness)
             }
             Edit::Sun(e) => {
                 let site = SiteTime {
@@ -347,26 +360,28 @@ fn delete<'a, T>(
     Err(list.iter().map(|x| name(x).as_str()).collect())
 }
 
+/// Refuses a material the scene does not have, with those it has.
+fn known_material(scene: &SceneFile, material: &str) -> Result<()> {
+    if scene.materials.contains_key(material) {
+        return Ok(());
+    }
+    let names = scene.materials.keys().map(String::as_str);
+    Err(refuse("material", crate::load::unknown("material", material, names)))
+}
+
+/// `key`: the `[spectra]` name of the new spectrum, already added.
 fn material_edit(
     scene: &mut SceneFile,
     material: &str,
     state: &str,
-    spectrum: Option<&str>,
+    key: Option<String>,
     model: Option<MaterialModel>,
     roughness: Option<f64>,
 ) -> Result<String> {
-    if !scene.materials.contains_key(material) {
-        let names = scene.materials.keys().map(String::as_str);
-        return Err(refuse("material", crate::load::unknown("material", material, names)));
-    }
-    if state == "base" && spectrum.is_none() && model.is_none() && roughness.is_none() {
+    if state == "base" && key.is_none() && model.is_none() && roughness.is_none() {
         return Err(refuse("material", "nothing to change: give spectrum, model or roughness"));
     }
-    let key = match spectrum {
-        Some(stem) => Some(library_spectrum(scene, stem)?),
-        None => None,
-    };
-    let m = scene.materials.get_mut(material).expect("checked above");
+    let m = scene.materials.get_mut(material).expect("known_material checked it");
     let mut changed = Vec::new();
     if state == "base" {
         if let Some(key) = &key {
@@ -410,6 +425,45 @@ fn material_edit(
 
 /// The scene's name for the shipped spectrum `stem`: the one that already names it, or a new
 /// entry (named by the stem, or the stem with a number when another spectrum has that name).
+/// The `[spectra]` name of a measured spectrum sent as a file (added, named after its file,
+/// unless the scene has it already).
+fn file_spectrum(
+    scene: &mut SceneFile,
+    file: &str,
+    file_name: &str,
+    extrapolate: bool,
+) -> Result<String> {
+    if !file.starts_with("blake3:") || !file.ends_with(".csv") {
+        return Err(refuse(
+            "file",
+            "send the spectrum to the studio first; give the reference it answers",
+        ));
+    }
+    let source = SpectrumSource::File { file: file.to_owned(), extrapolate };
+    if let Some((key, _)) = scene.spectra.iter().find(|(_, s)| **s == source) {
+        return Ok(key.clone());
+    }
+    let stem: String = file_name
+        .trim_end_matches(".csv")
+        .trim_end_matches(".txt")
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' })
+        .take(64)
+        .collect();
+    let stem = if stem.is_empty() { "measured".to_owned() } else { stem };
+    Ok(new_spectrum(scene, &stem, source))
+}
+
+/// Adds `source` to `[spectra]` under `stem`, or `stem-2`, … when that is taken: the name.
+fn new_spectrum(scene: &mut SceneFile, stem: &str, source: SpectrumSource) -> String {
+    let key = std::iter::once(stem.to_owned())
+        .chain((2..).map(|n| format!("{stem}-{n}")))
+        .find(|k| !scene.spectra.contains_key(k))
+        .expect("an unused name exists");
+    scene.spectra.insert(key.clone(), source);
+    key
+}
+
 fn library_spectrum(scene: &mut SceneFile, stem: &str) -> Result<String> {
     if restauro_spectral::library::text(stem).is_none() {
         let close = restauro_spectral::library::suggest(stem);
@@ -427,12 +481,7 @@ fn library_spectrum(scene: &mut SceneFile, stem: &str) -> Result<String> {
     if let Some((key, _)) = scene.spectra.iter().find(|(_, s)| **s == shipped) {
         return Ok(key.clone());
     }
-    let key = std::iter::once(stem.to_owned())
-        .chain((2..).map(|n| format!("{stem}-{n}")))
-        .find(|k| !scene.spectra.contains_key(k))
-        .expect("an unused name exists");
-    scene.spectra.insert(key.clone(), shipped);
-    Ok(key)
+    Ok(new_spectrum(scene, stem, shipped))
 }
 
 /// Puts the scene's sun at `site` (its direction from the site and time from now on), or adds

@@ -63,6 +63,7 @@ fn every_route_needs_the_client_token_and_refuses_in_the_servers_words() {
         ("GET", "/api/spectra".to_owned()),
         ("GET", "/api/sun-path".to_owned()),
         ("POST", format!("/api/scenes/{}/photometry?name=a.ies", "0".repeat(64))),
+        ("POST", format!("/api/scenes/{}/spectrum?name=a.csv", "0".repeat(64))),
         ("GET", format!("/api/jobs/{id}/painting.png")),
         ("GET", format!("/api/jobs/{id}/display.png")),
         ("GET", format!("/api/jobs/{id}/luminance")),
@@ -722,7 +723,7 @@ fn lights_and_photometric_files_are_checked_as_the_scene_file_is() {
     )
     .unwrap();
     for (name, bytes, words) in [
-        ("lamp.txt", &ldt[..], "ending in .ies (IES LM-63) or .ldt (EULUMDAT)"),
+        ("lamp.txt", &ldt[..], "ending in .ies or .ldt"),
         ("../lamp.ldt", &ldt[..], "ending in .ies"),
         ("lamp.ies", b"not a photometric file".as_slice(), "lamp.ies"),
         ("lamp.ldt", &vec![b'1'; (1 << 20) + 1][..], "at most 1048576"),
@@ -810,6 +811,71 @@ fn lights_and_photometric_files_are_checked_as_the_scene_file_is() {
         "{}",
         r.text()
     );
+}
+
+/// A measured reflectance sent as CSV: read as `[spectra]` files are (refusals name the file and
+/// the line), kept, and assigned to a material by the reference the studio answers.
+#[test]
+fn measured_spectra_sent_as_csv_are_read_as_scene_files_read_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (_c, s, id) = studio_with_scene(d);
+    let auth = [("Authorization", BEARER)];
+    let send = |name: &str, body: &[u8]| {
+        request(&s, "POST", &format!("/api/scenes/{id}/spectrum?name={name}"), &auth, body)
+    };
+    let rows: String = (400..=700).step_by(10).map(|nm| format!("{nm},0.25\n")).collect();
+    for (name, body, words) in [
+        ("a.png", rows.clone().into_bytes(), "ending in .csv or .txt"),
+        ("a.csv", vec![0xff, 0xfe, 0x00], "a.csv: not UTF-8"),
+        ("a.csv", vec![b'1'; (1 << 20) + 1], "at most 1048576"),
+        ("short.csv", rows.clone().into_bytes(), "short.csv"),
+    ] {
+        let r = send(name, &body);
+        assert_eq!(r.status, 400, "{name}: {}", r.text());
+        assert!(error_of(&r).contains(words), "{name}: {}", error_of(&r));
+    }
+    // Measured from 400 to 700 nm only: held at its ends when asked, and said so.
+    let r = send("short.csv&extrapolate=true", rows.as_bytes());
+    assert_eq!(r.status, 200, "{}", r.text());
+    let info = r.json();
+    assert_eq!(info["reflectance"].as_array().unwrap().len(), 81);
+    assert!(!info["notes"].as_array().unwrap().is_empty(), "{info}");
+    let r = send(
+        "flat.csv",
+        (380..=780).step_by(5).map(|nm| format!("{nm},0.25\n")).collect::<String>().as_bytes(),
+    );
+    let reference = r.json()["reference"].as_str().unwrap().to_owned();
+    let edit = |body: serde_json::Value| {
+        request(&s, "POST", &format!("/api/scenes/{id}/edits"), &auth, body.to_string().as_bytes())
+    };
+    for (body, words) in [
+        (
+            serde_json::json!({"edit": "material", "material": "travertine", "file": reference, "spectrum": "marble_white_solid__eco_ward95"}),
+            "not both",
+        ),
+        (
+            serde_json::json!({"edit": "material", "material": "travertine", "file": "flat.csv"}),
+            "send the spectrum to the studio first",
+        ),
+        (
+            serde_json::json!({"edit": "material", "material": "travertine", "file": format!("blake3:{}.csv", "0".repeat(64))}),
+            "has not been uploaded",
+        ),
+    ] {
+        let r = edit(body.clone());
+        assert!([400, 409].contains(&r.status), "{body}: {}", r.text());
+        assert!(error_of(&r).contains(words), "{body}: {}", error_of(&r));
+    }
+    let r = edit(
+        serde_json::json!({"edit": "material", "material": "travertine", "file": reference, "file_name": "flat.csv"}),
+    );
+    assert_eq!(r.status, 200, "{}", r.text());
+    let stone = material(&r.json(), "travertine").clone();
+    assert_eq!(stone["states"][0]["spectrum"], "flat", "{stone}");
+    let l = stone["states"][0]["lab"][0].as_f64().unwrap();
+    // CIE 1976: L* = 116 · 0.25^(1/3) − 16.
+    assert!((l - (116.0 * 0.25f64.cbrt() - 16.0)).abs() < 1e-3, "L* {l}");
 }
 
 /// A tar of the folder `dir` (its entries under `top/`).

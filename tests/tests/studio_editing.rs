@@ -622,3 +622,65 @@ fn a_lighting_designer_sets_the_sky_and_aims_a_luminaire_with_its_file() {
     b.wait_for("revision 3", "document.getElementById('view').dataset.revision === '3'");
     assert!(luminaire_cells(&mut b).is_empty());
 }
+
+/// A measured reflectance sent from the page as a CSV file: a flat 50 % grey card is plotted
+/// with its L*a*b* (CIE 1976: L* = 116 · 0.5^(1/3) − 16 = 76.07, neutral), assigned to the stone
+/// clicked and kept in the scene as a file; a file with a reflectance above 1 is refused in the
+/// reader's words, naming the file and the line.
+#[test]
+fn a_restorer_assigns_a_measured_spectrum_from_a_csv_file() {
+    if !available("studio_editing") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (farm, mut b, _) = opened(d);
+    b.click("#view");
+    b.wait_for("the material editor", "document.getElementById('material-csv')");
+    let stone =
+        b.eval("document.querySelector('#material .body > table tr:nth-child(3) td').textContent");
+    let grey = d.join("grey-card.csv");
+    let rows: String = (380..=780).step_by(10).map(|nm| format!("{nm},0.5\n")).collect();
+    std::fs::write(&grey, format!("# a grey card\nwavelength_nm,reflectance\n{rows}")).unwrap();
+    let bad = d.join("too-bright.csv");
+    std::fs::write(&bad, rows.replace("600,0.5", "600,1.5")).unwrap();
+
+    b.choose_file("#material-csv", &bad);
+    b.wait_for(
+        "the refusal",
+        "(() => { const t = document.getElementById('material-candidate').textContent; \
+         return t.includes('too-bright.csv') && !t.startsWith('reading'); })()",
+    );
+    let said = b.eval("document.getElementById('material-candidate').textContent");
+    assert!(
+        said.as_str().unwrap().contains("too-bright.csv:23: the reflectance 1.5 is above 1"),
+        "{said}"
+    );
+
+    b.choose_file("#material-csv", &grey);
+    b.wait_for(
+        "the candidate",
+        "document.getElementById('material-candidate').textContent.startsWith('grey-card.csv: L* 76.1, a* 0.0, b* 0.0')",
+    );
+    assert!(b.eval("document.querySelector('#material polyline.state-candidate')").is_object());
+    b.click("#material-assign");
+    b.wait_for("revision 1", "document.getElementById('view').dataset.revision === '1'");
+    let row = b.eval("[...document.querySelector('#material tr[data-state=base]').cells].map(c => c.textContent)");
+    assert_eq!(row[1], "grey-card", "{row}");
+    assert_eq!(
+        (row[3].as_str(), row[4].as_str(), row[5].as_str()),
+        (Some("76.1"), Some("0.0"), Some("0.0"))
+    );
+    let folder = download_shown(&mut b, &farm.coordinator, d);
+    let toml: toml::Table = toml::from_str(&std::fs::read_to_string(&folder).unwrap()).unwrap();
+    let file = toml["spectra"]["grey-card"]["file"].as_str().unwrap();
+    assert!(file.ends_with(".csv"), "{file}");
+    assert_eq!(
+        toml["materials"][stone.as_str().unwrap()]["reflectance"].as_str(),
+        Some("grey-card")
+    );
+    let kept = std::fs::read(folder.parent().unwrap().join(file)).unwrap();
+    assert_eq!(kept, std::fs::read(&grey).unwrap(), "the file is kept as sent");
+    let o = restauro_tests::restauro(&["scene", "check", folder.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+}

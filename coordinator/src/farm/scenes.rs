@@ -325,45 +325,63 @@ impl Farm {
     pub fn keep_photometry(&self, file_name: &str, bytes: &[u8]) -> Result<PhotometryInfo> {
         use restauro_scene::photometric;
         type Reader = fn(&str, &std::path::Path) -> restauro_scene::Result<photometric::Photometry>;
-        let sane = !file_name.is_empty()
-            && file_name.len() <= 100
-            && file_name.chars().all(|c| c.is_ascii_alphanumeric() || "._- ".contains(c));
-        let extension = file_name.rsplit_once('.').map(|(_, e)| e.to_ascii_lowercase());
-        let parse = match extension.as_deref() {
-            _ if !sane => None,
-            Some("ies") => Some(photometric::parse_ies as Reader),
-            Some("ldt") => Some(photometric::parse_ldt as Reader),
-            _ => None,
-        };
-        let parse = parse.ok_or_else(|| {
-            CoordinatorError::Request(
-                "name: give the file's name, ending in .ies (IES LM-63) or .ldt (EULUMDAT), \
-                 in letters, digits, `.`, `_` and `-`"
-                    .to_owned(),
-            )
-        })?;
-        if bytes.len() > MAX_PHOTOMETRY_BYTES {
-            return Err(CoordinatorError::Request(format!(
-                "{file_name}: {} bytes; a photometric file may have at most {MAX_PHOTOMETRY_BYTES}",
-                bytes.len()
-            )));
-        }
+        let extension = sent_file(file_name, bytes, &["ies", "ldt"], MAX_PHOTOMETRY_BYTES)?;
+        let parse: Reader =
+            if extension == "ies" { photometric::parse_ies } else { photometric::parse_ldt };
         let text = photometric::decode_text(bytes.to_vec());
         let p = parse(&text, std::path::Path::new(file_name))?;
-        let hash = blake3::hash(bytes).to_hex().to_string();
-        self.assets
-            .keep(&hash, bytes)
-            .map_err(|e| CoordinatorError::Internal(format!("keeping {file_name}: {e}")))?;
-        let extension = extension.unwrap_or_default();
-        info!(file = file_name, hash = %&hash[..12], "photometric file kept");
+        let reference = self.keep_file(file_name, bytes, &extension)?;
         Ok(PhotometryInfo {
-            reference: format!("blake3:{hash}.{extension}"),
+            reference,
             file_name: file_name.to_owned(),
             flux_lm: p.flux_lm(),
             peak_cd: p.peak_cd(),
             beam_angle_deg: p.beam_angle_deg(),
             description: p.description.clone(),
         })
+    }
+}
+
+/// Checks a file the studio was sent before it is read: its name (letters, digits, `.`, `_`,
+/// `-`, at most 100 characters, ending in one of `extensions`) and its size. Its extension, in
+/// lower case.
+pub fn sent_file(
+    name: &str,
+    bytes: &[u8],
+    extensions: &[&str],
+    max_bytes: usize,
+) -> Result<String> {
+    let extension = name.rsplit_once('.').map(|(_, e)| e.to_ascii_lowercase()).unwrap_or_default();
+    let sane = !name.is_empty()
+        && name.len() <= 100
+        && name.chars().all(|c| c.is_ascii_alphanumeric() || "._- ".contains(c))
+        && extensions.contains(&extension.as_str());
+    if !sane {
+        let endings: Vec<String> = extensions.iter().map(|e| format!(".{e}")).collect();
+        return Err(CoordinatorError::Request(format!(
+            "name: give the file's name, ending in {}, in letters, digits, `.`, `_` and `-`",
+            endings.join(" or ")
+        )));
+    }
+    if bytes.len() > max_bytes {
+        return Err(CoordinatorError::Request(format!(
+            "{name}: {} bytes; a file of this kind may have at most {max_bytes}",
+            bytes.len()
+        )));
+    }
+    Ok(extension)
+}
+
+impl Farm {
+    /// Keeps `bytes` (a file the studio was sent, already read as its kind) among the assets:
+    /// its reference in a scene, `blake3:<hash>.<extension>`.
+    pub fn keep_file(&self, file_name: &str, bytes: &[u8], extension: &str) -> Result<String> {
+        let hash = blake3::hash(bytes).to_hex().to_string();
+        self.assets
+            .keep(&hash, bytes)
+            .map_err(|e| CoordinatorError::Internal(format!("keeping {file_name}: {e}")))?;
+        info!(file = file_name, hash = %&hash[..12], "file kept");
+        Ok(format!("blake3:{hash}.{extension}"))
     }
 }
 

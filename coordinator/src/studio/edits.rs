@@ -130,6 +130,56 @@ pub struct OpenedFolder {
     pub scene: String,
 }
 
+/// A measured reflectance the studio was sent: its reference (for a material edit's `file`), and
+/// what it is, as the material panel shows a spectrum.
+#[derive(Serialize)]
+pub struct SpectrumInfo {
+    pub reference: String,
+    pub file_name: String,
+    /// ρ(λ) at 380, 385, … 780 nm.
+    pub reflectance: Vec<f32>,
+    pub lab: [f64; 3],
+    pub colour_linear_srgb: [f32; 3],
+    /// What reading it found worth saying (a range held at its ends, say).
+    pub notes: Vec<String>,
+}
+
+/// The largest spectrum file the studio takes, in bytes.
+pub const MAX_SPECTRUM_BYTES: usize = 1 << 20;
+
+/// `POST /api/scenes/{id}/spectrum?name=FILE.csv[&extrapolate=true]`, a measured reflectance as
+/// CSV (nm, value 0–1; the format `[spectra]` files have) as the body: read as a scene reads it,
+/// refused in the reader's words naming the file and line, else kept.
+pub async fn spectrum(
+    State(studio): State<Arc<Studio>>,
+    Path(id): Path<String>,
+    RawQuery(query): RawQuery,
+    body: Bytes,
+) -> Result<Json<SpectrumInfo>> {
+    use restauro_spectral::csv::{Quantity, load};
+    use restauro_spectral::tabulated::Coverage;
+    studio.farm.scene_revision(scene_id(&id)?, None)?;
+    let name = super::api::query_value(query.as_deref(), "name").unwrap_or_default();
+    let extrapolate =
+        super::api::query_value(query.as_deref(), "extrapolate").as_deref() == Some("true");
+    crate::farm::sent_file(&name, &body, &["csv", "txt"], MAX_SPECTRUM_BYTES)?;
+    let text = std::str::from_utf8(&body)
+        .map_err(|_| CoordinatorError::Request(format!("{name}: not UTF-8 text")))?;
+    let coverage = if extrapolate { Coverage::HoldEnds } else { Coverage::Require };
+    let loaded = load(text, &name, Quantity::Reflectance, coverage)
+        .map_err(|e| CoordinatorError::Request(e.to_string()))?;
+    let reference = studio.farm.keep_file(&name, &body, "csv")?;
+    let (lab, colour_linear_srgb) = appearance(&loaded.spectrum);
+    Ok(Json(SpectrumInfo {
+        reference,
+        file_name: name,
+        reflectance: loaded.spectrum.0.to_vec(),
+        lab,
+        colour_linear_srgb,
+        notes: loaded.notes.iter().map(ToString::to_string).collect(),
+    }))
+}
+
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct Revert {

@@ -80,6 +80,7 @@ fn router(studio: Arc<Studio>) -> Router {
         .route("/api/scenes/{id}/edits", post(edits::edit))
         .route("/api/scenes/{id}/revert", post(edits::revert))
         .route("/api/scenes/{id}/photometry", post(edits::photometry))
+        .route("/api/scenes/{id}/spectrum", post(edits::spectrum))
         .route("/api/scenes/{id}/revisions", get(edits::revisions))
         .route("/api/scenes/{id}/scene.json", get(edits::manifest))
         .route("/api/scenes/{id}/download", get(edits::download))

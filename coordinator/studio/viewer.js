@@ -49,6 +49,8 @@ export class Viewer {
     canvas.addEventListener('pointermove', (e) => {
       if (this.walker.active && (e.buttons & 1)) this.walker.look(e.movementX, e.movementY);
     });
+    // A double-click on a surface makes it the point the view orbits around (and turns to).
+    canvas.addEventListener('dblclick', (e) => this.pivot(e));
     canvas.addEventListener('pointerup', (e) => {
       if (down && Math.hypot(e.clientX - down[0], e.clientY - down[1]) < 4) this.pick(e);
       down = null;
@@ -69,6 +71,20 @@ export class Viewer {
     const extras = hit.object.geometry.userData || {};
     this.picked = hit.point.clone();
     this.onPick({ object: extras.object, part: extras.part, material: extras.material, point: hit.point.toArray() });
+  }
+
+  // The surface under the pointer event `e` becomes the centre of orbiting.
+  pivot(e) {
+    if (!this.model || this.walker.active) return;
+    const r = this.canvas.getBoundingClientRect();
+    const ndc = new THREE.Vector2(((e.clientX - r.left) / r.width) * 2 - 1, -((e.clientY - r.top) / r.height) * 2 + 1);
+    const ray = new THREE.Raycaster();
+    ray.setFromCamera(ndc, this.camera);
+    const hit = ray.intersectObject(this.model, true)[0];
+    if (!hit) return;
+    this.controls.target.copy(hit.point);
+    this.controls.update();
+    this.draw();
   }
 
   // Where the point `p` (a THREE.Vector3) is drawn, in the page's CSS pixels.

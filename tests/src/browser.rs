@@ -160,6 +160,20 @@ impl Browser {
         }
     }
 
+    /// Double-clicks the middle of the element `selector` with the mouse.
+    pub fn double_click(&mut self, selector: &str) {
+        let [x, y, w, h] = self.rect(selector);
+        let (x, y) = (x + w / 2.0, y + h / 2.0);
+        for count in [1, 2] {
+            for kind in ["mousePressed", "mouseReleased"] {
+                self.call(
+                    "Input.dispatchMouseEvent",
+                    json!({ "type": kind, "x": x, "y": y, "button": "left", "clickCount": count }),
+                );
+            }
+        }
+    }
+
     /// Clicks the middle of the element `selector` with the mouse, as a person would.
     pub fn click(&mut self, selector: &str) {
         let quoted = serde_json::to_string(selector).unwrap();

@@ -436,7 +436,7 @@ fn a_restorer_builds_a_hypothesis_part_by_part() {
     set_value(&mut b, "variant-state", "degraded");
     b.click("#new-variant");
     b.wait_for("revision 1", "document.getElementById('view').dataset.revision === '1'");
-    assert_eq!(b.eval("document.getElementById('snap-variant').value"), "first campaign");
+    b.wait_for("it chosen", "document.getElementById('snap-variant').value === 'first campaign'");
     let options = b.eval("[...document.getElementById('snap-variant').options].map(o => o.value)");
     assert_eq!(options, serde_json::json!(["", "as-found", "cleaned", "first campaign"]));
     let after = around_pick(&mut b, "32-hypothesis-degraded.png");
@@ -486,7 +486,7 @@ fn a_restorer_builds_a_hypothesis_part_by_part() {
     set_value(&mut b, "variant-name", "portal first");
     b.click("#rename-variant");
     b.wait_for("revision 3", "document.getElementById('view').dataset.revision === '3'");
-    assert_eq!(b.eval("document.getElementById('snap-variant').value"), "portal first");
+    b.wait_for("it chosen", "document.getElementById('snap-variant').value === 'portal first'");
     b.screenshot(&shots().join("36-hypothesis-renamed.png"));
     let folder = download_shown(&mut b, c, d);
     assert!(folder.ends_with("aosta-revision-3/scene.toml"), "{}", folder.display());
@@ -498,10 +498,28 @@ fn a_restorer_builds_a_hypothesis_part_by_part() {
     let o = restauro_tests::restauro(&["scene", "check", folder.to_str().unwrap()]);
     assert!(o.status.success(), "{}", text(&o));
 
+    // A double-click on the middle of the view makes the surface there the centre of orbiting:
+    // the camera stands 1.5 m from the stone (flown there above) with the centre put 5 m behind
+    // it; afterwards the centre is on the stone, 1.5 m away, still straight ahead.
+    let distance = "(() => { const v = window.studioViewer, t = v.controls.target, q = t.clone().project(v.camera); \
+                    return [t.distanceTo(v.camera.position), q.x, q.y]; })()";
+    b.eval(
+        "(() => { const v = window.studioViewer, d = v.controls.target.clone().sub(v.camera.position).normalize(); \
+         v.controls.target.copy(v.camera.position).addScaledVector(d, 6.5); v.controls.update(); })()",
+    );
+    let far = b.eval(distance)[0].as_f64().unwrap();
+    assert!((far - 6.5).abs() < 1e-6, "{far}");
+    b.double_click("#view");
+    let orbit = b.eval(distance);
+    let near = orbit[0].as_f64().unwrap();
+    assert!((near - 1.5).abs() < 0.1, "the centre is {near} m away, not on the stone 1.5 m away");
+    let (x, y) = (orbit[1].as_f64().unwrap(), orbit[2].as_f64().unwrap());
+    assert!(x.abs() < 0.01 && y.abs() < 0.01, "{orbit}");
+
     // Deleted: the picker goes back to the scene as it is.
     b.click("#delete-variant");
     b.wait_for("revision 4", "document.getElementById('view').dataset.revision === '4'");
-    assert_eq!(b.eval("document.getElementById('snap-variant').value"), "");
+    b.wait_for("none chosen", "document.getElementById('snap-variant').value === ''");
     let options = b.eval("[...document.getElementById('snap-variant').options].map(o => o.value)");
     assert_eq!(options, serde_json::json!(["", "as-found", "cleaned"]));
 }

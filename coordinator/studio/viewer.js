@@ -10,13 +10,20 @@ import { Walker } from './walk.js';
 export class Viewer {
   constructor(canvas) {
     this.canvas = canvas;
-    this.renderer = new THREE.WebGLRenderer({ canvas, antialias: true });
-    this.renderer.setPixelRatio(Math.min(window.devicePixelRatio, 2));
+    // No multisampling: with software GL (no GPU) it costs more than the model does. A still
+    // view is drawn at twice the resolution instead (supersampled), one in motion (orbiting,
+    // walking) at the screen's, so that a model of a million triangles keeps moving.
+    this.renderer = new THREE.WebGLRenderer({ canvas, antialias: false });
+    this.stillRatio = Math.min(2 * window.devicePixelRatio, 2);
+    this.movingRatio = Math.min(window.devicePixelRatio, 2);
+    this.renderer.setPixelRatio(this.stillRatio);
     this.scene = new THREE.Scene();
     this.scene.background = new THREE.Color(0x9fb4c8);
     this.camera = new THREE.PerspectiveCamera(40, 16 / 9, 0.1, 10000);
     this.controls = new OrbitControls(this.camera, canvas);
     this.controls.addEventListener('change', () => this.draw());
+    this.controls.addEventListener('start', () => this.moving(true));
+    this.controls.addEventListener('end', () => this.moving(false));
     // A preview light: the sky from above, and the sun from where the scene puts it (or from
     // the south-west when the scene has none), casting shadows.
     this.scene.add(new THREE.HemisphereLight(0xffffff, 0x6b5a48, 1.6));
@@ -30,6 +37,9 @@ export class Viewer {
     this.sun.shadow.normalBias = 0.05;
     this.scene.add(this.sun, this.sun.target);
     this.renderer.shadowMap.enabled = true;
+    // The shadows change only when the sun or the model does: the shadow map is drawn then, not
+    // at every frame (a model of a million triangles costs as much to draw into it as to see).
+    this.renderer.shadowMap.autoUpdate = false;
     this.model = null;
     this.view = null;
     // The notes' pins, picked before the model.
@@ -92,6 +102,14 @@ export class Viewer {
     const q = p.clone().project(this.camera);
     const r = this.canvas.getBoundingClientRect();
     return [r.left + ((q.x + 1) / 2) * r.width, r.top + ((1 - q.y) / 2) * r.height];
+  }
+
+  // Drawing a view in motion (true) or a still one (false): the resolution to draw at.
+  moving(on) {
+    const ratio = on ? this.movingRatio : this.stillRatio;
+    if (this.renderer.getPixelRatio() === ratio) return;
+    this.renderer.setPixelRatio(ratio);
+    this.resize();
   }
 
   resize() {
@@ -244,6 +262,7 @@ export class Viewer {
     [c.left, c.right, c.top, c.bottom, c.near, c.far] = [-radius, radius, radius, -radius, radius * 0.5, radius * 4];
     c.updateProjectionMatrix();
     this.sun.shadow.normalBias = (3 * 2 * radius) / this.sun.shadow.mapSize.x;
+    this.renderer.shadowMap.needsUpdate = true;
   }
 
   // Walking on (true: false when there is no ground under the camera) or off; orbiting then
@@ -252,10 +271,12 @@ export class Viewer {
     if (on) {
       if (!this.model || !this.walker.start()) return false;
       this.controls.enabled = false;
+      this.moving(true);
       return true;
     }
     if (!this.walker.active) return false;
     this.walker.stop();
+    this.moving(false);
     this.camera.up.set(0, 1, 0);
     this.controls.target.copy(this.ahead(5));
     this.controls.enabled = true;

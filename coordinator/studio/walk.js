@@ -102,7 +102,13 @@ export class Walker {
       if (this.hit(from, dir, distance + BODY_RADIUS_M)) return false;
     }
     const next = cam.position.clone().addScaledVector(dir, distance);
-    const ahead = this.ground(next.x, next.z, floor + STEP_M + 0.05);
+    // The ground where the foot lands: a crack narrower than the body (a joint between slabs,
+    // a seam of the model) does not stop a walker, an edge does.
+    let ahead = null;
+    for (const reach of [0, BODY_RADIUS_M / 2, -BODY_RADIUS_M / 2]) {
+      ahead = this.ground(next.x + dir.x * reach, next.z + dir.z * reach, floor + STEP_M + 0.05);
+      if (ahead !== null) break;
+    }
     if (ahead === null) return false;
     cam.position.copy(next);
     if (ahead > floor) cam.position.y = ahead + EYE_HEIGHT_M;

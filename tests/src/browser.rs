@@ -235,22 +235,30 @@ impl Browser {
     }
 
     /// Holds a key down until what it drives has moved and stopped: until the JavaScript
-    /// `expression`, once changed, gives the same value twice a second apart (or `limit` has
-    /// passed); then lets it go and
-    /// returns that value. A walk is judged by where it ends, whatever the frame rate of a
-    /// loaded machine's software GL.
-    pub fn hold_until_still(&mut self, key: &str, expression: &str, limit: Duration) -> Value {
+    /// `expression`, once changed, gives the same value twice a second apart while the page
+    /// drew at least 5 frames in between (`frames`, a JavaScript count of frames drawn: a
+    /// loaded machine may draw none for a second), or `limit` has passed; then lets it go and
+    /// returns that value. A walk is judged by where it ends, whatever the frame rate.
+    pub fn hold_until_still(
+        &mut self,
+        key: &str,
+        expression: &str,
+        frames: &str,
+        limit: Duration,
+    ) -> Value {
         self.call("Input.dispatchKeyEvent", json!({ "type": "keyDown", "key": key, "code": key }));
         let deadline = Instant::now() + limit;
         let first = self.eval(expression);
-        let mut last = first.clone();
+        let count = |b: &mut Self| b.eval(frames).as_f64().unwrap_or(0.0);
+        let (mut last, mut drawn) = (first.clone(), count(self));
         loop {
             std::thread::sleep(Duration::from_secs(1));
-            let now = self.eval(expression);
-            if (now == last && now != first) || Instant::now() >= deadline {
+            let (now, now_drawn) = (self.eval(expression), count(self));
+            let still = now == last && now != first && now_drawn - drawn >= 5.0;
+            if still || Instant::now() >= deadline {
                 break;
             }
-            last = now;
+            (last, drawn) = (now, now_drawn);
         }
         self.call("Input.dispatchKeyEvent", json!({ "type": "keyUp", "key": key, "code": key }));
         self.eval(expression)

@@ -292,7 +292,8 @@ fn a_restorer_swaps_a_stone_sets_the_sun_and_keeps_a_view() {
     let (x, y, z) = (at[0].as_f64().unwrap(), at[1].as_f64().unwrap(), at[2].as_f64().unwrap());
     assert!(x.abs() < 1e-6 && (y + 9.0).abs() < 1e-6, "{at}");
     assert!((1.6..=1.606).contains(&z), "eye at {z} m, not 1.6 m over the paving");
-    let at = b.hold_until_still("ArrowUp", world, std::time::Duration::from_secs(90));
+    let frames = "window.studioViewer.frames";
+    let at = b.hold_until_still("ArrowUp", world, frames, std::time::Duration::from_secs(90));
     let y = at[1].as_f64().unwrap();
     assert!((-1.35..=-1.19).contains(&y), "stopped at y = {y} m, not short of the buttress: {at}");
     // Over the paving's slabs (up to 5 mm high) and its mortar bed (−20 mm) between them.

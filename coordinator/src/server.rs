@@ -81,8 +81,8 @@ pub struct CoordinatorArgs {
     pub fault_commit_delay_ms: u64,
 }
 
-/// The server's TLS identity, read and checked before anything listens.
-fn tls_identity(args: &CoordinatorArgs) -> Result<Option<tonic::transport::Identity>> {
+/// The server's TLS certificate and key, read and checked before anything listens.
+fn tls_identity(args: &CoordinatorArgs) -> Result<Option<crate::studio::TlsPem>> {
     let (Some(cert), Some(key)) = (&args.tls_cert, &args.tls_key) else {
         return Ok(None);
     };
@@ -96,7 +96,7 @@ fn tls_identity(args: &CoordinatorArgs) -> Result<Option<tonic::transport::Ident
     };
     let cert = read(cert, "certificate", "-----BEGIN CERTIFICATE-----")?;
     let key = read(key, "key", "PRIVATE KEY-----")?;
-    Ok(Some(tonic::transport::Identity::from_pem(cert, key)))
+    Ok(Some(crate::studio::TlsPem { cert, key }))
 }
 
 fn seconds(value: f64, flag: &str) -> Result<Duration> {
@@ -141,13 +141,6 @@ pub fn run(args: &CoordinatorArgs) -> Result<()> {
         .context("starting the async runtime")?;
     let tls = tls_identity(args)?;
     let exit_with_stdin = args.exit_with_stdin;
-    if args.studio_listen.is_some() && tls.is_some() {
-        bail!(
-            "--studio-listen with --tls-cert: the studio serves plain HTTP in this release, and \
-             would send the client token in the clear; serve it on 127.0.0.1 behind a TLS proxy, \
-             or run the coordinator without TLS on a trusted network"
-        );
-    }
     let endpoints =
         Endpoints { grpc: args.listen, metrics: args.metrics_listen, studio: args.studio_listen };
     runtime.block_on(serve(config, endpoints, tls, stop_signal(exit_with_stdin)))
@@ -174,7 +167,7 @@ pub(crate) async fn stopped(mut rx: tokio::sync::watch::Receiver<bool>) {
 pub async fn serve(
     config: Config,
     endpoints: Endpoints,
-    tls: Option<tonic::transport::Identity>,
+    tls: Option<crate::studio::TlsPem>,
     stop: impl Future<Output = ()> + Send + 'static,
 ) -> Result<()> {
     let listen = endpoints.grpc;
@@ -196,7 +189,8 @@ pub async fn serve(
             worker = tracing::field::Empty,
         )
     });
-    if let Some(identity) = tls {
+    if let Some(pem) = &tls {
+        let identity = tonic::transport::Identity::from_pem(&pem.cert, &pem.key);
         server = server
             .tls_config(tonic::transport::ServerTlsConfig::new().identity(identity))
             .context("configuring TLS")?;
@@ -218,7 +212,8 @@ pub async fn serve(
     let studio = match endpoints.studio {
         Some(at) => {
             let tokens = tokens.clone();
-            Some(crate::studio::serve(at, farm.clone(), tokens, stop_rx.clone()).await?)
+            let stop = stop_rx.clone();
+            Some(crate::studio::serve(at, farm.clone(), tokens, stop, tls.clone()).await?)
         }
         None => None,
     };
@@ -230,7 +225,8 @@ pub async fn serve(
             writeln!(out, "metrics on {at}")?;
         }
         if let Some((at, _)) = &studio {
-            writeln!(out, "studio on http://{at}/")?;
+            let scheme = if has_tls { "https" } else { "http" };
+            writeln!(out, "studio on {scheme}://{at}/")?;
         }
         out.flush()?;
     }

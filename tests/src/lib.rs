@@ -128,7 +128,11 @@ impl Coordinator {
         let studio = extra.contains(&"--studio-listen").then(|| {
             let mut line = String::new();
             stdout.read_line(&mut line).unwrap();
-            let url = line.trim().strip_prefix("studio on http://").expect("the studio's address");
+            let line = line.trim();
+            let url = line
+                .strip_prefix("studio on http://")
+                .or_else(|| line.strip_prefix("studio on https://"));
+            let url = url.expect("the studio's address");
             url.trim_end_matches('/').to_owned()
         });
         Coordinator { child, url, metrics, studio, dir: dir.to_owned() }

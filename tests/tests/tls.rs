@@ -86,6 +86,40 @@ fn a_render_travels_over_tls_and_an_untrusting_or_plaintext_client_is_refused() 
     assert!(text(&o).contains("use https://"), "{}", text(&o));
 }
 
+/// The studio beside a TLS coordinator is served over TLS with its certificate: a client that
+/// trusts the site's authority signs in and its session cookie is `Secure`; plain HTTP to that
+/// port is answered by no studio.
+#[test]
+fn the_studio_is_served_over_tls_with_the_coordinators_certificate() {
+    use restauro_tests::http::{request, request_tls};
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (ca, cert, key) = certificates(d);
+    let tls = ["--tls-cert", &cert, "--tls-key", &key, "--studio-listen", "127.0.0.1:0"];
+    let coordinator = Coordinator::start(d, &d.join("data"), "127.0.0.1:0", &tls);
+    let studio = coordinator.studio.clone().unwrap();
+    let port = studio.rsplit(':').next().unwrap();
+    let at = format!("localhost:{port}");
+    let ca = Path::new(&ca);
+    let token = format!("{{\"token\": \"{}\"}}", restauro_tests::CLIENT_TOKEN);
+    let origin = format!("https://{at}");
+    let headers = [("Origin", origin.as_str()), ("Content-Type", "application/json")];
+    let r = request_tls(&at, ca, "POST", "/api/session", &headers, token.as_bytes());
+    assert!(r.status < 300, "{} {}", r.status, r.text());
+    let cookie = r.header("set-cookie").unwrap().to_owned();
+    assert!(cookie.contains("; Secure") && cookie.contains("HttpOnly"), "{cookie}");
+    let session = cookie.split(';').next().unwrap().to_owned();
+    let me = request_tls(&at, ca, "GET", "/api/whoami", &[("Cookie", &session)], b"");
+    assert_eq!(me.status, 200, "{}", me.text());
+    assert_eq!(me.json()["role"], "client");
+    let page = request_tls(&at, ca, "GET", "/", &[], b"");
+    assert_eq!(page.status, 200);
+    assert!(page.text().contains("restauro studio"));
+    // Plain HTTP to the TLS port gets no page: the connection is closed or refused.
+    let plain = std::panic::catch_unwind(|| request(&studio, "GET", "/", &[], b""));
+    assert!(plain.map_or(true, |r| r.status != 200), "plain HTTP served the studio");
+}
+
 #[test]
 fn files_that_are_not_pem_are_refused_naming_the_file() {
     let dir = tempfile::tempdir().unwrap();

@@ -102,14 +102,41 @@ fn router(studio: Arc<Studio>) -> Router {
         .with_state(studio)
 }
 
-/// Binds `listen` (port 0 picks a free port) and serves the studio until `stop` turns true.
-/// Returns the bound address and the serving task.
+/// The coordinator's certificate chain and private key (PEM), to serve the studio over TLS.
+#[derive(Clone)]
+pub struct TlsPem {
+    pub cert: Vec<u8>,
+    pub key: Vec<u8>,
+}
+
+/// A TLS acceptor for `pem` (TLS 1.2 and 1.3, ring, as the gRPC door has).
+fn acceptor(pem: &TlsPem) -> Result<tokio_rustls::TlsAcceptor> {
+    use tokio_rustls::rustls::pki_types::pem::PemObject;
+    use tokio_rustls::rustls::pki_types::{CertificateDer, PrivateKeyDer};
+    let chain = CertificateDer::pem_slice_iter(&pem.cert)
+        .collect::<std::result::Result<Vec<_>, _>>()
+        .context("reading the TLS certificate chain")?;
+    let key = PrivateKeyDer::from_pem_slice(&pem.key).context("reading the TLS private key")?;
+    let provider = Arc::new(tokio_rustls::rustls::crypto::ring::default_provider());
+    let config = tokio_rustls::rustls::ServerConfig::builder_with_provider(provider)
+        .with_safe_default_protocol_versions()
+        .context("the TLS protocol versions")?
+        .with_no_client_auth()
+        .with_single_cert(chain, key)
+        .context("the TLS certificate and key do not go together")?;
+    Ok(tokio_rustls::TlsAcceptor::from(Arc::new(config)))
+}
+
+/// Binds `listen` (port 0 picks a free port) and serves the studio until `stop` turns true,
+/// over TLS when `tls` is given. Returns the bound address and the serving task.
 pub async fn serve(
     listen: SocketAddr,
     farm: Arc<Farm>,
     tokens: Tokens,
     stop: watch::Receiver<bool>,
+    tls: Option<TlsPem>,
 ) -> Result<(SocketAddr, JoinHandle<()>)> {
+    let acceptor = tls.as_ref().map(acceptor).transpose()?;
     let listener = TcpListener::bind(listen)
         .await
         .with_context(|| format!("listening for the studio on {listen}"))?;
@@ -117,18 +144,70 @@ pub async fn serve(
     let events = events::Events::new();
     let studio = Arc::new(Studio {
         farm: farm.clone(),
-        gate: session::Gate::new(tokens, false),
+        gate: session::Gate::new(tokens, acceptor.is_some()),
         events: events.clone(),
         previews: preview::Previews::default(),
         stop: stop.clone(),
     });
     tokio::spawn(events.pump(farm, stopped(stop.clone())));
     let app = router(studio);
-    info!(%addr, "studio on http://{addr}/");
-    let task = tokio::spawn(async move {
-        if let Err(e) = axum::serve(listener, app).with_graceful_shutdown(stopped(stop)).await {
-            warn!(error = %e, "the studio stopped");
+    let task = match acceptor {
+        None => {
+            info!(%addr, "studio on http://{addr}/");
+            tokio::spawn(async move {
+                let serving = axum::serve(listener, app).with_graceful_shutdown(stopped(stop));
+                if let Err(e) = serving.await {
+                    warn!(error = %e, "the studio stopped");
+                }
+            })
         }
-    });
+        Some(acceptor) => {
+            info!(%addr, "studio on https://{addr}/");
+            tokio::spawn(serve_tls(listener, acceptor, app, stop))
+        }
+    };
     Ok((addr, task))
+}
+
+/// Accepts TLS connections until `stop`, each served as HTTP/1.1 by the studio's router; a
+/// handshake that fails (a client that does not trust the certificate) closes that connection
+/// only.
+async fn serve_tls(
+    listener: TcpListener,
+    acceptor: tokio_rustls::TlsAcceptor,
+    app: Router,
+    stop: watch::Receiver<bool>,
+) {
+    let ended = stopped(stop);
+    tokio::pin!(ended);
+    loop {
+        let (tcp, peer) = tokio::select! {
+            () = &mut ended => return,
+            accepted = listener.accept() => match accepted {
+                Ok(a) => a,
+                Err(e) => {
+                    warn!(error = %e, "accepting a studio connection");
+                    tokio::time::sleep(std::time::Duration::from_millis(50)).await;
+                    continue;
+                }
+            },
+        };
+        let (acceptor, app) = (acceptor.clone(), app.clone());
+        tokio::spawn(async move {
+            let tls = match acceptor.accept(tcp).await {
+                Ok(tls) => tls,
+                Err(e) => {
+                    tracing::debug!(%peer, error = %e, "a studio TLS handshake failed");
+                    return;
+                }
+            };
+            let service = hyper_util::service::TowerToHyperService::new(app);
+            let io = hyper_util::rt::TokioIo::new(tls);
+            if let Err(e) =
+                hyper::server::conn::http1::Builder::new().serve_connection(io, service).await
+            {
+                tracing::debug!(%peer, error = %e, "a studio connection ended");
+            }
+        });
+    }
 }

@@ -110,6 +110,9 @@ pub enum CoordinatorError {
     #[error("no such page `{0}` in the studio")]
     NoSuchPage(String),
 
+    #[error("no image {0} is kept by this coordinator; attach it to the note again")]
+    NoSuchImage(String),
+
     #[error("internal error: {0}")]
     Internal(String),
 }
@@ -146,7 +149,7 @@ impl CoordinatorError {
             E::NotSignedIn => Code::Unauthenticated,
             E::CrossOrigin { .. } => Code::PermissionDenied,
             E::Request(_) => Code::InvalidArgument,
-            E::NoSuchPage(_) | E::NoSuchScene(_) => Code::NotFound,
+            E::NoSuchPage(_) | E::NoSuchScene(_) | E::NoSuchImage(_) => Code::NotFound,
         }
     }
 

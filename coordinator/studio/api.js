@@ -58,6 +58,11 @@ export const openFolder = (name, bytes, scene) => call('POST',
 // and colour.
 export const uploadSpectrum = (id, name, bytes) =>
   call('POST', `${sceneUrl(id)}/spectrum?name=${encodeURIComponent(name)}`, bytes);
+// An image (PNG or JPEG, an ArrayBuffer) for a note, checked and kept by the server: its
+// reference, and where the page shows it from.
+export const uploadImage = (id, name, bytes) =>
+  call('POST', `${sceneUrl(id)}/images?name=${encodeURIComponent(name)}`, bytes);
+export const imageUrl = (reference) => `/api/images/${encodeURIComponent(reference)}`;
 export const revert = (id, revision) => call('POST', `${sceneUrl(id)}/revert`, { revision });
 export const downloadUrl = (id, revision) => `${sceneUrl(id)}/download${at(revision)}`;
 export const revisions = (id) => call('GET', `${sceneUrl(id)}/revisions`);

@@ -336,6 +336,9 @@ document.addEventListener('DOMContentLoaded', () => {
   exposure.init(() => shown && show(shown));
   notes.init({
     edit: applyEdit,
+    error: showError,
+    upload: (name, bytes) => api.uploadImage(openScene, name, bytes),
+    url: api.imageUrl,
     fly: (n) => { if (n.pose && viewer) { viewer.fly(n.pose); walking(false); } },
     picked: () => picked,
     pose: () => {

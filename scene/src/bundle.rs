@@ -48,18 +48,8 @@ pub fn bundle_scene(path: &Path, limits: &Limits) -> Result<Bundle> {
         files.insert(hash, bytes);
         Ok(())
     };
-    for (name, s) in scene.spectra.iter_mut() {
-        if let SpectrumSource::File { file, .. } = s {
-            add(file, format!("spectra.{name}"))?;
-        }
-    }
-    for (i, o) in scene.objects.iter_mut().enumerate() {
-        add(&mut o.mesh, format!("objects[{i}].mesh"))?;
-    }
-    for (i, l) in scene.lights.iter_mut().enumerate() {
-        if let Light::Point { ies: Some(r), .. } | Light::Spot { ies: Some(r), .. } = l {
-            add(r, format!("lights[{i}].ies"))?;
-        }
+    for (place, reference) in Bundle::placed_references_mut(&mut scene) {
+        add(reference, place)?;
     }
     Ok(Bundle { scene, files })
 }
@@ -113,33 +103,35 @@ impl Bundle {
 
     /// Every file reference in the scene, to rewrite.
     pub fn references_mut(scene: &mut SceneFile) -> Vec<&mut String> {
-        let mut out = Vec::new();
-        for s in scene.spectra.values_mut() {
-            if let SpectrumSource::File { file, .. } = s {
-                out.push(file);
-            }
-        }
-        out.extend(scene.objects.iter_mut().map(|o| &mut o.mesh));
-        for l in &mut scene.lights {
-            if let Light::Point { ies: Some(r), .. } | Light::Spot { ies: Some(r), .. } = l {
-                out.push(r);
-            }
-        }
-        out
+        Self::placed_references_mut(scene).into_iter().map(|(_, r)| r).collect()
     }
 
     /// Every file reference in the scene.
     pub fn references(&self) -> Vec<String> {
+        let mut scene = self.scene.clone();
+        Self::references_mut(&mut scene).into_iter().map(|r| r.clone()).collect()
+    }
+
+    /// Every file reference in the scene, each with where the scene names it
+    /// (`objects[2].mesh`), in the scene's order.
+    pub fn placed_references_mut(scene: &mut SceneFile) -> Vec<(String, &mut String)> {
         let mut out = Vec::new();
-        for s in self.scene.spectra.values() {
+        for (name, s) in &mut scene.spectra {
             if let SpectrumSource::File { file, .. } = s {
-                out.push(file.clone());
+                out.push((format!("spectra.{name}"), file));
             }
         }
-        out.extend(self.scene.objects.iter().map(|o| o.mesh.clone()));
-        for l in &self.scene.lights {
+        for (i, o) in scene.objects.iter_mut().enumerate() {
+            out.push((format!("objects[{i}].mesh"), &mut o.mesh));
+        }
+        for (i, l) in scene.lights.iter_mut().enumerate() {
             if let Light::Point { ies: Some(r), .. } | Light::Spot { ies: Some(r), .. } = l {
-                out.push(r.clone());
+                out.push((format!("lights[{i}].ies"), r));
+            }
+        }
+        for (i, a) in scene.annotations.iter_mut().enumerate() {
+            for (k, image) in a.images.iter_mut().enumerate() {
+                out.push((format!("annotations[{i}].images[{k}]"), image));
             }
         }
         out

@@ -213,6 +213,12 @@ impl Edit {
                 Ok(format!("view `{name}` deleted"))
             }
             Edit::SaveAnnotation(SaveAnnotation { annotation }) => {
+                if let Some(k) = annotation.images.iter().position(|r| !r.starts_with("blake3:")) {
+                    return Err(refuse(
+                        &format!("annotation.images[{k}]"),
+                        "send the image to the studio first; give the reference it answers",
+                    ));
+                }
                 save(&mut scene.annotations, annotation, |a| &a.title);
                 Ok(format!("note `{}` saved", annotation.title))
             }

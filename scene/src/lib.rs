@@ -21,6 +21,7 @@ pub mod guard;
 pub mod job;
 pub mod limits;
 pub mod load;
+pub mod note_image;
 pub mod obj;
 pub mod photometric;
 pub mod plan;

@@ -718,6 +718,50 @@ fn check_annotations(ctx: &Ctx, file: &SceneFile, objects: &[LoadedObject]) -> R
             let pose = pose_camera(p.position, p.target, p.up, p.vertical_fov_deg);
             check_pose(ctx, &format!("{place}.pose"), &pose)?;
         }
+        check_note_images(ctx, &place, &a.images)?;
+    }
+    Ok(())
+}
+
+/// A note's images: at most [`note_image::MAX_PER_NOTE`], each a PNG or JPEG file that is what
+/// its name says.
+fn check_note_images(ctx: &Ctx, place: &str, images: &[String]) -> Result<()> {
+    use crate::note_image;
+    if images.len() > note_image::MAX_PER_NOTE {
+        return Err(ctx.invalid(
+            format!("{place}.images"),
+            format!(
+                "{} images; a note holds at most {}: link the rest as documents",
+                images.len(),
+                note_image::MAX_PER_NOTE
+            ),
+        ));
+    }
+    for (k, reference) in images.iter().enumerate() {
+        let place = format!("{place}.images[{k}]");
+        let kind = extension(reference);
+        if !note_image::EXTENSIONS.contains(&kind.as_str()) {
+            return Err(ctx.invalid(
+                place,
+                format!("`{reference}`: a note's image is a .png, .jpg or .jpeg file"),
+            ));
+        }
+        let bytes = ctx.assets.read(reference, &place)?;
+        let shown = ctx.assets.display_path(reference);
+        if bytes.len() > note_image::MAX_BYTES {
+            return Err(SceneError::invalid(
+                &shown,
+                place,
+                format!(
+                    "{} bytes; a note's image may have at most {}: send a smaller copy",
+                    bytes.len(),
+                    note_image::MAX_BYTES
+                ),
+            ));
+        }
+        if note_image::media_type(&kind, &bytes).is_none() {
+            return Err(SceneError::invalid(&shown, place, note_image::not_an_image(&kind)));
+        }
     }
     Ok(())
 }

@@ -103,6 +103,10 @@ pub struct Annotation {
     /// Documents about it: `https://` (or `http://`) addresses.
     #[serde(default)]
     pub links: Vec<String>,
+    /// Photographs and charts kept with it: PNG or JPEG files beside the scene file. Not
+    /// written when there are none, so a note keeps the identity it had before images existed.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub images: Vec<String>,
     /// Where to look at it from.
     #[serde(default)]
     pub pose: Option<Pose>,

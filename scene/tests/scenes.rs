@@ -733,3 +733,47 @@ fn annotations_are_checked_as_the_rest_of_the_scene() {
     let twice = format!("{good}\n[[annotations]]\ntitle = \"crack\"\nposition = [1.0, 0.0, 1.0]\n");
     assert!(refused(&f, &twice).contains("a second note titled `crack`"));
 }
+
+/// A note's images are files beside the scene, bundled with it, each the PNG or JPEG its name
+/// says: a script or a mesh renamed `.png` is refused, naming the file.
+#[test]
+fn a_notes_images_are_bundled_and_must_be_what_their_names_say() {
+    const PNG_START: &[u8] = b"\x89PNG\r\n\x1a\n\0\0\0\rIHDR\0\0\0\x01\0\0\0\x01\x08\x02\0\0\0";
+    let f = Folder::new();
+    f.write("meshes/wall.obj", QUAD_OBJ);
+    f.write("photos/crack.png", PNG_START);
+    f.write("photos/crack.jpg", b"\xff\xd8\xff\xe0\0\x10JFIF\0");
+    f.write("photos/fake.png", b"<svg onload=alert(1)>");
+    f.write("photos/chart.gif", b"GIF89a");
+    let note = |images: &str| {
+        scene_toml(
+            OBJ_OBJECT,
+            &format!(
+                "[[annotations]]\ntitle = \"crack\"\nposition = [0.0, 0.0, 1.0]\nimages = {images}\n"
+            ),
+        )
+    };
+    let good = note("[\"photos/crack.png\", \"photos/crack.jpg\"]");
+    let path = f.write("scene.toml", &good);
+    let bundle = bundle_scene(&path, &Limits::default()).unwrap();
+    let hash = blake3::hash(PNG_START).to_hex().to_string();
+    assert_eq!(bundle.scene.annotations[0].images[0], format!("blake3:{hash}.png"));
+    assert_eq!(bundle.files[&hash], PNG_START);
+    assert_eq!(bundle.files.len(), 3, "the mesh and two images");
+    bundle.load(&Limits::default()).unwrap();
+    for (images, words) in [
+        ("[\"photos/fake.png\"]", "photos/fake.png: annotations[0].images[0]: not a PNG file"),
+        (
+            "[\"photos/crack.png\", \"photos/chart.gif\"]",
+            "annotations[0].images[1]: `photos/chart.gif`: a note's image is a .png, .jpg or .jpeg file",
+        ),
+        ("[\"meshes/wall.obj\"]", "a note's image is a .png"),
+        ("[\"photos/missing.png\"]", "photos/missing.png"),
+    ] {
+        let message = refused(&f, &note(images));
+        assert!(message.contains(words), "{images}: {message}");
+    }
+    let many: Vec<String> = (0..33).map(|_| "\"photos/crack.png\"".to_owned()).collect();
+    let message = refused(&f, &note(&format!("[{}]", many.join(", "))));
+    assert!(message.contains("33 images; a note holds at most 32"), "{message}");
+}

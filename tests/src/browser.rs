@@ -324,3 +324,16 @@ pub fn png_rgb(bytes: &[u8]) -> (Vec<[u8; 3]>, usize) {
     let rgb = data[..pixels * channels].chunks(channels).map(|p| [p[0], p[1], p[2]]).collect();
     (rgb, info.width as usize)
 }
+
+/// A PNG of `width` × `height` pixels all of the colour `rgb` (8-bit sRGB): a photograph to
+/// attach to a note, whose colour a test can look for in the page.
+pub fn solid_png(width: u32, height: u32, rgb: [u8; 3]) -> Vec<u8> {
+    let mut out = Vec::new();
+    let mut encoder = png::Encoder::new(&mut out, width, height);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    let mut writer = encoder.write_header().unwrap();
+    writer.write_image_data(&rgb.repeat((width * height) as usize)).unwrap();
+    writer.finish().unwrap();
+    out
+}

@@ -64,6 +64,8 @@ fn every_route_needs_the_client_token_and_refuses_in_the_servers_words() {
         ("GET", "/api/sun-path".to_owned()),
         ("POST", format!("/api/scenes/{}/photometry?name=a.ies", "0".repeat(64))),
         ("POST", format!("/api/scenes/{}/spectrum?name=a.csv", "0".repeat(64))),
+        ("POST", format!("/api/scenes/{}/images?name=a.png", "0".repeat(64))),
+        ("GET", format!("/api/images/blake3:{}.png", "0".repeat(64))),
         ("GET", format!("/api/jobs/{id}/painting.png")),
         ("GET", format!("/api/jobs/{id}/display.png")),
         ("GET", format!("/api/jobs/{id}/luminance")),
@@ -876,6 +878,93 @@ fn measured_spectra_sent_as_csv_are_read_as_scene_files_read_them() {
     let l = stone["states"][0]["lab"][0].as_f64().unwrap();
     // CIE 1976: L* = 116 · 0.25^(1/3) − 16.
     assert!((l - (116.0 * 0.25f64.cbrt() - 16.0)).abs() < 1e-3, "L* {l}");
+}
+
+/// Images sent for a note are checked to be the PNG or JPEG their names say, kept, named in the
+/// note, served back under their own media type (and nothing else the coordinator holds is),
+/// and travel with the scene's download, which reads back as the same scene.
+#[test]
+fn images_kept_with_notes_are_checked_served_and_downloaded() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (_c, s, id) = studio_with_scene(d);
+    let auth = [("Authorization", BEARER)];
+    let send = |name: &str, body: &[u8]| {
+        request(&s, "POST", &format!("/api/scenes/{id}/images?name={name}"), &auth, body)
+    };
+    let photo = restauro_tests::browser::solid_png(8, 6, [200, 40, 30]);
+    for (name, body, words) in [
+        ("a.gif", photo.clone(), "ending in .png or .jpg or .jpeg"),
+        ("a.jpg", photo.clone(), "a.jpg: not a JPEG file"),
+        ("a.png", b"<svg onload=alert(1)>".to_vec(), "a.png: not a PNG file"),
+        ("big.png", vec![0; (16 << 20) + 1], "at most 16777216 bytes"),
+    ] {
+        let r = send(name, &body);
+        assert_eq!(r.status, 400, "{name}: {}", r.text());
+        assert!(error_of(&r).contains(words), "{name}: {}", error_of(&r));
+    }
+    let r = send("crack%202024.png", &photo);
+    assert_eq!(r.status, 200, "{}", r.text());
+    let reference = r.json()["reference"].as_str().unwrap().to_owned();
+    assert_eq!(reference, format!("blake3:{}.png", blake3_hex(&photo)));
+    let r = get(&s, &format!("/api/images/{reference}"), &auth);
+    assert_eq!((r.status, r.header("content-type")), (200, Some("image/png")));
+    assert_eq!(r.header("x-content-type-options"), Some("nosniff"));
+    assert!(r.header("content-security-policy").unwrap().contains("sandbox"));
+    assert_eq!(r.body, photo);
+
+    // Only images: the scene's mesh asked for as a `.png` is not served, nor a hash not held.
+    let manifest = get(&s, &format!("/api/scenes/{id}/scene.json"), &auth).json();
+    let mesh = manifest["objects"][0]["mesh"].as_str().unwrap().to_owned();
+    let disguised = mesh.replace(".obj", ".png");
+    for path in [
+        format!("/api/images/{mesh}"),
+        format!("/api/images/{disguised}"),
+        format!("/api/images/blake3:{}.png", "0".repeat(64)),
+    ] {
+        let r = get(&s, &path, &auth);
+        assert_eq!(r.status, 404, "{path}: {}", r.text());
+        assert!(error_of(&r).contains("no image"), "{path}: {}", error_of(&r));
+    }
+
+    let note = |images: serde_json::Value| {
+        let body = serde_json::json!({"edit": "save-annotation", "annotation": {
+            "title": "crack", "position": [0.0, 1.0, 0.0], "images": images}});
+        request(&s, "POST", &format!("/api/scenes/{id}/edits"), &auth, body.to_string().as_bytes())
+    };
+    for (images, words) in [
+        (serde_json::json!(["photos/crack.png"]), "send the image to the studio first"),
+        (serde_json::json!([disguised]), "annotations[0].images[0]: not a PNG file"),
+        (serde_json::json!([mesh]), "a note's image is a .png, .jpg or .jpeg file"),
+        (serde_json::json!([format!("blake3:{}.png", "0".repeat(64))]), "has not been uploaded"),
+    ] {
+        let r = note(images.clone());
+        assert!([400, 409].contains(&r.status), "{images}: {}", r.text());
+        assert!(error_of(&r).contains(words), "{images}: {}", error_of(&r));
+    }
+    let r = note(serde_json::json!([reference]));
+    assert_eq!(r.status, 200, "{}", r.text());
+    assert_eq!(r.json()["annotations"][0]["images"], serde_json::json!([reference]));
+
+    // The download holds the image, and reads back as the very scene the studio holds.
+    let r = get(&s, &format!("/api/scenes/{id}/download"), &auth);
+    assert_eq!(r.status, 200);
+    let mut archive = tar::Archive::new(std::io::Cursor::new(&r.body));
+    let image_entry = archive
+        .entries()
+        .unwrap()
+        .map(|e| e.unwrap().path().unwrap().to_string_lossy().into_owned())
+        .find(|n| n.ends_with(".png"));
+    assert!(image_entry.is_some_and(|n| n.contains("/files/")), "no image in the download");
+    let limits = restauro_scene::load::Limits::default();
+    let bundle = restauro_scene::folder::bundle_folder_tar(&r.body, None, &limits).unwrap();
+    let latest = get(&s, &format!("/api/scenes/{id}/scene.json"), &auth).json();
+    let read_back: serde_json::Value = serde_json::from_str(&bundle.canonical_json()).unwrap();
+    assert_eq!(read_back, latest);
+}
+
+fn blake3_hex(bytes: &[u8]) -> String {
+    blake3::hash(bytes).to_hex().to_string()
 }
 
 /// A tar of the folder `dir` (its entries under `top/`).

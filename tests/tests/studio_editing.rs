@@ -311,7 +311,8 @@ fn a_restorer_swaps_a_stone_sets_the_sun_and_keeps_a_view() {
 
 /// A note pinned to the facade in the page is kept with the scene: its pin is drawn where it
 /// was clicked, a link that is not a web address is refused in the server's words, and after
-/// the coordinator restarts the note is listed and opens with its text, its link and its view.
+/// the coordinator restarts the note is listed and opens with its text, its link, the
+/// photograph attached to it (its pixels as sent) and its view.
 #[test]
 fn a_note_pinned_to_the_facade_survives_a_restart() {
     if !available("studio_editing") {
@@ -329,6 +330,10 @@ fn a_note_pinned_to_the_facade_survives_a_restart() {
     set_value(&mut b, "note-new-title", "crack above the third arch");
     set_value(&mut b, "note-new-text", "Opened 2 mm since the 2019 survey.");
     set_value(&mut b, "note-new-links", "javascript:alert(1)");
+    let photo_rgb = [30u8, 90, 200];
+    let photo = d.join("arch-3.png");
+    std::fs::write(&photo, restauro_tests::browser::solid_png(40, 30, photo_rgb)).unwrap();
+    b.choose_file("#note-new-images", &photo.canonicalize().unwrap());
     b.click("#note-save");
     b.wait_for("the refusal", "!document.getElementById('problem').hidden");
     let problem = b.eval("document.getElementById('problem').textContent");
@@ -367,6 +372,22 @@ fn a_note_pinned_to_the_facade_survives_a_restart() {
     );
     assert_eq!(b.eval("document.querySelector('#note-links a').href"), link);
     assert_eq!(b.eval("document.querySelector('#note-links a').rel"), "noopener noreferrer");
+    b.wait_for(
+        "the photograph",
+        "(() => { const i = document.querySelector('#note-images img'); return i && i.complete && i.naturalWidth > 0; })()",
+    );
+    let shown = b.eval(
+        "(() => { const i = document.querySelector('#note-images img'); const c = document.createElement('canvas'); \
+         c.width = i.naturalWidth; c.height = i.naturalHeight; const x = c.getContext('2d'); x.drawImage(i, 0, 0); \
+         return [i.naturalWidth, i.naturalHeight, ...[...x.getImageData(20, 15, 1, 1).data].slice(0, 3), i.alt]; })()",
+    );
+    assert_eq!(
+        &shown.as_array().unwrap()[..5],
+        &serde_json::json!([40, 30, photo_rgb[0], photo_rgb[1], photo_rgb[2]]).as_array().unwrap()
+            [..],
+        "{shown}"
+    );
+    assert!(shown[5].as_str().unwrap().contains("crack above the third arch"), "{shown}");
     assert!(
         b.eval("document.getElementById('note-part').textContent")
             .as_str()
@@ -379,6 +400,26 @@ fn a_note_pinned_to_the_facade_survives_a_restart() {
         "flown to the note's view"
     );
     b.screenshot(&shots().join("17-note-after-restart.png"));
+
+    // A second photograph added to the open note, then the first removed: the note keeps the
+    // second, and its view.
+    let second = d.join("arch-3-detail.png");
+    std::fs::write(&second, restauro_tests::browser::solid_png(12, 10, [240, 200, 20])).unwrap();
+    b.choose_file("#note-add-images", &second.canonicalize().unwrap());
+    b.wait_for("revision 2", "document.getElementById('view').dataset.revision === '2'");
+    let count = "document.querySelectorAll('#note-images img').length";
+    assert_eq!(b.eval(count), 2);
+    b.click("#note-images figure button");
+    b.wait_for("revision 3", "document.getElementById('view').dataset.revision === '3'");
+    assert_eq!(b.eval(count), 1);
+    b.wait_for(
+        "the second photograph",
+        "(() => { const i = document.querySelector('#note-images img'); return i.complete && i.naturalWidth === 12; })()",
+    );
+    assert_eq!(
+        b.eval("document.getElementById('note-text').textContent"),
+        "Opened 2 mm since the 2019 survey."
+    );
 }
 
 /// The linear RGB, over the 21 × 21 pixels of `after`, of the pixels that were within 2 % of

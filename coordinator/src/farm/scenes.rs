@@ -373,6 +373,11 @@ pub fn sent_file(
 }
 
 impl Farm {
+    /// The bytes of the asset with BLAKE3 `hash` (hex), when the coordinator holds it intact.
+    pub fn read_asset(&self, hash: &str) -> Result<Option<Vec<u8>>> {
+        self.assets.read(hash)
+    }
+
     /// Keeps `bytes` (a file the studio was sent, already read as its kind) among the assets:
     /// its reference in a scene, `blake3:<hash>.<extension>`.
     pub fn keep_file(&self, file_name: &str, bytes: &[u8], extension: &str) -> Result<String> {

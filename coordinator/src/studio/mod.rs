@@ -9,6 +9,7 @@ pub mod compare;
 pub mod display;
 pub mod edits;
 pub mod events;
+pub mod note_images;
 pub mod page;
 pub mod painting;
 pub mod preview;
@@ -50,8 +51,11 @@ async fn signed_in(State(studio): State<Arc<Studio>>, request: Request, next: Ne
         return e.into_response();
     }
     let mut response = next.run(request).await;
-    // Answers about live state are never cached.
-    response.headers_mut().insert(header::CACHE_CONTROL, HeaderValue::from_static("no-store"));
+    // Answers about live state are never cached (a content-addressed image says otherwise).
+    response
+        .headers_mut()
+        .entry(header::CACHE_CONTROL)
+        .or_insert(HeaderValue::from_static("no-store"));
     response
 }
 
@@ -81,6 +85,12 @@ fn router(studio: Arc<Studio>) -> Router {
         .route("/api/scenes/{id}/revert", post(edits::revert))
         .route("/api/scenes/{id}/photometry", post(edits::photometry))
         .route("/api/scenes/{id}/spectrum", post(edits::spectrum))
+        .route(
+            "/api/scenes/{id}/images",
+            post(note_images::upload)
+                .layer(axum::extract::DefaultBodyLimit::max(restauro_scene::note_image::MAX_BYTES)),
+        )
+        .route("/api/images/{reference}", get(note_images::image))
         .route("/api/scenes/{id}/revisions", get(edits::revisions))
         .route("/api/scenes/{id}/scene.json", get(edits::manifest))
         .route("/api/scenes/{id}/download", get(edits::download))

@@ -1,9 +1,11 @@
 // The material panel: what the clicked surface is (object, part, material) and what it is made
 // of: each state's reflectance spectrum 380–780 nm, plotted, with its colour and L*a*b* under
-// D65 as restauro computes them; and the controls that change it: another shipped spectrum for
+// the light the preview colours under, as restauro computes them; and the controls that change it: another shipped spectrum for
 // a state (searched, each candidate plotted beside the current ones), the reflection model and
 // its roughness. Each change is sent as an edit; the panel is then drawn again from the scene's
 // new revision, as the server keeps it.
+
+import * as colours from './colours.js';
 
 const NS = 'http://www.w3.org/2000/svg';
 const FIRST_NM = 380;
@@ -98,7 +100,7 @@ function editor(m, library, onEdit, upload) {
   let sent = null;
   const candidate = () => sent || library.find((s) => s.name === $('spectrum').value);
   const propose = (c) => {
-    $('candidate').textContent = `${c.name}: L* ${c.lab[0].toFixed(1)}, a* ${c.lab[1].toFixed(1)}, b* ${c.lab[2].toFixed(1)}` +
+    $('candidate').textContent = `${c.name}, under D65: L* ${c.lab[0].toFixed(1)}, a* ${c.lab[1].toFixed(1)}, b* ${c.lab[2].toFixed(1)}` +
       (c.notes && c.notes.length ? ` (${c.notes.join('; ')})` : '');
     const plotted = form.parentElement.querySelector('svg.spectrum');
     if (plotted) plotted.replaceWith(plot([...m.states, { ...c, state: 'candidate' }]));
@@ -159,16 +161,20 @@ export function show(panel, picked, view, library, onEdit, upload) {
   const states = document.createElement('table');
   states.className = 'states';
   states.innerHTML = '<thead><tr><th scope="col">State</th><th scope="col">Spectrum</th>' +
-    '<th scope="col">Colour (D65)</th><th scope="col">L*</th><th scope="col">a*</th><th scope="col">b*</th></tr></thead>';
+    '<th scope="col">Colour</th><th scope="col">L*</th><th scope="col">a*</th><th scope="col">b*</th></tr></thead>';
+  const caption = document.createElement('caption');
+  caption.textContent = `Under ${colours.name()} (2° observer; L*a*b* against that light's white)`;
+  states.prepend(caption);
   const tbody = document.createElement('tbody');
   for (const s of m.states) {
     const tr = document.createElement('tr');
     tr.dataset.state = s.state;
     const swatch = document.createElement('span');
     swatch.className = 'swatch';
-    swatch.style.background = css(s.colour_linear_srgb);
-    swatch.setAttribute('aria-label', `colour of ${s.spectrum}`);
-    const cells = [s.state, s.spectrum, swatch, ...s.lab.map((v) => v.toFixed(1))];
+    const seen = colours.look(s);
+    swatch.style.background = css(seen.colour_linear_srgb);
+    swatch.setAttribute('aria-label', `colour of ${s.spectrum} under ${colours.name()}`);
+    const cells = [s.state, s.spectrum, swatch, ...seen.lab.map((v) => v.toFixed(1))];
     for (const c of cells) {
       const td = document.createElement('td');
       td.append(c);

@@ -7,6 +7,7 @@ import * as material from './material.js';
 import * as light from './light.js';
 import * as compare from './compare.js';
 import * as notes from './notes.js';
+import * as colours from './colours.js';
 import * as exposure from './exposure.js';
 import * as variants from './variants.js';
 import * as painting from './painting.js';
@@ -100,7 +101,8 @@ async function open(id, revision) {
 async function present(view) {
   viewer.update(view);
   variants.show(view);
-  viewer.colour(variants.chosen());
+  colours.show(view);
+  viewer.colour(variants.chosen(), colours.look);
   const views = $('view-picker');
   views.replaceChildren(new Option("the scene's camera", ''), ...view.views.map((v) => new Option(v.name, v.name)));
   const list = await api.revisions(openScene);
@@ -334,6 +336,7 @@ document.addEventListener('DOMContentLoaded', () => {
     changed: (v) => { if (viewer && viewer.view) { viewer.colour(v); showMaterial(); } },
   });
   exposure.init(() => shown && show(shown));
+  colours.init(() => { if (viewer && viewer.view) { viewer.colour(undefined, colours.look); showMaterial(); } });
   notes.init({
     edit: applyEdit,
     error: showError,

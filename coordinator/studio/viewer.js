@@ -169,10 +169,11 @@ export class Viewer {
   }
 
   // Each part in the colour of its material in the state `variant` gives it (a `VariantView`;
-  // null: every part in its base state). A material without that state keeps its base, as in
-  // the render.
-  colour(variant = this.variant) {
+  // null: every part in its base state), under the light `look` picks (a state's colour under
+  // the light chosen). A material without that state keeps its base, as in the render.
+  colour(variant = this.variant, look = this.look || ((s) => s)) {
     this.variant = variant;
+    this.look = look;
     const materials = new Map(this.view.materials.map((m) => [m.name, m]));
     this.model.traverse((o) => {
       if (!o.isMesh) return;
@@ -181,7 +182,7 @@ export class Viewer {
       if (!m) return;
       const state = variant ? variant.parts[`${extras.object}/${extras.part}`] : 'base';
       const s = m.states.find((x) => x.state === state);
-      o.material.color.setRGB(...(s ? s.colour_linear_srgb : m.colour_linear_srgb));
+      o.material.color.setRGB(...(s ? look(s).colour_linear_srgb : m.colour_linear_srgb));
     });
     this.draw();
   }

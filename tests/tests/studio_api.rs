@@ -813,6 +813,23 @@ fn lights_and_photometric_files_are_checked_as_the_scene_file_is() {
         "{}",
         r.text()
     );
+
+    // Lit by a tungsten lamp alone (CIE A), the preview colours under the lamp's light: its
+    // white the one CIE 15:2004 Table T.3's chromaticity of A, (0.44757, 0.40745), gives in
+    // linear sRGB, the brightest channel at 1.
+    let lamp = serde_json::json!({"kind": "point", "position": [0.0, -5.0, 3.0], "intensity_cd": 500.0, "spectrum": "cie:A"});
+    assert_eq!(edit(serde_json::json!({"edit": "save-light", "light": lamp})).status, 200);
+    edit(serde_json::json!({"edit": "delete-light", "index": 1}));
+    let r = edit(serde_json::json!({"edit": "delete-light", "index": 0}));
+    assert_eq!(r.status, 200, "{}", r.text());
+    let lights = r.json()["preview_lights"].clone();
+    assert_eq!(lights[0]["key"], "scene", "{lights}");
+    assert!(lights[0]["label"].as_str().unwrap().contains("luminaires (cie_A)"), "{lights}");
+    let a = published_white(0.44757, 0.40745);
+    for k in 0..3 {
+        let got = lights[0]["white_linear_srgb"][k].as_f64().unwrap();
+        assert!((got - a[k]).abs() < 5e-3, "{lights}");
+    }
 }
 
 /// A measured reflectance sent as CSV: read as `[spectra]` files are (refusals name the file and
@@ -878,6 +895,76 @@ fn measured_spectra_sent_as_csv_are_read_as_scene_files_read_them() {
     let l = stone["states"][0]["lab"][0].as_f64().unwrap();
     // CIE 1976: L* = 116 · 0.25^(1/3) − 16.
     assert!((l - (116.0 * 0.25f64.cbrt() - 16.0)).abs() < 1e-3, "L* {l}");
+}
+
+/// The white of a light of chromaticity (x, y) in linear sRGB (IEC 61966-2-1's matrix), scaled
+/// so that its brightest channel is 1, as the studio shows whites.
+fn published_white(x: f64, y: f64) -> [f64; 3] {
+    let xyz = [x / y, 1.0, (1.0 - x - y) / y];
+    let m = [[3.2406, -1.5372, -0.4986], [-0.9689, 1.8758, 0.0415], [0.0557, -0.2040, 1.0570]];
+    let rgb: [f64; 3] = std::array::from_fn(|r| (0..3).map(|k| m[r][k] * xyz[k]).sum());
+    let top = rgb.iter().copied().fold(0.0, f64::max);
+    rgb.map(|v| v / top)
+}
+
+/// The preview colours each spectrum under the scene's own light, each of its light spectra
+/// alone, or D65: the whites are the published chromaticities' in sRGB, and the scene's
+/// daylight is its sun and sky in proportion to what each gives the ground.
+#[test]
+fn the_preview_colours_each_spectrum_under_the_scenes_own_light() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (_c, s, id) = studio_with_scene(d);
+    let auth = [("Authorization", BEARER)];
+    let view = get(&s, &format!("/api/scenes/{id}"), &auth).json();
+    let lights = view["preview_lights"].as_array().unwrap();
+    let keys: Vec<&str> = lights.iter().map(|l| l["key"].as_str().unwrap()).collect();
+    assert_eq!(keys, ["scene", "spectrum:sunlight", "spectrum:skylight", "cie:D65"], "{lights:?}");
+    let white = |key: &str| -> Vec<f64> {
+        let l = lights.iter().find(|l| l["key"] == key).unwrap();
+        serde_json::from_value(l["white_linear_srgb"].clone()).unwrap()
+    };
+    // sRGB's white is D65's (IEC 61966-2-1). The sun here is D55, whose chromaticity CIE
+    // 15:2004 Table T.3 gives as (0.33242, 0.34743): its white in linear sRGB, the brightest
+    // channel at 1.
+    let d55 = published_white(0.33242, 0.34743);
+    for (key, want) in [("cie:D65", vec![1.0; 3]), ("spectrum:sunlight", d55.to_vec())] {
+        let got = white(key);
+        for k in 0..3 {
+            assert!((got[k] - want[k]).abs() < 5e-3, "{key}: {got:?}, want {want:?}");
+        }
+    }
+    // The ground's daylight: the sun's illuminance on the horizontal (normal illuminance by the
+    // sine of its elevation) and the sky's, so each state's XYZ under it is the two lights'
+    // XYZs (each relative to its own white) weighted by those illuminances.
+    let sun = &view["sun"];
+    let e_sun = sun["illuminance_lux"].as_f64().unwrap()
+        * sun["elevation_deg"].as_f64().unwrap().to_radians().sin();
+    let sky =
+        view["lights"].as_array().unwrap().iter().find(|l| l["light"]["kind"] == "sky").unwrap();
+    let e_sky = sky["illuminance_lux"].as_f64().unwrap();
+    assert!(e_sun > 1000.0 && e_sky > 1000.0, "{e_sun} {e_sky}");
+    let mut states = 0;
+    for m in view["materials"].as_array().unwrap() {
+        for st in m["states"].as_array().unwrap() {
+            let xyz = |key: &str| -> Vec<f64> {
+                serde_json::from_value(st["under"][key]["xyz"].clone()).unwrap()
+            };
+            let (mix, a, b) = (xyz("scene"), xyz("spectrum:sunlight"), xyz("spectrum:skylight"));
+            for k in 0..3 {
+                let want = (e_sun * a[k] + e_sky * b[k]) / (e_sun + e_sky);
+                assert!(
+                    (mix[k] - want).abs() < 1e-3 * want.max(1.0),
+                    "{}: {mix:?} vs {want}",
+                    m["name"]
+                );
+            }
+            // Under D65 the state looks as its own colour and L*a*b* say.
+            assert_eq!(st["under"]["cie:D65"]["lab"], st["lab"], "{}", m["name"]);
+            states += 1;
+        }
+    }
+    assert!(states >= 4, "{states} states");
 }
 
 /// Images sent for a note are checked to be the PNG or JPEG their names say, kept, named in the

@@ -115,12 +115,18 @@ fn a_restorer_signs_in_follows_a_render_and_sees_its_image() {
     assert_eq!(fact("Object").as_deref(), Some("facade"), "{facts}");
     let stone = fact("Material").unwrap();
     assert!(["travertine", "puddinga", "mortar"].contains(&stone.as_str()), "{facts}");
-    // Its base state's L*a*b* is the one `restauro color` gives for the spectrum the scene
-    // binds it to.
+    // Its base state's L*a*b* under the sky's light alone (CIE daylight at 12 000 K in this
+    // scene) is the one `restauro color` gives for the spectrum the scene binds it to.
     let toml: toml::Table = toml::from_str(&std::fs::read_to_string(&scene).unwrap()).unwrap();
     let alias = toml["materials"][stone.as_str()]["reflectance"].as_str().unwrap().to_owned();
     let library = toml["spectra"][alias.as_str()].as_str().unwrap().to_owned();
-    let o = restauro_tests::restauro(&["color", &library, "--json"]);
+    b.eval(
+        "(() => { const e = document.getElementById('preview-light'); e.value = 'spectrum:skylight'; \
+         e.dispatchEvent(new Event('change')); })()",
+    );
+    let caption = b.eval("document.querySelector('#material table.states caption').textContent");
+    assert!(caption.as_str().unwrap().starts_with("Under skylight (the sky alone)"), "{caption}");
+    let o = restauro_tests::restauro(&["color", &library, "-i", "daylight:12000", "--json"]);
     let color: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let row = b.eval("[...document.querySelector('#material tr[data-state=base]').cells].map(c => c.textContent)");
     assert_eq!(row[1], alias.as_str(), "{row}");

@@ -65,6 +65,20 @@ fn restauro_colour(spectrum: &str) -> ([f64; 3], [f64; 3]) {
     (rgb, lab)
 }
 
+/// The material panel shows `lab` (what `restauro color` gives under `light`) for the base
+/// state, to the 0.1 it prints.
+fn base_lab_is(b: &mut Browser, lab: [f64; 3], light: &str) {
+    let row = b.eval("[...document.querySelector('#material tr[data-state=base]').cells].map(c => c.textContent)");
+    for k in 0..3 {
+        let shown: f64 = row[3 + k].as_str().unwrap().parse().unwrap();
+        assert!(
+            (shown - lab[k]).abs() <= 0.051,
+            "L*a*b*[{k}] under {light}: shown {shown}, restauro color {}",
+            lab[k]
+        );
+    }
+}
+
 fn set_value(b: &mut Browser, id: &str, value: &str) {
     b.eval(&format!(
         "(() => {{ const e = document.getElementById('{id}'); e.value = {value:?}; \
@@ -119,6 +133,13 @@ fn a_restorer_swaps_a_stone_sets_the_sun_and_keeps_a_view() {
     let (scene, token) = (farm.scene.clone(), farm.token.clone());
     b.wait_for("the sun's path", "document.querySelector('#sun-chart svg polyline')");
 
+    // The page colours under the scene's own daylight first; D65 here, as `restauro color`'s.
+    let lights = b.eval("[...document.getElementById('preview-light').options].map(o => o.value)");
+    assert_eq!(
+        lights,
+        serde_json::json!(["scene", "spectrum:sunlight", "spectrum:skylight", "cie:D65"])
+    );
+    set_value(&mut b, "preview-light", "cie:D65");
     // Click the facade; the material panel opens with the controls that change it.
     b.click("#view");
     b.wait_for("the material editor", "document.getElementById('material-search')");
@@ -148,16 +169,8 @@ fn a_restorer_swaps_a_stone_sets_the_sun_and_keeps_a_view() {
         "the panel redrawn",
         &format!("document.querySelector('#material tr[data-state=base]').cells[1].textContent === '{brick}'"),
     );
-    let row = b.eval("[...document.querySelector('#material tr[data-state=base]').cells].map(c => c.textContent)");
     let (brick_rgb, brick_lab) = restauro_colour(brick);
-    for k in 0..3 {
-        let shown: f64 = row[3 + k].as_str().unwrap().parse().unwrap();
-        assert!(
-            (shown - brick_lab[k]).abs() <= 0.051,
-            "L*a*b*[{k}]: shown {shown}, restauro color {}",
-            brick_lab[k]
-        );
-    }
+    base_lab_is(&mut b, brick_lab, "D65");
     // The real-time view shades the stone with its new colour under the same light: each
     // channel of the clicked surface scales as the colours restauro computes do.
     let after = around_pick(&mut b, "12-edit-after.png");
@@ -173,6 +186,44 @@ fn a_restorer_swaps_a_stone_sets_the_sun_and_keeps_a_view() {
         );
     }
     assert!(seen[0] / seen[2] > 1.5, "the stone turned red: {seen:?}");
+
+    // Coloured under the sun's light alone (D55): the panel gives `restauro color -i D55`'s
+    // L*a*b*, and the view's stone changes from D65 as restauro's colours under the two lights
+    // do (each light's white scaled to a brightest channel of 1, as the page shows whites).
+    let d55 = |spectrum: &str| {
+        let o = restauro_tests::restauro(&[
+            "color", spectrum, "-i", "D55", "--adapt", "none", "--json",
+        ]);
+        let c: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let rgb: [f64; 3] = std::array::from_fn(|k| c["sample"]["rgb_linear"][k].as_f64().unwrap());
+        (rgb, ["l", "a", "b"].map(|k| c["sample"]["lab"][k].as_f64().unwrap()))
+    };
+    let white_csv = d.join("white.csv");
+    std::fs::write(
+        &white_csv,
+        (380..=780).step_by(5).map(|nm| format!("{nm},1\n")).collect::<String>(),
+    )
+    .unwrap();
+    let (white, _) = d55(white_csv.to_str().unwrap());
+    let top = white.iter().copied().fold(1.0, f64::max);
+    let (brick_d55, brick_d55_lab) = d55(brick);
+    set_value(&mut b, "preview-light", "spectrum:sunlight");
+    b.wait_for(
+        "the panel under the sun",
+        "document.querySelector('#material table.states caption').textContent.includes('sunlight')",
+    );
+    base_lab_is(&mut b, brick_d55_lab, "D55");
+    let under_sun = around_pick(&mut b, "12b-under-the-sun.png");
+    let seen = scaled(&after, &under_sun);
+    for k in 0..3 {
+        let expected = brick_d55[k] / top / brick_rgb[k];
+        assert!(
+            (seen[k] / expected - 1.0).abs() < 0.05,
+            "channel {k}: D65 to D55 scaled the view by {:.3}, the spectra say {expected:.3}",
+            seen[k]
+        );
+    }
+    set_value(&mut b, "preview-light", "cie:D65");
 
     // A snapshot of revision 1 from the scene's camera: changed from the render of revision 0
     // as the spectra say, and bit for bit what the command line renders of the revision downloaded as a folder.
@@ -466,11 +517,13 @@ fn a_restorer_builds_a_hypothesis_part_by_part() {
          v.fly({ position: from.toArray(), target: p.toArray(), up: [0, 1, 0], vertical_fov_deg: 40 }); })()",
     );
     let before = around_pick(&mut b, "31-hypothesis-before.png");
-    // The colours restauro gives the clicked material's states, from the scene's view.
+    // The colours restauro gives the clicked material's states under the light the preview
+    // colours under (the scene's own), from the scene's view.
     let state_rgb = |b: &mut Browser, state: &str| -> [f64; 3] {
         let rgb = b.eval(&format!(
             "(() => {{ const m = window.studioViewer.view.materials.find(m => m.name === '{material}'); \
-             return (m.states.find(s => s.state === '{state}') || m.states[0]).colour_linear_srgb; }})()"
+             const s = m.states.find(s => s.state === '{state}') || m.states[0]; \
+             return s.under[document.getElementById('preview-light').value].colour_linear_srgb; }})()"
         ));
         std::array::from_fn(|k| rgb[k].as_f64().unwrap())
     };
@@ -724,7 +777,7 @@ fn a_restorer_assigns_a_measured_spectrum_from_a_csv_file() {
     b.choose_file("#material-csv", &grey);
     b.wait_for(
         "the candidate",
-        "document.getElementById('material-candidate').textContent.startsWith('grey-card.csv: L* 76.1, a* 0.0, b* 0.0')",
+        "document.getElementById('material-candidate').textContent.startsWith('grey-card.csv, under D65: L* 76.1, a* 0.0, b* 0.0')",
     );
     assert!(b.eval("document.querySelector('#material polyline.state-candidate')").is_object());
     b.click("#material-assign");

@@ -8,7 +8,8 @@
 
 use super::Studio;
 use super::api::{parse, revision, scene_id};
-use super::preview::{appearance, to_world};
+use super::appearance::appearance;
+use super::preview::to_world;
 use crate::error::{CoordinatorError, Result};
 use crate::farm::RevisionInfo;
 use axum::Json;

@@ -5,6 +5,7 @@
 //! but signing in needs the client token or a session made from it ([`session`]).
 
 pub mod api;
+pub mod appearance;
 pub mod compare;
 pub mod display;
 pub mod edits;

@@ -33,6 +33,7 @@ const FILES: &[(&str, &str, &str)] = &[
     script!("painting.js"),
     script!("luminaires.js"),
     script!("upload.js"),
+    script!("colours.js"),
     script!("vendor/three/three.module.js"),
     script!("vendor/three/three.core.js"),
     script!("vendor/three/addons/controls/OrbitControls.js"),
@@ -72,4 +73,23 @@ pub async fn file(Path(name): Path<String>) -> Result<Response, CoordinatorError
         .find(|(path, _, _)| *path == name)
         .map(|(_, kind, text)| page(kind, text))
         .ok_or_else(|| CoordinatorError::NoSuchPage(format!("/static/{}", name.escape_debug())))
+}
+
+#[cfg(test)]
+mod tests {
+    /// Every module of the page's own folder is embedded (a new file left out of [`FILES`]
+    /// would load in no browser).
+    #[test]
+    fn every_file_of_the_page_is_embedded() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("studio");
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let name = entry.unwrap().file_name().into_string().unwrap();
+            if name.ends_with(".js") || name.ends_with(".css") {
+                assert!(
+                    super::FILES.iter().any(|(path, _, _)| *path == name),
+                    "{name} is not embedded"
+                );
+            }
+        }
+    }
 }

@@ -1,17 +1,12 @@
 //! What the page draws in real time: a scene's geometry as GLB ([`gltf_export`]), each
-//! material coloured as restauro computes it from its reflectance spectrum (under CIE D65,
-//! 2° observer, as linear sRGB: CIE 15:2004 Eqs. 7.1–7.3, IEC 61966-2-1), and the scene's
-//! camera, in the GLB's coordinates. Kept for the few scenes opened last, by bundle identity.
+//! material coloured as restauro computes it from its reflectance spectrum under each of the
+//! scene's lights and D65 ([`appearance`]), and the scene's camera, in the GLB's coordinates. Kept for the few scenes opened last, by bundle identity.
 
+use super::appearance::{self, appearance};
 use crate::error::Result;
 use crate::farm::Farm;
 use restauro_scene::gltf_export::{self, Preview};
 use restauro_scene::load::LoadedScene;
-use restauro_spectral::Lab;
-use restauro_spectral::Spectrum;
-use restauro_spectral::colorimetry::{Observer, relative_xyz, white_point};
-use restauro_spectral::illuminant::Illuminant;
-use restauro_spectral::rgb_space::RgbSpace;
 use serde::Serialize;
 use std::sync::{Arc, Mutex};
 
@@ -41,29 +36,30 @@ pub struct StateView {
     /// CIE 1976 L*a*b* under D65 (2° observer), D65 white.
     pub lab: [f64; 3],
     pub colour_linear_srgb: [f32; 3],
+    /// Its L*a*b* and colour under each light of [`SceneView::preview_lights`], by key.
+    pub under: std::collections::BTreeMap<String, appearance::Look>,
 }
 
 /// The wavelengths of `StateView::reflectance`, in nm.
 pub const FIRST_NM: f64 = 380.0;
 pub const STEP_NM: f64 = 5.0;
 
-/// How a reflectance looks under D65 (2° observer): its L*a*b* and its linear-sRGB colour.
-pub fn appearance(rho: &Spectrum) -> ([f64; 3], [f32; 3]) {
-    let d65 = Illuminant::D65.spd().unwrap_or(Spectrum::ONE);
-    let xyz = relative_xyz(rho, &d65, Observer::Cie1931TwoDegree);
-    let lab = Lab::from_xyz(xyz, white_point(&d65, Observer::Cie1931TwoDegree));
-    ([lab.l, lab.a, lab.b], colour(xyz))
-}
-
-fn state_view(state: &'static str, spectrum: &str, scene: &LoadedScene) -> Option<StateView> {
+fn state_view(
+    state: &'static str,
+    spectrum: &str,
+    scene: &LoadedScene,
+    lights: &[appearance::Light],
+) -> Option<StateView> {
     let rho = scene.spectra.get(spectrum)?;
     let (lab, colour_linear_srgb) = appearance(rho);
+    let under = appearance::Light::looks(rho, lights);
     Some(StateView {
         state,
         spectrum: spectrum.to_owned(),
         reflectance: rho.0.to_vec(),
         lab,
         colour_linear_srgb,
+        under,
     })
 }
 
@@ -280,6 +276,8 @@ pub struct SceneView {
     /// Every light of the file, in its order.
     pub lights: Vec<LightView>,
     pub light_spectra: Vec<String>,
+    /// The lights the page may colour the materials under, the scene's own first.
+    pub preview_lights: Vec<appearance::LightChoice>,
     pub notes: Vec<String>,
 }
 
@@ -324,10 +322,6 @@ pub struct ScenePreview {
 
 /// The linear-sRGB colour of relative tristimulus values (Y = 100 for white), clipped to the
 /// gamut.
-fn colour(xyz: restauro_spectral::Xyz) -> [f32; 3] {
-    RgbSpace::Srgb.linear_from_xyz(xyz.scale(0.01)).map(|v| v.clamp(0.0, 1.0) as f32)
-}
-
 /// World (Z up) to the GLB's frame (Y up), relative to `offset`.
 fn to_glb(p: [f64; 3], offset: [f64; 3]) -> [f64; 3] {
     let [x, y, z] = std::array::from_fn(|k| p[k] - offset[k]);
@@ -348,6 +342,7 @@ fn state_spectrum<'a>(
 }
 
 fn build(id: &str, revision: u32, scene: &LoadedScene) -> ScenePreview {
+    let lights = appearance::scene_lights(scene);
     let materials: Vec<MaterialView> = scene
         .file
         .materials
@@ -359,7 +354,7 @@ fn build(id: &str, revision: u32, scene: &LoadedScene) -> ScenePreview {
                 ("cleaned", state_spectrum(m, "cleaned")),
             ]
             .into_iter()
-            .filter_map(|(state, spectrum)| state_view(state, spectrum?, scene))
+            .filter_map(|(state, spectrum)| state_view(state, spectrum?, scene, &lights))
             .collect();
             MaterialView {
                 name: name.clone(),
@@ -425,6 +420,7 @@ fn build(id: &str, revision: u32, scene: &LoadedScene) -> ScenePreview {
         sun: sun_view(scene),
         lights: light_views(scene, offset_m),
         light_spectra: light_spectra(scene),
+        preview_lights: lights.iter().map(appearance::Light::choice).collect(),
         offset_m,
         triangles,
         camera,

@@ -87,7 +87,8 @@ async function open(id, revision) {
     await present(view);
     $('snap-width').value = view.camera.width;
     $('snap-height').value = view.camera.height;
-    $('scene-status').textContent = `${view.triangles.toLocaleString('en')} triangles, ` +
+    const moving = view.coarse_triangles ? ` (${view.coarse_triangles.toLocaleString('en')} while moving)` : '';
+    $('scene-status').textContent = `${view.triangles.toLocaleString('en')} triangles${moving}, ` +
       `${view.materials.length} materials`;
     $('view').dataset.scene = id;
   } catch (e) {

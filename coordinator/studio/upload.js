@@ -1,6 +1,7 @@
 // A scene folder sent to the coordinator: the folder a person picks (its files with their
-// paths in it) is packed here into one POSIX tar (IEEE 1003.1 ustar) and posted; or a tar made
-// elsewhere (the studio's own download, `restauro scene bundle --out`) is posted as it is. The
+// paths in it) is packed here into one POSIX tar (IEEE 1003.1 ustar) and posted; or a tar or zip
+// made elsewhere (the studio's own download, `restauro scene bundle --out`, a file manager's
+// "compress") is posted as it is. The
 // server bundles and checks it as the command line does and renders a quick preview of it; the
 // page then opens it.
 
@@ -68,7 +69,7 @@ async function send(name, bytes, scene) {
 }
 
 // A job name from a file or folder name: letters, digits, `-` and `_`.
-const stem = (name) => (name.replace(/\.tar$/i, '').replace(/[^A-Za-z0-9_-]+/g, '-').replace(/^-+|-+$/g, '') || 'scene');
+const stem = (name) => (name.replace(/\.(tar|zip)$/i, '').replace(/[^A-Za-z0-9_-]+/g, '-').replace(/^-+|-+$/g, '') || 'scene');
 
 async function folderChosen() {
   const files = [...$('upload-folder').files];

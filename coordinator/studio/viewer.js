@@ -107,6 +107,11 @@ export class Viewer {
   // Drawing a view in motion (true) or a still one (false): the resolution to draw at.
   moving(on) {
     const ratio = on ? this.movingRatio : this.stillRatio;
+    if (this.coarse && this.coarse.children.length > 0 && this.model.visible === on) {
+      this.model.visible = !on;
+      this.coarse.visible = on;
+      this.draw();
+    }
     if (this.renderer.getPixelRatio() === ratio) return;
     this.renderer.setPixelRatio(ratio);
     this.resize();
@@ -129,16 +134,22 @@ export class Viewer {
   // Opens the scene `view` (from /api/scenes/{id}); resolves when its model is drawn.
   async open(view, glbUrl) {
     const gltf = await new GLTFLoader().loadAsync(glbUrl);
-    if (this.model) this.scene.remove(this.model);
+    if (this.model) this.scene.remove(this.model, this.coarse);
     this.model = gltf.scene;
-    this.scene.add(this.model);
+    // A big model comes with a coarser copy (extras.restauro_coarse) drawn instead of it while
+    // the view moves; it is kept apart, so that clicks and the walker meet the model itself.
+    this.coarse = new THREE.Group();
+    this.coarse.visible = false;
+    for (const node of [...this.model.children]) {
+      if (node.userData.restauro_coarse) this.coarse.add(node);
+    }
+    this.scene.add(this.model, this.coarse);
     // A Lambert material is drawn as one (no highlight), so that its pixels scale with its
     // colour as restauro's matte surfaces do; Cook–Torrance keeps glTF's rough metal-free PBR.
     // Each part gets its own material: a hypothesis may put two parts of one material in
     // different states.
     const lambert = new Set(view.materials.filter((m) => m.model === 'lambert').map((m) => m.name));
-    this.model.traverse((o) => {
-      if (!o.isMesh) return;
+    this.meshes((o) => {
       o.castShadow = true;
       o.receiveShadow = true;
       if (lambert.has(o.material.name)) {
@@ -148,6 +159,8 @@ export class Viewer {
         o.material = o.material.clone();
       }
     });
+    // The sun's shadows are cast by the model itself (the shadow map is drawn while still).
+    this.coarse.traverse((o) => { o.castShadow = false; });
     const box = new THREE.Box3().setFromObject(this.model);
     this.bounds = box;
     const size = box.getSize(new THREE.Vector3()).length();
@@ -156,6 +169,13 @@ export class Viewer {
     this.update(view);
     this.home();
     return gltf;
+  }
+
+  // Calls `f` with every mesh of the model and of its coarse copy.
+  meshes(f) {
+    for (const root of [this.model, this.coarse]) {
+      root.traverse((o) => { if (o.isMesh) f(o); });
+    }
   }
 
   // A new revision of the open scene (same geometry): its materials' colours and its sun.
@@ -175,8 +195,7 @@ export class Viewer {
     this.variant = variant;
     this.look = look;
     const materials = new Map(this.view.materials.map((m) => [m.name, m]));
-    this.model.traverse((o) => {
-      if (!o.isMesh) return;
+    this.meshes((o) => {
       const extras = o.geometry.userData || {};
       const m = materials.get(extras.material ?? o.material.name);
       if (!m) return;

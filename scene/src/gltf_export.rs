@@ -8,8 +8,14 @@
 //! the centre of the scene's bounds is subtracted and kept, as `offset_m`, in the file's
 //! `asset.extras.restauro` and in [`Preview`]. glTF is Y-up (§3.4): world (x, y, z), Z up, is
 //! written (x, z, −y).
+//!
+//! A model of more than twice [`vertex_clustering::TARGET_TRIANGLES`] triangles carries a
+//! coarser copy for drawing while the view moves: one more node per object, marked
+//! `extras.restauro_coarse`, whose primitives index the same vertices (see
+//! [`vertex_clustering`]).
 
 use crate::load::LoadedScene;
+use crate::vertex_clustering;
 use serde_json::{Value, json};
 
 /// The GLB and what the page needs to place it.
@@ -18,6 +24,8 @@ pub struct Preview {
     /// World coordinates (Z up, metres) of the GLB's origin.
     pub offset_m: [f64; 3],
     pub triangles: usize,
+    /// The triangles of the coarse copy drawn while moving (0: none, the model is drawn whole).
+    pub coarse_triangles: usize,
 }
 
 /// World (Z up) to glTF (Y up), relative to `offset`.
@@ -125,6 +133,8 @@ pub fn scene_glb(scene: &LoadedScene, colour: impl Fn(&str) -> [f32; 3]) -> Prev
         .collect();
     let mut w = Writer::default();
     let (mut meshes, mut nodes, mut triangles) = (Vec::new(), Vec::new(), 0);
+    let cell_m = vertex_clustering::cell_size_m(scene, vertex_clustering::TARGET_TRIANGLES);
+    let (mut coarse_nodes, mut coarse_triangles) = (Vec::new(), 0);
     for o in &scene.objects {
         let positions: Vec<[f32; 3]> =
             o.mesh.positions.iter().map(|&p| to_gltf(p, offset)).collect();
@@ -133,7 +143,9 @@ pub fn scene_glb(scene: &LoadedScene, colour: impl Fn(&str) -> [f32; 3]) -> Prev
             let turned: Vec<[f32; 3]> = n.iter().map(|v| [v[0], v[2], -v[1]]).collect();
             w.vec3s(&turned, false)
         });
-        let mut primitives = Vec::new();
+        let representative =
+            cell_m.map(|c| vertex_clustering::representatives(&o.mesh.positions, c));
+        let (mut primitives, mut coarse) = (Vec::new(), Vec::new());
         for (g, group) in o.mesh.groups.iter().enumerate() {
             if o.hidden_groups[g] {
                 continue;
@@ -156,14 +168,35 @@ pub fn scene_glb(scene: &LoadedScene, colour: impl Fn(&str) -> [f32; 3]) -> Prev
             if let Some(normal) = normal {
                 attributes["NORMAL"] = json!(normal);
             }
+            let extras =
+                json!({ "object": o.name, "part": group.name, "material": o.group_materials[g] });
+            if let Some(r) = &representative {
+                let fewer = vertex_clustering::coarse_indices(&tris, r);
+                if !fewer.is_empty() {
+                    coarse_triangles += fewer.len() / 3;
+                    let indices = w.indices(&fewer);
+                    coarse.push(json!({
+                        "attributes": attributes.clone(), "indices": indices, "material": material,
+                        "extras": extras.clone()
+                    }));
+                }
+            }
             primitives.push(json!({
                 "attributes": attributes, "indices": indices, "material": material,
-                "extras": { "object": o.name, "part": group.name, "material": o.group_materials[g] }
+                "extras": extras
             }));
         }
         meshes.push(json!({ "name": o.name, "primitives": primitives }));
         nodes.push(json!({ "name": o.name, "mesh": meshes.len() - 1 }));
+        if !coarse.is_empty() {
+            meshes.push(json!({ "name": format!("{} (coarse)", o.name), "primitives": coarse }));
+            coarse_nodes.push(json!({
+                "name": format!("{} (coarse)", o.name), "mesh": meshes.len() - 1,
+                "extras": { "restauro_coarse": true }
+            }));
+        }
     }
+    nodes.extend(coarse_nodes);
     while !w.bin.len().is_multiple_of(4) {
         w.bin.push(0);
     }
@@ -182,7 +215,7 @@ pub fn scene_glb(scene: &LoadedScene, colour: impl Fn(&str) -> [f32; 3]) -> Prev
         "bufferViews": w.views,
         "buffers": [{ "byteLength": w.bin.len() }],
     });
-    Preview { glb: glb(&document, &w.bin), offset_m: offset, triangles }
+    Preview { glb: glb(&document, &w.bin), offset_m: offset, triangles, coarse_triangles }
 }
 
 /// The GLB container (§4.4): a 12-byte header, the JSON chunk padded with spaces, the binary

@@ -30,4 +30,5 @@ mod ply_layout;
 pub mod samples;
 pub mod scene_file;
 pub mod upright;
+pub mod vertex_clustering;
 pub mod vrml;

@@ -676,6 +676,77 @@ fn the_preview_glb_holds_the_scene_as_it_is_in_the_world() {
     assert_eq!(by_name.get("glaze"), Some(&Some([0.1, 0.2, 0.3])), "{by_name:?}");
 }
 
+/// A model of more than 200 000 triangles carries a coarse copy for the view in motion: one
+/// more node per object, marked, about 100 000 triangles that index the model's own vertices
+/// (no second vertex buffer); a small model carries none.
+#[test]
+fn a_big_preview_carries_a_coarse_copy_on_the_same_vertices() {
+    let n = 330; // 2 × 330² = 217 800 triangles over 33 m × 33 m, and one joint.
+    let mut obj = String::new();
+    for y in 0..=n {
+        for x in 0..=n {
+            obj += &format!(
+                "v {} {} {}\n",
+                f64::from(x) * 0.1,
+                f64::from(y) * 0.1,
+                (f64::from(x) * 0.3).sin()
+            );
+        }
+    }
+    obj += "usemtl stone\n";
+    let at = |x: u32, y: u32| y * (n + 1) + x + 1;
+    for y in 0..n {
+        for x in 0..n {
+            obj += &format!(
+                "f {} {} {}\nf {} {} {}\n",
+                at(x, y),
+                at(x + 1, y),
+                at(x + 1, y + 1),
+                at(x, y),
+                at(x + 1, y + 1),
+                at(x, y + 1)
+            );
+        }
+    }
+    obj += "usemtl joint\nf 1 2 3\n";
+    let folder = Folder::new();
+    folder.write("meshes/wall.obj", obj);
+    let scene = load(&folder, &scene_toml(OBJ_OBJECT, "")).unwrap();
+    let preview = restauro_scene::gltf_export::scene_glb(&scene, |_| [0.5; 3]);
+    assert_eq!(preview.triangles, 2 * 330 * 330 + 1);
+    assert!((50_000..=150_000).contains(&preview.coarse_triangles), "{}", preview.coarse_triangles);
+    // The GLB's JSON chunk (§4.4.3): the coarse node's primitives use the model's positions.
+    let length = u32::from_le_bytes(preview.glb[12..16].try_into().unwrap()) as usize;
+    let doc: serde_json::Value = serde_json::from_slice(&preview.glb[20..20 + length]).unwrap();
+    let nodes = doc["nodes"].as_array().unwrap();
+    assert_eq!(nodes.len(), 2, "{nodes:?}");
+    assert_eq!(nodes[1]["extras"]["restauro_coarse"], true);
+    let primitives = |node: &serde_json::Value| {
+        doc["meshes"][node["mesh"].as_u64().unwrap() as usize]["primitives"].clone()
+    };
+    let (full, coarse) = (primitives(&nodes[0]), primitives(&nodes[1]));
+    assert_eq!(coarse[0]["attributes"], full[0]["attributes"]);
+    assert_eq!(coarse[0]["extras"], full[0]["extras"]);
+    let count: u64 = coarse
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| {
+            doc["accessors"][p["indices"].as_u64().unwrap() as usize]["count"].as_u64().unwrap()
+        })
+        .sum();
+    assert_eq!(count, 3 * preview.coarse_triangles as u64);
+
+    let small = load(&folder_with_quad(), &scene_toml(OBJ_OBJECT, "")).unwrap();
+    assert_eq!(restauro_scene::gltf_export::scene_glb(&small, |_| [0.5; 3]).coarse_triangles, 0);
+}
+
+fn folder_with_quad() -> Folder {
+    let f = Folder::new();
+    f.write("meshes/wall.obj", QUAD_OBJ);
+    f
+}
+
 /// A bundle written out as a folder reads back as the same bundle: the same canonical scene,
 /// the same identity, the same files.
 #[test]
@@ -776,4 +847,66 @@ fn a_notes_images_are_bundled_and_must_be_what_their_names_say() {
     let many: Vec<String> = (0..33).map(|_| "\"photos/crack.png\"".to_owned()).collect();
     let message = refused(&f, &note(&format!("[{}]", many.join(", "))));
     assert!(message.contains("33 images; a note holds at most 32"), "{message}");
+}
+
+/// `entries` as a zip, each deflated.
+fn zip_of(entries: &[(&str, &[u8])]) -> Vec<u8> {
+    use std::io::Write;
+    let mut w = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+    let options = zip::write::SimpleFileOptions::default()
+        .compression_method(zip::CompressionMethod::Deflated);
+    for (name, bytes) in entries {
+        w.start_file(*name, options).unwrap();
+        w.write_all(bytes).unwrap();
+    }
+    w.finish().unwrap().into_inner()
+}
+
+/// A scene folder sent as a zip (as a file manager packs one) bundles as the folder on disk
+/// does; a path out of the folder, a file over the size limit and a damaged zip are refused,
+/// naming what is wrong.
+#[test]
+fn a_scene_folder_sent_as_a_zip_bundles_as_the_folder_does() {
+    use restauro_scene::folder::bundle_folder_archive;
+    let toml = scene_toml(OBJ_OBJECT, "");
+    let f = Folder::new();
+    f.write("meshes/wall.obj", QUAD_OBJ);
+    let on_disk = bundle_scene(&f.write("scene.toml", &toml), &Limits::default()).unwrap();
+    let zipped = zip_of(&[
+        ("facade/scene.toml", toml.as_bytes()),
+        ("facade/meshes/wall.obj", QUAD_OBJ.as_bytes()),
+    ]);
+    let sent = bundle_folder_archive(&zipped, None, &Limits::default()).unwrap();
+    assert_eq!(sent.id(), on_disk.id());
+
+    let small = Limits { max_file_bytes: 4096, ..Limits::default() };
+    let zeros = vec![0u8; 10_000];
+    for (entries, limits, words) in [
+        (
+            vec![("../scene.toml", toml.as_bytes())],
+            Limits::default(),
+            "`../scene.toml` is not a path inside the folder",
+        ),
+        (
+            vec![("/etc/scene.toml", toml.as_bytes())],
+            Limits::default(),
+            "is not a path inside the folder",
+        ),
+        (
+            vec![("scene.toml", toml.as_bytes()), ("meshes/wall.obj", &zeros[..])],
+            small,
+            "`meshes/wall.obj` is more than 4096 bytes",
+        ),
+        (vec![("meshes/wall.obj", QUAD_OBJ.as_bytes())], Limits::default(), "it has no scene file"),
+    ] {
+        let message =
+            bundle_folder_archive(&zip_of(&entries), None, &limits).unwrap_err().to_string();
+        assert!(message.contains(words), "{message}");
+        assert!(message.starts_with("the folder sent"), "{message}");
+    }
+    let mut damaged = zipped.clone();
+    damaged.truncate(zipped.len() / 2);
+    let message =
+        bundle_folder_archive(&damaged, None, &Limits::default()).unwrap_err().to_string();
+    assert!(message.contains("not a readable zip archive"), "{message}");
 }

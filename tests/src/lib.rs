@@ -6,6 +6,7 @@
 
 pub mod browser;
 pub mod http;
+pub mod relief;
 pub mod wire;
 
 use std::io::{BufRead, BufReader};

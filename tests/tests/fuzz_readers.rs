@@ -1,6 +1,7 @@
 //! A fuzz harness for every reader of outside input, on stable Rust inside `cargo test`: the
 //! scene TOML (through the scene loader, on a folder), OBJ, PLY (ASCII and binary), glTF and
-//! GLB, VRML97, IES LM-63, EULUMDAT, spectrum CSV and OpenEXR.
+//! GLB, VRML97, IES LM-63, EULUMDAT, spectrum CSV, OpenEXR, and bundle archives and scene
+//! folders sent as a zip.
 //!
 //! Each input is a valid seed file (generated here, or read from `data/` and the scene crate's
 //! photometric fixtures) changed by a few seeded, deterministic mutations: bit flips,
@@ -24,7 +25,7 @@
 //! keeps the input under `$TMPDIR/restauro-fuzz-failures/`; `RESTAURO_FUZZ_ONLY=<reader>:<n>`
 //! runs that one input again (with the same `RESTAURO_FUZZ_SEED`).
 //!
-//! The quick run (`cargo test`) tries 300 inputs per reader, 3300 in all (and the seeds and
+//! The quick run (`cargo test`) tries 300 inputs per reader, 3600 in all (and the seeds and
 //! kept findings unmutated), in about 4 s with the test profile. A longer run is one command
 //! away; the test profile keeps overflow checks, which find more (330 000 inputs take about six
 //! minutes on one core), and `--release` runs faster:
@@ -551,6 +552,27 @@ fn archive_seeds(dir: &Path) -> Vec<(String, Vec<u8>)> {
     vec![("aosta.tar".into(), std::fs::read(&path).unwrap())]
 }
 
+/// The Aosta folder as a file manager zips it, its entries deflated, and stored.
+fn zip_seeds() -> Vec<(String, Vec<u8>)> {
+    use std::io::Write;
+    let aosta = restauro_scene::aosta::generate(16, 9, 1);
+    [zip::CompressionMethod::Deflated, zip::CompressionMethod::Stored]
+        .into_iter()
+        .map(|method| {
+            let mut w = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+            let options = zip::write::SimpleFileOptions::default().compression_method(method);
+            for (name, text) in [
+                ("aosta/aosta.toml", &aosta.scene_toml),
+                ("aosta/meshes/facade.obj", &aosta.facade_obj),
+            ] {
+                w.start_file(name, options).unwrap();
+                w.write_all(text.as_bytes()).unwrap();
+            }
+            (format!("aosta-{method:?}.zip"), w.finish().unwrap().into_inner())
+        })
+        .collect()
+}
+
 fn exr_seeds(dir: &Path) -> Vec<(String, Vec<u8>)> {
     let mut out = Vec::new();
     let path = dir.join("spectral.exr");
@@ -828,6 +850,23 @@ fn readers() -> Vec<Reader> {
             names_file: names_own_file,
         },
         Reader {
+            name: "folder-zip",
+            file: "input.zip",
+            seeds: zip_seeds(),
+            bench: Bench::new(&[]),
+            run: |folder| {
+                let bytes = std::fs::read(folder.join("input.zip")).unwrap();
+                let limits = Limits::default();
+                let bundle = restauro_scene::folder::bundle_folder_archive(&bytes, None, &limits)
+                    .map_err(|e| e.to_string())?;
+                bundle.load(&limits).map(|_| ()).map_err(|e| e.to_string())
+            },
+            // The zip's own refusals name the upload; the scene's, the file in it.
+            names_file: |_, message| {
+                message.starts_with("the folder sent") || message.contains("aosta/")
+            },
+        },
+        Reader {
             name: "exr",
             file: "input.exr",
             seeds: exr,
@@ -919,7 +958,7 @@ fn try_input(
 
 #[test]
 fn every_reader_survives_mutated_input() {
-    let total = env_number("RESTAURO_FUZZ_INPUTS", 3300);
+    let total = env_number("RESTAURO_FUZZ_INPUTS", 3600);
     let base = env_number("RESTAURO_FUZZ_SEED", 0);
     let timeout = Duration::from_secs(env_number("RESTAURO_FUZZ_TIMEOUT_S", 20));
     let only = std::env::var("RESTAURO_FUZZ_ONLY").ok();

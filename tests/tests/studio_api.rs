@@ -1044,7 +1044,7 @@ fn images_kept_with_notes_are_checked_served_and_downloaded() {
         .find(|n| n.ends_with(".png"));
     assert!(image_entry.is_some_and(|n| n.contains("/files/")), "no image in the download");
     let limits = restauro_scene::load::Limits::default();
-    let bundle = restauro_scene::folder::bundle_folder_tar(&r.body, None, &limits).unwrap();
+    let bundle = restauro_scene::folder::bundle_folder_archive(&r.body, None, &limits).unwrap();
     let latest = get(&s, &format!("/api/scenes/{id}/scene.json"), &auth).json();
     let read_back: serde_json::Value = serde_json::from_str(&bundle.canonical_json()).unwrap();
     assert_eq!(read_back, latest);
@@ -1052,6 +1052,28 @@ fn images_kept_with_notes_are_checked_served_and_downloaded() {
 
 fn blake3_hex(bytes: &[u8]) -> String {
     blake3::hash(bytes).to_hex().to_string()
+}
+
+/// A zip of the folder `dir` (its files under `top/`, deflated).
+fn folder_zip(dir: &std::path::Path, top: &str) -> Vec<u8> {
+    use std::io::Write;
+    let mut w = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+    let options = zip::write::SimpleFileOptions::default()
+        .compression_method(zip::CompressionMethod::Deflated);
+    let mut pending = vec![dir.to_owned()];
+    while let Some(at) = pending.pop() {
+        for entry in std::fs::read_dir(&at).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                pending.push(path);
+                continue;
+            }
+            let relative = path.strip_prefix(dir).unwrap().to_string_lossy().into_owned();
+            w.start_file(format!("{top}/{relative}"), options).unwrap();
+            w.write_all(&std::fs::read(&path).unwrap()).unwrap();
+        }
+    }
+    w.finish().unwrap().into_inner()
 }
 
 /// A tar of the folder `dir` (its entries under `top/`).
@@ -1081,7 +1103,7 @@ fn raw_tar(entries: &[(&str, &[u8])]) -> Vec<u8> {
 /// scene bundle` bundles it, the same identity), with a preview job; a bundle archive too; and
 /// what is not a scene folder is refused in words that name the problem.
 #[test]
-fn a_scene_folder_sent_as_a_tar_opens_as_a_scene() {
+fn a_scene_folder_sent_as_a_tar_or_a_zip_opens_as_a_scene() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let (c, _) = Coordinator::with_studio(d);
@@ -1113,6 +1135,13 @@ fn a_scene_folder_sent_as_a_tar_opens_as_a_scene() {
     assert!(o.status.success(), "{}", text(&o));
     let r = send("aosta-archive", &std::fs::read(&archive).unwrap());
     assert_eq!((r.status, r.json()["scene"].as_str()), (200, Some(id.as_str())), "{}", r.text());
+    // Zipped, as a file manager packs a folder: the same scene.
+    let zipped = folder_zip(&folder, "aosta");
+    let r = send("aosta-zip&scene=aosta/aosta.toml", &zipped);
+    assert_eq!((r.status, r.json()["scene"].as_str()), (200, Some(id.as_str())), "{}", r.text());
+    let r = send("aosta-zip", &zipped[..zipped.len() / 2]);
+    assert_eq!(r.status, 400, "{}", r.text());
+    assert!(error_of(&r).contains("not a readable zip archive"), "{}", error_of(&r));
 
     let toml = std::fs::read(&scene).unwrap();
     for (name, body, words) in [

@@ -497,3 +497,70 @@ fn a_scene_folder_is_opened_from_the_page() {
     assert_eq!(read[0], ("overcast/scene.toml".to_owned(), b"format = 1\n".to_vec()));
     assert_eq!(read[1], (long, vec![7u8; 1000]));
 }
+
+/// The view's canvas, drawn now, shrunk to 64 × 36 pixels (RGB).
+fn view_pixels(b: &mut Browser) -> Vec<[u8; 3]> {
+    let read = b.eval(
+        "(() => { const v = window.studioViewer; v.draw(); \
+         const t = document.createElement('canvas'); t.width = 64; t.height = 36; \
+         const g = t.getContext('2d'); g.drawImage(v.canvas, 0, 0, 64, 36); \
+         return Array.from(g.getImageData(0, 0, 64, 36).data); })()",
+    );
+    let bytes: Vec<u8> = serde_json::from_value(read).unwrap();
+    bytes.chunks_exact(4).map(|p| [p[0], p[1], p[2]]).collect()
+}
+
+/// A model of more than 200 000 triangles is drawn from its coarse copy while a drag moves the
+/// view, and from itself again when the drag ends; the two look alike (the same surface, a few
+/// grey levels apart on average), and a click still finds the surface.
+#[test]
+fn a_big_model_is_drawn_coarse_while_the_view_moves() {
+    if !available("studio_browser") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // 330 × 330 quads: 217 800 triangles.
+    let (_c, page, _worker) = restauro_tests::relief::relief_studio(d, 330, 330);
+    let mut b = Browser::launch(1280, 720);
+    b.goto(&format!("{page}#token={CLIENT_TOKEN}"));
+    b.wait_for("the model", "document.getElementById('view').dataset.revision === '0'");
+    let status = b.eval("document.getElementById('scene-status').textContent");
+    assert!(status.as_str().unwrap().contains("217,800 triangles ("), "{status}");
+    assert!(status.as_str().unwrap().contains("while moving)"), "{status}");
+    b.eval("document.getElementById('view').scrollIntoView({ block: 'center' })");
+    let still = view_pixels(&mut b);
+    let relief = still.iter().filter(|p| !is_background(**p)).count();
+    assert!(relief > still.len() / 10, "the relief covers {relief} of {} pixels", still.len());
+
+    // A drag: pressed, moved a little, and held.
+    let [x, y, w, h] = b.rect("#view");
+    let (x, y) = (x + w / 2.0, y + h / 2.0);
+    let mouse = |b: &mut Browser, kind: &str, dx: f64| {
+        b.call(
+            "Input.dispatchMouseEvent",
+            serde_json::json!({ "type": kind, "x": x + dx, "y": y, "button": "left", "buttons": 1, "clickCount": 1 }),
+        );
+    };
+    mouse(&mut b, "mousePressed", 0.0);
+    mouse(&mut b, "mouseMoved", 1.0);
+    let shown = "[window.studioViewer.model.visible, window.studioViewer.coarse.visible]";
+    assert_eq!(b.eval(shown), serde_json::json!([false, true]), "the coarse copy while dragging");
+    let moving = view_pixels(&mut b);
+    b.screenshot(&shots().join("40-big-model-moving.png"));
+    mouse(&mut b, "mouseReleased", 1.0);
+    assert_eq!(b.eval(shown), serde_json::json!([true, false]), "the model itself when still");
+    let differing: f64 = still
+        .iter()
+        .zip(&moving)
+        .map(|(a, b)| (0..3).map(|k| f64::from(a[k].abs_diff(b[k]))).sum::<f64>() / 3.0)
+        .sum::<f64>()
+        / still.len() as f64;
+    assert!(
+        differing < 12.0,
+        "the coarse copy differs from the model by {differing:.1} grey levels a pixel"
+    );
+    // A click still finds the surface under it.
+    b.click("#view");
+    b.wait_for("the surface clicked", "!document.getElementById('material').hidden");
+}

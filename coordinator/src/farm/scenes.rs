@@ -394,7 +394,7 @@ impl Farm {
 pub const MAX_FOLDER_BYTES: usize = 512 << 20;
 
 impl Farm {
-    /// Takes a scene folder sent as one tar (or a bundle archive): bundled and checked as the
+    /// Takes a scene folder sent as one tar or zip (or a bundle archive): bundled and checked as the
     /// command line bundles a folder, its files kept among the assets, and sent to the farm with
     /// a quick preview render (160 × 90 px, 1 sample per pixel, as `restauro studio` sends a
     /// scene), so that it is one of the studio's scenes. The preview job and the scene's id.
@@ -402,7 +402,7 @@ impl Farm {
         self: &Arc<Self>,
         name: &str,
         scene: Option<String>,
-        tar: Vec<u8>,
+        archive: Vec<u8>,
     ) -> Result<(crate::job::JobStatus, String)> {
         use restauro_scene::job::{JobName, JobSpec};
         use restauro_scene::plan::RenderOptions;
@@ -411,7 +411,8 @@ impl Farm {
         let farm = self.clone();
         let bundle = tokio::task::spawn_blocking(move || -> Result<Bundle> {
             let limits = &farm.config.limits;
-            let bundle = restauro_scene::folder::bundle_folder_tar(&tar, scene.as_deref(), limits)?;
+            let bundle =
+                restauro_scene::folder::bundle_folder_archive(&archive, scene.as_deref(), limits)?;
             for (hash, bytes) in &bundle.files {
                 if !farm.assets.has(hash) {
                     farm.assets.keep(hash, bytes).map_err(|e| {

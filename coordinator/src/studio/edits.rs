@@ -110,7 +110,7 @@ pub async fn photometry(
     Ok(Json(info))
 }
 
-/// `POST /api/scenes?name=NAME[&scene=PATH]`, a scene folder as a tar (or a bundle archive from `restauro
+/// `POST /api/scenes?name=NAME[&scene=PATH]`, a scene folder as a tar or a zip (or a bundle archive from `restauro
 /// scene bundle --out`) as the body: bundled, checked and sent to the farm with a quick preview
 /// render; that job, whose scene the studio then holds.
 pub async fn open_folder(

@@ -264,6 +264,8 @@ pub struct SceneView {
     pub revision: u32,
     pub offset_m: [f64; 3],
     pub triangles: usize,
+    /// The triangles of the coarser copy the page draws while the view moves (0: none).
+    pub coarse_triangles: usize,
     pub camera: CameraView,
     pub materials: Vec<MaterialView>,
     /// The scene's hypotheses (variants).
@@ -373,9 +375,10 @@ fn build(id: &str, revision: u32, scene: &LoadedScene) -> ScenePreview {
             }
         })
         .collect();
-    let Preview { glb, offset_m, triangles } = gltf_export::scene_glb(scene, |name| {
-        materials.iter().find(|m| m.name == name).map_or([0.5; 3], |m| m.colour_linear_srgb)
-    });
+    let Preview { glb, offset_m, triangles, coarse_triangles } =
+        gltf_export::scene_glb(scene, |name| {
+            materials.iter().find(|m| m.name == name).map_or([0.5; 3], |m| m.colour_linear_srgb)
+        });
     let c = &scene.camera;
     let camera = CameraView {
         position: to_glb(c.position, offset_m),
@@ -423,6 +426,7 @@ fn build(id: &str, revision: u32, scene: &LoadedScene) -> ScenePreview {
         preview_lights: lights.iter().map(appearance::Light::choice).collect(),
         offset_m,
         triangles,
+        coarse_triangles,
         camera,
         materials,
         variants: variant_views(scene),

@@ -163,7 +163,7 @@ export function show(panel, picked, view, library, onEdit, upload) {
   states.innerHTML = '<thead><tr><th scope="col">State</th><th scope="col">Spectrum</th>' +
     '<th scope="col">Colour</th><th scope="col">L*</th><th scope="col">a*</th><th scope="col">b*</th></tr></thead>';
   const caption = document.createElement('caption');
-  caption.textContent = `Under ${colours.name()} (2° observer; L*a*b* against that light's white)`;
+  caption.textContent = `Under ${colours.name()}: each colour as a camera balanced for daylight (D65) shows it; L*a*b* against that light's white (2° observer)`;
   states.prepend(caption);
   const tbody = document.createElement('tbody');
   for (const s of m.states) {

@@ -8,8 +8,8 @@
 //! `cargo test --release -p restauro-tests --test studio_speed -- --ignored --nocapture`
 //! (`RESTAURO_SPEED_QUADS=316x158` for a model of 100 000 triangles).
 
-use restauro_tests::browser::{Browser, available};
 use restauro_tests::CLIENT_TOKEN;
+use restauro_tests::browser::{Browser, available};
 use std::time::Instant;
 
 #[test]

@@ -195,6 +195,12 @@ fn add_sky(
     weight.add(out, &sky.per_nit, bsdf.rho(), a * k, b * k);
 }
 
+/// Where a path of `max_depth = 0` (no cap) stops if the roulette has not ended it. The roulette
+/// keeps a path with probability at most 0.95 a bounce from the third surface on, so a path
+/// reaches this depth with probability below 0.95^4094 ≈ 1e-91: no bias that a float can hold,
+/// and no endless path between two mirrors under Whitted.
+pub const UNCAPPED_DEPTH_GUARD: u32 = 4096;
+
 /// The spectral radiance (W·sr⁻¹·m⁻²·nm⁻¹) arriving at the camera along the ray; `rays`
 /// counts the rays traced (closest-hit and shadow), for the benchmarks.
 pub fn radiance(
@@ -225,7 +231,10 @@ pub fn add_radiance(
     let mut neutral = 1.0f32;
     let mut spectral: Option<Spectrum> = None;
     let (mut origin, mut direction) = (origin, direction);
-    let max_depth = scene.settings.max_depth.max(1);
+    let max_depth = match scene.settings.max_depth {
+        0 => UNCAPPED_DEPTH_GUARD,
+        cap => cap,
+    };
     for depth in 0..max_depth {
         *rays += 1;
         let Some(hit) = scene.intersect(origin, direction, f32::INFINITY) else {

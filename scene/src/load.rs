@@ -401,6 +401,15 @@ impl Ctx<'_> {
                 .parse::<Illuminant>()
                 .and_then(|i| i.spd())
                 .map_err(|e| self.invalid(&spectrum_place, e.to_string()))?,
+            SpectrumSource::Constant { constant } => {
+                if !(constant.is_finite() && (0.0..=1e6).contains(constant)) {
+                    return Err(self.invalid(
+                        &spectrum_place,
+                        format!("constant = {constant}: give a value from 0 (a black surface) to 1 for a reflectance, or up to 1e6 for a light"),
+                    ));
+                }
+                Spectrum::splat(*constant as f32)
+            }
             SpectrumSource::Mix { mix } => {
                 if mix.is_empty() {
                     return Err(self.invalid(
@@ -889,12 +898,13 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
             "use 1 or more, or raise the limit with --max-spp",
         ));
     }
-    if r.max_depth == 0 || r.max_depth > limits.max_depth {
+    // 0 is no cap: the roulette ends paths, at a cost bounded in expectation.
+    if r.max_depth > limits.max_depth {
         return Err(limit(
             "render.max_depth",
             u64::from(r.max_depth),
             u64::from(limits.max_depth),
-            "use 1 or more bounces, or raise the limit with --max-depth",
+            "use fewer bounces (0: no cap, the roulette ends paths), or raise the limit with --max-depth",
         ));
     }
 

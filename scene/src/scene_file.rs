@@ -225,6 +225,7 @@ pub struct Render {
     pub integrator: Integrator,
     #[serde(default = "default_spp")]
     pub samples_per_pixel: u32,
+    /// The most surfaces one path meets; 0: no cap, paths end by Russian roulette alone.
     #[serde(default = "default_depth")]
     pub max_depth: u32,
     #[serde(default)]
@@ -270,6 +271,9 @@ pub enum SpectrumSource {
     },
     /// An areal mixture of named spectra, weights summing to 1: e.g. a stone and soot.
     Mix { mix: Vec<MixPart> },
+    /// The same value at every wavelength: a reflectance given as a number (0 to 1, as
+    /// validation rooms are specified; 0 is a black surface), or an equal-energy light.
+    Constant { constant: f64 },
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

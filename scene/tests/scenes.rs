@@ -910,3 +910,32 @@ fn a_scene_folder_sent_as_a_zip_bundles_as_the_folder_does() {
         bundle_folder_archive(&damaged, None, &Limits::default()).unwrap_err().to_string();
     assert!(message.contains("not a readable zip archive"), "{message}");
 }
+
+/// A reflectance given as a number is flat at every wavelength; 0 (a black surface) is allowed,
+/// a negative value or one above 1 for a reflectance is refused; `max_depth = 0` (no cap) is
+/// taken, a depth over the limit is not.
+#[test]
+fn constant_spectra_and_an_uncapped_depth() {
+    let f = Folder::new();
+    f.write("meshes/wall.obj", QUAD_OBJ);
+    let with = |spectrum: &str, render: &str| {
+        scene_toml(OBJ_OBJECT, render).replace(
+            "travertine = \"travertine_tufa_solid__eco_ward73\"",
+            &format!("travertine = {spectrum}"),
+        )
+    };
+    let scene = load(&f, &with("{ constant = 0.0 }", "[render]\nmax_depth = 0")).unwrap();
+    assert!(scene.spectra["travertine"].0.iter().all(|&v| v == 0.0));
+    assert_eq!(scene.file.render.max_depth, 0);
+    let scene = load(&f, &with("{ constant = 0.95 }", "")).unwrap();
+    assert!(scene.spectra["travertine"].0.iter().all(|&v| v == 0.95));
+    for (spectrum, render, words) in [
+        ("{ constant = -0.1 }", "", "spectra.travertine: constant = -0.1: give a value from 0"),
+        ("{ constant = 1.5 }", "", "reaches 1.5 but is used as a reflectance"),
+        ("{ constant = nan }", "", "constant = NaN"),
+        ("{ constant = 0.5 }", "[render]\nmax_depth = 65", "render.max_depth"),
+    ] {
+        let message = refused(&f, &with(spectrum, render));
+        assert!(message.contains(words), "{spectrum} {render}: {message}");
+    }
+}

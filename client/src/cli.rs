@@ -346,6 +346,24 @@ pub struct DisplayArgs {
     pub exposure: String,
     #[command(flatten)]
     pub display: DisplayTarget,
+    /// Draw a quantity in false colour instead of the image: `luminance` (cd/m², the Y of the
+    /// absolute XYZ), coloured by viridis, with isolines and a legend strip below the image.
+    #[arg(long, value_parser = ["luminance"])]
+    pub false_colour: Option<String>,
+    /// The false colour's scale: log (equal steps are equal ratios) or linear.
+    #[arg(long, default_value = "log", requires = "false_colour",
+          value_parser = clap::builder::ValueParser::new(|s: &str| s.parse::<restauro_image::false_colour::Scale>()))]
+    pub scale: restauro_image::false_colour::Scale,
+    /// The luminances at the ends of the scale, MIN:MAX in cd/m² (by default whole decades
+    /// around the 1st and 99th percentiles on a log scale, 0 to the 99th percentile rounded up
+    /// on a linear one).
+    #[arg(long, requires = "false_colour")]
+    pub range: Option<String>,
+    /// The bands of the scale: an isoline where the luminance crosses each level between them
+    /// (1: no isolines).
+    #[arg(long, default_value_t = 10, requires = "false_colour",
+          value_parser = clap::value_parser!(u32).range(1..=100))]
+    pub bands: u32,
 }
 
 #[derive(Debug, Args)]

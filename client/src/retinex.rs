@@ -159,9 +159,50 @@ pub fn run(args: &RetinexArgs) -> Result<String> {
     Ok(text)
 }
 
+/// `restauro display --false-colour luminance`: the luminance map with its isolines and legend.
+fn false_colour(args: &DisplayArgs, image: &XyzImage) -> Result<String> {
+    use restauro_image::false_colour::{FalseColour, LEGEND_PX, Range, picture};
+    let range = match &args.range {
+        Some(text) => {
+            let (min, max) = text
+                .split_once(':')
+                .and_then(|(a, b)| {
+                    Some((a.trim().parse::<f64>().ok()?, b.trim().parse::<f64>().ok()?))
+                })
+                .ok_or_else(|| {
+                    anyhow::anyhow!("--range `{text}`: give MIN:MAX in cd/m², e.g. 1:1000")
+                })?;
+            Range::new(min, max, args.scale).map_err(|e| anyhow::anyhow!("--range: {e}"))?
+        }
+        None => Range::auto(&image.pixels, args.scale),
+    };
+    let fc = FalseColour { scale: args.scale, range, bands: args.bands };
+    let rgb = picture(&image.pixels, image.width, &fc);
+    let height = image.height + LEGEND_PX;
+    write_png(
+        &args.out,
+        image.width,
+        height,
+        &PngPixels::Eight(rgb),
+        restauro_spectral::rgb_space::RgbSpace::Srgb,
+    )
+    .with_context(|| format!("writing {}", args.out.display()))?;
+    Ok(format!(
+        "wrote {}: luminance in false colour, {} scale from {} to {} cd/m², {} bands\n",
+        args.out.display(),
+        args.scale,
+        range.min_cd_m2,
+        range.max_cd_m2,
+        args.bands
+    ))
+}
+
 pub fn run_display(args: &DisplayArgs) -> Result<String> {
     let exposure = parse_exposure(&args.exposure)?;
     let image = read_exr(&args.input, MAX_PIXELS)?;
+    if args.false_colour.is_some() {
+        return false_colour(args, &image);
+    }
     write_display_png(
         &args.out,
         image.width,

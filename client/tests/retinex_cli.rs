@@ -242,3 +242,76 @@ fn bad_input_is_refused_with_a_clear_message() {
     assert!(err.contains("missing.exr"), "{err}");
     assert!(!png.exists(), "nothing written on failure");
 }
+
+/// A Lambertian plane of reflectance 0.5 under a sun at the zenith of 100 000 lux has luminance
+/// ρE/π = 15 915.5 cd/m² everywhere. In false colour on a linear scale of 0 to twice that, in
+/// four bands, every pixel is viridis at 0.5 (#21918c, matplotlib's) with no isoline across the
+/// even plane, and a legend strip is added below; ranges that cannot be drawn are refused.
+#[test]
+fn false_colour_places_a_known_luminance_on_its_scale() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(
+        d.join("plane.obj"),
+        "v -50 -50 0\nv 50 -50 0\nv 50 50 0\nv -50 50 0\nf 1 2 3 4\n",
+    )
+    .unwrap();
+    std::fs::write(
+        d.join("scene.toml"),
+        "format = 1\n[camera]\nposition = [0.0, 0.0, 10.0]\ntarget = [0.0, 0.0, 0.0]\nup = [0.0, 1.0, 0.0]\n\
+         width = 16\nheight = 12\n[render]\nintegrator = \"whitted\"\nsamples_per_pixel = 1\n\
+         [spectra]\nhalf = { constant = 0.5 }\nsun = { illuminant = \"D65\" }\n\
+         [materials.grey]\nmodel = \"lambert\"\nreflectance = \"half\"\n\
+         [[objects]]\nname = \"plane\"\nmesh = \"plane.obj\"\nmaterial = \"grey\"\n\
+         [[lights]]\nkind = \"sun\"\nilluminance_lux = 100000.0\nazimuth_deg = 0.0\nelevation_deg = 90.0\nspectrum = \"sun\"\n",
+    )
+    .unwrap();
+    let out = d.join("out");
+    ok(&[
+        "render",
+        d.join("scene.toml").to_str().unwrap(),
+        "--in-process",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let exr = out.join("scene.exr");
+    let luminance = 0.5 * 100_000.0 / std::f64::consts::PI;
+    let png = d.join("false.png");
+    let range = format!("0:{}", 2.0 * luminance);
+    let said = ok(&[
+        "display",
+        exr.to_str().unwrap(),
+        "--out",
+        png.to_str().unwrap(),
+        "--false-colour",
+        "luminance",
+        "--scale",
+        "linear",
+        "--range",
+        &range,
+        "--bands",
+        "4",
+    ]);
+    assert!(said.contains("linear scale from 0 to 31830.9"), "{said}");
+    let (w, h, _, rgb) = png_info(&png);
+    assert_eq!((w, h), (16, 12 + restauro_image::false_colour::LEGEND_PX as u32));
+    for p in rgb[..16 * 12 * 3].chunks(3) {
+        assert_eq!(p, [0x21, 0x91, 0x8c], "a pixel of the plane");
+    }
+    let e = exr.to_str().unwrap();
+    let o = png.to_str().unwrap();
+    for (args, words) in [
+        (vec!["--range", "5:1"], "give MIN:MAX with 0 ≤ MIN < MAX"),
+        (vec!["--range", "0:10"], "a log scale starts above 0"),
+        (vec!["--range", "lots"], "--range `lots`: give MIN:MAX"),
+    ] {
+        let mut all = vec!["display", e, "--out", o, "--false-colour", "luminance"];
+        all.extend(args);
+        let err = refused(&all);
+        assert!(err.contains(words), "{err}");
+    }
+    // A scale without a false colour is a usage error (clap's exit status 2).
+    let usage = restauro(&["display", e, "--out", o, "--scale", "linear"]);
+    assert_eq!(usage.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&usage.stderr).contains("--false-colour"));
+}

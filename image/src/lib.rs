@@ -7,6 +7,7 @@
 
 pub mod atomic_file;
 pub mod delta_e;
+pub mod false_colour;
 pub mod framebuffer;
 pub mod image_files;
 pub mod results;

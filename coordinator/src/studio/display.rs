@@ -12,6 +12,7 @@ use axum::extract::{Path, RawQuery, State};
 use axum::http::header;
 use axum::response::{IntoResponse, Response};
 use restauro_image::delta_e::viridis;
+use restauro_image::false_colour;
 use restauro_image::image_files::{MAX_PIXELS, PngPixels, XyzImage, encode_png, read_exr};
 use restauro_spectral::display::{DisplayParams, Exposure, encode, exposure_scale, to_u8};
 use restauro_spectral::rgb_space::RgbSpace;
@@ -76,28 +77,16 @@ pub async fn luminance(
     Path(id): Path<String>,
 ) -> Result<Json<Luminance>> {
     let image = image_of(&studio, &id).await?;
-    let mut y: Vec<f64> =
-        image.pixels.iter().map(|p| f64::from(p[1])).filter(|v| *v > 0.0).collect();
-    y.sort_by(f64::total_cmp);
-    let at = |q: f64| y.get(((y.len() as f64 * q) as usize).min(y.len().saturating_sub(1)));
-    let (p1, p50, p99) = (at(0.01), at(0.5), at(0.99));
-    let (p1, p50, p99) = (*p1.unwrap_or(&1.0), *p50.unwrap_or(&1.0), *p99.unwrap_or(&1.0));
+    let [p1, p50, p99] = false_colour::percentiles(&image.pixels);
+    let scale = false_colour::Range::auto(&image.pixels, false_colour::Scale::Log);
     Ok(Json(Luminance {
         auto_white_cd_m2: 1.0 / exposure_scale(&image.pixels, Exposure::default()),
         p1_cd_m2: p1,
         p50_cd_m2: p50,
         p99_cd_m2: p99,
-        scale_min_cd_m2: 10f64.powf(p1.log10().floor()),
-        scale_max_cd_m2: 10f64.powf(p99.log10().ceil()),
+        scale_min_cd_m2: scale.min_cd_m2,
+        scale_max_cd_m2: scale.max_cd_m2,
     }))
-}
-
-/// Where luminance `y` falls on a logarithmic scale from `min` to `max` (0–1, clamped).
-pub fn log_position(y: f64, min: f64, max: f64) -> f64 {
-    if y <= 0.0 {
-        return 0.0;
-    }
-    ((y.log10() - min.log10()) / (max.log10() - min.log10())).clamp(0.0, 1.0)
 }
 
 /// `GET /api/jobs/{id}/luminance.png?min_cd_m2=…&max_cd_m2=…`: each pixel's luminance in false
@@ -118,11 +107,13 @@ pub async fn false_colour(
     if min >= max {
         return Err(CoordinatorError::Request("min_cd_m2 must be below max_cd_m2".to_owned()));
     }
+    let (scale, range) =
+        (false_colour::Scale::Log, false_colour::Range { min_cd_m2: min, max_cd_m2: max });
     let image = image_of(&studio, &id).await?;
     let rgb = image
         .pixels
         .iter()
-        .flat_map(|p| viridis(log_position(f64::from(p[1]), min, max)))
+        .flat_map(|p| viridis(false_colour::position(f64::from(p[1]), scale, range)))
         .collect();
     png(image.width, image.height, rgb)
 }

@@ -1127,11 +1127,14 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
     for (i, l) in file.lights.iter().enumerate() {
         let place = format!("lights[{i}]");
         let resolved = match l {
-            Light::Point { position, intensity_cd, spectrum, ies, aim } => {
+            Light::Point { position, intensity_cd, flux_lm, spectrum, ies, aim } => {
                 ctx.emission(spectrum, &format!("{place}.spectrum"))?;
                 let photometry = photometry(&ctx, ies, &format!("{place}.ies"))?;
+                let given = given_intensity(&ctx, &place, *intensity_cd, *flux_lm, || {
+                    lumens_per_cd(photometry.as_ref(), 4.0 * std::f64::consts::PI)
+                })?;
                 let intensity_cd =
-                    luminaire_intensity(&mut ctx, &place, *intensity_cd, photometry.as_ref())?;
+                    luminaire_intensity(&mut ctx, &place, given, photometry.as_ref())?;
                 check_luminaire(&ctx, &place, *position, intensity_cd, *aim)?;
                 ResolvedLight::Point {
                     position: *position,
@@ -1141,7 +1144,16 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
                     aim: *aim,
                 }
             }
-            Light::Spot { position, intensity_cd, spectrum, aim, cone_deg, falloff_deg, ies } => {
+            Light::Spot {
+                position,
+                intensity_cd,
+                flux_lm,
+                spectrum,
+                aim,
+                cone_deg,
+                falloff_deg,
+                ies,
+            } => {
                 if !(cone_deg.is_finite()
                     && *cone_deg > 0.0
                     && falloff_deg.is_finite()
@@ -1155,8 +1167,11 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
                 }
                 ctx.emission(spectrum, &format!("{place}.spectrum"))?;
                 let photometry = photometry(&ctx, ies, &format!("{place}.ies"))?;
+                let given = given_intensity(&ctx, &place, *intensity_cd, *flux_lm, || {
+                    lumens_per_cd(photometry.as_ref(), spot_lumens_per_cd(*cone_deg, *falloff_deg))
+                })?;
                 let intensity_cd =
-                    luminaire_intensity(&mut ctx, &place, *intensity_cd, photometry.as_ref())?;
+                    luminaire_intensity(&mut ctx, &place, given, photometry.as_ref())?;
                 check_luminaire(&ctx, &place, *position, intensity_cd, Some(*aim))?;
                 ResolvedLight::Spot {
                     position: *position,
@@ -1347,6 +1362,49 @@ fn check_illuminance(ctx: &Ctx, place: &str, lux: f64) -> Result<()> {
 /// A luminaire's peak intensity (cd): the photometric file's own unless `intensity_cd`
 /// overrides it (noted when it departs from the file by more than 1 %); without a file,
 /// `intensity_cd` itself, which is then required.
+/// The intensity a luminaire is given: `intensity_cd`, or `flux_lm` over the lumens one
+/// candela of its distribution emits (`per_cd`), or neither (its photometric file's own).
+fn given_intensity(
+    ctx: &Ctx,
+    place: &str,
+    intensity_cd: Option<f64>,
+    flux_lm: Option<f64>,
+    per_cd: impl FnOnce() -> f64,
+) -> Result<Option<f64>> {
+    match (intensity_cd, flux_lm) {
+        (Some(_), Some(_)) => Err(ctx
+            .invalid(place, "give intensity_cd or flux_lm, not both (one follows from the other)")),
+        (None, Some(lm)) if !(lm.is_finite() && (0.0..=1e10).contains(&lm)) => Err(ctx.invalid(
+            format!("{place}.flux_lm"),
+            format!("{lm} is not a luminous flux; give lumens from 0 to 1e10"),
+        )),
+        (None, Some(lm)) => {
+            let per = per_cd();
+            if per > 0.0 { Ok(Some(lm / per)) } else { Ok(Some(0.0)) }
+        }
+        (cd, None) => Ok(cd),
+    }
+}
+
+/// The lumens a luminaire emits per candela of its peak: its photometric file's flux over its
+/// peak, or `shape`'s (the lumens of one candela in the distribution without a file).
+fn lumens_per_cd(photometry: Option<&Photometry>, shape: f64) -> f64 {
+    match photometry {
+        Some(p) if p.peak_cd() > 0.0 => p.flux_lm() / p.peak_cd(),
+        Some(_) => 0.0,
+        None => shape,
+    }
+}
+
+/// The lumens of a spot of one candela inside its cone: Φ = 2π ∫ f(cos θ) d(cos θ), with f = 1
+/// inside `cone_deg` and the smoothstep of the render between it and `cone_deg + falloff_deg`,
+/// whose mean over the band is ½: 2π [(1 − cos θ_in) + ½ (cos θ_in − cos θ_out)].
+fn spot_lumens_per_cd(cone_deg: f64, falloff_deg: f64) -> f64 {
+    let inner = cone_deg.to_radians().cos();
+    let outer = (cone_deg + falloff_deg.max(1e-3)).to_radians().cos();
+    2.0 * std::f64::consts::PI * ((1.0 - inner) + 0.5 * (inner - outer))
+}
+
 fn luminaire_intensity(
     ctx: &mut Ctx,
     place: &str,
@@ -1370,7 +1428,7 @@ fn luminaire_intensity(
         (Some(cd), None) => Ok(cd),
         (None, None) => Err(ctx.invalid(
             format!("{place}.intensity_cd"),
-            "a luminaire without a photometric file (ies) needs its intensity in candela",
+            "a luminaire without a photometric file (ies) needs its intensity_cd (candela) or its flux_lm (lumens)",
         )),
     }
 }

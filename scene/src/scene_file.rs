@@ -463,6 +463,9 @@ pub enum Light {
         position: [f64; 3],
         #[serde(default)]
         intensity_cd: Option<f64>,
+        /// Its luminous flux instead of its intensity: what a lamp's data sheet gives.
+        #[serde(default)]
+        flux_lm: Option<f64>,
         spectrum: String,
         #[serde(default)]
         ies: Option<String>,
@@ -477,6 +480,9 @@ pub enum Light {
         position: [f64; 3],
         #[serde(default)]
         intensity_cd: Option<f64>,
+        /// Its luminous flux (all of it, the falloff included) instead of its intensity.
+        #[serde(default)]
+        flux_lm: Option<f64>,
         spectrum: String,
         #[serde(deserialize_with = "vec3::aim")]
         aim: [f64; 3],

@@ -258,7 +258,8 @@ fn a_luminaire_renders_its_file_as_measured() {
         "[[lights]]\nkind = \"point\"\nposition = [0.0, -2.0, 2.0]\nspectrum = \"sunlight\"\n";
     let err = refused(&f, &scene_toml(OBJ_OBJECT, bare));
     assert!(
-        err.contains("intensity_cd") && err.contains("needs its intensity in candela"),
+        err.contains("intensity_cd")
+            && err.contains("needs its intensity_cd (candela) or its flux_lm"),
         "{err}"
     );
 }
@@ -938,4 +939,63 @@ fn constant_spectra_and_an_uncapped_depth() {
         let message = refused(&f, &with(spectrum, render));
         assert!(message.contains(words), "{spectrum} {render}: {message}");
     }
+}
+
+/// A luminaire given by its flux: an isotropic point of Φ lm has Φ/4π cd; a spot of one
+/// candela inside a 30° cone with no falloff emits 2π(1 − cos 30°) lm, and with a falloff its
+/// smoothstep band adds half its solid angle; a photometric file is scaled so that its flux is
+/// the one given. Both intensity and flux at once are refused.
+#[test]
+fn luminaires_given_by_their_flux() {
+    use restauro_scene::load::ResolvedLight;
+    let f = Folder::new();
+    f.write("meshes/wall.obj", QUAD_OBJ);
+    let ies =
+        concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/photometric/lambertian_cos_1000cd.ies");
+    f.write("lamps/cos.ies", std::fs::read(ies).unwrap());
+    let intensity = |light: &str| -> f64 {
+        let scene = load(
+            &f,
+            &scene_toml(OBJ_OBJECT, &format!("[[lights]]\n{light}spectrum = \"sunlight\"\n")),
+        )
+        .unwrap();
+        match scene.lights.last().unwrap() {
+            ResolvedLight::Point { intensity_cd, .. }
+            | ResolvedLight::Spot { intensity_cd, .. } => *intensity_cd,
+            other => panic!("{other}"),
+        }
+    };
+    let pi = std::f64::consts::PI;
+    let point = intensity("kind = \"point\"\nposition = [0.0, -2.0, 2.0]\nflux_lm = 1000.0\n");
+    assert!((point - 1000.0 / (4.0 * pi)).abs() < 1e-9, "{point}");
+    let spot = "kind = \"spot\"\nposition = [0.0, -2.0, 2.0]\naim = [0.0, 0.0, 0.0]\nflux_lm = 1000.0\ncone_deg = 30.0\n";
+    let sharp = intensity(spot);
+    let cos30 = 30f64.to_radians().cos();
+    assert!((sharp - 1000.0 / (2.0 * pi * (1.0 - cos30))).abs() < 0.05, "{sharp}");
+    let soft = intensity(&format!("{spot}falloff_deg = 10.0\n"));
+    let cos40 = 40f64.to_radians().cos();
+    let want = 1000.0 / (2.0 * pi * ((1.0 - cos30) + 0.5 * (cos30 - cos40)));
+    assert!((soft - want).abs() < 1e-9, "{soft} vs {want}");
+    // A cosine luminaire of 1000 cd at its peak emits π · 1000 lm: given 500 lm, its peak is
+    // 500/π cd.
+    let filed = intensity(
+        "kind = \"point\"\nposition = [0.0, -2.0, 2.0]\nies = \"lamps/cos.ies\"\nflux_lm = 500.0\n",
+    );
+    assert!((filed - 500.0 / pi).abs() < 0.01 * 500.0 / pi, "{filed}");
+    let both = refused(
+        &f,
+        &scene_toml(
+            OBJ_OBJECT,
+            "[[lights]]\nkind = \"point\"\nposition = [0.0, -2.0, 2.0]\nflux_lm = 10.0\nintensity_cd = 1.0\nspectrum = \"sunlight\"\n",
+        ),
+    );
+    assert!(both.contains("give intensity_cd or flux_lm, not both"), "{both}");
+    let negative = refused(
+        &f,
+        &scene_toml(
+            OBJ_OBJECT,
+            "[[lights]]\nkind = \"point\"\nposition = [0.0, -2.0, 2.0]\nflux_lm = -10.0\nspectrum = \"sunlight\"\n",
+        ),
+    );
+    assert!(negative.contains("lights[1].flux_lm: -10 is not a luminous flux"), "{negative}");
 }

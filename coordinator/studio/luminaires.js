@@ -1,7 +1,8 @@
 // The sky and the luminaires: the sky's model, diffuse horizontal illuminance and spectrum; each
 // luminaire listed (where it stands and what it aims at, in metres in the scene's frame; its peak
 // intensity in cd, its flux in lm and beam angle from its photometric file), and a form that
-// places one at the point clicked (raised a little), aims it at another, gives its intensity or
+// places one at the point clicked (raised a little), aims it at another, gives its intensity (or
+// its flux) or
 // an IES / EULUMDAT file (read by the server, which says what is in it) and a spectrum by name.
 // Every change is an edit of the scene's `[[lights]]`, checked as a scene file is.
 
@@ -141,6 +142,7 @@ function startEditing(l) {
   fill(['lum-x', 'lum-y', 'lum-z'], x.position);
   fill(['lum-ax', 'lum-ay', 'lum-az'], x.aim);
   $('lum-cd').value = x.intensity_cd ?? '';
+  $('lum-lm').value = x.flux_lm ?? '';
   if (x.kind === 'spot') { $('lum-cone').value = x.cone_deg; $('lum-falloff').value = x.falloff_deg; }
   $('lum-spectrum').value = x.spectrum;
   setFile(x.ies ? { reference: x.ies, file_name: 'the file kept', flux_lm: l.flux_lm, peak_cd: l.intensity_cd, beam_angle_deg: l.beam_angle_deg, description: '' } : null);
@@ -171,6 +173,8 @@ function light() {
   if (aim.every((v) => v !== null)) l.aim = aim;
   const cd = value('lum-cd');
   if (cd !== null) l.intensity_cd = cd;
+  const lm = value('lum-lm');
+  if (lm !== null) l.flux_lm = lm;
   if (file) l.ies = file.reference;
   if (kind === 'spot') { l.cone_deg = value('lum-cone'); l.falloff_deg = value('lum-falloff') ?? 0; }
   return l;

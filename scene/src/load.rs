@@ -87,6 +87,27 @@ pub enum ResolvedLight {
     Sky { illuminance_lux: f64, model: SkyModel, spectrum: String },
 }
 
+impl ResolvedLight {
+    /// A luminaire's luminous flux as rendered, lm: its photometric file's, scaled to the
+    /// intensity rendered, or that of its intensity in its shape (isotropic, or the spot's
+    /// cone). `None` for the sun and the sky.
+    pub fn flux_lm(&self) -> Option<f64> {
+        match self {
+            ResolvedLight::Point { intensity_cd, photometry, .. } => {
+                Some(intensity_cd * lumens_per_cd(photometry.as_ref(), 4.0 * std::f64::consts::PI))
+            }
+            ResolvedLight::Spot { intensity_cd, photometry, cone_deg, falloff_deg, .. } => Some(
+                intensity_cd
+                    * lumens_per_cd(
+                        photometry.as_ref(),
+                        spot_lumens_per_cd(*cone_deg, *falloff_deg),
+                    ),
+            ),
+            _ => None,
+        }
+    }
+}
+
 /// One line describing the light, for people: what `restauro scene check` lists and the demo's
 /// report records.
 impl std::fmt::Display for ResolvedLight {

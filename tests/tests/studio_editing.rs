@@ -738,6 +738,16 @@ fn a_lighting_designer_sets_the_sky_and_aims_a_luminaire_with_its_file() {
     b.click("#luminaires tbody button[aria-label='Delete luminaire 2']");
     b.wait_for("revision 3", "document.getElementById('view').dataset.revision === '3'");
     assert!(luminaire_cells(&mut b).is_empty());
+
+    // A bare lamp given by its flux, as a data sheet gives it: 1000 lm in every direction is
+    // 1000/4π = 79.6 cd, shown to the candela, and its flux is listed.
+    set_value(&mut b, "lum-cd", "");
+    set_value(&mut b, "lum-lm", "1000");
+    b.click("#lum-save");
+    b.wait_for("revision 4", "document.getElementById('view').dataset.revision === '4'");
+    let rows = luminaire_cells(&mut b);
+    let (cd, lm) = (shown_number(&rows[0][4]), shown_number(&rows[0][5]));
+    assert_eq!((cd, lm), ((1000.0 / (4.0 * std::f64::consts::PI)).round(), 1000.0), "{rows:?}");
 }
 
 /// A measured reflectance sent from the page as a CSV file: a flat 50 % grey card is plotted

@@ -206,7 +206,9 @@ fn light_views(scene: &LoadedScene, offset: [f64; 3]) -> Vec<LightView> {
         };
         match light {
             Light::Point { .. } | Light::Spot { .. } => {
-                let (position, intensity_cd, photometry, aim) = match luminaires.next() {
+                let resolved = luminaires.next();
+                view.flux_lm = resolved.and_then(ResolvedLight::flux_lm);
+                let (position, intensity_cd, photometry, aim) = match resolved {
                     Some(ResolvedLight::Point {
                         position, intensity_cd, photometry, aim, ..
                     }) => (*position, *intensity_cd, photometry, *aim),
@@ -219,8 +221,6 @@ fn light_views(scene: &LoadedScene, offset: [f64; 3]) -> Vec<LightView> {
                 view.aim = aim.map(|a| to_glb(a, offset));
                 view.intensity_cd = Some(intensity_cd);
                 if let Some(p) = photometry {
-                    let scale = intensity_cd / p.peak_cd().max(1e-12);
-                    view.flux_lm = Some(p.flux_lm() * scale);
                     view.beam_angle_deg = Some(p.beam_angle_deg());
                     view.solid = Some(solid(p, luminaire_frame(position, aim)));
                 }

@@ -184,7 +184,7 @@ fn inward_sphere() -> String {
 /// A closed sphere of reflectance 0.95 (given as a number): light is reflected twenty times on
 /// average before it is absorbed, so a cap on the bounces biases the image, and only a path
 /// ended by the roulette alone (`max_depth = 0`) converges. The wall luminance is
-/// ρ·(I/R²)/(π(1 − ρ)) = 19·I/π (the integrating sphere's law, exact for any closed sphere): the mean of the
+/// ρ·(I/R²)/(π(1 − ρ)) = 19·I/π (the integrating sphere's law): the mean of the
 /// image within 1.5 % (Monte Carlo noise and the facets). With five surfaces at most, the
 /// first five terms of the series: ρ·(I/R²)/π · (1 − ρ⁵)/(1 − ρ), under a quarter of it.
 #[test]

@@ -119,6 +119,13 @@ pub enum CoordinatorError {
 
 pub type Result<T, E = CoordinatorError> = std::result::Result<T, E>;
 
+/// A blocking task that panicked or was cancelled: the coordinator's own fault, said as such.
+impl From<tokio::task::JoinError> for CoordinatorError {
+    fn from(e: tokio::task::JoinError) -> Self {
+        CoordinatorError::Internal(e.to_string())
+    }
+}
+
 impl CoordinatorError {
     pub fn io(path: &std::path::Path, source: std::io::Error) -> Self {
         Self::Io { path: path.display().to_string(), source }

@@ -430,15 +430,12 @@ impl Farm {
             let plan = Plan::new(&scene, &render, &limits, Path::new(&format!("scene {name}")))?;
             Ok((plan, manifest))
         })
-        .await
-        .map_err(|e| CoordinatorError::Internal(e.to_string()))??;
+        .await??;
         let id = JobId::random();
         let tiles = plan.tile_count();
         let record = JobRecord::new(id.clone(), spec, manifest, plan, now_unix_ms());
         let (store, key, bytes) = (self.store.clone(), id.clone(), record.to_bytes());
-        tokio::task::spawn_blocking(move || store.put_job(&key, &bytes))
-            .await
-            .map_err(|e| CoordinatorError::Internal(e.to_string()))??;
+        tokio::task::spawn_blocking(move || store.put_job(&key, &bytes)).await??;
         let status = {
             let mut st = self.lock();
             admission.armed = false;
@@ -699,8 +696,7 @@ impl Farm {
             (check_tile(tile, &rect, layout, &data), data)
         } else {
             tokio::task::spawn_blocking(move || (check_tile(tile, &rect, layout, &data), data))
-                .await
-                .map_err(|e| CoordinatorError::Internal(e.to_string()))?
+                .await?
         };
         if let Err(e) = checked {
             let reason = format!("sent pixels no tracer produces: {e}");

@@ -207,8 +207,7 @@ impl Farm {
         let scene = tokio::task::spawn_blocking(move || -> Result<LoadedScene> {
             Ok(farm.bundle(&manifest)?.load(&farm.config.limits)?)
         })
-        .await
-        .map_err(|e| CoordinatorError::Internal(e.to_string()))??;
+        .await??;
         Ok((number, scene))
     }
 
@@ -237,8 +236,7 @@ impl Farm {
             let bundle = farm.bundle(&manifest)?;
             Ok(restauro_scene::folder::folder_tar(&bundle, &folder, &comment)?)
         })
-        .await
-        .map_err(|e| CoordinatorError::Internal(e.to_string()))?
+        .await?
         .map(|tar| (name, tar))
     }
 
@@ -280,17 +278,14 @@ impl Farm {
             farm.bundle(&checked)?.load(&farm.config.limits)?;
             Ok(())
         })
-        .await
-        .map_err(|e| CoordinatorError::Internal(e.to_string()))??;
+        .await??;
         let revision = Revision { manifest_json, summary, created_unix_ms: now_unix_ms() };
         let number = latest + 1;
         let bytes = serde_json::to_vec(&revision).map_err(|e| {
             CoordinatorError::Internal(format!("a revision does not serialise: {e}"))
         })?;
         let (store, key) = (self.store.clone(), id.to_owned());
-        tokio::task::spawn_blocking(move || store.put_revision(&key, number, &bytes))
-            .await
-            .map_err(|e| CoordinatorError::Internal(e.to_string()))??;
+        tokio::task::spawn_blocking(move || store.put_revision(&key, number, &bytes)).await??;
         info!(scene = %&id[..id.len().min(12)], number, summary = %revision.summary, "scene revised");
         let made = RevisionInfo {
             number,
@@ -422,8 +417,7 @@ impl Farm {
             }
             Ok(bundle)
         })
-        .await
-        .map_err(|e| CoordinatorError::Internal(e.to_string()))??;
+        .await??;
         let spec = JobSpec { name, render: RenderOptions::quick_preview(), ..JobSpec::default() };
         info!(files = bundle.files.len(), "scene folder taken");
         let manifest = bundle.canonical_json();

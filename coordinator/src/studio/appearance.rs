@@ -2,8 +2,9 @@
 //! observer, the light's own white as the reference white, CIE 15:2004 Eqs. 7.1–7.3 and
 //! §8.2.1), and its linear-sRGB colour (IEC 61966-2-1; not adapted, the colour the absolute
 //! render shows it in, scaled so that the light's white has no channel above 1: a warm light's
-//! white keeps its hue instead of clipping to yellow). The preview and the material panel colour every spectrum under one of the scene's
-//! lights, chosen on the page; D65 is always offered as the reference.
+//! white keeps its hue instead of clipping to yellow). The preview and the material panel
+//! colour every spectrum under one of the scene's lights, chosen on the page; D65 is always
+//! offered as the reference.
 
 use restauro_scene::load::{LoadedScene, ResolvedLight};
 use restauro_spectral::Lab;

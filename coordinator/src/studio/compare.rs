@@ -79,8 +79,7 @@ async fn compared(studio: &Arc<Studio>, query: Option<&str>) -> Result<Compared>
         };
         Ok(Compared { view, map })
     })
-    .await
-    .map_err(|e| CoordinatorError::Internal(e.to_string()))?
+    .await?
 }
 
 /// `GET /api/compare?a=JOB&b=JOB`: the ΔE00 statistics of B against A.

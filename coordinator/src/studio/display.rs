@@ -31,9 +31,7 @@ pub(super) fn rendered(studio: &Studio, id: &JobId) -> Result<(String, XyzImage)
 
 async fn image_of(studio: &Arc<Studio>, id: &str) -> Result<XyzImage> {
     let (studio, id) = (studio.clone(), JobId::parse(id)?);
-    tokio::task::spawn_blocking(move || rendered(&studio, &id).map(|(_, image)| image))
-        .await
-        .map_err(|e| CoordinatorError::Internal(e.to_string()))?
+    tokio::task::spawn_blocking(move || rendered(&studio, &id).map(|(_, image)| image)).await?
 }
 
 fn png(width: usize, height: usize, rgb: Vec<u8>) -> Result<Response> {
@@ -104,11 +102,9 @@ pub async fn false_colour(
         })
     };
     let (min, max) = (bound("min_cd_m2")?, bound("max_cd_m2")?);
-    if min >= max {
-        return Err(CoordinatorError::Request("min_cd_m2 must be below max_cd_m2".to_owned()));
-    }
-    let (scale, range) =
-        (false_colour::Scale::Log, false_colour::Range { min_cd_m2: min, max_cd_m2: max });
+    let scale = false_colour::Scale::Log;
+    let range = false_colour::Range::new(min, max, scale)
+        .map_err(|e| CoordinatorError::Request(format!("min_cd_m2, max_cd_m2: {e}")))?;
     let image = image_of(&studio, &id).await?;
     let rgb = image
         .pixels

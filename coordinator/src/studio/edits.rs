@@ -104,9 +104,7 @@ pub async fn photometry(
     studio.farm.scene_revision(scene_id(&id)?, None)?;
     let name = super::api::query_value(query.as_deref(), "name").unwrap_or_default();
     let farm = studio.farm.clone();
-    let info = tokio::task::spawn_blocking(move || farm.keep_photometry(&name, &body))
-        .await
-        .map_err(|e| CoordinatorError::Internal(e.to_string()))??;
+    let info = tokio::task::spawn_blocking(move || farm.keep_photometry(&name, &body)).await??;
     Ok(Json(info))
 }
 
@@ -272,9 +270,7 @@ fn shipped() -> &'static [LibrarySpectrum] {
 
 /// `GET /api/spectra`: the shipped reflectance spectra, each with its curve and colour.
 pub async fn spectra() -> Result<Json<&'static [LibrarySpectrum]>> {
-    let all = tokio::task::spawn_blocking(shipped)
-        .await
-        .map_err(|e| CoordinatorError::Internal(e.to_string()))?;
+    let all = tokio::task::spawn_blocking(shipped).await?;
     Ok(Json(all))
 }
 

@@ -54,9 +54,8 @@ pub async fn upload(
     let farm = studio.farm.clone();
     let file_name = name.clone();
     let bytes = body.len();
-    let reference = tokio::task::spawn_blocking(move || farm.keep_file(&name, &body, &kind))
-        .await
-        .map_err(|e| CoordinatorError::Internal(e.to_string()))??;
+    let reference =
+        tokio::task::spawn_blocking(move || farm.keep_file(&name, &body, &kind)).await??;
     Ok(Json(ImageInfo { reference, file_name, media_type, bytes }))
 }
 
@@ -74,10 +73,8 @@ pub async fn image(
         return Err(missing());
     }
     let farm = studio.farm.clone();
-    let bytes = tokio::task::spawn_blocking(move || farm.read_asset(&hash))
-        .await
-        .map_err(|e| CoordinatorError::Internal(e.to_string()))??
-        .ok_or_else(missing)?;
+    let bytes =
+        tokio::task::spawn_blocking(move || farm.read_asset(&hash)).await??.ok_or_else(missing)?;
     let media_type = note_image::media_type(&kind, &bytes).ok_or_else(missing)?;
     Ok((
         [

@@ -23,9 +23,7 @@ pub async fn painting(
     Path(id): Path<String>,
 ) -> Result<Response> {
     let (farm, id) = (studio.farm.clone(), JobId::parse(&id)?);
-    let bytes = tokio::task::spawn_blocking(move || paint(&farm, &id))
-        .await
-        .map_err(|e| CoordinatorError::Internal(e.to_string()))??;
+    let bytes = tokio::task::spawn_blocking(move || paint(&farm, &id)).await??;
     let headers = [(header::CONTENT_TYPE, "image/png"), (header::CACHE_CONTROL, "no-store")];
     Ok((headers, bytes).into_response())
 }

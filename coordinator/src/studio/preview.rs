@@ -51,8 +51,11 @@ fn state_view(
     lights: &[appearance::Light],
 ) -> Option<StateView> {
     let rho = scene.spectra.get(spectrum)?;
-    let (lab, colour_linear_srgb) = appearance(rho);
     let under = appearance::Light::looks(rho, lights);
+    // D65 is among the lights: its look is the state's own colour.
+    let (lab, colour_linear_srgb) = under
+        .get(appearance::D65_KEY)
+        .map_or_else(|| appearance(rho), |l| (l.lab, l.colour_linear_srgb));
     Some(StateView {
         state,
         spectrum: spectrum.to_owned(),

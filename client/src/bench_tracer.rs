@@ -188,6 +188,7 @@ pub fn bench(args: &BenchArgs) -> Result<String> {
         samples_per_pixel: args.spp,
         max_depth: 1,
         seed: 1,
+        grids: false,
     };
     let whitted = PreparedScene::new(&scene, None, base)?;
     let samples = (w * h) as u64 * u64::from(args.spp);

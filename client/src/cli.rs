@@ -35,6 +35,10 @@ pub enum Command {
     /// on loopback) unless --coordinator is given: absolute XYZ (and spectral radiance) to
     /// OpenEXR and a PNG, each also after the Retinex.
     Render(RenderArgs),
+    /// The illuminance (lux) at a scene's calculation grids, direct and indirect, computed
+    /// spectrally through a cluster (or in-process): a CSV and a false-colour PNG per grid, and
+    /// a JSON document with each grid's minimum, mean, maximum and uniformity.
+    Illuminance(IlluminanceArgs),
     /// Submit a scene to a coordinator and print the job id.
     Submit(SubmitArgs),
     /// Follow a job with a progress bar until it ends.
@@ -171,7 +175,44 @@ pub struct RenderArgs {
     /// The Retinex's random seed.
     #[arg(long, default_value_t = 0)]
     pub retinex_seed: u64,
-    /// Render in this process, without a cluster.
+    #[command(flatten)]
+    pub run: RunArgs,
+    /// Compute the scene's calculation grids instead of its image (`restauro illuminance`).
+    #[arg(skip)]
+    pub grids: bool,
+}
+
+#[derive(Clone, Debug, Args)]
+pub struct IlluminanceArgs {
+    /// The scene file, with its calculation grids (`[[grids]]`).
+    pub scene: PathBuf,
+    /// The folder for the results: the grids' EXR, a CSV and a false-colour PNG per grid, and
+    /// illuminance.json.
+    #[arg(long, default_value = "out")]
+    pub out: PathBuf,
+    /// The restoration hypothesis (a variant of the scene): its reflectances change the
+    /// indirect light.
+    #[arg(long)]
+    pub variant: Option<String>,
+    /// Override the scene's integrator: whitted computes the direct light only, path the
+    /// inter-reflected light too.
+    #[arg(long, value_enum)]
+    pub integrator: Option<IntegratorArg>,
+    /// Samples per point (by default the scene's samples per pixel).
+    #[arg(long)]
+    pub spp: Option<u32>,
+    /// Print the JSON document (schema restauro.illuminance/1) instead of a summary.
+    #[arg(long)]
+    pub json: bool,
+    #[command(flatten)]
+    pub run: RunArgs,
+}
+
+/// Where a render or a grid computation runs: an embedded local cluster (the default), the
+/// coordinator named, or this process; and the limits the scene is checked against.
+#[derive(Clone, Debug, Args)]
+pub struct RunArgs {
+    /// Compute in this process, without a cluster.
     #[arg(long, conflicts_with = "coordinator")]
     pub in_process: bool,
     /// Workers of the embedded local cluster.

@@ -50,15 +50,15 @@ fn state_name(state: i32) -> String {
 
 pub fn submit(args: &SubmitArgs) -> Result<String> {
     let r = &args.render;
-    let Some(coordinator) = &r.connect.coordinator else {
+    let Some(coordinator) = &r.run.connect.coordinator else {
         bail!(
             "submit needs --coordinator URL (or RESTAURO_COORDINATOR); `restauro render` renders on an embedded cluster"
         );
     };
     let connect = ConnectArgs {
         coordinator: coordinator.clone(),
-        token_file: r.connect.token_file.clone(),
-        tls_ca: r.connect.tls_ca.clone(),
+        token_file: r.run.connect.token_file.clone(),
+        tls_ca: r.run.connect.tls_ca.clone(),
         protocol_version: pb::PROTOCOL_VERSION,
     };
     let spec = job_spec(r, args.priority)?;

@@ -9,6 +9,7 @@ pub mod cluster;
 pub mod color;
 pub mod compare;
 pub mod demo;
+pub mod illuminance;
 pub mod jobs_cmd;
 pub mod progress;
 pub mod render;

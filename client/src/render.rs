@@ -9,7 +9,7 @@ use crate::progress::Progress;
 use anyhow::{Context, Result};
 use restauro_image::framebuffer::{Framebuffer, TileExtras, TileLayout, encode_tile};
 use restauro_image::image_files::{MAX_PIXELS, read_exr};
-use restauro_image::results::{ResultOptions, write_results};
+use restauro_image::results::{ResultOptions, write_grid_results, write_results};
 use restauro_proto as pb;
 use restauro_render::prepared::PreparedScene;
 use restauro_render::tile::render_tile;
@@ -36,16 +36,18 @@ pub fn render_options(args: &RenderArgs) -> RenderOptions {
         height: args.height,
         spectral: args.spectral,
         tile: args.tile,
+        grids: args.grids,
     }
 }
 
 /// The job's name: the scene file's stem, and the variant.
 pub fn job_name(args: &RenderArgs) -> String {
     let stem = args.scene.file_stem().and_then(|s| s.to_str()).unwrap_or("render");
-    match &args.variant {
+    let name = match &args.variant {
         Some(v) => format!("{stem}-{v}"),
         None => stem.to_owned(),
-    }
+    };
+    if args.grids { format!("{name}-illuminance") } else { name }
 }
 
 /// The job the command line asks for: its one conversion to the domain's job, checked here as
@@ -70,7 +72,7 @@ pub fn job_spec(args: &RenderArgs, priority: i32) -> Result<JobSpec> {
 
 /// Checks the scene here (errors name the user's own files) and bundles it for a coordinator.
 pub fn checked_bundle(args: &RenderArgs) -> Result<(Bundle, Plan)> {
-    let limits: Limits = (&args.limits).into();
+    let limits: Limits = (&args.run.limits).into();
     let scene = load_scene(&args.scene, &limits)?;
     let plan = Plan::new(&scene, &render_options(args), &limits, &args.scene)?;
     let bundle = bundle_scene(&args.scene, &limits)?;
@@ -81,24 +83,24 @@ pub fn run(args: &RenderArgs) -> Result<String> {
     if !args.variants.is_empty() {
         return run_variants(args);
     }
-    if args.in_process {
+    if args.run.in_process {
         return run_in_process(args);
     }
     let started = Instant::now();
     // An embedded cluster starts first: its processes come up while the scene is checked.
-    let tls_ca = args.connect.tls_ca.as_deref();
-    let (url, token, _cluster) = match &args.connect.coordinator {
+    let tls_ca = args.run.connect.tls_ca.as_deref();
+    let (url, token, _cluster) = match &args.run.connect.coordinator {
         Some(url) => {
-            let token = crate::jobs_cmd::client_token(args.connect.token_file.as_deref())?;
+            let token = crate::jobs_cmd::client_token(args.run.connect.token_file.as_deref())?;
             (url.clone(), token, None)
         }
         None => {
             // The embedded coordinator checks the job against the limits given here.
-            let limits = args.limits.to_args();
+            let limits = args.run.limits.to_args();
             let limits: Vec<&str> = limits.iter().map(String::as_str).collect();
             let c = LocalCluster::start_with(
-                args.workers.max(1),
-                args.cluster_logs.as_deref(),
+                args.run.workers.max(1),
+                args.run.cluster_logs.as_deref(),
                 &limits,
             )?;
             (c.url.clone(), c.client_token.clone(), Some(c))
@@ -124,17 +126,21 @@ pub fn run(args: &RenderArgs) -> Result<String> {
         anyhow::Ok((status, files))
     })?;
     let mut s = String::new();
-    let where_ = if args.connect.coordinator.is_some() {
+    let where_ = if args.run.connect.coordinator.is_some() {
         format!("coordinator {url}")
     } else {
-        format!("an embedded cluster of {} workers", args.workers.max(1))
+        format!("an embedded cluster of {} workers", args.run.workers.max(1))
+    };
+    let size = if plan.grids {
+        format!("{} grid points", plan.width)
+    } else {
+        format!("{}×{}", plan.width, plan.height)
     };
     let _ = writeln!(
         s,
-        "rendered {} ({}×{}, {}, {} spp, {} tiles) through {where_} in {:.2} s (job {})",
+        "{} {} ({size}, {}, {} spp, {} tiles) through {where_} in {:.2} s (job {})",
+        if plan.grids { "computed" } else { "rendered" },
         args.scene.display(),
-        plan.width,
-        plan.height,
         plan.integrator,
         plan.samples_per_pixel,
         status.tiles_total,
@@ -185,7 +191,7 @@ fn run_variants(args: &RenderArgs) -> Result<String> {
 }
 
 fn run_in_process(args: &RenderArgs) -> Result<String> {
-    let limits: Limits = (&args.limits).into();
+    let limits: Limits = (&args.run.limits).into();
     let mut scene = load_scene(&args.scene, &limits)?;
     let spec = job_spec(args, 0)?;
     let plan = Plan::new(&scene, &spec.render, &limits, &args.scene)?;
@@ -227,6 +233,18 @@ fn run_in_process(args: &RenderArgs) -> Result<String> {
     );
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
+    if plan.grids {
+        let written = write_grid_results(&args.out, frame, &name, &info)?;
+        let mut s = format!(
+            "computed {} points of {} in {render_s:.2} s after {prepare_s:.2} s of preparation\n",
+            plan.width,
+            args.scene.display()
+        );
+        for f in written.files {
+            let _ = writeln!(s, "wrote {}", args.out.join(f).display());
+        }
+        return Ok(s);
+    }
     let written = write_results(
         &args.out,
         frame,

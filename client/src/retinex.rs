@@ -161,7 +161,7 @@ pub fn run(args: &RetinexArgs) -> Result<String> {
 
 /// `restauro display --false-colour luminance`: the luminance map with its isolines and legend.
 fn false_colour(args: &DisplayArgs, image: &XyzImage) -> Result<String> {
-    use restauro_image::false_colour::{FalseColour, LEGEND_PX, Range, picture};
+    use restauro_image::false_colour::{FalseColour, LEGEND_PX, Range, Unit, picture};
     let range = match &args.range {
         Some(text) => {
             let (min, max) = text
@@ -176,7 +176,7 @@ fn false_colour(args: &DisplayArgs, image: &XyzImage) -> Result<String> {
         }
         None => Range::auto(&image.pixels, args.scale),
     };
-    let fc = FalseColour { scale: args.scale, range, bands: args.bands };
+    let fc = FalseColour { scale: args.scale, range, bands: args.bands, unit: Unit::default() };
     let rgb = picture(&image.pixels, image.width, &fc);
     let height = image.height + LEGEND_PX;
     write_png(
@@ -191,8 +191,8 @@ fn false_colour(args: &DisplayArgs, image: &XyzImage) -> Result<String> {
         "wrote {}: luminance in false colour, {} scale from {} to {} cd/m², {} bands\n",
         args.out.display(),
         args.scale,
-        range.min_cd_m2,
-        range.max_cd_m2,
+        range.min,
+        range.max,
         args.bands
     ))
 }

@@ -7,7 +7,7 @@ use crate::farm::Farm;
 use crate::ids::JobId;
 use crate::job::JobRecord;
 use restauro_image::framebuffer::{Framebuffer, TileLayout};
-use restauro_image::results::{ResultOptions, write_results};
+use restauro_image::results::{ResultOptions, write_grid_results, write_results};
 use restauro_spectral::retinex::RetinexParams;
 use std::sync::Arc;
 use std::time::Instant;
@@ -87,13 +87,19 @@ fn files(farm: &Arc<Farm>, record: &JobRecord) -> Result<Vec<String>, Outcome> {
     let dir = farm.results_dir(id);
     std::fs::create_dir_all(&dir)
         .map_err(|e| Outcome::Failed(format!("{}: {e}", dir.display())))?;
+    let stem = record.spec.name.file_stem();
+    let info = record.info();
+    if plan.grids {
+        let written = write_grid_results(&dir, frame, &stem, &info)
+            .map_err(|e| Outcome::Failed(e.to_string()))?;
+        info!("grids written");
+        return Ok(written.files);
+    }
     let retinex = farm.config.retinex.then(|| RetinexParams {
         paths: record.spec.retinex.paths,
         seed: record.spec.retinex.seed,
         ..RetinexParams::default()
     });
-    let stem = record.spec.name.file_stem();
-    let info = record.info();
     let options =
         ResultOptions { name: &stem, info: &info, exposure: record.spec.exposure, retinex };
     let written =

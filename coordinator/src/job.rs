@@ -216,6 +216,7 @@ impl JobRecord {
             sky: false,
             lit: false,
             tile: 1,
+            grids: false,
         };
         let was_final = matches!(
             old.get("state").and_then(|s| s.as_str()),
@@ -271,6 +272,7 @@ mod tests {
             sky: false,
             lit: false,
             tile: 8,
+            grids: false,
         };
         JobRecord::new(JobId::from("j"), JobSpec::default(), "{}".into(), plan, 0)
     }

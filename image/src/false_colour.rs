@@ -34,11 +34,30 @@ impl fmt::Display for Scale {
     }
 }
 
-/// The luminances at the ends of the colour bar, cd/m².
+/// The values at the ends of the colour bar, in the picture's [`Unit`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Range {
-    pub min_cd_m2: f64,
-    pub max_cd_m2: f64,
+    pub min: f64,
+    pub max: f64,
+}
+
+/// What a false-colour picture shows, named in its legend.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Unit {
+    /// Luminance, cd/m² (a render's Y).
+    #[default]
+    CandelaPerSquareMetre,
+    /// Illuminance, lx (a calculation grid's Y).
+    Lux,
+}
+
+impl Unit {
+    pub fn symbol(self) -> &'static str {
+        match self {
+            Unit::CandelaPerSquareMetre => "cd/m²",
+            Unit::Lux => "lx",
+        }
+    }
 }
 
 impl Range {
@@ -55,7 +74,7 @@ impl Range {
                 "the range {min_cd_m2}:{max_cd_m2} cd/m²: a log scale starts above 0 cd/m²"
             ));
         }
-        Ok(Range { min_cd_m2, max_cd_m2 })
+        Ok(Range { min: min_cd_m2, max: max_cd_m2 })
     }
 
     /// The range chosen for an image: whole decades around the 1st and 99th percentiles of its
@@ -67,9 +86,9 @@ impl Range {
             Scale::Log => {
                 let min = 10f64.powf(p1.log10().floor());
                 let max = 10f64.powf(p99.log10().ceil()).max(min * 10.0);
-                Range { min_cd_m2: min, max_cd_m2: max }
+                Range { min, max }
             }
-            Scale::Linear => Range { min_cd_m2: 0.0, max_cd_m2: nice_above(p99) },
+            Scale::Linear => Range { min: 0.0, max: nice_above(p99) },
         }
     }
 }
@@ -86,14 +105,14 @@ pub fn percentiles(pixels: &[[f32; 3]]) -> [f64; 3] {
 }
 
 /// The least of 1, 2 or 5 times a power of ten that is at least `v`.
-fn nice_above(v: f64) -> f64 {
+pub fn nice_above(v: f64) -> f64 {
     let decade = 10f64.powf(v.max(f64::MIN_POSITIVE).log10().floor());
     [1.0, 2.0, 5.0, 10.0].iter().map(|m| m * decade).find(|n| *n >= v).unwrap_or(10.0 * decade)
 }
 
 /// Where luminance `y` falls on the scale from `range.min` to `range.max` (0–1, clamped).
 pub fn position(y: f64, scale: Scale, range: Range) -> f64 {
-    let Range { min_cd_m2: min, max_cd_m2: max } = range;
+    let Range { min, max } = range;
     match scale {
         Scale::Log if y <= 0.0 => 0.0,
         Scale::Log => ((y.log10() - min.log10()) / (max.log10() - min.log10())).clamp(0.0, 1.0),
@@ -103,7 +122,7 @@ pub fn position(y: f64, scale: Scale, range: Range) -> f64 {
 
 /// The luminance at `t` (0–1) along the scale.
 pub fn value_at(t: f64, scale: Scale, range: Range) -> f64 {
-    let Range { min_cd_m2: min, max_cd_m2: max } = range;
+    let Range { min, max } = range;
     match scale {
         Scale::Log => 10f64.powf(min.log10() + t * (max.log10() - min.log10())),
         Scale::Linear => min + t * (max - min),
@@ -117,6 +136,7 @@ pub struct FalseColour {
     pub range: Range,
     /// The bands between isolines: an isoline at each of the `bands − 1` inner levels (0: none).
     pub bands: u32,
+    pub unit: Unit,
 }
 
 /// The height of the legend strip below the image, in pixels.
@@ -155,7 +175,7 @@ fn legend(width: usize, fc: &FalseColour) -> Vec<u8> {
             strip.set(x, y, colour);
         }
     }
-    let unit = "cd/m²";
+    let unit = fc.unit.symbol();
     let unit_x = right.saturating_sub(text_width(unit));
     strip.text(unit_x, 22, unit);
     let levels = fc.bands.max(1);
@@ -239,7 +259,7 @@ fn text_width(text: &str) -> usize {
 }
 
 /// A glyph of the legend's font: its width and its five rows, high bit on the left. Only what
-/// a value and the unit need (digits, `.`, `-`, `+`, `e`, `c`, `d`, `/`, `m`, `²`).
+/// a value and the units need (digits, `.`, `-`, `+`, `e`, `c`, `d`, `/`, `m`, `²`, `l`, `x`).
 fn glyph(c: char) -> (usize, [u8; 5]) {
     match c {
         '0' => (3, [0b111, 0b101, 0b101, 0b101, 0b111]),
@@ -261,6 +281,8 @@ fn glyph(c: char) -> (usize, [u8; 5]) {
         '/' => (3, [0b001, 0b001, 0b010, 0b100, 0b100]),
         'm' => (5, [0, 0b11110, 0b10101, 0b10101, 0b10101]),
         '²' => (3, [0b110, 0b001, 0b010, 0b111, 0]),
+        'l' => (1, [1, 1, 1, 1, 1]),
+        'x' => (3, [0, 0b101, 0b010, 0b010, 0b101]),
         _ => (3, [0; 5]),
     }
 }
@@ -304,6 +326,7 @@ mod tests {
             scale: Scale::Linear,
             range: Range::new(0.0, 100.0, Scale::Linear).unwrap(),
             bands: 4,
+            unit: Unit::CandelaPerSquareMetre,
         };
         let rgb = picture(&pixels, w, &fc);
         assert_eq!(rgb.len(), w * (h + LEGEND_PX) * 3);

@@ -50,6 +50,40 @@ fn write_display_png(
     Ok(())
 }
 
+/// The EXR attribute that marks a calculation grid's irradiance, and says how to read it.
+pub const GRID_UNITS: &str = "illuminance: Y in lux (K_m = 683 lm/W); a column per grid point, \
+                              row 0 direct, row 1 indirect";
+
+/// Writes a finished calculation of the scene's grids (`Plan::grids`) into `dir`: one EXR,
+/// `<name>.exr`, whose Y is illuminance in lux (with the 81 bands of the spectral irradiance
+/// when kept). There is no picture to show and nothing for the Retinex to adapt to: the
+/// client makes the grids' tables and maps from it.
+pub fn write_grid_results(
+    dir: &Path,
+    frame: Framebuffer,
+    name: &str,
+    info: &str,
+) -> Result<Written, ResultsError> {
+    let image = XyzImage {
+        width: frame.width as usize,
+        height: frame.height as usize,
+        pixels: frame.xyz,
+        emitter: None,
+        lit_by: None,
+    };
+    let attrs = [("restauroRender", info), ("restauroXyzUnits", GRID_UNITS)];
+    let file = format!("{name}.exr");
+    match frame.spectral {
+        Some(planes) => {
+            let bands =
+                planes.into_iter().enumerate().map(|(i, v)| (wavelength_nm(i), v)).collect();
+            write_spectral_exr(&dir.join(&file), &image, bands, &attrs)?;
+        }
+        None => write_xyz_exr(&dir.join(&file), &image, &attrs)?,
+    }
+    Ok(Written { files: vec![file], retinex_s: 0.0 })
+}
+
 /// Writes a finished render's files into `dir`.
 pub fn write_results(
     dir: &Path,

@@ -74,6 +74,7 @@ impl TryFrom<pb::RenderOptions> for RenderOptions {
             height: o.height,
             spectral: o.spectral,
             tile: o.tile,
+            grids: o.grids,
         })
     }
 }
@@ -88,6 +89,7 @@ impl From<&RenderOptions> for pb::RenderOptions {
             height: o.height,
             spectral: o.spectral,
             tile: o.tile,
+            grids: o.grids,
         }
     }
 }
@@ -178,6 +180,7 @@ impl From<&Plan> for pb::Plan {
             sky: p.sky,
             lit: p.lit,
             tile: p.tile,
+            grids: p.grids,
         }
     }
 }
@@ -201,6 +204,7 @@ impl TryFrom<pb::Plan> for Plan {
             sky: p.sky,
             lit: p.lit,
             tile: p.tile,
+            grids: p.grids,
         })
     }
 }
@@ -268,6 +272,7 @@ mod tests {
                 height: None,
                 spectral: true,
                 tile: Some(32),
+                grids: true,
             },
             exposure: Exposure::Absolute { white_cd_m2: 120.0 },
             retinex: RetinexOptions::new(Some(40), Some(7)).unwrap(),
@@ -312,6 +317,7 @@ mod tests {
             sky: true,
             lit: true,
             tile: 16,
+            grids: true,
         };
         assert_eq!(Plan::try_from(pb::Plan::from(&plan)).unwrap(), plan);
         let unspecified = pb::Plan { integrator: 0, ..pb::Plan::from(&plan) };

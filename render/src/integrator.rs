@@ -55,7 +55,7 @@ fn lit_mask(lux: &LitLux) -> u32 {
 /// A local frame around a normal (Duff et al., "Building an orthonormal basis, revisited",
 /// JCGT 6(1), 2017).
 #[derive(Clone, Copy)]
-struct Frame {
+pub(crate) struct Frame {
     x: Vec3A,
     y: Vec3A,
     z: Vec3A,
@@ -63,7 +63,7 @@ struct Frame {
 
 impl Frame {
     #[inline]
-    fn new(n: Vec3A) -> Self {
+    pub(crate) fn new(n: Vec3A) -> Self {
         let sign = 1.0f32.copysign(n.z);
         let a = -1.0 / (sign + n.z);
         let b = n.x * n.y * a;
@@ -78,7 +78,7 @@ impl Frame {
         Vec3A::new(v.dot(self.x), v.dot(self.y), v.dot(self.z))
     }
     #[inline]
-    fn to_world(self, v: Vec3A) -> Vec3A {
+    pub(crate) fn to_world(self, v: Vec3A) -> Vec3A {
         self.x * v.x + self.y * v.y + self.z * v.z
     }
 }
@@ -86,8 +86,14 @@ impl Frame {
 /// Rays leave a surface from a point lifted off it, against self-intersection in f32.
 #[inline]
 pub fn lift(hit: &Hit) -> Vec3A {
-    let scale = 1.0 + hit.point.abs().max_element();
-    hit.point + hit.normal * (2e-5 * scale)
+    lift_along(hit.point, hit.normal)
+}
+
+/// `point` lifted off its surface along the unit `normal`.
+#[inline]
+pub fn lift_along(point: Vec3A, normal: Vec3A) -> Vec3A {
+    let scale = 1.0 + point.abs().max_element();
+    point + normal * (2e-5 * scale)
 }
 
 /// What the light arriving at a vertex is multiplied by on its way to the camera: one at the
@@ -225,6 +231,29 @@ pub fn add_radiance(
     rays: &mut u64,
     out: &mut Spectrum,
 ) -> Seen {
+    trace(scene, (origin, direction), Escape::SeesSky, sampler, rays, out)
+}
+
+/// What a ray that meets no surface adds.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub enum Escape {
+    /// The sky's radiance: a camera ray.
+    SeesSky,
+    /// Nothing: a calculation grid's ray for its indirect light (the sky's direct light is
+    /// sampled at the sensor itself).
+    Nothing,
+}
+
+/// The radiance arriving at `origin` along the ray, as [`add_radiance`] computes it, with
+/// `escape` saying whether a ray that meets nothing sees the sky.
+pub fn trace(
+    scene: &PreparedScene,
+    (origin, direction): (Vec3A, Vec3A),
+    escape: Escape,
+    sampler: &mut PixelSampler,
+    rays: &mut u64,
+    out: &mut Spectrum,
+) -> Seen {
     let mut lux: LitLux = [0.0; LIT_BITS];
     // Whitted's bounces are neutral (Fresnel of a dielectric); the path tracer's become spectral
     // at its first bounce.
@@ -239,7 +268,7 @@ pub fn add_radiance(
         *rays += 1;
         let Some(hit) = scene.intersect(origin, direction, f32::INFINITY) else {
             if depth == 0 {
-                if let Some(sky) = &scene.sky {
+                if let Some(sky) = scene.sky.as_ref().filter(|_| escape == Escape::SeesSky) {
                     out.add_scaled(&sky.per_nit, sky.luminance_cd_m2(direction));
                 }
                 return Seen { sky: true, lit_by: 0 };

@@ -1,7 +1,8 @@
 //! restauro-render: the spectral tracer as a library — scene preparation with a CWBVH
 //! ([`prepared`]), the pinhole [`camera`], keyed [`sampler`], the [`bsdf`]s, photometric
-//! [`light`]s, the Whitted and path [`integrator`]s and [`tile`] rendering. It knows nothing of
-//! the network: the worker process and `restauro render --in-process` both call it.
+//! [`light`]s, the Whitted and path [`integrator`]s, the calculation grids' [`sensor`]s and
+//! [`tile`] rendering. It knows nothing of the network: the worker process and `restauro render
+//! --in-process` both call it.
 
 pub mod bsdf;
 pub mod camera;
@@ -9,4 +10,5 @@ pub mod integrator;
 pub mod light;
 pub mod prepared;
 pub mod sampler;
+pub mod sensor;
 pub mod tile;

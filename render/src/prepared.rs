@@ -6,6 +6,7 @@ use crate::bsdf::Bsdf;
 use crate::camera::Camera;
 use crate::light::{Distribution, Light, Sky};
 use crate::sampler::Strata;
+use crate::sensor::Sensor;
 use glam::Vec3A;
 use obvhs::BvhBuildParams;
 use obvhs::cwbvh::CwBvh;
@@ -36,6 +37,8 @@ pub struct Settings {
     pub samples_per_pixel: u32,
     pub max_depth: u32,
     pub seed: u64,
+    /// Compute the scene's calculation grids rather than its camera's image (`Plan::grids`).
+    pub grids: bool,
 }
 
 impl From<&Plan> for Settings {
@@ -45,6 +48,7 @@ impl From<&Plan> for Settings {
             samples_per_pixel: plan.samples_per_pixel,
             max_depth: plan.max_depth,
             seed: plan.seed,
+            grids: plan.grids,
         }
     }
 }
@@ -62,6 +66,8 @@ pub struct PreparedScene {
     pub lights: Vec<Light>,
     /// The sky, sampled over the hemisphere (at most one: the loader refuses two).
     pub sky: Option<Sky>,
+    /// The sensors of every calculation grid, in the grids' order.
+    pub sensors: Vec<Sensor>,
 }
 
 /// A surface hit.
@@ -155,7 +161,18 @@ impl PreparedScene {
                 _ => lights.push(light(scene, l)?),
             }
         }
+        let sensors = scene
+            .grids
+            .iter()
+            .flat_map(|g| {
+                let normal = Vec3A::from(g.normal.map(|x| x as f32));
+                g.points
+                    .iter()
+                    .map(move |p| Sensor { point: Vec3A::from(p.map(|x| x as f32)), normal })
+            })
+            .collect();
         Ok(Self {
+            sensors,
             camera: Camera::new(&scene.camera),
             strata: Strata::new(settings.samples_per_pixel),
             settings,
@@ -187,6 +204,7 @@ impl PreparedScene {
             + self.material_of.len() * size_of::<u32>()
             + self.materials.len() * size_of::<Bsdf>()
             + self.lights.iter().map(Light::memory_bytes).sum::<usize>()
+            + self.sensors.len() * size_of::<Sensor>()
     }
 
     /// The closest hit along the ray within (tmin, tmax).

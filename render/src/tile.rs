@@ -6,6 +6,7 @@
 use crate::integrator::{LIT_BITS, add_radiance};
 use crate::prepared::PreparedScene;
 use crate::sampler::{PixelKey, PixelSampler};
+use crate::sensor::{self, Component};
 use glam::Vec3A;
 use rayon::prelude::*;
 use restauro_spectral::Spectrum;
@@ -72,6 +73,10 @@ fn keyed_camera_ray(
 /// lights that light the first hits of more than half of them.
 #[inline]
 fn pixel_sum(scene: &PreparedScene, x: u32, y: u32, rays: &mut u64) -> (Spectrum, u32, u32) {
+    if scene.settings.grids {
+        // Sensor x's direct (row 0) or indirect (row 1) irradiance.
+        return (sensor::irradiance_sum(scene, x, Component::of_row(y), rays), 0, 0);
+    }
     let key = PixelKey::new(scene.settings.seed, x, y);
     let mut sum = Spectrum::ZERO;
     let mut sky = 0;
@@ -101,8 +106,9 @@ pub fn pixel_counted(scene: &PreparedScene, x: u32, y: u32, rays: &mut u64) -> S
 /// (kept only then: a row of spectra is 81 times the size of its XYZ).
 pub fn render_tile(scene: &PreparedScene, rect: Rect, spectral: bool) -> TileResult {
     type Row = (Vec<[f32; 3]>, Option<Vec<Spectrum>>, Option<Vec<f32>>, Option<Vec<u32>>, u64);
-    let has_sky = scene.sky.is_some();
-    let has_lights = !scene.lights.is_empty();
+    // A grid's sensors see no sky and have no frameworks of illumination (`Plan::new`).
+    let has_sky = scene.sky.is_some() && !scene.settings.grids;
+    let has_lights = !scene.lights.is_empty() && !scene.settings.grids;
     let rows: Vec<Row> = (rect.y..rect.y + rect.height)
         .into_par_iter()
         .map(|y| {
@@ -113,9 +119,28 @@ pub fn render_tile(scene: &PreparedScene, rect: Rect, spectral: bool) -> TileRes
             let mut sky = has_sky.then(|| Vec::with_capacity(width));
             let mut lit = has_lights.then(|| Vec::with_capacity(width));
             let mean = 1.0 / scene.settings.samples_per_pixel.max(1) as f32;
+            // A grid's tile is two rows of sensors, each costly: its sensors run in parallel.
+            let sums: Vec<(Spectrum, u32, u32, u64)> = if scene.settings.grids {
+                (rect.x..rect.x + rect.width)
+                    .into_par_iter()
+                    .map(|x| {
+                        let mut rays = 0;
+                        let (sum, sky, lit) = pixel_sum(scene, x, y, &mut rays);
+                        (sum, sky, lit, rays)
+                    })
+                    .collect()
+            } else {
+                Vec::new()
+            };
             for x in rect.x..rect.x + rect.width {
                 // The film is linear: the XYZ of the sum, scaled, is the XYZ of the mean.
-                let (sum, saw_sky, lit_by) = pixel_sum(scene, x, y, &mut rays);
+                let (sum, saw_sky, lit_by) = match sums.get((x - rect.x) as usize) {
+                    Some(&(sum, sky, lit, sensor_rays)) => {
+                        rays += sensor_rays;
+                        (sum, sky, lit)
+                    }
+                    None => pixel_sum(scene, x, y, &mut rays),
+                };
                 xyz.push(film_xyz(&sum).map(|v| v * mean));
                 if let Some(s) = &mut spectra {
                     s.push(sum * mean);

@@ -64,6 +64,7 @@ fn settings(scene: &LoadedScene) -> Settings {
         samples_per_pixel: r.samples_per_pixel,
         max_depth: r.max_depth,
         seed: r.seed,
+        grids: false,
     }
 }
 

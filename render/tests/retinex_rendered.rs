@@ -20,6 +20,7 @@ fn prepare(dir: &std::path::Path, toml: &str) -> PreparedScene {
         samples_per_pixel: r.samples_per_pixel,
         max_depth: r.max_depth,
         seed: r.seed,
+        grids: false,
     };
     PreparedScene::new(&loaded, None, settings).unwrap()
 }

@@ -17,6 +17,7 @@ pub mod edit;
 pub mod folder;
 pub mod gltf_export;
 pub mod gltf_mesh;
+pub mod grid;
 pub mod guard;
 pub mod job;
 pub mod limits;

@@ -166,6 +166,8 @@ pub struct LoadedScene {
     pub spectra: BTreeMap<String, Spectrum>,
     pub objects: Vec<LoadedObject>,
     pub lights: Vec<ResolvedLight>,
+    /// The calculation grids, in the file's order.
+    pub grids: Vec<crate::grid::ResolvedGrid>,
     /// Things done to the data that the user should know (extrapolation, dropped triangles,
     /// materials without a state a variant asks for).
     pub notes: Vec<String>,
@@ -1317,6 +1319,7 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
     }
 
     check_annotations(&ctx, &file, &objects)?;
+    let grids = crate::grid::resolve_grids(&ctx.path, &file.grids)?;
 
     // Variants.
     let states = ["base", "degraded", "cleaned"];
@@ -1357,7 +1360,7 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
     }
 
     let Ctx { notes, spectra, .. } = ctx;
-    Ok(LoadedScene { camera, spectra, objects, lights, notes, file })
+    Ok(LoadedScene { camera, spectra, objects, lights, grids, notes, file })
 }
 
 /// An illuminance (sun or sky): finite, ≥ 0 and at most [`MAX_ILLUMINANCE_LUX`].

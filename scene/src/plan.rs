@@ -30,6 +30,10 @@ pub struct RenderOptions {
     pub spectral: bool,
     /// The tile edge in pixels; `None` chooses one (see [`auto_tile`]).
     pub tile: Option<u32>,
+    /// Compute the illuminance at the scene's calculation grids instead of the camera's image
+    /// (see [`Plan::grids`]). Absent in jobs stored before grids existed.
+    #[serde(default)]
+    pub grids: bool,
 }
 
 impl RenderOptions {
@@ -63,12 +67,21 @@ pub struct Plan {
     pub lit: bool,
     /// The tile edge in pixels; the tiles follow from it and the image size ([`Plan::tile`]).
     pub tile: u32,
+    /// The "image" is the scene's calculation grids: one column per sensor point (all the
+    /// grids' points in file order), row 0 its direct and row 1 its indirect spectral
+    /// irradiance, whose Y is illuminance in lux. Tiles of sensors run on the farm as tiles of
+    /// pixels do, so the grids compute identically in-process and on any cluster.
+    #[serde(default)]
+    pub grids: bool,
 }
 
 /// The lights with a bit of their own in a pixel's mask of the lights that light it (in the
 /// scene's order, the sky not counted); lights beyond the last share its bit. 24, so that a
 /// mask is an exact integer in an f32 image channel.
 pub const LIT_BITS: usize = 24;
+
+/// The rows of a grids plan: the direct irradiance, then the indirect.
+pub const SENSOR_ROWS: u32 = 2;
 
 /// A tile edge that gives an image of `width × height` about 48 tiles or more (so each of
 /// several workers gets several, and a lost worker costs little), a multiple of 16 between 16
@@ -132,8 +145,23 @@ impl Plan {
             ));
         }
         let render = &scene.file.render;
-        let width = options.width.unwrap_or(scene.camera.width);
-        let height = options.height.unwrap_or(scene.camera.height);
+        let (width, height) = if options.grids {
+            let points: usize = scene.grids.iter().map(|g| g.points.len()).sum();
+            if points == 0 {
+                return Err(SceneError::invalid(
+                    path,
+                    "grids",
+                    "the scene has no calculation grid; add a [[grids]] table (see \
+                     docs/scene-format.md)",
+                ));
+            }
+            (u32::try_from(points).unwrap_or(u32::MAX), SENSOR_ROWS)
+        } else {
+            (
+                options.width.unwrap_or(scene.camera.width),
+                options.height.unwrap_or(scene.camera.height),
+            )
+        };
         let plan = Plan {
             width,
             height,
@@ -143,9 +171,20 @@ impl Plan {
             max_depth: render.max_depth,
             seed: render.seed,
             spectral: options.spectral,
-            sky: scene.lights.iter().any(|l| matches!(l, crate::load::ResolvedLight::Sky { .. })),
-            lit: scene.lights.iter().any(|l| !matches!(l, crate::load::ResolvedLight::Sky { .. })),
-            tile: options.tile.unwrap_or_else(|| auto_tile(width, height)),
+            // A sensor sees no sky and has no frameworks of illumination.
+            sky: !options.grids
+                && scene.lights.iter().any(|l| matches!(l, crate::load::ResolvedLight::Sky { .. })),
+            lit: !options.grids
+                && scene
+                    .lights
+                    .iter()
+                    .any(|l| !matches!(l, crate::load::ResolvedLight::Sky { .. })),
+            tile: options.tile.unwrap_or_else(|| match options.grids {
+                // A strip two sensors high: about 48 tiles along it.
+                true => width.div_ceil(48).next_multiple_of(16).clamp(16, 4096),
+                false => auto_tile(width, height),
+            }),
+            grids: options.grids,
         };
         plan.check(limits, path)?;
         Ok(plan)

@@ -82,6 +82,39 @@ pub struct SceneFile {
     /// Notes pinned to the model (the studio's annotations). Not written when there are none.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub annotations: Vec<Annotation>,
+    /// Calculation grids: the points whose illuminance `restauro illuminance` computes. Not
+    /// written when there are none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub grids: Vec<Grid>,
+}
+
+/// A calculation grid (a lighting designer's calculation surface): virtual sensors that cast
+/// no shadow and that the camera does not see. Either a rectangle (`origin`, `u`, `v`,
+/// `divisions`: a point at the centre of each cell) or a list of `points`; the illuminance is
+/// computed on the side `normal` faces (by default u × v).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Grid {
+    /// Its name, one per grid (it names its output files).
+    pub name: String,
+    /// One corner of the rectangle (m).
+    #[serde(default, deserialize_with = "vec3::opt_origin")]
+    pub origin: Option<[f64; 3]>,
+    /// One edge of the rectangle, from `origin` (m).
+    #[serde(default, deserialize_with = "vec3::opt_u")]
+    pub u: Option<[f64; 3]>,
+    /// The other edge, from `origin` (m).
+    #[serde(default, deserialize_with = "vec3::opt_v")]
+    pub v: Option<[f64; 3]>,
+    /// The cells along `u` and along `v`.
+    #[serde(default)]
+    pub divisions: Option<Vec<u32>>,
+    /// Instead of a rectangle: the points themselves (m).
+    #[serde(default, deserialize_with = "vec3::opt_points")]
+    pub points: Option<Vec<[f64; 3]>>,
+    /// The direction the sensors face (required with `points`).
+    #[serde(default, deserialize_with = "vec3::opt_normal")]
+    pub normal: Option<[f64; 3]>,
 }
 
 /// A note pinned to a point of the model, or to a part: what a surveyor or a restorer wrote
@@ -667,6 +700,48 @@ mod vec3 {
         aim, opt_aim => "aim";
         translate, opt_translate => "translate";
         rotate_deg, opt_rotate_deg => "rotate_deg";
+        origin, opt_origin => "origin";
+        u, opt_u => "u";
+        v, opt_v => "v";
+        normal, opt_normal => "normal";
+    }
+
+    /// A list of points, each exactly three numbers.
+    struct Points;
+
+    impl<'de> Visitor<'de> for Points {
+        type Value = Option<Vec<[f64; 3]>>;
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            write!(f, "a list of points [[x, y, z], …] for `points`")
+        }
+        fn visit_none<E: de::Error>(self) -> Result<Self::Value, E> {
+            Ok(None)
+        }
+        fn visit_unit<E: de::Error>(self) -> Result<Self::Value, E> {
+            Ok(None)
+        }
+        fn visit_some<D: Deserializer<'de>>(self, d: D) -> Result<Self::Value, D::Error> {
+            d.deserialize_seq(Points)
+        }
+        fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
+            struct Point([f64; 3]);
+            impl<'de> Deserialize<'de> for Point {
+                fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+                    d.deserialize_seq(Three("points")).map(Point)
+                }
+            }
+            let mut out = Vec::new();
+            while let Some(Point(p)) = seq.next_element()? {
+                out.push(p);
+            }
+            Ok(Some(out))
+        }
+    }
+
+    pub(super) fn opt_points<'de, D: Deserializer<'de>>(
+        d: D,
+    ) -> Result<Option<Vec<[f64; 3]>>, D::Error> {
+        d.deserialize_option(Points)
     }
 }
 

@@ -82,8 +82,8 @@ pub async fn luminance(
         p1_cd_m2: p1,
         p50_cd_m2: p50,
         p99_cd_m2: p99,
-        scale_min_cd_m2: scale.min_cd_m2,
-        scale_max_cd_m2: scale.max_cd_m2,
+        scale_min_cd_m2: scale.min,
+        scale_max_cd_m2: scale.max,
     }))
 }
 

@@ -91,6 +91,7 @@ pub async fn take(
             height: Some(request.height),
             spectral: false,
             tile: None,
+            grids: false,
         },
         ..JobSpec::default()
     }

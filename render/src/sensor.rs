@@ -1,0 +1,133 @@
+//! Calculation grids: the spectral irradiance E(λ) (W·m⁻²·nm⁻¹) at a virtual sensor, a point
+//! with a facing direction that casts no shadow and that no ray meets. Its Y,
+//! K_m Σ E(λ) ȳ(λ) Δλ, is the illuminance in lux, computed from all 81 bands.
+//!
+//! * **Direct**: every point or distant light exactly, E⊥(λ) cos θ behind a shadow ray (the
+//!   same terms the integrators use, Rossi et al. Eq. 8), plus one sample per sample of the sky:
+//!   a cosine-weighted direction (pdf cos θ/π), so E = π · L_sky(ω) when the sky is open there.
+//! * **Indirect** (the path integrator only): a cosine-weighted direction, and π times the
+//!   radiance the surfaces it meets reflect back along it, followed as the path integrator
+//!   follows a camera ray (`render.max_depth` surfaces, 0 for no cap). Whitted has no diffuse
+//!   inter-reflection (the paper's ray tracing), so its indirect illuminance is zero.
+//!
+//! The first direction of each sample is stratified over the samples as a pixel's position is.
+//! Each of a sensor's two rows has its own keyed random sequence, so the grids are bit-identical
+//! wherever their tiles are computed.
+
+use crate::integrator::{Escape, Frame, lift_along, trace};
+use crate::prepared::PreparedScene;
+use crate::sampler::PixelKey;
+use glam::Vec3A;
+use restauro_scene::scene_file::Integrator;
+use restauro_spectral::Spectrum;
+use std::f32::consts::PI;
+
+/// A sensor of a calculation grid.
+#[derive(Clone, Copy, Debug)]
+pub struct Sensor {
+    pub point: Vec3A,
+    /// Unit; the side whose illuminance is computed.
+    pub normal: Vec3A,
+}
+
+/// What a sensor's row holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Component {
+    Direct,
+    Indirect,
+}
+
+impl Component {
+    /// The component of row `row` of a grids plan (see `Plan::grids`).
+    pub fn of_row(row: u32) -> Self {
+        if row == 0 { Self::Direct } else { Self::Indirect }
+    }
+}
+
+/// The sum over the plan's samples of the `component` of sensor `index`'s spectral irradiance
+/// (divide by the samples for the mean); `rays` counts the rays traced.
+pub fn irradiance_sum(
+    scene: &PreparedScene,
+    index: u32,
+    component: Component,
+    rays: &mut u64,
+) -> Spectrum {
+    let mut sum = Spectrum::ZERO;
+    let Some(sensor) = scene.sensors.get(index as usize) else { return sum };
+    let samples = scene.settings.samples_per_pixel.max(1);
+    let origin = lift_along(sensor.point, sensor.normal);
+    let frame = Frame::new(sensor.normal);
+    match component {
+        Component::Direct => {
+            // The lights are deltas: the same each sample, so added once for all of them.
+            add_lights(scene, sensor, origin, samples as f32, rays, &mut sum);
+            if scene.sky.is_none() {
+                return sum;
+            }
+        }
+        Component::Indirect if scene.settings.integrator == Integrator::Whitted => return sum,
+        Component::Indirect => {}
+    }
+    let key = PixelKey::new(scene.settings.seed, index, component as u32);
+    for s in 0..samples {
+        let mut sampler = key.sampler(s);
+        let (u, v) = sampler.next2();
+        let (u1, u2) = scene.strata.position(s, u, v);
+        let direction = frame.to_world(crate::bsdf::cosine_sample(u1, u2));
+        match component {
+            Component::Direct => add_sky(scene, origin, direction, rays, &mut sum),
+            Component::Indirect => {
+                let mut radiance = Spectrum::ZERO;
+                let ray = (origin, direction);
+                trace(scene, ray, Escape::Nothing, &mut sampler, rays, &mut radiance);
+                sum.add_scaled(&radiance, PI);
+            }
+        }
+    }
+    sum
+}
+
+/// `weight` times the irradiance of every point and distant light that reaches the sensor.
+fn add_lights(
+    scene: &PreparedScene,
+    sensor: &Sensor,
+    origin: Vec3A,
+    weight: f32,
+    rays: &mut u64,
+    out: &mut Spectrum,
+) {
+    for light in &scene.lights {
+        let Some(inc) = light.incident(sensor.point) else { continue };
+        let cos = inc.direction.dot(sensor.normal);
+        if cos <= 0.0 {
+            continue;
+        }
+        let reach =
+            if inc.distance.is_finite() { inc.distance * (1.0 - 1e-4) } else { f32::INFINITY };
+        *rays += 1;
+        if scene.occluded(origin, inc.direction, reach) {
+            continue;
+        }
+        out.add_scaled(inc.spectrum, inc.scale * cos * weight);
+    }
+}
+
+/// One sample of the sky's irradiance along a cosine-weighted `direction`:
+/// L · cos θ / (cos θ/π) = π L.
+fn add_sky(
+    scene: &PreparedScene,
+    origin: Vec3A,
+    direction: Vec3A,
+    rays: &mut u64,
+    out: &mut Spectrum,
+) {
+    let Some(sky) = &scene.sky else { return };
+    let luminance = sky.luminance_cd_m2(direction);
+    if luminance <= 0.0 {
+        return;
+    }
+    *rays += 1;
+    if !scene.occluded(origin, direction, f32::INFINITY) {
+        out.add_scaled(&sky.per_nit, luminance * PI);
+    }
+}

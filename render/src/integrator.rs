@@ -32,7 +32,8 @@ const LIT_SHARE: f32 = 0.1;
 /// What a camera sample saw besides its radiance.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Seen {
-    /// The ray escaped to the sky (so saw it, if there is one).
+    /// The ray saw a light source: it escaped to the sky (if there is one), or met an area
+    /// luminaire's emitting side.
     pub sky: bool,
     /// Bit k: light k (in the scene's order, the sky not counted) lights the camera ray's first
     /// hit, unoccluded, with at least a tenth of the direct illuminance there. Points lit by the
@@ -144,7 +145,7 @@ fn add_direct(
     let bsdf = &scene.materials[hit.material as usize];
     add_sky(scene, v, origin, weight, sampler, rays, out);
     for (i, light) in scene.lights.iter().enumerate() {
-        let Some(inc) = light.incident(hit.point) else { continue };
+        let Some(inc) = light.sampled_incident(hit.point, || sampler.next2()) else { continue };
         let cos = inc.direction.dot(hit.normal);
         if cos <= 0.0 {
             continue;
@@ -266,7 +267,17 @@ pub fn trace(
     };
     for depth in 0..max_depth {
         *rays += 1;
-        let Some(hit) = scene.intersect(origin, direction, f32::INFINITY) else {
+        let hit = scene.intersect(origin, direction, f32::INFINITY);
+        let reach = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
+        if let Some((panel, front)) = scene.panel_hit(origin, direction, reach) {
+            // An area luminaire in front of the surface: seen by a camera ray from its
+            // emitting side; it ends any other path, whose vertices sampled it already.
+            if depth == 0 && front && escape == Escape::SeesSky {
+                out.add_scaled(&panel.per_nit, panel.luminance_cd_m2);
+            }
+            return Seen { sky: depth == 0 && front, lit_by: lit_mask(&lux) };
+        }
+        let Some(hit) = hit else {
             if depth == 0 {
                 if let Some(sky) = scene.sky.as_ref().filter(|_| escape == Escape::SeesSky) {
                     out.add_scaled(&sky.per_nit, sky.luminance_cd_m2(direction));

@@ -7,9 +7,15 @@
 //! ```
 //!
 //! and cos α is applied by the integrator; for the sun, E⊥(λ) = E_v · S_e(λ) / Σ K S_e Δλ.
-//! These are delta lights (a point or a direction), sampled exactly. The sky is the one
-//! extended source: a dome of luminance L_v(ω) (cd/m²) above the horizon, whose spectral radiance
-//! is L_v(ω) · S_e(λ) / Σ K(λ) S_e(λ) Δλ, sampled by the integrator over the hemisphere.
+//! These are delta lights (a point or a direction), sampled exactly. The extended sources are
+//! the sky, a dome of luminance L_v(ω) (cd/m²) above the horizon, whose spectral radiance is
+//! L_v(ω) · S_e(λ) / Σ K(λ) S_e(λ) Δλ, sampled by the integrator over the hemisphere; and area
+//! luminaires, Lambertian rectangles of one luminance, sampled by area: a point y drawn
+//! uniformly on a panel of area A gives a point x the estimate
+//!
+//! ```text
+//!   E⊥(λ) = L_v · A · cos θ_y / r² · S_e(λ) / Σ K S_e Δλ     (pdf 1/A; cos θ_x applied as above).
+//! ```
 
 use glam::Vec3A;
 use restauro_scene::photometric::Photometry;
@@ -43,6 +49,69 @@ pub enum Light {
     /// A distant source: `direction` towards it, `irradiance` E⊥(λ) on a surface facing it,
     /// whose illuminance is `illuminance_lux`.
     Distant { direction: Vec3A, irradiance: Spectrum, illuminance_lux: f32 },
+    /// An area luminaire, sampled by area ([`Panel::incident_from`]).
+    Area(Panel),
+}
+
+/// A Lambertian emitting rectangle: `corner` + s·`u` + t·`v` for s, t in [0, 1], emitting
+/// towards `normal` with luminance `luminance_cd_m2`.
+#[derive(Clone, Debug)]
+pub struct Panel {
+    pub corner: Vec3A,
+    pub u: Vec3A,
+    pub v: Vec3A,
+    pub normal: Vec3A,
+    pub area_m2: f32,
+    pub luminance_cd_m2: f32,
+    /// S_e(λ)/Σ K S_e Δλ: the spectral radiance of one cd/m².
+    pub per_nit: Spectrum,
+}
+
+impl Panel {
+    /// The light reaching `p` from the point at (s, t) of the panel, as one sample of area
+    /// sampling: nothing when `p` is behind the panel or in its plane.
+    #[inline]
+    pub fn incident_from(&self, p: Vec3A, s: f32, t: f32) -> Option<Incident<'_>> {
+        let y = self.corner + self.u * s + self.v * t;
+        let d = y - p;
+        let r2 = d.length_squared();
+        if r2 <= 0.0 {
+            return None;
+        }
+        let r = r2.sqrt();
+        let direction = d / r;
+        let cos_y = -direction.dot(self.normal);
+        if cos_y <= 0.0 {
+            return None;
+        }
+        let e = self.luminance_cd_m2 * self.area_m2 * cos_y / r2;
+        Some(Incident {
+            direction,
+            distance: r,
+            scale: e,
+            spectrum: &self.per_nit,
+            illuminance_lux: e,
+        })
+    }
+
+    /// Where the ray from `origin` along `direction` meets the panel before `tmax`, and
+    /// whether it meets its emitting side.
+    #[inline]
+    pub fn intersect(&self, origin: Vec3A, direction: Vec3A, tmax: f32) -> Option<(f32, bool)> {
+        let denom = direction.dot(self.normal);
+        if denom == 0.0 {
+            return None;
+        }
+        let t = (self.corner - origin).dot(self.normal) / denom;
+        if !(t > 0.0 && t < tmax) {
+            return None;
+        }
+        let q = origin + direction * t - self.corner;
+        // u ⟂ v (the loader checks it), so each coordinate is a projection.
+        let s = q.dot(self.u) / self.u.length_squared();
+        let w = q.dot(self.v) / self.v.length_squared();
+        ((0.0..=1.0).contains(&s) && (0.0..=1.0).contains(&w)).then_some((t, denom < 0.0))
+    }
 }
 
 /// The sky dome: its luminance over directions above the horizon (nothing comes from below it:
@@ -143,6 +212,30 @@ impl Light {
         std::mem::size_of::<Self>() + table
     }
 
+    /// One sample of the light reaching `p`: exact for a point or distant light (which draws
+    /// nothing from `draw`), a point drawn on an area luminaire's panel.
+    #[inline]
+    pub fn sampled_incident(
+        &self,
+        p: Vec3A,
+        draw: impl FnOnce() -> (f32, f32),
+    ) -> Option<Incident<'_>> {
+        match self {
+            Light::Area(panel) => {
+                let (s, t) = draw();
+                panel.incident_from(p, s, t)
+            }
+            _ => self.incident(p),
+        }
+    }
+
+    /// Whether the light is a point or a direction, the same at every sample.
+    pub fn is_delta(&self) -> bool {
+        !matches!(self, Light::Area(_))
+    }
+
+    /// The light reaching `p` from a point or distant light (`None` for an area luminaire,
+    /// which is sampled: [`Light::sampled_incident`]).
     #[inline]
     pub fn incident(&self, p: Vec3A) -> Option<Incident<'_>> {
         match self {
@@ -171,6 +264,8 @@ impl Light {
                 spectrum: irradiance,
                 illuminance_lux: *illuminance_lux,
             }),
+            // Extended: sampled by [`Light::sampled_incident`].
+            Light::Area(_) => None,
         }
     }
 }

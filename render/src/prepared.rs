@@ -4,7 +4,7 @@
 
 use crate::bsdf::Bsdf;
 use crate::camera::Camera;
-use crate::light::{Distribution, Light, Sky};
+use crate::light::{Distribution, Light, Panel, Sky};
 use crate::sampler::Strata;
 use crate::sensor::Sensor;
 use glam::Vec3A;
@@ -68,6 +68,8 @@ pub struct PreparedScene {
     pub sky: Option<Sky>,
     /// The sensors of every calculation grid, in the grids' order.
     pub sensors: Vec<Sensor>,
+    /// The area luminaires (also in `lights`), for the rays that meet them.
+    panels: Vec<Panel>,
 }
 
 /// A surface hit.
@@ -171,8 +173,16 @@ impl PreparedScene {
                     .map(move |p| Sensor { point: Vec3A::from(p.map(|x| x as f32)), normal })
             })
             .collect();
+        let panels = lights
+            .iter()
+            .filter_map(|l| match l {
+                Light::Area(p) => Some(p.clone()),
+                _ => None,
+            })
+            .collect();
         Ok(Self {
             sensors,
+            panels,
             camera: Camera::new(&scene.camera),
             strata: Strata::new(settings.samples_per_pixel),
             settings,
@@ -224,6 +234,26 @@ impl PreparedScene {
             normal,
             material: self.material_of[slot],
         })
+    }
+
+    /// The nearest area luminaire the ray meets before `tmax`, and whether on its emitting
+    /// side. Luminaires are not in the BVH: they cast no shadow on the light of others.
+    #[inline]
+    pub fn panel_hit(&self, origin: Vec3A, direction: Vec3A, tmax: f32) -> Option<(&Panel, bool)> {
+        let mut nearest = None;
+        let mut reach = tmax;
+        for p in &self.panels {
+            if let Some((t, front)) = p.intersect(origin, direction, reach) {
+                reach = t;
+                nearest = Some((p, front));
+            }
+        }
+        nearest
+    }
+
+    /// Whether the scene has a light source the camera can see: the sky or an area luminaire.
+    pub fn has_visible_sources(&self) -> bool {
+        self.sky.is_some() || !self.panels.is_empty()
     }
 
     /// Whether anything blocks the segment from `origin` along `direction` up to `distance`.
@@ -335,6 +365,18 @@ fn light(scene: &LoadedScene, l: &ResolvedLight) -> Result<Light, TraceError> {
             irradiance: luminous(scene, spectrum)? * (*illuminance_lux as f32),
             illuminance_lux: *illuminance_lux as f32,
         },
+        ResolvedLight::Area { panel, luminance_cd_m2, spectrum } => {
+            let v3 = |p: [f64; 3]| Vec3A::from(p.map(|x| x as f32));
+            Light::Area(Panel {
+                corner: v3(panel.corner),
+                u: v3(panel.u),
+                v: v3(panel.v),
+                normal: v3(panel.normal),
+                area_m2: panel.area_m2() as f32,
+                luminance_cd_m2: *luminance_cd_m2 as f32,
+                per_nit: luminous(scene, spectrum)?,
+            })
+        }
         ResolvedLight::Sky { .. } => {
             return Err(TraceError::Scene("the sky is not a delta light".into()));
         }

@@ -4,7 +4,8 @@
 //!
 //! * **Direct**: every point or distant light exactly, E⊥(λ) cos θ behind a shadow ray (the
 //!   same terms the integrators use, Rossi et al. Eq. 8), plus one sample per sample of the sky:
-//!   a cosine-weighted direction (pdf cos θ/π), so E = π · L_sky(ω) when the sky is open there.
+//!   a cosine-weighted direction (pdf cos θ/π), so E = π · L_sky(ω) when the sky is open there;
+//!   and of each area luminaire: a point of its panel, stratified over the samples.
 //! * **Indirect** (the path integrator only): a cosine-weighted direction, and π times the
 //!   radiance the surfaces it meets reflect back along it, followed as the path integrator
 //!   follows a camera ray (`render.max_depth` surfaces, 0 for no cap). Whitted has no diffuse
@@ -15,6 +16,7 @@
 //! wherever their tiles are computed.
 
 use crate::integrator::{Escape, Frame, lift_along, trace};
+use crate::light::Light;
 use crate::prepared::PreparedScene;
 use crate::sampler::PixelKey;
 use glam::Vec3A;
@@ -57,11 +59,12 @@ pub fn irradiance_sum(
     let samples = scene.settings.samples_per_pixel.max(1);
     let origin = lift_along(sensor.point, sensor.normal);
     let frame = Frame::new(sensor.normal);
+    let extended = scene.lights.iter().any(|l| !l.is_delta());
     match component {
         Component::Direct => {
-            // The lights are deltas: the same each sample, so added once for all of them.
-            add_lights(scene, sensor, origin, samples as f32, rays, &mut sum);
-            if scene.sky.is_none() {
+            // Point and distant lights are the same each sample: added once for all of them.
+            add_lights(scene, sensor, origin, (samples as f32, None), rays, &mut sum);
+            if scene.sky.is_none() && !extended {
                 return sum;
             }
         }
@@ -75,7 +78,15 @@ pub fn irradiance_sum(
         let (u1, u2) = scene.strata.position(s, u, v);
         let direction = frame.to_world(crate::bsdf::cosine_sample(u1, u2));
         match component {
-            Component::Direct => add_sky(scene, origin, direction, rays, &mut sum),
+            Component::Direct => {
+                add_sky(scene, origin, direction, rays, &mut sum);
+                if extended {
+                    // A point of each panel, stratified over the samples as the direction is.
+                    let (u, v) = sampler.next2();
+                    let at = scene.strata.position(s, u, v);
+                    add_lights(scene, sensor, origin, (1.0, Some(at)), rays, &mut sum);
+                }
+            }
             Component::Indirect => {
                 let mut radiance = Spectrum::ZERO;
                 let ray = (origin, direction);
@@ -87,17 +98,23 @@ pub fn irradiance_sum(
     sum
 }
 
-/// `weight` times the irradiance of every point and distant light that reaches the sensor.
+/// `weight` times the irradiance that reaches the sensor: from every point and distant light
+/// when `panel_point` is `None`, else from the point (s, t) of every area luminaire.
 fn add_lights(
     scene: &PreparedScene,
     sensor: &Sensor,
     origin: Vec3A,
-    weight: f32,
+    (weight, panel_point): (f32, Option<(f32, f32)>),
     rays: &mut u64,
     out: &mut Spectrum,
 ) {
     for light in &scene.lights {
-        let Some(inc) = light.incident(sensor.point) else { continue };
+        let incident = match (panel_point, light) {
+            (None, _) => light.incident(sensor.point),
+            (Some((s, t)), Light::Area(panel)) => panel.incident_from(sensor.point, s, t),
+            (Some(_), _) => None,
+        };
+        let Some(inc) = incident else { continue };
         let cos = inc.direction.dot(sensor.normal);
         if cos <= 0.0 {
             continue;

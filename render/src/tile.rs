@@ -107,7 +107,7 @@ pub fn pixel_counted(scene: &PreparedScene, x: u32, y: u32, rays: &mut u64) -> S
 pub fn render_tile(scene: &PreparedScene, rect: Rect, spectral: bool) -> TileResult {
     type Row = (Vec<[f32; 3]>, Option<Vec<Spectrum>>, Option<Vec<f32>>, Option<Vec<u32>>, u64);
     // A grid's sensors see no sky and have no frameworks of illumination (`Plan::new`).
-    let has_sky = scene.sky.is_some() && !scene.settings.grids;
+    let has_sky = scene.has_visible_sources() && !scene.settings.grids;
     let has_lights = !scene.lights.is_empty() && !scene.settings.grids;
     let rows: Vec<Row> = (rect.y..rect.y + rect.height)
         .into_par_iter()

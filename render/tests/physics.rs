@@ -349,3 +349,39 @@ fn the_camera_sees_the_sky() {
         assert_eq!(tile.sky.as_deref(), Some(&[1.0f32; 16][..]), "{model}");
     }
 }
+
+/// A 1 × 1 m area luminaire of L = 1000 cd/m² facing down 2 m above the plane. The camera sees
+/// its luminance from below (to 1e-4), and nothing from behind it; the plane below its centre
+/// has luminance ρE/π with E = 4 · L · ½ [X/√(1 + X²) atan(Y/√(1 + X²)) + (X ↔ Y)], the
+/// illuminance below the corner of each a/2 × a/2 quarter (X = Y = a/2h; the rectangle's
+/// configuration factor, Howell's catalogue B-3), to 1 % (4096 samples of the panel).
+#[test]
+fn an_area_luminaire_is_seen_and_lights_by_its_luminance() {
+    let lights = "[[lights]]\nkind = \"area\"\ncorner = [-0.5, -0.5, 2.0]\nu = [1.0, 0.0, 0.0]\n\
+                  v = [0.0, 1.0, 0.0]\nnormal = [0.0, 0.0, -1.0]\nluminance_cd_m2 = 1000.0\n\
+                  spectrum = \"lamp\"";
+    let render = "[render]\nintegrator = \"whitted\"\nsamples_per_pixel = 4096\nmax_depth = 1";
+    let below = "[camera]\nposition = [0.1, 0.0, 0.5]\ntarget = [0.0, 0.0, 2.0]\n\
+                 vertical_fov_deg = 5.0\nwidth = 3\nheight = 3";
+    let dir = tempfile::tempdir().unwrap();
+    let loaded = scene(dir.path(), PLANE, below, lights, render);
+    let prepared = PreparedScene::new(&loaded, None, settings(&loaded)).unwrap();
+    let seen = luminance(&pixel(&prepared, 1, 1));
+    assert!((seen / 1000.0 - 1.0).abs() < 1e-4, "the panel seen from below: {seen} cd/m²");
+    let above = "[camera]\nposition = [0.0, 0.0, 10.0]\ntarget = [0.0, 0.0, 0.0]\n\
+                 up = [0.0, 1.0, 0.0]\nvertical_fov_deg = 2.0\nwidth = 3\nheight = 3";
+    let dir = tempfile::tempdir().unwrap();
+    let loaded = scene(dir.path(), PLANE, above, lights, render);
+    let prepared = PreparedScene::new(&loaded, None, settings(&loaded)).unwrap();
+    assert_eq!(luminance(&pixel(&prepared, 1, 1)), 0.0, "its back is dark and hides the plane");
+    let side = "[camera]\nposition = [3.0, 0.0, 0.5]\ntarget = [0.0, 0.0, 0.0]\n\
+                vertical_fov_deg = 0.5\nwidth = 3\nheight = 3";
+    let dir = tempfile::tempdir().unwrap();
+    let loaded = scene(dir.path(), PLANE, side, lights, render);
+    let prepared = PreparedScene::new(&loaded, None, settings(&loaded)).unwrap();
+    let x = 0.5f64 / 2.0;
+    let quarter = 0.5 * 2.0 * x / (1.0 + x * x).sqrt() * (x / (1.0 + x * x).sqrt()).atan();
+    let expect = 0.5 / PI * 4.0 * 1000.0 * quarter;
+    let l = luminance(&pixel(&prepared, 1, 1));
+    assert!((l / expect - 1.0).abs() < 0.01, "the plane below it: {l} cd/m² against {expect}");
+}

@@ -266,6 +266,7 @@ fn light_kind(light: &Light) -> &'static str {
         Light::Spot { .. } => "spot",
         Light::Sun { .. } => "sun",
         Light::Sky { .. } => "sky",
+        Light::Area { .. } => "area",
     }
 }
 
@@ -287,7 +288,8 @@ fn save_light(scene: &mut SceneFile, index: Option<usize>, light: &Light) -> Res
         Light::Point { spectrum, .. }
         | Light::Spot { spectrum, .. }
         | Light::Sun { spectrum, .. }
-        | Light::Sky { spectrum, .. } => spectrum,
+        | Light::Sky { spectrum, .. }
+        | Light::Area { spectrum, .. } => spectrum,
     };
     if let Some(name) = spectrum.strip_prefix("cie:") {
         let key = format!("cie_{}", name.replace(|c: char| !c.is_ascii_alphanumeric(), "_"));

@@ -11,6 +11,7 @@ pub use mesh::{Bounds, Group, Mesh};
 /// Spectrum files are read by restauro-spectral's reader.
 pub use restauro_spectral::csv as spectrum_csv;
 pub mod archive;
+pub mod area_light;
 pub mod assets;
 pub mod bundle;
 pub mod edit;

@@ -85,6 +85,8 @@ pub enum ResolvedLight {
     },
     /// The sky dome: `illuminance_lux` on a horizontal surface open to the whole sky.
     Sky { illuminance_lux: f64, model: SkyModel, spectrum: String },
+    /// A Lambertian emitting rectangle.
+    Area { panel: crate::area_light::Panel, luminance_cd_m2: f64, spectrum: String },
 }
 
 impl ResolvedLight {
@@ -95,6 +97,9 @@ impl ResolvedLight {
         match self {
             ResolvedLight::Point { intensity_cd, photometry, .. } => {
                 Some(intensity_cd * lumens_per_cd(photometry.as_ref(), 4.0 * std::f64::consts::PI))
+            }
+            ResolvedLight::Area { panel, luminance_cd_m2, .. } => {
+                Some(std::f64::consts::PI * luminance_cd_m2 * panel.area_m2())
             }
             ResolvedLight::Spot { intensity_cd, photometry, cone_deg, falloff_deg, .. } => Some(
                 intensity_cd
@@ -134,6 +139,16 @@ impl std::fmt::Display for ResolvedLight {
             }
             ResolvedLight::Sky { illuminance_lux, model, spectrum } => {
                 write!(f, "{model}: {illuminance_lux} lux on the horizontal, spectrum {spectrum}")
+            }
+            ResolvedLight::Area { panel, luminance_cd_m2, spectrum } => {
+                let area = panel.area_m2();
+                write!(
+                    f,
+                    "area luminaire at {:?}: {luminance_cd_m2} cd/m² over {area:.3} m², {:.0} lm, \
+                     spectrum {spectrum}",
+                    panel.corner,
+                    std::f64::consts::PI * luminance_cd_m2 * area
+                )
             }
         }
     }
@@ -1166,6 +1181,16 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
                     photometry,
                     aim: *aim,
                 }
+            }
+            Light::Area { corner, u, v, normal, luminance_cd_m2, flux_lm, spectrum } => {
+                ctx.emission(spectrum, &format!("{place}.spectrum"))?;
+                let panel = crate::area_light::Panel::new(*corner, *u, *v, *normal)
+                    .map_err(|(field, problem)| ctx.invalid(format!("{place}.{field}"), problem))?;
+                let luminance_cd_m2 =
+                    crate::area_light::luminance(&panel, *luminance_cd_m2, *flux_lm).map_err(
+                        |(field, problem)| ctx.invalid(format!("{place}{field}"), problem),
+                    )?;
+                ResolvedLight::Area { panel, luminance_cd_m2, spectrum: spectrum.clone() }
             }
             Light::Spot {
                 position,

@@ -55,9 +55,9 @@ pub struct Plan {
     pub max_depth: u32,
     pub seed: u64,
     pub spectral: bool,
-    /// Whether the scene has a sky. Its tiles then carry each pixel's sky coverage (the fraction
-    /// of its camera samples that saw the sky), so the Retinex can keep the sky from becoming
-    /// the white.
+    /// Whether the scene has a sky or an area luminaire, a light source the camera can see. Its
+    /// tiles then carry each pixel's sky coverage (the fraction of its camera samples that saw
+    /// a light source), so the Retinex can keep the sky or a lamp from becoming the white.
     pub sky: bool,
     /// Whether the scene has point or distant lights. Its tiles then carry which of them light
     /// each pixel (a mask of [`LIT_BITS`] bits), so the Retinex can adapt to each framework of
@@ -173,7 +173,13 @@ impl Plan {
             spectral: options.spectral,
             // A sensor sees no sky and has no frameworks of illumination.
             sky: !options.grids
-                && scene.lights.iter().any(|l| matches!(l, crate::load::ResolvedLight::Sky { .. })),
+                && scene.lights.iter().any(|l| {
+                    matches!(
+                        l,
+                        crate::load::ResolvedLight::Sky { .. }
+                            | crate::load::ResolvedLight::Area { .. }
+                    )
+                }),
             lit: !options.grids
                 && scene
                     .lights

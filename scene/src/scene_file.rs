@@ -554,6 +554,28 @@ pub enum Light {
         model: Option<SkyModel>,
         spectrum: String,
     },
+    /// A Lambertian emitting rectangle (a light panel, a luminous ceiling, a lit opening): the
+    /// same luminance in every direction on its emitting side, given by `luminance_cd_m2` or
+    /// by its whole `flux_lm` (Φ = π L A). The camera sees it.
+    Area {
+        /// One corner (m).
+        #[serde(deserialize_with = "vec3::corner")]
+        corner: [f64; 3],
+        /// One edge, from `corner` (m).
+        #[serde(deserialize_with = "vec3::u")]
+        u: [f64; 3],
+        /// The other edge, from `corner`, at a right angle to `u` (m).
+        #[serde(deserialize_with = "vec3::v")]
+        v: [f64; 3],
+        /// The side it emits from: u × v unless this points the other way.
+        #[serde(default, deserialize_with = "vec3::opt_normal")]
+        normal: Option<[f64; 3]>,
+        #[serde(default)]
+        luminance_cd_m2: Option<f64>,
+        #[serde(default)]
+        flux_lm: Option<f64>,
+        spectrum: String,
+    },
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -704,6 +726,7 @@ mod vec3 {
         u, opt_u => "u";
         v, opt_v => "v";
         normal, opt_normal => "normal";
+        corner, opt_corner => "corner";
     }
 
     /// A list of points, each exactly three numbers.

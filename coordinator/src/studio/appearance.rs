@@ -102,9 +102,9 @@ pub fn scene_lights(scene: &LoadedScene) -> Vec<Light> {
         let (spectrum, what) = match l {
             ResolvedLight::Sun { spectrum, .. } => (spectrum, "the sun".to_owned()),
             ResolvedLight::Sky { spectrum, .. } => (spectrum, "the sky".to_owned()),
-            ResolvedLight::Point { spectrum, .. } | ResolvedLight::Spot { spectrum, .. } => {
-                (spectrum, format!("light {}", k + 1))
-            }
+            ResolvedLight::Point { spectrum, .. }
+            | ResolvedLight::Spot { spectrum, .. }
+            | ResolvedLight::Area { spectrum, .. } => (spectrum, format!("light {}", k + 1)),
         };
         if let Some(spd) = scene.spectra.get(spectrum)
             && seen.insert(spectrum.clone())
@@ -152,7 +152,9 @@ fn scene_light(scene: &LoadedScene) -> Option<Light> {
         return Some(Light { key: SCENE_LIGHT.into(), label, spd: Spectrum(total) });
     }
     scene.lights.iter().find_map(|l| match l {
-        ResolvedLight::Point { spectrum, .. } | ResolvedLight::Spot { spectrum, .. } => {
+        ResolvedLight::Point { spectrum, .. }
+        | ResolvedLight::Spot { spectrum, .. }
+        | ResolvedLight::Area { spectrum, .. } => {
             let spd = *scene.spectra.get(spectrum)?;
             let label = format!("the scene's luminaires ({spectrum})");
             Some(Light { key: SCENE_LIGHT.into(), label, spd })

@@ -187,6 +187,7 @@ fn light_views(scene: &LoadedScene, offset: [f64; 3]) -> Vec<LightView> {
         .lights
         .iter()
         .filter(|l| matches!(l, ResolvedLight::Point { .. } | ResolvedLight::Spot { .. }));
+    let mut panels = scene.lights.iter().filter(|l| matches!(l, ResolvedLight::Area { .. }));
     let sky = scene.lights.iter().find_map(|l| match l {
         ResolvedLight::Sky { illuminance_lux, model, .. } => {
             Some((*illuminance_lux, model.to_string()))
@@ -234,6 +235,15 @@ fn light_views(scene: &LoadedScene, offset: [f64; 3]) -> Vec<LightView> {
                     view.model = Some(model.clone());
                 }
             }
+            Light::Area { .. } => {
+                let Some(resolved @ ResolvedLight::Area { panel, .. }) = panels.next() else {
+                    continue;
+                };
+                let centre: [f64; 3] =
+                    std::array::from_fn(|k| panel.corner[k] + 0.5 * (panel.u[k] + panel.v[k]));
+                view.position = Some(to_glb(centre, offset));
+                view.flux_lm = resolved.flux_lm();
+            }
             Light::Sun { .. } => {}
         }
         out.push(view);
@@ -248,7 +258,8 @@ fn light_spectra(scene: &LoadedScene) -> Vec<String> {
         Light::Point { spectrum, .. }
         | Light::Spot { spectrum, .. }
         | Light::Sun { spectrum, .. }
-        | Light::Sky { spectrum, .. } => spectrum.clone(),
+        | Light::Sky { spectrum, .. }
+        | Light::Area { spectrum, .. } => spectrum.clone(),
     });
     let illuminants = scene
         .file

@@ -10,7 +10,8 @@
 //!
 //! The sky, an extended source, is sampled at every vertex by a cosine-weighted direction about
 //! the normal (pdf cos θ/π) with a shadow ray to infinity: the estimate of its reflected radiance
-//! is f(wo, wi) · L_sky(wi) · π. A camera ray that escapes sees the sky's radiance; a bounce that
+//! is f(wo, wi) · L_sky(wi) · π (a CIE general sky adds a sample by its luminance, see
+//! [`crate::sky`]). Area luminaires are sampled by area at every vertex. A camera ray that escapes sees the sky's radiance; a bounce that
 //! escapes adds nothing, because the sky was already counted at the vertex it left (Whitted's
 //! mirror rays therefore do not reflect the sky).
 //!
@@ -168,9 +169,9 @@ fn add_direct(
     }
 }
 
-/// One sample of the sky's light reflected at a vertex (nothing when the scene has no sky): a
-/// direction drawn with pdf cos θ/π about the normal and a shadow ray to infinity; the estimate
-/// is f · L · cos θ / (cos θ/π) = f · L · π.
+/// The sky's light reflected at a vertex (nothing when the scene has no sky): a direction drawn
+/// with pdf cos θ/π about the normal, and for a sky sampled by its luminance a second direction
+/// drawn from it, each with a shadow ray to infinity ([`crate::sky`] gives each its weight).
 #[inline]
 fn add_sky(
     scene: &PreparedScene,
@@ -183,23 +184,23 @@ fn add_sky(
 ) {
     let Some(sky) = &scene.sky else { return };
     let (u1, u2) = sampler.next2();
-    let wi = cosine_sample(u1, u2);
-    let direction = v.frame.to_world(wi);
-    let luminance = sky.luminance_cd_m2(direction);
-    if luminance <= 0.0 {
-        return;
-    }
+    let cosine = v.frame.to_world(cosine_sample(u1, u2));
     let bsdf = &scene.materials[v.hit.material as usize];
-    let (a, b) = bsdf.parts(v.wo, wi);
-    if a <= 0.0 && b <= 0.0 {
-        return;
+    for sample in sky.samples(v.hit.normal, cosine, || sampler.next2()).into_iter().flatten() {
+        if sample.luminance_cd_m2 <= 0.0 {
+            continue;
+        }
+        let (a, b) = bsdf.parts(v.wo, v.frame.to_local(sample.direction));
+        if a <= 0.0 && b <= 0.0 {
+            continue;
+        }
+        *rays += 1;
+        if scene.occluded(origin, sample.direction, f32::INFINITY) {
+            continue;
+        }
+        let k = sample.luminance_cd_m2 * sample.weight;
+        weight.add(out, &sky.per_nit, bsdf.rho(), a * k, b * k);
     }
-    *rays += 1;
-    if scene.occluded(origin, direction, f32::INFINITY) {
-        return;
-    }
-    let k = luminance * std::f32::consts::PI;
-    weight.add(out, &sky.per_nit, bsdf.rho(), a * k, b * k);
 }
 
 /// Where a path of `max_depth = 0` (no cap) stops if the roulette has not ended it. The roulette

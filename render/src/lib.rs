@@ -1,6 +1,6 @@
 //! restauro-render: the spectral tracer as a library — scene preparation with a CWBVH
 //! ([`prepared`]), the pinhole [`camera`], keyed [`sampler`], the [`bsdf`]s, photometric
-//! [`light`]s, the Whitted and path [`integrator`]s, the calculation grids' [`sensor`]s and
+//! [`light`]s and the [`sky`], the Whitted and path [`integrator`]s, the calculation grids' [`sensor`]s and
 //! [`tile`] rendering. It knows nothing of the network: the worker process and `restauro render
 //! --in-process` both call it.
 
@@ -11,4 +11,5 @@ pub mod light;
 pub mod prepared;
 pub mod sampler;
 pub mod sensor;
+pub mod sky;
 pub mod tile;

@@ -19,7 +19,6 @@
 
 use glam::Vec3A;
 use restauro_scene::photometric::Photometry;
-use restauro_scene::scene_file::SkyModel;
 use restauro_spectral::Spectrum;
 
 /// How a luminaire's intensity varies with direction.
@@ -111,42 +110,6 @@ impl Panel {
         let s = q.dot(self.u) / self.u.length_squared();
         let w = q.dot(self.v) / self.v.length_squared();
         ((0.0..=1.0).contains(&s) && (0.0..=1.0).contains(&w)).then_some((t, denom < 0.0))
-    }
-}
-
-/// The sky dome: its luminance over directions above the horizon (nothing comes from below it:
-/// the ground is geometry).
-#[derive(Clone, Debug)]
-pub struct Sky {
-    /// S_e(λ)/Σ K S_e Δλ: the spectral radiance of one cd/m² (W·sr⁻¹·m⁻²·nm⁻¹).
-    pub per_nit: Spectrum,
-    /// The luminance at the zenith, cd/m².
-    pub zenith_cd_m2: f32,
-    pub model: SkyModel,
-}
-
-impl Sky {
-    /// A sky giving `illuminance_lux` on a horizontal surface open to all of it:
-    /// uniform, E_h = π L; CIE overcast, E_h = ∫ L_z (1 + 2 cos θ)/3 · cos θ dω = 7π L_z / 9.
-    pub fn new(illuminance_lux: f64, model: SkyModel, per_nit: Spectrum) -> Self {
-        let zenith = match model {
-            SkyModel::Uniform => illuminance_lux / std::f64::consts::PI,
-            SkyModel::CieOvercast => 9.0 * illuminance_lux / (7.0 * std::f64::consts::PI),
-        };
-        Self { per_nit, zenith_cd_m2: zenith as f32, model }
-    }
-
-    /// The luminance (cd/m²) seen looking along `direction` (unit; +Z up): zero below the horizon.
-    #[inline]
-    pub fn luminance_cd_m2(&self, direction: Vec3A) -> f32 {
-        let cos_theta = direction.z;
-        if cos_theta <= 0.0 {
-            return 0.0;
-        }
-        match self.model {
-            SkyModel::Uniform => self.zenith_cd_m2,
-            SkyModel::CieOvercast => self.zenith_cd_m2 * (1.0 + 2.0 * cos_theta) / 3.0,
-        }
     }
 }
 

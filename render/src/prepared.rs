@@ -4,9 +4,10 @@
 
 use crate::bsdf::Bsdf;
 use crate::camera::Camera;
-use crate::light::{Distribution, Light, Panel, Sky};
+use crate::light::{Distribution, Light, Panel};
 use crate::sampler::Strata;
 use crate::sensor::Sensor;
+use crate::sky::Sky;
 use glam::Vec3A;
 use obvhs::BvhBuildParams;
 use obvhs::cwbvh::CwBvh;
@@ -157,8 +158,10 @@ impl PreparedScene {
         let mut sky = None;
         for l in &scene.lights {
             match l {
-                ResolvedLight::Sky { illuminance_lux, model, spectrum } => {
-                    sky = Some(Sky::new(*illuminance_lux, *model, luminous(scene, spectrum)?));
+                ResolvedLight::Sky { illuminance_lux, model, spectrum, general, ground_cd_m2 } => {
+                    let per_nit = luminous(scene, spectrum)?;
+                    sky =
+                        Some(Sky::new(*illuminance_lux, *model, per_nit, *general, *ground_cd_m2));
                 }
                 _ => lights.push(light(scene, l)?),
             }

@@ -79,7 +79,11 @@ pub fn irradiance_sum(
         let direction = frame.to_world(crate::bsdf::cosine_sample(u1, u2));
         match component {
             Component::Direct => {
-                add_sky(scene, origin, direction, rays, &mut sum);
+                // The sky's own sample, if it has one, is stratified too: its first pair of
+                // numbers picks the cell.
+                let mut first = Some((u1, u2));
+                let draw = || first.take().unwrap_or_else(|| sampler.next2());
+                add_sky(scene, (origin, sensor.normal), direction, draw, rays, &mut sum);
                 if extended {
                     // A point of each panel, stratified over the samples as the direction is.
                     let (u, v) = sampler.next2();
@@ -129,22 +133,25 @@ fn add_lights(
     }
 }
 
-/// One sample of the sky's irradiance along a cosine-weighted `direction`:
-/// L · cos θ / (cos θ/π) = π L.
+/// One sample of the sky's irradiance at the sensor from the cosine-weighted `direction` (and,
+/// for a sky sampled by its luminance, one more drawn with `draw`): L · weight each, the
+/// weight π for the cosine sample alone.
 fn add_sky(
     scene: &PreparedScene,
-    origin: Vec3A,
+    (origin, normal): (Vec3A, Vec3A),
     direction: Vec3A,
+    draw: impl FnMut() -> (f32, f32),
     rays: &mut u64,
     out: &mut Spectrum,
 ) {
     let Some(sky) = &scene.sky else { return };
-    let luminance = sky.luminance_cd_m2(direction);
-    if luminance <= 0.0 {
-        return;
-    }
-    *rays += 1;
-    if !scene.occluded(origin, direction, f32::INFINITY) {
-        out.add_scaled(&sky.per_nit, luminance * PI);
+    for sample in sky.samples(normal, direction, draw).into_iter().flatten() {
+        if sample.luminance_cd_m2 <= 0.0 {
+            continue;
+        }
+        *rays += 1;
+        if !scene.occluded(origin, sample.direction, f32::INFINITY) {
+            out.add_scaled(&sky.per_nit, sample.luminance_cd_m2 * sample.weight);
+        }
     }
 }

@@ -84,7 +84,15 @@ pub enum ResolvedLight {
         spectrum: String,
     },
     /// The sky dome: `illuminance_lux` on a horizontal surface open to the whole sky.
-    Sky { illuminance_lux: f64, model: SkyModel, spectrum: String },
+    Sky {
+        illuminance_lux: f64,
+        model: SkyModel,
+        spectrum: String,
+        /// With [`SkyModel::CieGeneral`]: its type and the sun that shapes it.
+        general: Option<crate::cie_sky::GeneralSky>,
+        /// The luminance of the ground below the horizon (0: none, or black).
+        ground_cd_m2: f64,
+    },
     /// A Lambertian emitting rectangle.
     Area { panel: crate::area_light::Panel, luminance_cd_m2: f64, spectrum: String },
 }
@@ -137,8 +145,17 @@ impl std::fmt::Display for ResolvedLight {
                     None => write!(f, ", cone {cone_deg}°"),
                 }
             }
-            ResolvedLight::Sky { illuminance_lux, model, spectrum } => {
-                write!(f, "{model}: {illuminance_lux} lux on the horizontal, spectrum {spectrum}")
+            ResolvedLight::Sky { illuminance_lux, model, spectrum, general, ground_cd_m2 } => {
+                write!(f, "{model}")?;
+                if let Some(g) = general {
+                    let el = g.sun[2].clamp(-1.0, 1.0).asin().to_degrees();
+                    write!(f, " type {} (sun {el:.1}° high)", g.sky_type)?;
+                }
+                write!(f, ": {illuminance_lux} lux on the horizontal, spectrum {spectrum}")?;
+                if *ground_cd_m2 > 0.0 {
+                    write!(f, "; ground below the horizon at {ground_cd_m2:.1} cd/m²")?;
+                }
+                Ok(())
             }
             ResolvedLight::Area { panel, luminance_cd_m2, spectrum } => {
                 let area = panel.area_m2();
@@ -1301,7 +1318,7 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
                     spectrum: spectrum.clone(),
                 }
             }
-            Light::Sky { illuminance_lux, preset, model, spectrum } => {
+            Light::Sky { illuminance_lux, preset, model, spectrum, .. } => {
                 ctx.emission(spectrum, &format!("{place}.spectrum"))?;
                 let (lux, preset_model) = match (illuminance_lux, preset) {
                     (Some(_), Some(_)) => {
@@ -1320,10 +1337,14 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
                     }
                 };
                 check_illuminance(&ctx, &place, lux)?;
+                // The general sky's sun and the ground are settled once every light is
+                // resolved (`crate::sky_shape`): the scene's sun may come after the sky.
                 ResolvedLight::Sky {
                     illuminance_lux: lux,
                     model: model.unwrap_or(preset_model),
                     spectrum: spectrum.clone(),
+                    general: None,
+                    ground_cd_m2: 0.0,
                 }
             }
         };
@@ -1342,6 +1363,7 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
             "more than one sky; a scene has one sky dome (give its total illuminance_lux)",
         ));
     }
+    crate::sky_shape::settle(&ctx.path, &file.lights, &mut lights)?;
 
     check_annotations(&ctx, &file, &objects)?;
     let grids = crate::grid::resolve_grids(&ctx.path, &file.grids)?;

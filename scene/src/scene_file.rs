@@ -553,6 +553,21 @@ pub enum Light {
         #[serde(default)]
         model: Option<SkyModel>,
         spectrum: String,
+        /// With `model = "cie-general"`: the standard's sky type, 1 to 15.
+        #[serde(default)]
+        cie_type: Option<u8>,
+        /// Where the sun stands for the sky's shape, when the scene has no sun light (the sun
+        /// is then not a light: a sky component with the sun excluded).
+        #[serde(default)]
+        sun_elevation_deg: Option<f64>,
+        #[serde(default)]
+        sun_azimuth_deg: Option<f64>,
+        #[serde(default)]
+        site: Option<SiteTime>,
+        /// A ground below the horizon, for open scenes: its reflectance, seen at the uniform
+        /// luminance ρ·E_h/π (E_h the horizontal illuminance of the sky and sun together).
+        #[serde(default)]
+        ground_reflectance: Option<f64>,
     },
     /// A Lambertian emitting rectangle (a light panel, a luminous ceiling, a lit opening): the
     /// same luminance in every direction on its emitting side, given by `luminance_cd_m2` or
@@ -597,6 +612,9 @@ pub enum SkyModel {
     /// L(θ) = L_z (1 + 2 cos θ) / 3, three times brighter at the zenith than at the horizon,
     /// with E_h = 7π L_z / 9.
     CieOvercast,
+    /// The CIE standard general sky (ISO 15469:2004), one of its 15 types (`cie_type`), shaped
+    /// by the sun's position.
+    CieGeneral,
 }
 
 /// What a person reads, a name for the sky: "uniform sky", "CIE overcast sky".
@@ -605,6 +623,7 @@ impl std::fmt::Display for SkyModel {
         f.pad(match self {
             SkyModel::Uniform => "uniform sky",
             SkyModel::CieOvercast => "CIE overcast sky",
+            SkyModel::CieGeneral => "CIE general sky",
         })
     }
 }

@@ -999,3 +999,59 @@ fn luminaires_given_by_their_flux() {
     );
     assert!(negative.contains("lights[1].flux_lm: -10 is not a luminous flux"), "{negative}");
 }
+
+/// A CIE general sky takes the scene's sun, or its own, never both; its type and ground are
+/// checked; the ground's luminance is ρ E_h / π with the sun's horizontal share in E_h.
+#[test]
+fn a_general_sky_finds_its_sun_and_its_ground() {
+    let f = Folder::new();
+    f.write("meshes/wall.obj", QUAD_OBJ);
+    let sky = |keys: &str| {
+        format!(
+            "[[lights]]\nkind = \"sky\"\nilluminance_lux = 20000.0\nspectrum = \"sunlight\"\n{keys}\n"
+        )
+    };
+    let with_sun = |keys: &str| scene_toml(OBJ_OBJECT, &sky(keys));
+    let scene =
+        load(&f, &with_sun("model = \"cie-general\"\ncie_type = 12\nground_reflectance = 0.2"))
+            .unwrap();
+    let Some(ResolvedLight::Sky { general: Some(g), ground_cd_m2, .. }) =
+        scene.lights.iter().find(|l| matches!(l, ResolvedLight::Sky { .. }))
+    else {
+        panic!("no general sky")
+    };
+    assert_eq!(g.sky_type, 12);
+    assert!((g.sun[2] - 50f64.to_radians().sin()).abs() < 1e-12, "the scene's sun, 50° high");
+    let e_h = 20_000.0 + 100_000.0 * 50f64.to_radians().sin();
+    assert!((ground_cd_m2 - 0.2 * e_h / std::f64::consts::PI).abs() < 1e-9);
+    let cases = [
+        (with_sun("model = \"cie-general\""), "lights[1].cie_type"),
+        (with_sun("model = \"cie-general\"\ncie_type = 16"), "16 is not a sky type"),
+        (with_sun("cie_type = 3"), "cie_type is for model = \"cie-general\""),
+        (
+            with_sun(
+                "model = \"cie-general\"\ncie_type = 3\nsun_elevation_deg = 30.0\nsun_azimuth_deg = 90.0",
+            ),
+            "the scene has a sun light",
+        ),
+        (with_sun("ground_reflectance = 1.5"), "not a reflectance"),
+        (with_sun("sun_elevation_deg = 30.0"), "only a CIE general sky"),
+    ];
+    for (toml, expected) in cases {
+        let e = refused(&f, &toml);
+        assert!(e.contains(expected), "{expected}: {e}");
+    }
+    // Without a sun light, the sky's own sun: by angles, or missing.
+    let no_sun = |keys: &str| {
+        let toml = with_sun(keys);
+        let start = toml.find("[[lights]]\nkind = \"sun\"").unwrap();
+        let end = start + toml[start..].find("spectrum = \"sunlight\"\n").unwrap() + 22;
+        format!("{}{}", &toml[..start], &toml[end..])
+    };
+    let own = load(&f, &no_sun("model = \"cie-general\"\ncie_type = 7\nsun_elevation_deg = 30.0\nsun_azimuth_deg = 90.0"))
+        .unwrap();
+    let Some(ResolvedLight::Sky { general: Some(g), .. }) = own.lights.first() else { panic!() };
+    assert!((g.sun[0] - 30f64.to_radians().cos()).abs() < 1e-12, "east, 30° high");
+    let e = refused(&f, &no_sun("model = \"cie-general\"\ncie_type = 7"));
+    assert!(e.contains("a CIE general sky is shaped by the sun"), "{e}");
+}

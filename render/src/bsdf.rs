@@ -18,9 +18,21 @@ use std::f32::consts::{FRAC_1_PI, PI};
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Bsdf {
-    Lambert { rho: Spectrum },
-    CookTorrance { rho: Spectrum, f0: f32, roughness: f32 },
+    Lambert {
+        rho: Spectrum,
+    },
+    CookTorrance {
+        rho: Spectrum,
+        f0: f32,
+        roughness: f32,
+    },
+    /// A pane of glass: no diffuse or glossy part. The integrators follow it as a specular
+    /// interface ([`crate::glass`]), and shadow rays pass through it.
+    Glass(crate::glass::Glass),
 }
+
+/// The diffuse reflectance of a material that has none.
+static NO_REFLECTANCE: Spectrum = Spectrum::ZERO;
 
 /// Schlick's approximation of the Fresnel reflectance.
 #[inline]
@@ -59,6 +71,7 @@ impl Bsdf {
         }
         match *self {
             Bsdf::Lambert { .. } => (FRAC_1_PI, 0.0),
+            Bsdf::Glass(_) => (0.0, 0.0),
             Bsdf::CookTorrance { f0, roughness, .. } => {
                 let h = (wo + wi).normalize();
                 let oh = wo.dot(h).max(1e-6);
@@ -74,6 +87,7 @@ impl Bsdf {
     pub fn rho(&self) -> &Spectrum {
         match self {
             Bsdf::Lambert { rho } | Bsdf::CookTorrance { rho, .. } => rho,
+            Bsdf::Glass(_) => &NO_REFLECTANCE,
         }
     }
 
@@ -92,7 +106,7 @@ impl Bsdf {
     #[inline]
     fn specular_probability(&self) -> f32 {
         match self {
-            Bsdf::Lambert { .. } => 0.0,
+            Bsdf::Lambert { .. } | Bsdf::Glass(_) => 0.0,
             Bsdf::CookTorrance { .. } => 0.5,
         }
     }
@@ -106,6 +120,7 @@ impl Bsdf {
         let diffuse = wi.z * FRAC_1_PI;
         match *self {
             Bsdf::Lambert { .. } => diffuse,
+            Bsdf::Glass(_) => 0.0,
             Bsdf::CookTorrance { roughness, .. } => {
                 let p = self.specular_probability();
                 let h = (wo + wi).normalize();
@@ -119,6 +134,9 @@ impl Bsdf {
     /// surface.
     #[inline]
     pub fn sample(&self, wo: Vec3A, u: f32, u1: f32, u2: f32) -> Option<(Vec3A, f32)> {
+        if let Bsdf::Glass(_) = self {
+            return None;
+        }
         let wi = match *self {
             Bsdf::CookTorrance { roughness, .. } if u < self.specular_probability() => {
                 // Beckmann half vector: tan²θh = −m² ln(1 − u1), φ = 2π u2.
@@ -142,7 +160,7 @@ impl Bsdf {
     /// reflectance towards the mirror direction.
     pub fn mirror_reflectance(&self, cos_o: f32) -> Option<f32> {
         match *self {
-            Bsdf::Lambert { .. } => None,
+            Bsdf::Lambert { .. } | Bsdf::Glass(_) => None,
             Bsdf::CookTorrance { f0, .. } => Some(schlick(f0, cos_o)),
         }
     }

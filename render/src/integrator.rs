@@ -17,7 +17,7 @@
 //!
 //! All 81 bands travel together on every ray; nothing here allocates.
 
-use crate::bsdf::cosine_sample;
+use crate::bsdf::{Bsdf, cosine_sample};
 use crate::prepared::{Hit, PreparedScene};
 use crate::sampler::PixelSampler;
 use glam::Vec3A;
@@ -84,6 +84,9 @@ impl Frame {
         self.x * v.x + self.y * v.y + self.z * v.z
     }
 }
+
+/// The reflectance of a light source: what [`Weight::add`] takes for a light added unreflected.
+static NO_LIGHT: Spectrum = Spectrum::ZERO;
 
 /// Rays leave a surface from a point lifted off it, against self-intersection in f32.
 #[inline]
@@ -158,13 +161,14 @@ fn add_direct(
         let reach =
             if inc.distance.is_finite() { inc.distance * (1.0 - 1e-4) } else { f32::INFINITY };
         *rays += 1;
-        if scene.occluded(origin, inc.direction, reach) {
+        let through = scene.visibility(origin, inc.direction, reach);
+        if through <= 0.0 {
             continue;
         }
-        let k = inc.scale * cos;
+        let k = inc.scale * cos * through;
         weight.add(out, inc.spectrum, bsdf.rho(), a * k, b * k);
         if let Some(lux) = lit.as_deref_mut() {
-            lux[i.min(LIT_BITS - 1)] += inc.illuminance_lux * cos;
+            lux[i.min(LIT_BITS - 1)] += inc.illuminance_lux * cos * through;
         }
     }
 }
@@ -195,10 +199,11 @@ fn add_sky(
             continue;
         }
         *rays += 1;
-        if scene.occluded(origin, sample.direction, f32::INFINITY) {
+        let through = scene.visibility(origin, sample.direction, f32::INFINITY);
+        if through <= 0.0 {
             continue;
         }
-        let k = sample.luminance_cd_m2 * sample.weight;
+        let k = sample.luminance_cd_m2 * sample.weight * through;
         weight.add(out, &sky.per_nit, bsdf.rho(), a * k, b * k);
     }
 }
@@ -266,39 +271,62 @@ pub fn trace(
         0 => UNCAPPED_DEPTH_GUARD,
         cap => cap,
     };
+    // Whether light met on escaping (the sky, an area luminaire) counts: along the camera's own
+    // ray, and after a reflection in glass; not after a surface, whose direct light sampled the
+    // sky and the luminaires already (through any glass on the way). `view`: every surface so
+    // far was glass, so what the ray meets is what the camera sees.
+    let mut counts = escape == Escape::SeesSky;
+    let mut view = true;
     for depth in 0..max_depth {
         *rays += 1;
         let hit = scene.intersect(origin, direction, f32::INFINITY);
         let reach = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
-        if let Some((panel, front)) = scene.panel_hit(origin, direction, reach) {
-            // An area luminaire in front of the surface: seen by a camera ray from its
-            // emitting side; it ends any other path, whose vertices sampled it already.
-            if depth == 0 && front && escape == Escape::SeesSky {
-                out.add_scaled(&panel.per_nit, panel.luminance_cd_m2);
-            }
-            return Seen { sky: depth == 0 && front, lit_by: lit_mask(&lux) };
-        }
-        let Some(hit) = hit else {
-            if depth == 0 {
-                if let Some(sky) = scene.sky.as_ref().filter(|_| escape == Escape::SeesSky) {
-                    out.add_scaled(&sky.per_nit, sky.luminance_cd_m2(direction));
-                }
-                return Seen { sky: true, lit_by: 0 };
-            }
-            break;
-        };
-        let frame = Frame::new(hit.normal);
-        let wo = frame.to_local(-direction);
-        let weight = match &spectral {
+        let through = match &spectral {
             Some(t) => Weight::Spectral(t),
             None => Weight::Neutral(neutral),
         };
-        let lit = (depth == 0).then_some(&mut lux);
-        add_direct(scene, &Vertex { hit: &hit, frame, wo }, weight, sampler, rays, out, lit);
+        if let Some((panel, front)) = scene.panel_hit(origin, direction, reach) {
+            // An area luminaire in front of the surface, seen from its emitting side; it ends
+            // the path.
+            if counts && front {
+                through.add(out, &panel.per_nit, &NO_LIGHT, 0.0, panel.luminance_cd_m2);
+            }
+            return Seen { sky: view && front, lit_by: lit_mask(&lux) };
+        }
+        let Some(hit) = hit else {
+            if let Some(sky) = scene.sky.as_ref().filter(|_| counts) {
+                through.add(out, &sky.per_nit, &NO_LIGHT, 0.0, sky.luminance_cd_m2(direction));
+            }
+            return Seen { sky: view, lit_by: lit_mask(&lux) };
+        };
+        let frame = Frame::new(hit.normal);
+        let wo = frame.to_local(-direction);
+        let bsdf = &scene.materials[hit.material as usize];
+        if let Bsdf::Glass(glass) = bsdf {
+            // A pane: through it or off it, chosen by their shares; its absorption in the weight.
+            let (r, t) = glass.reflect_transmit(wo.z);
+            if r + t <= 0.0 || depth + 1 == max_depth {
+                break;
+            }
+            match &mut spectral {
+                Some(s) => *s *= r + t,
+                None => neutral *= r + t,
+            }
+            if sampler.next_1d() * (r + t) < t {
+                origin = lift_along(hit.point, -hit.normal);
+            } else {
+                direction = frame.to_world(Vec3A::new(-wo.x, -wo.y, wo.z));
+                origin = lift(&hit);
+                counts = true;
+            }
+            continue;
+        }
+        let lit = view.then_some(&mut lux);
+        add_direct(scene, &Vertex { hit: &hit, frame, wo }, through, sampler, rays, out, lit);
+        (counts, view) = (false, false);
         if depth + 1 == max_depth {
             break;
         }
-        let bsdf = &scene.materials[hit.material as usize];
         match scene.settings.integrator {
             Integrator::Whitted => {
                 let Some(f) = bsdf.mirror_reflectance(wo.z) else { break };

@@ -54,6 +54,9 @@ impl From<&Plan> for Settings {
     }
 }
 
+/// The most panes of glass a shadow ray passes through before it is taken as blocked.
+const MAX_PANES: usize = 8;
+
 pub struct PreparedScene {
     pub camera: Camera,
     pub settings: Settings,
@@ -71,6 +74,8 @@ pub struct PreparedScene {
     pub sensors: Vec<Sensor>,
     /// The area luminaires (also in `lights`), for the rays that meet them.
     panels: Vec<Panel>,
+    /// Whether any triangle is glass: shadow rays then pass through panes.
+    has_glass: bool,
 }
 
 /// A surface hit.
@@ -183,7 +188,9 @@ impl PreparedScene {
                 _ => None,
             })
             .collect();
+        let has_glass = materials.iter().any(|m| matches!(m, Bsdf::Glass(_)));
         Ok(Self {
+            has_glass,
             sensors,
             panels,
             camera: Camera::new(&scene.camera),
@@ -259,6 +266,34 @@ impl PreparedScene {
         self.sky.is_some() || !self.panels.is_empty()
     }
 
+    /// The fraction of light that passes along the segment from `origin` along `direction`
+    /// up to `distance`: 0 when something opaque blocks it, else the product of the
+    /// transmittances of the panes of glass it crosses (1 through nothing). Without glass in
+    /// the scene, one any-hit query.
+    #[inline]
+    pub fn visibility(&self, origin: Vec3A, direction: Vec3A, distance: f32) -> f32 {
+        if !self.has_glass {
+            return if self.occluded(origin, direction, distance) { 0.0 } else { 1.0 };
+        }
+        let (mut from, mut through) = (origin, 1.0f32);
+        // A segment crosses a few panes at most; past this many it is taken as blocked.
+        for _ in 0..MAX_PANES {
+            let left = distance - (from - origin).dot(direction);
+            if left <= 0.0 {
+                return through;
+            }
+            let Some(hit) = self.intersect(from, direction, left) else { return through };
+            let Bsdf::Glass(glass) = &self.materials[hit.material as usize] else { return 0.0 };
+            through *= glass.reflect_transmit(direction.dot(hit.normal)).1;
+            if through <= 0.0 {
+                return 0.0;
+            }
+            // On, beyond the pane (the hit's normal faces back along the ray).
+            from = crate::integrator::lift_along(hit.point, -hit.normal);
+        }
+        0.0
+    }
+
     /// Whether anything blocks the segment from `origin` along `direction` up to `distance`.
     #[inline]
     pub fn occluded(&self, origin: Vec3A, direction: Vec3A, distance: f32) -> bool {
@@ -281,9 +316,15 @@ impl PreparedScene {
 fn bsdf(scene: &LoadedScene, name: &str, state: &str) -> Bsdf {
     let m = &scene.file.materials[name];
     let o = m.state(state);
+    if m.model == MaterialModel::Glass {
+        let ior = o.and_then(|o| o.ior).or(m.ior).unwrap_or(crate::glass::DEFAULT_IOR);
+        let thickness = m.thickness_mm.unwrap_or(crate::glass::DEFAULT_THICKNESS_MM);
+        return Bsdf::Glass(crate::glass::Glass::new(ior, thickness, m.transmittance));
+    }
     let reflectance = o.and_then(|o| o.reflectance.as_ref()).unwrap_or(&m.reflectance);
     let rho = scene.spectra[reflectance];
     match m.model {
+        MaterialModel::Glass => unreachable!("returned above"),
         MaterialModel::Lambert => Bsdf::Lambert { rho },
         MaterialModel::CookTorrance => {
             let roughness = o.and_then(|o| o.roughness).or(m.roughness).unwrap_or(0.3) as f32;

@@ -126,10 +126,10 @@ fn add_lights(
         let reach =
             if inc.distance.is_finite() { inc.distance * (1.0 - 1e-4) } else { f32::INFINITY };
         *rays += 1;
-        if scene.occluded(origin, inc.direction, reach) {
-            continue;
+        let through = scene.visibility(origin, inc.direction, reach);
+        if through > 0.0 {
+            out.add_scaled(inc.spectrum, inc.scale * cos * weight * through);
         }
-        out.add_scaled(inc.spectrum, inc.scale * cos * weight);
     }
 }
 
@@ -150,8 +150,9 @@ fn add_sky(
             continue;
         }
         *rays += 1;
-        if !scene.occluded(origin, sample.direction, f32::INFINITY) {
-            out.add_scaled(&sky.per_nit, sample.luminance_cd_m2 * sample.weight);
+        let through = scene.visibility(origin, sample.direction, f32::INFINITY);
+        if through > 0.0 {
+            out.add_scaled(&sky.per_nit, sample.luminance_cd_m2 * sample.weight * through);
         }
     }
 }

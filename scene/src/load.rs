@@ -534,6 +534,25 @@ fn check_surface(
         ctx.reflectance(r, &format!("{place}.reflectance"))?;
     }
     match model {
+        MaterialModel::Glass => {
+            if reflectance.is_some() || roughness.is_some() || specular.is_some() {
+                return Err(ctx.invalid(
+                    place,
+                    "glass has no reflectance, roughness or specular: its reflection follows from \
+                     its ior; give ior, thickness_mm and transmittance",
+                ));
+            }
+            if let Some(n) = ior
+                && !(n.is_finite() && n > 1.0 && n <= 3.0)
+            {
+                return Err(ctx.invalid(
+                    format!("{place}.ior"),
+                    format!(
+                        "{n} is out of range; glass has an index of refraction above 1, at most 3"
+                    ),
+                ));
+            }
+        }
         MaterialModel::Lambert => {
             if roughness.is_some() || specular.is_some() || ior.is_some() {
                 return Err(ctx.invalid(place, "a lambert material has no roughness, specular or ior; use model = \"cook-torrance\""));
@@ -568,6 +587,51 @@ fn check_surface(
                 ));
             }
         }
+    }
+    Ok(())
+}
+
+/// A material's glazing keys: only glass has them, and glass needs no reflectance. The pane is
+/// at most 100 mm thick and transmits at most what its faces let through, (1 − r)/(1 + r).
+fn check_glazing(ctx: &Ctx, place: &str, m: &crate::scene_file::Material) -> Result<()> {
+    if m.model != MaterialModel::Glass {
+        if m.thickness_mm.is_some() || m.transmittance.is_some() {
+            return Err(
+                ctx.invalid(place, "thickness_mm and transmittance are for model = \"glass\"")
+            );
+        }
+        if m.reflectance.is_empty() {
+            return Err(ctx.invalid(
+                format!("{place}.reflectance"),
+                "a material needs its reflectance, a spectrum name",
+            ));
+        }
+        return Ok(());
+    }
+    if !m.reflectance.is_empty() {
+        return Err(ctx.invalid(
+            format!("{place}.reflectance"),
+            "glass has no reflectance: its reflection follows from its ior",
+        ));
+    }
+    if let Some(d) = m.thickness_mm
+        && !(d.is_finite() && d > 0.0 && d <= 100.0)
+    {
+        return Err(ctx.invalid(
+            format!("{place}.thickness_mm"),
+            format!("{d} mm is out of range; a pane is more than 0 and at most 100 mm thick"),
+        ));
+    }
+    let n = m.ior.unwrap_or(1.52);
+    let most = ((1.0 - ((n - 1.0) / (n + 1.0)).powi(2)) / (1.0 + ((n - 1.0) / (n + 1.0)).powi(2)))
+        .min(1.0);
+    if let Some(t) = m.transmittance
+        && !(t.is_finite() && (0.0..=most).contains(&t))
+    {
+        return Err(ctx.invalid(
+            format!("{place}.transmittance"),
+            format!("{t} is out of range; glass of index {n} transmits 0 to {most:.4} at normal incidence (its faces reflect the rest)"),
+        ));
     }
     Ok(())
 }
@@ -971,11 +1035,12 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
     // Materials and their states.
     for (name, m) in &file.materials {
         let place = format!("materials.{name}");
+        check_glazing(&ctx, &place, m)?;
         check_surface(
             &mut ctx,
             &place,
             m.model,
-            Some(&m.reflectance),
+            (m.model != MaterialModel::Glass).then_some(m.reflectance.as_str()),
             m.roughness,
             m.specular,
             m.ior,

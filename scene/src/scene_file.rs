@@ -321,14 +321,25 @@ pub struct MixPart {
 pub enum MaterialModel {
     Lambert,
     CookTorrance,
+    /// Thin clear glazing: Fresnel reflection and transmission at its two faces, absorption
+    /// through its thickness (see `thickness_mm`, `transmittance`, `ior`).
+    Glass,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Material {
     pub model: MaterialModel,
-    /// The spectral hemispherical reflectance ρ(λ), by spectrum name.
+    /// The spectral hemispherical reflectance ρ(λ), by spectrum name (none for glass).
+    #[serde(default, skip_serializing_if = "String::is_empty")]
     pub reflectance: String,
+    /// Glass: the pane's thickness, mm (6 unless given).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub thickness_mm: Option<f64>,
+    /// Glass: its transmittance at normal incidence, 0–1 (0.88 for 6 mm of clear float glass,
+    /// scaled by absorption to another thickness, unless given).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub transmittance: Option<f64>,
     /// Cook–Torrance: Beckmann roughness m (rms slope), 0 < m ≤ 1.
     #[serde(default)]
     pub roughness: Option<f64>,
@@ -553,20 +564,22 @@ pub enum Light {
         #[serde(default)]
         model: Option<SkyModel>,
         spectrum: String,
+        // The keys below are not written when absent, so a sky without them keeps the
+        // identity it had before they existed.
         /// With `model = "cie-general"`: the standard's sky type, 1 to 15.
-        #[serde(default)]
+        #[serde(default, skip_serializing_if = "Option::is_none")]
         cie_type: Option<u8>,
         /// Where the sun stands for the sky's shape, when the scene has no sun light (the sun
         /// is then not a light: a sky component with the sun excluded).
-        #[serde(default)]
+        #[serde(default, skip_serializing_if = "Option::is_none")]
         sun_elevation_deg: Option<f64>,
-        #[serde(default)]
+        #[serde(default, skip_serializing_if = "Option::is_none")]
         sun_azimuth_deg: Option<f64>,
-        #[serde(default)]
+        #[serde(default, skip_serializing_if = "Option::is_none")]
         site: Option<SiteTime>,
         /// A ground below the horizon, for open scenes: its reflectance, seen at the uniform
         /// luminance ρ·E_h/π (E_h the horizontal illuminance of the sky and sun together).
-        #[serde(default)]
+        #[serde(default, skip_serializing_if = "Option::is_none")]
         ground_reflectance: Option<f64>,
     },
     /// A Lambertian emitting rectangle (a light panel, a luminous ceiling, a lit opening): the

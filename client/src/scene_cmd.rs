@@ -61,7 +61,11 @@ pub struct AostaFiles {
     pub sunny: PathBuf,
     /// `aosta-overcast.toml`: an overcast day.
     pub overcast: PathBuf,
-    /// `meshes/facade.obj`, which both use.
+    /// `aosta-clear.toml`: the afternoon's sun under the CIE standard clear sky.
+    pub clear: PathBuf,
+    /// `aosta-floodlit.toml`: a night under floodlights, with a calculation grid.
+    pub floodlit: PathBuf,
+    /// `meshes/facade.obj`, which all of them use.
     pub mesh: PathBuf,
 }
 
@@ -72,13 +76,20 @@ pub fn write_aosta(out: &Path, width: u32, height: u32, seed: u64) -> Result<Aos
     let files = AostaFiles {
         sunny: out.join("aosta.toml"),
         overcast: out.join("aosta-overcast.toml"),
+        clear: out.join("aosta-clear.toml"),
+        floodlit: out.join("aosta-floodlit.toml"),
         mesh: out.join("meshes/facade.obj"),
     };
-    for (path, text) in [
-        (&files.mesh, &generated.facade_obj),
-        (&files.sunny, &generated.scene_toml),
-        (&files.overcast, &generated.overcast_toml),
-    ] {
+    let photometry = restauro_scene::aosta::PHOTOMETRY
+        .map(|(name, text)| (out.join("photometry").join(name), text.to_owned()));
+    let texts = [
+        (files.mesh.clone(), generated.facade_obj),
+        (files.sunny.clone(), generated.scene_toml),
+        (files.overcast.clone(), generated.overcast_toml),
+        (files.clear.clone(), generated.clear_toml),
+        (files.floodlit.clone(), generated.floodlit_toml),
+    ];
+    for (path, text) in texts.iter().chain(&photometry) {
         atomic_file::write(path, text.as_bytes())
             .with_context(|| format!("cannot write {}", path.display()))?;
     }
@@ -92,8 +103,11 @@ pub fn run(command: &SceneCommand) -> Result<String> {
             // Check what was written as any scene is checked.
             let loaded = load_scene(&files.sunny, &Limits::default())?;
             let mut s = summary(&files.sunny, &loaded);
-            load_scene(&files.overcast, &Limits::default())?;
-            for path in [&files.sunny, &files.overcast, &files.mesh] {
+            for other in [&files.overcast, &files.clear, &files.floodlit] {
+                load_scene(other, &Limits::default())?;
+            }
+            for path in [&files.sunny, &files.overcast, &files.clear, &files.floodlit, &files.mesh]
+            {
                 let bytes = std::fs::metadata(path).map_or(0, |m| m.len());
                 let _ = writeln!(s, "wrote {} ({bytes} bytes)", path.display());
             }

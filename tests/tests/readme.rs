@@ -9,7 +9,9 @@
 //! * `cargo test --workspace` is skipped: it is the command running this test;
 //! * sizes are reduced where a flag allows: `demo --quick`, `scene aosta` at 160×90, `--spp 1`;
 //! * the cluster's port 7878 is a free port, and the studio's 7880 another, so that tests
-//!   running at once do not collide.
+//!   running at once do not collide;
+//! * the checkout's `validation/` folder (scenes the README refers to) is copied into the
+//!   folder first, as a user running the README from the checkout has it.
 //!
 //! A failing line fails the test with the script's output.
 
@@ -75,6 +77,10 @@ fn every_readme_command_runs_in_order() {
         body.join("\n")
     );
     let dir = tempfile::tempdir().unwrap();
+    copy_folder(
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../validation"),
+        &dir.path().join("validation"),
+    );
     let mut bash = Command::new("bash");
     bash.arg("-c")
         .arg(&script)
@@ -117,4 +123,18 @@ fn the_runner_reads_blocks_and_continuations() {
         adapted("cargo run --release -p restauro -- demo   # x", (9, 10)).unwrap(),
         "\"$RESTAURO\" demo --quick   # x"
     );
+}
+
+/// Copies the folder `from` into `to`, recursively.
+fn copy_folder(from: &std::path::Path, to: &std::path::Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for entry in std::fs::read_dir(from).unwrap() {
+        let path = entry.unwrap().path();
+        let target = to.join(path.file_name().unwrap());
+        if path.is_dir() {
+            copy_folder(&path, &target);
+        } else {
+            std::fs::copy(&path, &target).unwrap();
+        }
+    }
 }

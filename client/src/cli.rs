@@ -28,8 +28,9 @@ pub enum Command {
     /// --compare the CIEDE2000 difference between two materials.
     Color(ColorArgs),
     /// Render the demo on an embedded local cluster: the Aosta facade as found and cleaned under
-    /// a summer sun and an overcast sky, the paper's stone experiment (Fig. 12) under CIE A, B,
-    /// C and D65, each with and without Retinex, a CIEDE2000 map, contact sheets and a report.
+    /// a summer sun, an overcast sky and the CIE clear sky, the paper's stone experiment
+    /// (Fig. 12) under CIE A, B, C and D65, each with and without Retinex, a CIEDE2000 map, the
+    /// facade floodlit at night with the illuminance over one bay, contact sheets and a report.
     Demo(DemoArgs),
     /// Render a scene through a cluster — an embedded local one (a coordinator and two workers
     /// on loopback) unless --coordinator is given: absolute XYZ (and spectral radiance) to

@@ -2,11 +2,14 @@
 //! coordinator and workers, real processes on loopback) it renders
 //!
 //! 1. the south facade of the Roman theatre of Aosta as found and cleaned, under the sun of a
-//!    summer afternoon at the site (with its clear sky) and under the CIE overcast sky of
-//!    10 000 lux, each with and without the Retinex;
+//!    summer afternoon at the site (with its clear sky), under the CIE overcast sky of
+//!    10 000 lux and under the same sun with the CIE standard clear sky, each with and without
+//!    the Retinex;
 //! 2. the paper's stone experiment (Rossi, Marini & Rizzi 2004, Fig. 12): travertine and pudding
 //!    stone, as found and cleaned, beside a white tile under CIE illuminants A, B, C and D65,
 //!    with and without the Retinex;
+//! 3. the facade floodlit at night, and the illuminance over one bay on its calculation grid,
+//!    written as `restauro illuminance` writes it (a false-colour map, a table, a document);
 //!
 //! and writes labelled contact sheets, a CIEDE2000 map between the two hypotheses, and a report
 //! (Markdown and JSON) of every image, its scene, light, parameters and render time, and the
@@ -65,6 +68,8 @@ struct Size {
     facade_spp: u32,
     samples: (u32, u32),
     samples_spp: u32,
+    /// Samples a point of the floodlit facade's grid.
+    grid_spp: u32,
     /// The width of a facade image on its contact sheet.
     sheet_cell: u32,
 }
@@ -77,6 +82,7 @@ impl Size {
                 facade_spp: 4,
                 samples: (300, 200),
                 samples_spp: 1,
+                grid_spp: 16,
                 sheet_cell: 320,
             }
         } else {
@@ -85,6 +91,7 @@ impl Size {
                 facade_spp: 32,
                 samples: (600, 400),
                 samples_spp: 4,
+                grid_spp: 256,
                 sheet_cell: 560,
             }
         }
@@ -96,6 +103,7 @@ impl Size {
 enum FacadeLight {
     SummerAfternoon,
     Overcast,
+    ClearSky,
 }
 
 impl FacadeLight {
@@ -103,14 +111,35 @@ impl FacadeLight {
         match self {
             FacadeLight::SummerAfternoon => "summer afternoon",
             FacadeLight::Overcast => "overcast sky",
+            FacadeLight::ClearSky => "CIE clear sky",
         }
     }
 }
 
 #[derive(Clone, Debug)]
 enum Kind {
-    Facade { light: FacadeLight, variant: &'static str },
-    Samples { illuminant: &'static str },
+    Facade {
+        light: FacadeLight,
+        variant: &'static str,
+    },
+    Samples {
+        illuminant: &'static str,
+    },
+    /// The facade floodlit at night, cleaned.
+    Night,
+    /// The floodlit scene's calculation grid.
+    Grid,
+}
+
+impl Kind {
+    /// The restoration hypothesis rendered.
+    fn variant(&self) -> Option<String> {
+        match self {
+            Kind::Facade { variant, .. } => Some(variant.to_string()),
+            Kind::Night => Some("cleaned".into()),
+            Kind::Samples { .. } | Kind::Grid => None,
+        }
+    }
 }
 
 /// One render of the demo.
@@ -208,6 +237,7 @@ struct Report {
     samples: Vec<SampleRegion>,
     stones: Vec<StoneColour>,
     cleaning: Vec<CleaningDifference>,
+    floodlighting: Floodlighting,
 }
 
 fn bar_style(template: &str) -> Result<ProgressStyle> {
@@ -270,6 +300,7 @@ pub fn run(args: &DemoArgs) -> Result<String> {
             .collect(),
         stones: analysis.stones,
         cleaning: analysis.cleaning,
+        floodlighting: analysis.floodlighting,
     };
     let md_path = out.join("report.md");
     let json_path = out.join("report.json");
@@ -307,6 +338,18 @@ pub fn run(args: &DemoArgs) -> Result<String> {
             c.p95_delta_e00
         );
     }
+    let f = &report.floodlighting;
+    let _ = writeln!(
+        s,
+        "  the floodlit facade at night, {}: mean {:.1} lx (from {:.1} to {:.1} lx), uniformity \
+         {:.2}; map {}",
+        f.grid,
+        f.mean_lux,
+        f.min_lux,
+        f.max_lux,
+        f.uniformity,
+        out.join(&f.map).display()
+    );
     let _ = writeln!(s, "contact sheets:");
     for image in report.images.iter().filter(|i| i.file.starts_with("sheets/")) {
         let _ = writeln!(s, "  {}", out.join(&image.file).display());
@@ -323,6 +366,7 @@ fn write_scenes(out: &Path, size: &Size) -> Result<Vec<Job>> {
     for (light, scene, stem) in [
         (FacadeLight::SummerAfternoon, &aosta.sunny, "facade-sun"),
         (FacadeLight::Overcast, &aosta.overcast, "facade-overcast"),
+        (FacadeLight::ClearSky, &aosta.clear, "facade-clear"),
     ] {
         for variant in ["as-found", "cleaned"] {
             jobs.push(Job {
@@ -333,6 +377,18 @@ fn write_scenes(out: &Path, size: &Size) -> Result<Vec<Job>> {
             });
         }
     }
+    jobs.push(Job {
+        key: "facade-night-cleaned".into(),
+        scene: aosta.floodlit.clone(),
+        kind: Kind::Night,
+        spp: size.facade_spp,
+    });
+    jobs.push(Job {
+        key: "floodlit-grid".into(),
+        scene: aosta.floodlit.clone(),
+        kind: Kind::Grid,
+        spp: size.grid_spp,
+    });
     let dir = out.join("scenes/samples");
     for illuminant in ILLUMINANTS {
         let g = samples::generate(illuminant, size.samples.0, size.samples.1, size.samples_spp);
@@ -378,16 +434,13 @@ async fn render_all(
     for (index, job) in jobs.iter().enumerate() {
         let bundle = bundle_scene(&job.scene, &Limits::default())?;
         cluster::upload(&mut client, &bundle).await?;
-        let variant = match &job.kind {
-            Kind::Facade { variant, .. } => Some(variant.to_string()),
-            Kind::Samples { .. } => None,
-        };
         let spec = JobSpec {
             name: JobName::new(&job.key)?,
             priority: (jobs.len() - index) as i32,
             render: RenderOptions {
-                variant,
+                variant: job.kind.variant(),
                 samples_per_pixel: Some(job.spp),
+                grids: matches!(job.kind, Kind::Grid),
                 ..RenderOptions::default()
             },
             ..JobSpec::default()
@@ -420,10 +473,7 @@ async fn render_all(
             record: RenderRecord {
                 job: job.key.clone(),
                 scene: relative(out, &job.scene),
-                variant: match &job.kind {
-                    Kind::Facade { variant, .. } => Some(variant.to_string()),
-                    Kind::Samples { .. } => None,
-                },
+                variant: job.kind.variant(),
                 lights: loaded.lights.iter().map(ToString::to_string).collect(),
                 integrator: render.integrator,
                 width: plan.width,
@@ -530,6 +580,73 @@ struct Analysis {
     images: Vec<Image>,
     stones: Vec<StoneColour>,
     cleaning: Vec<CleaningDifference>,
+    floodlighting: Floodlighting,
+}
+
+/// The floodlit facade's calculation grid, as a lighting designer reads it.
+#[derive(Serialize)]
+struct Floodlighting {
+    scene: String,
+    grid: String,
+    points: usize,
+    samples_per_point: u32,
+    min_lux: f64,
+    mean_lux: f64,
+    max_lux: f64,
+    /// E_min / E_mean.
+    uniformity: f64,
+    /// The false-colour map, the points' table and the document (`restauro.illuminance/1`).
+    map: String,
+    table: String,
+    document: String,
+}
+
+/// The floodlit grid's documents, written as `restauro illuminance` writes them, into
+/// `out/floodlit/`; its map is listed among the images.
+fn floodlighting(
+    out: &Path,
+    jobs: &[Job],
+    finished: &[Finished],
+    scenes: &BTreeMap<PathBuf, LoadedScene>,
+    images: &mut Vec<Image>,
+) -> Result<Floodlighting> {
+    use crate::illuminance::{Document, SCHEMA, grid_results, write_documents};
+    let (job, f) = jobs
+        .iter()
+        .zip(finished)
+        .find(|(j, _)| matches!(j.kind, Kind::Grid))
+        .ok_or_else(|| anyhow!("the floodlit grid is missing"))?;
+    let exr = f.dir.join(format!("{}.exr", f.record.job));
+    let image = read_exr(&exr, usize::MAX).with_context(|| format!("reading {}", exr.display()))?;
+    let grids = grid_results(&scenes[&job.scene].grids, &image, &exr)?;
+    let document =
+        Document { schema: SCHEMA, scene: relative(out, &job.scene), variant: None, grids };
+    let json = serde_json::to_string_pretty(&document)? + "\n";
+    let written = write_documents(&out.join("floodlit"), &document, &json)?;
+    let (Some(grid), Some([csv, png])) = (document.grids.first(), written.per_grid.first()) else {
+        bail!("the floodlit scene has no grid");
+    };
+    let map = relative(out, png);
+    images.push(Image {
+        file: map.clone(),
+        what: format!(
+            "the floodlit bay ({}): illuminance in false colour, isolines, lux scale",
+            grid.name
+        ),
+    });
+    Ok(Floodlighting {
+        scene: relative(out, &job.scene),
+        grid: grid.name.clone(),
+        points: grid.points.len(),
+        samples_per_point: job.spp,
+        min_lux: grid.min_lux,
+        mean_lux: grid.mean_lux,
+        max_lux: grid.max_lux,
+        uniformity: grid.uniformity,
+        map,
+        table: relative(out, csv),
+        document: relative(out, &written.json),
+    })
 }
 
 /// The two images of a render: as rendered (absolute XYZ) and after the Retinex (relative).
@@ -573,9 +690,12 @@ fn analyse(
     scenes: &BTreeMap<PathBuf, LoadedScene>,
 ) -> Result<Analysis> {
     let mut images = Vec::new();
-    for f in finished {
+    for (job, f) in jobs.iter().zip(finished) {
         for file in &f.record.files {
-            let what = if file.ends_with("-retinex.exr") {
+            let what = if matches!(job.kind, Kind::Grid) {
+                "the floodlit bay's grid: illuminance (Y in lux), row 0 direct, row 1 indirect, \
+                 OpenEXR"
+            } else if file.ends_with("-retinex.exr") {
                 "after the Retinex: XYZ relative to a D65 white (Y = 1), OpenEXR"
             } else if file.ends_with("-retinex.png") {
                 "after the Retinex, sRGB"
@@ -592,17 +712,17 @@ fn analyse(
     let mut facade: BTreeMap<(FacadeLight, &str), (Pair, &Job)> = BTreeMap::new();
     let mut stones: BTreeMap<&str, Pair> = BTreeMap::new();
     for (job, f) in jobs.iter().zip(finished) {
-        let pair = read_pair(f)?;
         match &job.kind {
             Kind::Facade { light, variant } => {
-                facade.insert((*light, variant), (pair, job));
+                facade.insert((*light, variant), (read_pair(f)?, job));
             }
             Kind::Samples { illuminant } => {
-                stones.insert(illuminant, pair);
+                stones.insert(illuminant, read_pair(f)?);
             }
+            Kind::Night | Kind::Grid => {}
         }
     }
-    let lights = [FacadeLight::SummerAfternoon, FacadeLight::Overcast];
+    let lights = [FacadeLight::SummerAfternoon, FacadeLight::Overcast, FacadeLight::ClearSky];
     let get = |light, variant: &'static str| {
         facade.get(&(light, variant)).ok_or_else(|| anyhow!("the {variant} render is missing"))
     };
@@ -642,6 +762,7 @@ fn analyse(
             ),
             "Summer afternoon: the sun at 15:30 CEST on 15 July at 45.74 N 7.32 E, and a clear sky of 15 000 lux.".into(),
             "Overcast: the CIE standard overcast sky, 10 000 lux. Each light's two renders share one exposure.".into(),
+            "CIE clear sky: the same sun under the CIE standard clear sky (general sky type 12), 15 000 lux, over a ground of reflectance 0.2.".into(),
             "As found = stone + 30 % soot-proxy mixture (derived, not measured).".into(),
             "As seen: Marini-Rizzi Brownian-path Retinex on CAT02 l, m, s cone responses; the paths pass over the sky; sun and shadow adapted apart.".into(),
         ],
@@ -841,7 +962,8 @@ fn analyse(
         &grid,
         "contact sheet: the whole sample board under each illuminant, rendered and seen",
     )?);
-    Ok(Analysis { images, stones: table, cleaning })
+    let floodlighting = floodlighting(out, jobs, finished, scenes, &mut images)?;
+    Ok(Analysis { images, stones: table, cleaning, floodlighting })
 }
 
 /// The sRGB picture of the pixels of `r`.
@@ -968,6 +1090,28 @@ fn markdown(r: &Report) -> String {
             c.pixels
         );
     }
+    let f = &r.floodlighting;
+    let _ = writeln!(s, "\n## The facade floodlit at night\n");
+    let _ = writeln!(
+        s,
+        "`{}`: two metal-halide floodlights and an LED spot of measured photometry. The \
+         illuminance over the fourth bay (grid `{}`, {} points, {} samples a point, direct and \
+         inter-reflected light, computed on the cluster as `restauro illuminance` computes it):\n",
+        f.scene, f.grid, f.points, f.samples_per_point
+    );
+    let _ = writeln!(s, "| minimum | mean | maximum | uniformity E_min/E_mean |");
+    let _ = writeln!(s, "|---:|---:|---:|---:|");
+    let _ = writeln!(
+        s,
+        "| {:.1} lx | {:.1} lx | {:.1} lx | {:.3} |\n",
+        f.min_lux, f.mean_lux, f.max_lux, f.uniformity
+    );
+    let _ = writeln!(
+        s,
+        "![the floodlit bay in false colour]({})\n\nEach point: [`{}`]({}); the document: \
+         [`{}`]({}).",
+        f.map, f.table, f.table, f.document, f.document
+    );
     let _ = writeln!(s, "\n{}", restauro_spectral::library::ECOSTRESS_ACKNOWLEDGEMENT);
     s
 }

@@ -21,7 +21,7 @@ use restauro_scene::grid::ResolvedGrid;
 use restauro_scene::load::{Limits, load_scene};
 use serde::Serialize;
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// The JSON document's schema.
 pub const SCHEMA: &str = "restauro.illuminance/1";
@@ -92,31 +92,49 @@ pub fn run(args: &IlluminanceArgs) -> Result<String> {
     };
     let json = serde_json::to_string_pretty(&document)? + "\n";
     let mut text = computed;
-    let json_path = args.out.join("illuminance.json");
-    atomic_file::write(&json_path, json.as_bytes())
-        .with_context(|| format!("writing {}", json_path.display()))?;
-    for grid in &document.grids {
-        let csv = args.out.join(format!("{}.csv", grid.name));
-        atomic_file::write(&csv, csv_text(grid).as_bytes())
-            .with_context(|| format!("writing {}", csv.display()))?;
-        let png = args.out.join(format!("{}.png", grid.name));
-        write_map(&png, grid)?;
+    let written = write_documents(&args.out, &document, &json)?;
+    for (grid, files) in document.grids.iter().zip(written.per_grid) {
         let _ = writeln!(
             text,
-            "{}: {} points, min {:.4} lx, mean {:.4} lx, max {:.4} lx, uniformity {:.3}\n\
-             wrote {}\nwrote {}",
+            "{}: {} points, min {:.4} lx, mean {:.4} lx, max {:.4} lx, uniformity {:.3}",
             grid.name,
             grid.points.len(),
             grid.min_lux,
             grid.mean_lux,
             grid.max_lux,
             grid.uniformity,
-            csv.display(),
-            png.display()
         );
+        for f in files {
+            let _ = writeln!(text, "wrote {}", f.display());
+        }
     }
-    let _ = writeln!(text, "wrote {}", json_path.display());
+    let _ = writeln!(text, "wrote {}", written.json.display());
     Ok(if args.json { json } else { text })
+}
+
+/// The files [`write_documents`] wrote: per grid its CSV and its map, and the JSON document.
+pub struct Written {
+    pub per_grid: Vec<[PathBuf; 2]>,
+    pub json: PathBuf,
+}
+
+/// Writes `document` (whose JSON text is `json`) into `dir`: `illuminance.json`, and per grid
+/// `<grid>.csv` and its false-colour map `<grid>.png`.
+pub fn write_documents(dir: &Path, document: &Document, json: &str) -> Result<Written> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let json_path = dir.join("illuminance.json");
+    atomic_file::write(&json_path, json.as_bytes())
+        .with_context(|| format!("writing {}", json_path.display()))?;
+    let mut per_grid = Vec::with_capacity(document.grids.len());
+    for grid in &document.grids {
+        let csv = dir.join(format!("{}.csv", grid.name));
+        atomic_file::write(&csv, csv_text(grid).as_bytes())
+            .with_context(|| format!("writing {}", csv.display()))?;
+        let png = dir.join(format!("{}.png", grid.name));
+        write_map(&png, grid)?;
+        per_grid.push([csv, png]);
+    }
+    Ok(Written { per_grid, json: json_path })
 }
 
 /// Each grid's points from the EXR's columns (row 0 direct, row 1 indirect; Y is lux).

@@ -93,7 +93,27 @@ fn the_quick_demo_writes_what_it_lists_and_the_retinex_adapts() {
         assert!(markdown.contains(file), "report.md does not list {file}");
     }
     let renders = report["renders"].as_array().unwrap();
-    assert_eq!(renders.len(), 8);
+    // The facade under three lights, as found and cleaned; the stones under four illuminants;
+    // the facade floodlit at night, and its grid.
+    assert_eq!(renders.len(), 12);
+    // The floodlit bay: its figures are its grid's, and its map is listed.
+    let f = &report["floodlighting"];
+    let document: Value = serde_json::from_str(
+        &std::fs::read_to_string(out.join(f["document"].as_str().unwrap())).unwrap(),
+    )
+    .unwrap();
+    let grid = &document["grids"][0];
+    let lux: Vec<f64> =
+        grid["points"].as_array().unwrap().iter().map(|p| p["lux"].as_f64().unwrap()).collect();
+    let (min, max) = lux.iter().fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
+    let average = lux.iter().sum::<f64>() / lux.len() as f64;
+    assert_eq!(f["points"].as_u64().unwrap() as usize, lux.len());
+    assert!(max > 0.0 && min >= 0.0, "the floodlights light the bay: {min} to {max} lx");
+    assert!((f["mean_lux"].as_f64().unwrap() - average).abs() < 1e-6 * average.max(1.0));
+    let u = f["uniformity"].as_f64().unwrap();
+    assert!((u - min / average).abs() < 1e-9, "uniformity {u} against {}", min / average);
+    assert!(listed.contains(&f["map"].as_str().unwrap()), "the map is not listed");
+    assert!(markdown.contains("## The facade floodlit at night"));
     for r in renders {
         for f in r["files"].as_array().unwrap() {
             assert!(listed.contains(&f.as_str().unwrap()), "{f} is not listed");

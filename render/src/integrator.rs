@@ -11,9 +11,11 @@
 //! The sky, an extended source, is sampled at every vertex by a cosine-weighted direction about
 //! the normal (pdf cos θ/π) with a shadow ray to infinity: the estimate of its reflected radiance
 //! is f(wo, wi) · L_sky(wi) · π (a CIE general sky adds a sample by its luminance, see
-//! [`crate::sky`]). Area luminaires are sampled by area at every vertex. A camera ray that escapes sees the sky's radiance; a bounce that
-//! escapes adds nothing, because the sky was already counted at the vertex it left (Whitted's
-//! mirror rays therefore do not reflect the sky).
+//! [`crate::sky`]); area luminaires are sampled at every vertex too ([`crate::light::Panel`]).
+//! A camera ray that escapes sees the sky's radiance, and so does one that passed through glass
+//! or reflected in it; a bounce off any other surface that escapes adds nothing, because the sky
+//! was already counted at the vertex it left, through any glass on the way (Whitted's mirror
+//! rays therefore do not reflect the sky). Shadow rays pass through glass by its transmittance.
 //!
 //! All 81 bands travel together on every ray; nothing here allocates.
 

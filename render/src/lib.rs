@@ -13,4 +13,5 @@ pub mod prepared;
 pub mod sampler;
 pub mod sensor;
 pub mod sky;
+pub mod spherical_rectangle;
 pub mod tile;

@@ -10,13 +10,16 @@
 //! These are delta lights (a point or a direction), sampled exactly. The extended sources are
 //! the sky, a dome of luminance L_v(ω) (cd/m²) above the horizon, whose spectral radiance is
 //! L_v(ω) · S_e(λ) / Σ K(λ) S_e(λ) Δλ, sampled by the integrator over the hemisphere; and area
-//! luminaires, Lambertian rectangles of one luminance, sampled by area: a point y drawn
+//! luminaires, Lambertian rectangles of one luminance, sampled by area far off — a point y drawn
 //! uniformly on a panel of area A gives a point x the estimate
 //!
 //! ```text
-//!   E⊥(λ) = L_v · A · cos θ_y / r² · S_e(λ) / Σ K S_e Δλ     (pdf 1/A; cos θ_x applied as above).
+//!   E⊥(λ) = L_v · A · cos θ_y / r² · S_e(λ) / Σ K S_e Δλ     (pdf 1/A; cos θ_x applied as above)
 //! ```
+//!
+//! — and by solid angle close by, E⊥(λ) = L_v · Ω · S_e(λ)/Σ K S_e Δλ ([`crate::spherical_rectangle`]).
 
+use crate::spherical_rectangle::SphericalRectangle;
 use glam::Vec3A;
 use restauro_scene::photometric::Photometry;
 use restauro_spectral::Spectrum;
@@ -48,7 +51,7 @@ pub enum Light {
     /// A distant source: `direction` towards it, `irradiance` E⊥(λ) on a surface facing it,
     /// whose illuminance is `illuminance_lux`.
     Distant { direction: Vec3A, irradiance: Spectrum, illuminance_lux: f32 },
-    /// An area luminaire, sampled by area ([`Panel::incident_from`]).
+    /// An area luminaire, sampled by solid angle or by area ([`Panel::incident_from`]).
     Area(Panel),
 }
 
@@ -67,10 +70,43 @@ pub struct Panel {
 }
 
 impl Panel {
-    /// The light reaching `p` from the point at (s, t) of the panel, as one sample of area
-    /// sampling: nothing when `p` is behind the panel or in its plane.
+    /// One sample of the light reaching `p`, drawn with (s, t) ∈ [0, 1)²: by solid angle
+    /// within two diagonals of the panel's centre, where sampling by area would be noisy (its
+    /// 1/r² varies across the panel), and by area farther off, where it is as good and cheaper.
+    /// Nothing when `p` is behind the panel or in its plane.
     #[inline]
     pub fn incident_from(&self, p: Vec3A, s: f32, t: f32) -> Option<Incident<'_>> {
+        if (p - self.corner).dot(self.normal) <= 0.0 {
+            return None;
+        }
+        let diagonal = self.u + self.v;
+        let centre = self.corner + diagonal * 0.5;
+        if (p - centre).length_squared() < 4.0 * diagonal.length_squared()
+            && let Some(sr) = SphericalRectangle::new(self.corner, self.u, self.v, p)
+        {
+            let d = sr.sample(s, t) - p;
+            let r = d.length();
+            if r <= 0.0 {
+                return None;
+            }
+            // Directions uniform over the solid angle Ω: E⊥ = L · Ω per sample.
+            let e = self.luminance_cd_m2 * sr.solid_angle;
+            let spectrum = &self.per_nit;
+            return Some(Incident {
+                direction: d / r,
+                distance: r,
+                scale: e,
+                spectrum,
+                illuminance_lux: e,
+            });
+        }
+        self.incident_by_area(p, s, t)
+    }
+
+    /// The light reaching `p` from the point at (s, t) of the panel, as one sample of area
+    /// sampling (pdf 1/A).
+    #[inline]
+    fn incident_by_area(&self, p: Vec3A, s: f32, t: f32) -> Option<Incident<'_>> {
         let y = self.corner + self.u * s + self.v * t;
         let d = y - p;
         let r2 = d.length_squared();

@@ -125,3 +125,24 @@ fn case_5_8_holds_in_every_band() {
         );
     }
 }
+
+/// A point 5 cm below the centre of a 1 × 1 m panel of 1000 cd/m², where the panel fills most
+/// of its sky: sampled by solid angle, 256 samples give E = 4 · L · ½ [X/√(1 + X²)
+/// atan(Y/√(1 + X²)) + (X ↔ Y)], X = Y = 10 (the rectangle's configuration factor, four
+/// quarters), to 0.5 %.
+#[test]
+fn a_point_close_to_an_area_luminaire_is_sampled_by_solid_angle() {
+    let dir = tempfile::tempdir().unwrap();
+    let body = "[[lights]]\nkind = \"area\"\ncorner = [-0.5, -0.5, 0.05]\nu = [1.0, 0.0, 0.0]\n\
+                v = [0.0, 1.0, 0.0]\nnormal = [0.0, 0.0, -1.0]\nluminance_cd_m2 = 1000.0\n\
+                spectrum = \"lamp\"\n[[grids]]\nname = \"g\"\npoints = [[0.0, 0.0, 0.0]]\n\
+                normal = [0.0, 0.0, 1.0]\n";
+    let speck = "v 9 9 -1\nv 10 9 -1\nv 9 10 -1\nf 1 2 3\n";
+    let scene = load(dir.path(), speck, body);
+    let (direct, _) = irradiance(&scene, 256);
+    let e = f64::from(restauro_render::tile::film_xyz(&direct[0])[1]);
+    let x: f64 = 10.0;
+    let quarter = 0.5 * 2.0 * x / (1.0 + x * x).sqrt() * (x / (1.0 + x * x).sqrt()).atan();
+    let expected = 4.0 * 1000.0 * quarter;
+    assert!((e / expected - 1.0).abs() < 0.005, "{e} lx against {expected}");
+}

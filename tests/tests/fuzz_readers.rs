@@ -777,6 +777,7 @@ fn readers() -> Vec<Reader> {
             seeds: vec![
                 ("aosta.toml".into(), aosta.scene_toml.into_bytes()),
                 ("aosta-overcast.toml".into(), aosta.overcast_toml.into_bytes()),
+                ("aosta-clear.toml".into(), aosta.clear_toml.into_bytes()),
                 ("samples.toml".into(), samples.scene_toml.into_bytes()),
                 ("everything.toml".into(), everything.into_bytes()),
             ],

@@ -1114,10 +1114,10 @@ fn a_scene_folder_sent_as_a_tar_or_a_zip_opens_as_a_scene() {
     let send = |name: &str, body: &[u8]| {
         request(&s, "POST", &format!("/api/scenes?name={name}"), &auth, body)
     };
-    // The generator writes two scenes into the folder: one is chosen.
+    // The generator writes four scenes into the folder (four lights): one is chosen.
     let r = send("aosta-sent", &folder_tar(&folder, "aosta"));
     assert_eq!(r.status, 400, "{}", r.text());
-    assert!(error_of(&r).contains("2 scene files at the same level"), "{}", error_of(&r));
+    assert!(error_of(&r).contains("4 scene files at the same level"), "{}", error_of(&r));
     let r = send("aosta-sent&scene=aosta/nothing.toml", &folder_tar(&folder, "aosta"));
     assert!(error_of(&r).contains("no scene file `aosta/nothing.toml`"), "{}", error_of(&r));
     let r = send("aosta-sent&scene=aosta/aosta.toml", &folder_tar(&folder, "aosta"));

@@ -591,6 +591,22 @@ fn check_surface(
     Ok(())
 }
 
+/// The name of the spectrum a sky is given without one: CIE D65, the daylight of the CIE
+/// general sky's definition. A `[spectra]` entry of this name is the user's own, and wins.
+pub const DEFAULT_SKY_SPECTRUM: &str = "cie:D65";
+
+/// A sky's spectrum: its own, or [`DEFAULT_SKY_SPECTRUM`], resolved into the scene's spectra.
+fn sky_spectrum(ctx: &mut Ctx, given: &str) -> Result<String> {
+    if !given.is_empty() {
+        return Ok(given.to_owned());
+    }
+    if !ctx.file.spectra.contains_key(DEFAULT_SKY_SPECTRUM) {
+        let d65 = Illuminant::D65.spd().map_err(|e| ctx.invalid("spectrum", e.to_string()))?;
+        ctx.spectra.insert(DEFAULT_SKY_SPECTRUM.to_owned(), d65);
+    }
+    Ok(DEFAULT_SKY_SPECTRUM.to_owned())
+}
+
 /// A material's glazing keys: only glass has them, and glass needs no reflectance. The pane is
 /// at most 100 mm thick and transmits at most what its faces let through, (1 − r)/(1 + r).
 fn check_glazing(ctx: &Ctx, place: &str, m: &crate::scene_file::Material) -> Result<()> {
@@ -1384,6 +1400,7 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
                 }
             }
             Light::Sky { illuminance_lux, preset, model, spectrum, .. } => {
+                let spectrum = &sky_spectrum(&mut ctx, spectrum)?;
                 ctx.emission(spectrum, &format!("{place}.spectrum"))?;
                 let (lux, preset_model) = match (illuminance_lux, preset) {
                     (Some(_), Some(_)) => {

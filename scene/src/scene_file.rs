@@ -563,6 +563,8 @@ pub enum Light {
         /// `clear` preset).
         #[serde(default)]
         model: Option<SkyModel>,
+        /// Its spectral shape; CIE D65 when not given (not written then).
+        #[serde(default, skip_serializing_if = "String::is_empty")]
         spectrum: String,
         // The keys below are not written when absent, so a sky without them keeps the
         // identity it had before they existed.

@@ -1054,4 +1054,18 @@ fn a_general_sky_finds_its_sun_and_its_ground() {
     assert!((g.sun[0] - 30f64.to_radians().cos()).abs() < 1e-12, "east, 30° high");
     let e = refused(&f, &no_sun("model = \"cie-general\"\ncie_type = 7"));
     assert!(e.contains("a CIE general sky is shaped by the sun"), "{e}");
+    // A sky without a spectrum is CIE D65 (ISO 15469's daylight), the tabulated illuminant.
+    let toml = with_sun("").replace(
+        "[[lights]]\nkind = \"sky\"\nilluminance_lux = 20000.0\nspectrum = \"sunlight\"\n",
+        "[[lights]]\nkind = \"sky\"\nilluminance_lux = 20000.0\n",
+    );
+    let scene = load(&f, &toml).unwrap();
+    let Some(ResolvedLight::Sky { spectrum, .. }) =
+        scene.lights.iter().find(|l| matches!(l, ResolvedLight::Sky { .. }))
+    else {
+        panic!("no sky")
+    };
+    assert_eq!(spectrum, restauro_scene::load::DEFAULT_SKY_SPECTRUM);
+    let d65 = restauro_spectral::Illuminant::D65.spd().unwrap();
+    assert_eq!(scene.spectra[spectrum], d65, "{spectrum}");
 }

@@ -267,7 +267,9 @@ fn light_spectra(scene: &LoadedScene) -> Vec<String> {
         .iter()
         .filter(|(_, source)| matches!(source, SpectrumSource::Illuminant { .. }))
         .map(|(name, _)| name.clone());
-    let all: std::collections::BTreeSet<String> = used.chain(illuminants).collect();
+    // A sky without a spectrum of its own (D65) names none.
+    let all: std::collections::BTreeSet<String> =
+        used.chain(illuminants).filter(|name| !name.is_empty()).collect();
     all.into_iter().collect()
 }
 

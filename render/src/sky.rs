@@ -199,7 +199,7 @@ mod tests {
 
     fn clear_sky() -> Sky {
         let sun = direction_to_sun(SunPosition { azimuth_deg: 200.0, elevation_deg: 35.0 });
-        let general = GeneralSky { sky_type: 15, sun };
+        let general = GeneralSky::new(15, sun);
         Sky::new(20_000.0, SkyModel::CieGeneral, Spectrum::ONE, Some(general), 0.0)
     }
 

@@ -47,7 +47,7 @@ fn sun(elevation_deg: f64) -> [f64; 3] {
 fn horizontal_over_zenith_matches_the_table() {
     for (elevation, row) in TABLE {
         for (k, expected) in row.iter().enumerate() {
-            let sky = GeneralSky { sky_type: k as u8 + 1, sun: sun(elevation) };
+            let sky = GeneralSky::new(k as u8 + 1, sun(elevation));
             let got = sky.horizontal_over_zenith();
             assert!(
                 (got / expected - 1.0).abs() < 5e-5,
@@ -66,7 +66,7 @@ fn each_type_gives_the_illuminance_it_is_given() {
     use restauro_render::sky::Sky;
     use restauro_scene::scene_file::SkyModel;
     for t in 1..=15u8 {
-        let general = GeneralSky { sky_type: t, sun: sun(38.0) };
+        let general = GeneralSky::new(t, sun(38.0));
         let sky = Sky::new(
             12_000.0,
             SkyModel::CieGeneral,
@@ -162,10 +162,8 @@ fn grids_under_a_clear_sky_agree_with_quadrature() {
         })
         .collect();
     let scene = load(dir.path(), sky, &grids);
-    let general = GeneralSky {
-        sky_type: 12,
-        sun: direction_to_sun(SunPosition { azimuth_deg: 225.0, elevation_deg: 25.0 }),
-    };
+    let sun = direction_to_sun(SunPosition { azimuth_deg: 225.0, elevation_deg: 25.0 });
+    let general = GeneralSky::new(12, sun);
     let zenith = 15_000.0 / general.horizontal_over_zenith();
     let got = direct_lux(&scene, 4096);
     for (k, n) in normals.iter().enumerate() {

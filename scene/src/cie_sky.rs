@@ -39,6 +39,8 @@ pub struct GeneralSky {
     /// The unit direction towards the sun (+Z up). Its elevation shapes the sky even where the
     /// sun itself is not a light of the scene.
     pub sun: [f64; 3],
+    /// 1 / (f(Z_s) φ(0)): the zenith's luminance, constant for the sky, computed once.
+    over_zenith: f64,
 }
 
 /// φ(Z) with cos Z given; at and below the horizon the limit, 1 (b < 0).
@@ -53,6 +55,15 @@ fn indicatrix(c: f64, d: f64, e: f64, chi: f64) -> f64 {
 }
 
 impl GeneralSky {
+    /// The sky of `sky_type` (1 to 15; others are taken as the nearest) with the sun towards the
+    /// unit direction `sun`.
+    pub fn new(sky_type: u8, sun: [f64; 3]) -> Self {
+        let [a, b, c, d, e] = PARAMETERS[(sky_type.clamp(1, 15) - 1) as usize];
+        let z_s = sun[2].clamp(-1.0, 1.0).acos();
+        let over_zenith = 1.0 / (indicatrix(c, d, e, z_s) * gradation(a, b, 1.0));
+        Self { sky_type, sun, over_zenith }
+    }
+
     fn parameters(&self) -> [f64; 5] {
         PARAMETERS[(self.sky_type.clamp(1, 15) - 1) as usize]
     }
@@ -66,15 +77,15 @@ impl GeneralSky {
         let [a, b, c, d, e] = self.parameters();
         let dot: f64 = (0..3).map(|k| direction[k] * self.sun[k]).sum();
         let chi = dot.clamp(-1.0, 1.0).acos();
-        let z_s = self.sun[2].clamp(-1.0, 1.0).acos();
-        indicatrix(c, d, e, chi) * gradation(a, b, cos_z)
-            / (indicatrix(c, d, e, z_s) * gradation(a, b, 1.0))
+        indicatrix(c, d, e, chi) * gradation(a, b, cos_z) * self.over_zenith
     }
 
     /// D_v/L_z = ∫ (L/L_z) cos Z dω over the sky, by the midpoint rule in (cos Z, azimuth) —
-    /// dω = d(cos Z) dα — on 1024 × 2048 cells.
+    /// dω = d(cos Z) dα — on 512 × 1024 cells: within 1.2 × 10⁻⁵ of 2048 × 4096 cells for
+    /// types 1, 7, 10, 12, 13 and 15 with the sun 10° to 85° high (the kink of f(χ) at the sun
+    /// keeps the rule from its h² order).
     pub fn horizontal_over_zenith(&self) -> f64 {
-        let (rows, columns) = (1024usize, 2048usize);
+        let (rows, columns) = (512usize, 1024usize);
         let (d_mu, d_alpha) = (1.0 / rows as f64, std::f64::consts::TAU / columns as f64);
         let mut sum = 0.0;
         for i in 0..rows {
@@ -104,11 +115,11 @@ mod tests {
     #[test]
     fn type_5_is_uniform_and_the_zenith_is_one() {
         for el in [20.0, 60.0] {
-            let sky = GeneralSky { sky_type: 5, sun: sun_direction(el, 135.0) };
+            let sky = GeneralSky::new(5, sun_direction(el, 135.0));
             assert!((sky.horizontal_over_zenith() - std::f64::consts::PI).abs() < 1e-5);
         }
         for t in 1..=15 {
-            let sky = GeneralSky { sky_type: t, sun: sun_direction(40.0, 200.0) };
+            let sky = GeneralSky::new(t, sun_direction(40.0, 200.0));
             assert!((sky.relative_luminance([0.0, 0.0, 1.0]) - 1.0).abs() < 1e-12, "type {t}");
             assert_eq!(sky.relative_luminance([1.0, 0.0, -0.1]), 0.0);
         }

@@ -70,7 +70,7 @@ pub fn settle(path: &Path, file_lights: &[Light], lights: &mut [ResolvedLight]) 
                 (Some((direction, _)), false) => direction,
                 (None, _) => own_sun_direction(elevation, azimuth, site.as_ref(), &invalid)?,
             };
-            *general = Some(GeneralSky { sky_type: t, sun });
+            *general = Some(GeneralSky::new(t, sun));
         }
         (_, Some(_)) => {
             let problem = "cie_type is for model = \"cie-general\"; set the model, or remove it";

@@ -20,6 +20,7 @@
 //! All 81 bands travel together on every ray; nothing here allocates.
 
 use crate::bsdf::{Bsdf, cosine_sample};
+use crate::glass::{Optics, Transmission};
 use crate::prepared::{Hit, PreparedScene};
 use crate::sampler::PixelSampler;
 use glam::Vec3A;
@@ -129,6 +130,40 @@ impl Weight<'_> {
             Weight::Spectral(w) => out.add_reflected_weighted(w, light, rho, a, b),
         }
     }
+
+    /// `out += weight · through · light · (ρ·a + b)`: light that arrived through glass.
+    #[inline]
+    fn add_through(
+        self,
+        through: &Transmission,
+        out: &mut Spectrum,
+        light: &Spectrum,
+        rho: &Spectrum,
+        (a, b): (f32, f32),
+    ) {
+        match through {
+            Transmission::Neutral(t) => self.add(out, light, rho, a * t, b * t),
+            Transmission::Tinted(t) => self.add_tinted(t, out, light, rho, (a, b)),
+        }
+    }
+
+    /// [`Weight::add_through`] behind tinted glass; out of line, as rare.
+    #[cold]
+    #[inline(never)]
+    fn add_tinted(
+        self,
+        tint: &Spectrum,
+        out: &mut Spectrum,
+        light: &Spectrum,
+        rho: &Spectrum,
+        (a, b): (f32, f32),
+    ) {
+        let weight = match self {
+            Weight::Neutral(w) => *tint * w,
+            Weight::Spectral(w) => *tint * *w,
+        };
+        Weight::Spectral(&weight).add(out, light, rho, a, b)
+    }
 }
 
 /// Adds the direct light at a vertex to `out`: Σ f(wo, wi) · E⊥(λ) · cos θi over the visible
@@ -160,17 +195,15 @@ fn add_direct(
         if a <= 0.0 && b <= 0.0 {
             continue;
         }
-        let reach =
-            if inc.distance.is_finite() { inc.distance * (1.0 - 1e-4) } else { f32::INFINITY };
         *rays += 1;
-        let through = scene.visibility(origin, inc.direction, reach);
-        if through <= 0.0 {
+        let through = scene.visibility(origin, inc.direction, inc.shadow_reach());
+        if through.is_blocked() {
             continue;
         }
-        let k = inc.scale * cos * through;
-        weight.add(out, inc.spectrum, bsdf.rho(), a * k, b * k);
+        let k = inc.scale * cos;
+        weight.add_through(&through, out, inc.spectrum, bsdf.rho(), (a * k, b * k));
         if let Some(lux) = lit.as_deref_mut() {
-            lux[i.min(LIT_BITS - 1)] += inc.illuminance_lux * cos * through;
+            lux[i.min(LIT_BITS - 1)] += inc.illuminance_lux * cos * through.mean();
         }
     }
 }
@@ -202,11 +235,11 @@ fn add_sky(
         }
         *rays += 1;
         let through = scene.visibility(origin, sample.direction, f32::INFINITY);
-        if through <= 0.0 {
+        if through.is_blocked() {
             continue;
         }
-        let k = sample.luminance_cd_m2 * sample.weight * through;
-        weight.add(out, &sky.per_nit, bsdf.rho(), a * k, b * k);
+        let k = sample.luminance_cd_m2 * sample.weight;
+        weight.add_through(&through, out, &sky.per_nit, bsdf.rho(), (a * k, b * k));
     }
 }
 
@@ -305,16 +338,14 @@ pub fn trace(
         let wo = frame.to_local(-direction);
         let bsdf = &scene.materials[hit.material as usize];
         if let Bsdf::Glass(glass) = bsdf {
-            // A pane: through it or off it, chosen by their shares; its absorption in the weight.
-            let (r, t) = glass.reflect_transmit(wo.z);
-            if r + t <= 0.0 || depth + 1 == max_depth {
+            if depth + 1 == max_depth {
                 break;
             }
-            match &mut spectral {
-                Some(s) => *s *= r + t,
-                None => neutral *= r + t,
-            }
-            if sampler.next_1d() * (r + t) < t {
+            let Some(transmit) = through_pane(glass, wo.z, sampler, &mut neutral, &mut spectral)
+            else {
+                break;
+            };
+            if transmit {
                 origin = lift_along(hit.point, -hit.normal);
             } else {
                 direction = frame.to_world(Vec3A::new(-wo.x, -wo.y, wo.z));
@@ -332,7 +363,10 @@ pub fn trace(
         match scene.settings.integrator {
             Integrator::Whitted => {
                 let Some(f) = bsdf.mirror_reflectance(wo.z) else { break };
-                neutral *= f;
+                match &mut spectral {
+                    Some(s) => *s *= f,
+                    None => neutral *= f,
+                }
                 direction = frame.to_world(Vec3A::new(-wo.x, -wo.y, wo.z));
             }
             Integrator::Path => {
@@ -359,4 +393,44 @@ pub fn trace(
         origin = lift(&hit);
     }
     Seen { sky: false, lit_by: lit_mask(&lux) }
+}
+
+/// A path meets a pane: it goes through or reflects off, chosen by their shares (mean over the
+/// bands for tinted glass), and the throughput takes the chosen share over its probability.
+/// Returns whether it goes through, or `None` when the pane neither reflects nor transmits.
+/// Out of line: it keeps the tracer's loop small for the scenes (most) without glass.
+#[inline(never)]
+fn through_pane(
+    glass: &crate::glass::Glass,
+    cos_i: f32,
+    sampler: &mut PixelSampler,
+    neutral: &mut f32,
+    spectral: &mut Option<Spectrum>,
+) -> Option<bool> {
+    match glass.optics(cos_i) {
+        Optics::Neutral { r, t } => {
+            if r + t <= 0.0 {
+                return None;
+            }
+            match spectral {
+                Some(s) => *s *= r + t,
+                None => *neutral *= r + t,
+            }
+            Some(sampler.next_1d() * (r + t) < t)
+        }
+        Optics::Tinted { r, t } => {
+            let (r_mean, t_mean) = (r.mean(), t.mean());
+            if r_mean + t_mean <= 0.0 {
+                return None;
+            }
+            let transmit = sampler.next_1d() * (r_mean + t_mean) < t_mean;
+            let (share, p) = if transmit { (t, t_mean) } else { (r, r_mean) };
+            let factor = share * ((r_mean + t_mean) / p);
+            match spectral {
+                Some(s) => *s *= factor,
+                None => *spectral = Some(factor * *neutral),
+            }
+            Some(transmit)
+        }
+    }
 }

@@ -165,6 +165,14 @@ impl Incident<'_> {
     pub fn irradiance(&self) -> Spectrum {
         *self.spectrum * self.scale
     }
+
+    /// How far a shadow ray towards the light looks for blockers: all the way to a distant
+    /// light, and short of a near one by a relative 10⁻⁴, so that the light's own surface (an
+    /// area luminaire's plane) does not block it.
+    #[inline]
+    pub fn shadow_reach(&self) -> f32 {
+        if self.distance.is_finite() { self.distance * (1.0 - 1e-4) } else { f32::INFINITY }
+    }
 }
 
 impl Distribution {

@@ -4,6 +4,7 @@
 
 use crate::bsdf::Bsdf;
 use crate::camera::Camera;
+use crate::glass::Transmission;
 use crate::light::{Distribution, Light, Panel};
 use crate::sampler::Strata;
 use crate::sensor::Sensor;
@@ -16,8 +17,9 @@ use obvhs::rt_triangle::RtTriangle;
 use obvhs::triangle::Triangle;
 use restauro_scene::load::{LoadedScene, ResolvedLight};
 use restauro_scene::plan::Plan;
-use restauro_scene::scene_file::{Integrator, MaterialModel};
+use restauro_scene::scene_file::{Integrator, MaterialModel, Transmittance};
 use restauro_spectral::Spectrum;
+use restauro_spectral::grid::BANDS;
 use restauro_spectral::photometry::LuminousSpectrum;
 use std::collections::BTreeMap;
 use std::time::Duration;
@@ -266,16 +268,30 @@ impl PreparedScene {
         self.sky.is_some() || !self.panels.is_empty()
     }
 
-    /// The fraction of light that passes along the segment from `origin` along `direction`
-    /// up to `distance`: 0 when something opaque blocks it, else the product of the
-    /// transmittances of the panes of glass it crosses (1 through nothing). Without glass in
-    /// the scene, one any-hit query.
+    /// The share of light that passes along the segment from `origin` along `direction` up to
+    /// `distance`: none when something opaque blocks it, else the product of the
+    /// transmittances of the panes of glass it crosses (all of it through nothing), by band
+    /// behind tinted glass. Without glass in the scene, one any-hit query.
     #[inline]
-    pub fn visibility(&self, origin: Vec3A, direction: Vec3A, distance: f32) -> f32 {
+    pub fn visibility(&self, origin: Vec3A, direction: Vec3A, distance: f32) -> Transmission {
         if !self.has_glass {
-            return if self.occluded(origin, direction, distance) { 0.0 } else { 1.0 };
+            let blocked = self.occluded(origin, direction, distance);
+            return Transmission::Neutral(if blocked { 0.0 } else { 1.0 });
         }
-        let (mut from, mut through) = (origin, 1.0f32);
+        self.visibility_through_glass(origin, direction, distance)
+    }
+
+    /// [`PreparedScene::visibility`] in a scene with glass: closest hits pane after pane. Kept
+    /// out of line so that the shadow rays of scenes without glass stay small.
+    #[inline(never)]
+    fn visibility_through_glass(
+        &self,
+        origin: Vec3A,
+        direction: Vec3A,
+        distance: f32,
+    ) -> Transmission {
+        const BLOCKED: Transmission = Transmission::Neutral(0.0);
+        let (mut from, mut through) = (origin, Transmission::Neutral(1.0));
         // A segment crosses a few panes at most; past this many it is taken as blocked.
         for _ in 0..MAX_PANES {
             let left = distance - (from - origin).dot(direction);
@@ -283,15 +299,17 @@ impl PreparedScene {
                 return through;
             }
             let Some(hit) = self.intersect(from, direction, left) else { return through };
-            let Bsdf::Glass(glass) = &self.materials[hit.material as usize] else { return 0.0 };
-            through *= glass.reflect_transmit(direction.dot(hit.normal)).1;
-            if through <= 0.0 {
-                return 0.0;
+            let Bsdf::Glass(glass) = &self.materials[hit.material as usize] else {
+                return BLOCKED;
+            };
+            through = through.then(glass.optics(direction.dot(hit.normal)).transmittance());
+            if through.is_blocked() {
+                return BLOCKED;
             }
             // On, beyond the pane (the hit's normal faces back along the ray).
             from = crate::integrator::lift_along(hit.point, -hit.normal);
         }
-        0.0
+        BLOCKED
     }
 
     /// Whether anything blocks the segment from `origin` along `direction` up to `distance`.
@@ -319,7 +337,11 @@ fn bsdf(scene: &LoadedScene, name: &str, state: &str) -> Bsdf {
     if m.model == MaterialModel::Glass {
         let ior = o.and_then(|o| o.ior).or(m.ior).unwrap_or(crate::glass::DEFAULT_IOR);
         let thickness = m.thickness_mm.unwrap_or(crate::glass::DEFAULT_THICKNESS_MM);
-        return Bsdf::Glass(crate::glass::Glass::new(ior, thickness, m.transmittance));
+        let transmittance = m.transmittance.as_ref().map(|t| match t {
+            Transmittance::Neutral(t) => Spectrum([*t as f32; BANDS]),
+            Transmittance::Spectral(name) => scene.spectra[name],
+        });
+        return Bsdf::Glass(crate::glass::Glass::new(ior, thickness, transmittance.as_ref()));
     }
     let reflectance = o.and_then(|o| o.reflectance.as_ref()).unwrap_or(&m.reflectance);
     let rho = scene.spectra[reflectance];

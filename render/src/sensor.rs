@@ -15,6 +15,7 @@
 //! Each of a sensor's two rows has its own keyed random sequence, so the grids are bit-identical
 //! wherever their tiles are computed.
 
+use crate::glass::Transmission;
 use crate::integrator::{Escape, Frame, lift_along, trace};
 use crate::light::Light;
 use crate::prepared::PreparedScene;
@@ -123,13 +124,9 @@ fn add_lights(
         if cos <= 0.0 {
             continue;
         }
-        let reach =
-            if inc.distance.is_finite() { inc.distance * (1.0 - 1e-4) } else { f32::INFINITY };
         *rays += 1;
-        let through = scene.visibility(origin, inc.direction, reach);
-        if through > 0.0 {
-            out.add_scaled(inc.spectrum, inc.scale * cos * weight * through);
-        }
+        let through = scene.visibility(origin, inc.direction, inc.shadow_reach());
+        add_through(out, inc.spectrum, inc.scale * cos * weight, &through);
     }
 }
 
@@ -151,8 +148,16 @@ fn add_sky(
         }
         *rays += 1;
         let through = scene.visibility(origin, sample.direction, f32::INFINITY);
-        if through > 0.0 {
-            out.add_scaled(&sky.per_nit, sample.luminance_cd_m2 * sample.weight * through);
-        }
+        add_through(out, &sky.per_nit, sample.luminance_cd_m2 * sample.weight, &through);
+    }
+}
+
+/// `out += k · light` as it arrives through `through`.
+#[inline]
+fn add_through(out: &mut Spectrum, light: &Spectrum, k: f32, through: &Transmission) {
+    match through {
+        Transmission::Neutral(t) if *t > 0.0 => out.add_scaled(light, k * t),
+        Transmission::Neutral(_) => {}
+        Transmission::Tinted(t) => out.add_reflected(light, t, k, 0.0),
     }
 }

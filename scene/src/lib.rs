@@ -17,6 +17,7 @@ pub mod bundle;
 pub mod cie_sky;
 pub mod edit;
 pub mod folder;
+pub mod glazing;
 pub mod gltf_export;
 pub mod gltf_mesh;
 pub mod grid;

@@ -9,7 +9,8 @@ use crate::error::{Result, SceneError};
 use crate::mesh::Mesh;
 use crate::photometric::{self, Photometry};
 use crate::scene_file::{
-    self, Light, MaterialModel, SceneFile, SkyModel, SkyPreset, SpectrumSource, SunPreset, UpAxis,
+    self, Light, MaterialModel, SceneFile, SkyModel, SkyPreset, SpectrumSource, SunPreset,
+    Transmittance, UpAxis,
 };
 use crate::sun::{Site, SunPosition, direction_to_sun, sun_position};
 use crate::{gltf_mesh, obj, ply, upright, vrml};
@@ -608,8 +609,9 @@ fn sky_spectrum(ctx: &mut Ctx, given: &str) -> Result<String> {
 }
 
 /// A material's glazing keys: only glass has them, and glass needs no reflectance. The pane is
-/// at most 100 mm thick and transmits at most what its faces let through, (1 − r)/(1 + r).
-fn check_glazing(ctx: &Ctx, place: &str, m: &crate::scene_file::Material) -> Result<()> {
+/// at most 100 mm thick and transmits at most what its faces let through, (1 − r)/(1 + r), in
+/// every band.
+fn check_glazing(ctx: &mut Ctx, place: &str, m: &crate::scene_file::Material) -> Result<()> {
     if m.model != MaterialModel::Glass {
         if m.thickness_mm.is_some() || m.transmittance.is_some() {
             return Err(
@@ -638,15 +640,26 @@ fn check_glazing(ctx: &Ctx, place: &str, m: &crate::scene_file::Material) -> Res
             format!("{d} mm is out of range; a pane is more than 0 and at most 100 mm thick"),
         ));
     }
-    let n = m.ior.unwrap_or(1.52);
-    let most = ((1.0 - ((n - 1.0) / (n + 1.0)).powi(2)) / (1.0 + ((n - 1.0) / (n + 1.0)).powi(2)))
-        .min(1.0);
-    if let Some(t) = m.transmittance
-        && !(t.is_finite() && (0.0..=most).contains(&t))
-    {
+    let n = m.ior.unwrap_or(crate::glazing::DEFAULT_IOR);
+    let most = crate::glazing::max_transmittance(n).min(1.0);
+    let field = format!("{place}.transmittance");
+    let (t, band) = match &m.transmittance {
+        None => return Ok(()),
+        Some(Transmittance::Neutral(t)) => (*t, String::new()),
+        Some(Transmittance::Spectral(name)) => {
+            let s = ctx.spectrum(name, &field, &mut Vec::new())?;
+            // The first band out of range, to name it (its value as the spectrum holds it).
+            let inside = |v: f32| (0.0..=most).contains(&f64::from(v));
+            let Some(i) = s.0.iter().position(|&v| !inside(v)) else { return Ok(()) };
+            let nm = restauro_spectral::grid::wavelength_nm(i);
+            let t = format!("{}", s.0[i]).parse().unwrap_or(f64::NAN);
+            (t, format!("spectrum `{name}` at {nm} nm: "))
+        }
+    };
+    if !(t.is_finite() && (0.0..=most).contains(&t)) {
         return Err(ctx.invalid(
-            format!("{place}.transmittance"),
-            format!("{t} is out of range; glass of index {n} transmits 0 to {most:.4} at normal incidence (its faces reflect the rest)"),
+            field,
+            format!("{band}{t} is out of range; glass of index {n} transmits 0 to {most:.4} at normal incidence (its faces reflect the rest)"),
         ));
     }
     Ok(())
@@ -1051,7 +1064,7 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
     // Materials and their states.
     for (name, m) in &file.materials {
         let place = format!("materials.{name}");
-        check_glazing(&ctx, &place, m)?;
+        check_glazing(&mut ctx, &place, m)?;
         check_surface(
             &mut ctx,
             &place,

@@ -336,10 +336,11 @@ pub struct Material {
     /// Glass: the pane's thickness, mm (6 unless given).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub thickness_mm: Option<f64>,
-    /// Glass: its transmittance at normal incidence, 0–1 (0.88 for 6 mm of clear float glass,
-    /// scaled by absorption to another thickness, unless given).
+    /// Glass: its transmittance at normal incidence, one number for clear glass or a spectrum
+    /// for tinted glass (0.88 for 6 mm of clear float glass, scaled by absorption to another
+    /// thickness, unless given).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub transmittance: Option<f64>,
+    pub transmittance: Option<Transmittance>,
     /// Cook–Torrance: Beckmann roughness m (rms slope), 0 < m ≤ 1.
     #[serde(default)]
     pub roughness: Option<f64>,
@@ -399,6 +400,41 @@ pub struct Transform {
     /// A uniform scale, or one per axis.
     #[serde(default)]
     pub scale: Option<Scale>,
+}
+
+/// A pane's transmittance at normal incidence: the same in every band (clear glass), or by
+/// wavelength, a spectrum named in `[spectra]` (tinted or coated glass).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(untagged)]
+pub enum Transmittance {
+    Neutral(f64),
+    Spectral(String),
+}
+
+/// A number or a spectrum name, refused otherwise with what to give.
+impl<'de> Deserialize<'de> for Transmittance {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct TransmittanceVisitor;
+        impl<'de> Visitor<'de> for TransmittanceVisitor {
+            type Value = Transmittance;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a number 0–1 (clear glass) or the name of a spectrum (tinted glass)")
+            }
+            fn visit_f64<E: de::Error>(self, v: f64) -> Result<Transmittance, E> {
+                Ok(Transmittance::Neutral(v))
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<Transmittance, E> {
+                Ok(Transmittance::Neutral(v as f64))
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<Transmittance, E> {
+                Ok(Transmittance::Neutral(v as f64))
+            }
+            fn visit_str<E: de::Error>(self, v: &str) -> Result<Transmittance, E> {
+                Ok(Transmittance::Spectral(v.to_owned()))
+            }
+        }
+        d.deserialize_any(TransmittanceVisitor)
+    }
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize)]

@@ -60,6 +60,11 @@ impl Spectrum {
         self.0.iter().copied().fold(f32::NEG_INFINITY, f32::max)
     }
 
+    /// The mean over the bands.
+    pub fn mean(&self) -> f32 {
+        self.0.iter().sum::<f32>() / self.0.len() as f32
+    }
+
     /// The smallest band value.
     pub fn min_value(&self) -> f32 {
         self.0.iter().copied().fold(f32::INFINITY, f32::min)

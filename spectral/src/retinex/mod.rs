@@ -20,7 +20,8 @@
 //!   a glint or Monte Carlo noise cannot be the white, and light sources in view are passed
 //!   over, so the sky is neither the building's white nor a wall across its ratios;
 //! * [`frameworks`] — the regions lit by the same light (the sun, the sky in the shadows);
-//! * [`paths`] — the path function and the two phases that give every pixel ≥ N samples.
+//! * [`paths`] — the path function and the two phases that give every pixel ≥ N samples;
+//! * [`tiling`] — the order in which the paths' images are kept: tiles, for the caches.
 //!
 //! **Reach: how local the adaptation is.** The paths' extent is the adaptation field: a
 //! pixel's white is found among the areas its paths reach. `reach` is the RMS distance from a
@@ -54,6 +55,7 @@
 
 mod frameworks;
 mod paths;
+mod tiling;
 mod walk;
 mod white;
 
@@ -349,8 +351,11 @@ pub fn retinex(
     let length = params.length.unwrap_or(reach_length);
     let steps = length - 1;
     let burn_in = length / 4;
+    let tiling = tiling::Tiling::new(width, height);
+    let tiled_logs = tiling.tiled(&white.logs, [0; 4]);
     let walker = Walker {
-        logs: &white.logs,
+        logs: &tiled_logs,
+        tiling,
         width,
         height,
         turning: Turning::with_persistence(persistence),

@@ -25,6 +25,7 @@
 //! number is a function of (seed, phase, path); samples are summed as integers, whose addition
 //! is associative. The output is bit-identical for any number of threads and any order of work.
 
+use super::tiling::Tiling;
 use super::walk::{Turning, Walk};
 use super::white::EMITTER;
 use crate::keyed_random::KeyedRng;
@@ -44,7 +45,9 @@ const MAX_ACCUMULATOR_IMAGES: usize = 8;
 
 /// Everything a path needs to know about the image.
 pub(super) struct Walker<'a> {
+    /// The cleaned logs, in the tiled order of `tiling`.
     pub logs: &'a [[i16; 4]],
+    pub tiling: Tiling,
     pub width: usize,
     pub height: usize,
     pub turning: Turning,
@@ -113,31 +116,47 @@ pub(super) fn count(sums: &Sums) -> u32 {
 }
 
 impl Walker<'_> {
-    /// Walks `steps` steps from `start` and calls `visit(pixel, white)` after each step
-    /// k = `from`..=steps at which the path has met a surface.
+    /// Walks `steps` steps from pixel `start` (row-major) and adds the white found to `sums`
+    /// (tiled) after each step k = `from`..=steps at which the path has met a surface.
+    ///
+    /// In batches: where the walk goes does not depend on what it reads, so the places of a
+    /// batch of steps are found first and their logs and sums read together, and the cache
+    /// misses of a batch overlap instead of waiting one after another.
     #[inline]
-    fn run(
-        &self,
-        rng: &mut KeyedRng,
-        start: usize,
-        steps: u32,
-        from: u32,
-        mut visit: impl FnMut(usize, [i32; 4]),
-    ) {
+    fn run(&self, rng: &mut KeyedRng, start: usize, steps: u32, from: u32, sums: &mut [Sums]) {
+        const BATCH: u32 = 32;
         let mut walk = Walk::new(rng, self.width, self.height, start, self.turning);
         let mut state = State::new();
-        state.step(self.logs[start], self.threshold);
-        for k in 1..=steps {
-            let pixel = walk.step();
-            state.step(self.logs[pixel], self.threshold);
-            if k >= from && state.on_surface {
-                visit(pixel, state.white());
+        state.step(self.logs[self.tiling.index_of(start)], self.threshold);
+        let mut places = [0usize; BATCH as usize];
+        let mut logs = [[0i16; 4]; BATCH as usize];
+        let mut k = 1;
+        while k <= steps {
+            let batch = BATCH.min(steps - k + 1) as usize;
+            for place in &mut places[..batch] {
+                let (x, y) = walk.step();
+                *place = self.tiling.index(x, y);
+            }
+            let mut touched = 0i32;
+            for (l, &place) in logs.iter_mut().zip(&places[..batch]) {
+                *l = self.logs[place];
+                touched = touched.wrapping_add(sums[place][3]);
+            }
+            // The sums were read only to bring them into the cache.
+            std::hint::black_box(touched);
+            for (&place, &l) in places[..batch].iter().zip(&logs) {
+                state.step(l, self.threshold);
+                if k >= from && state.on_surface {
+                    add(&mut sums[place], state.white());
+                }
+                k += 1;
             }
         }
     }
 
     /// Phase 1: `paths` shared paths of `steps` steps from uniformly random starts, split into
-    /// contiguous ranges, one accumulator image each, summed at the end.
+    /// contiguous ranges, one accumulator image each (tiled), summed at the end. Returns the
+    /// sums in row-major order.
     pub(super) fn shared(
         &self,
         seed: u64,
@@ -146,7 +165,8 @@ impl Walker<'_> {
         burn_in: u32,
         progress: &(dyn Fn(u64, u64) + Sync),
     ) -> Vec<Sums> {
-        let n = self.logs.len();
+        let n = self.tiling.len();
+        let pixels = self.width * self.height;
         let by_memory = (ACCUMULATOR_BYTES / (n * std::mem::size_of::<Sums>())).max(1);
         let tasks = rayon::current_num_threads().clamp(1, MAX_ACCUMULATOR_IMAGES).min(by_memory);
         let tasks = tasks as u64;
@@ -159,8 +179,8 @@ impl Walker<'_> {
                 let (first, end) = (paths * task / tasks, paths * (task + 1) / tasks);
                 for path in first..end {
                     let mut rng = KeyedRng::from_parts(&[seed, 1, path]);
-                    let start = rng.below(n as u32) as usize;
-                    self.run(&mut rng, start, steps, burn_in, |p, w| add(&mut sums[p], w));
+                    let start = rng.below(pixels as u32) as usize;
+                    self.run(&mut rng, start, steps, burn_in, &mut sums);
                     if (path - first + 1) % CHUNK == 0 || path + 1 == end {
                         let step = (path - first) % CHUNK + 1;
                         progress(done.fetch_add(step, Ordering::Relaxed) + step, paths);
@@ -174,7 +194,7 @@ impl Walker<'_> {
         for partial in partials {
             sums.par_iter_mut().zip(partial.par_iter()).for_each(|(a, b)| merge(a, b));
         }
-        sums
+        self.tiling.row_major(&sums, pixels)
     }
 
     /// Phase 2: every pixel with fewer than `least` samples gets its own paths ending there,
@@ -205,16 +225,19 @@ impl Walker<'_> {
                     for j in 0..deficit {
                         let mut rng = KeyedRng::from_parts(&[seed, 2, pixel as u64, u64::from(j)]);
                         let k = burn_in + rng.below(steps - burn_in + 1);
+                        // The logs along the walk, read as it goes (the reads do not wait on
+                        // one another), then taken backwards.
                         trail.clear();
-                        trail.push(pixel);
+                        trail.push(self.logs[self.tiling.index_of(pixel)]);
                         let mut walk =
                             Walk::new(&mut rng, self.width, self.height, pixel, self.turning);
                         for _ in 0..k {
-                            trail.push(walk.step());
+                            let (x, y) = walk.step();
+                            trail.push(self.logs[self.tiling.index(x, y)]);
                         }
                         let mut state = State::new();
-                        for &p in trail.iter().rev() {
-                            state.step(self.logs[p], self.threshold);
+                        for &logs in trail.iter().rev() {
+                            state.step(logs, self.threshold);
                         }
                         if state.on_surface {
                             add(&mut total, state.white());

@@ -64,7 +64,6 @@ pub(super) fn mean_square_distance(k: f64, l: f64) -> f64 {
 
 /// A walker on an image of `width` × `height` pixels.
 pub(super) struct Walk<'a> {
-    width: usize,
     x: i32,
     y: i32,
     x_end: i32,
@@ -72,6 +71,7 @@ pub(super) struct Walk<'a> {
     angle: u32,
     span: u32,
     half_width: i32,
+    directions: &'static [(i32, i32)],
     rng: &'a mut KeyedRng,
     bits: u64,
     bits_left: u32,
@@ -90,7 +90,6 @@ impl<'a> Walk<'a> {
         let (fx, fy) = ((draw & 0xfff) as i32, ((draw >> 12) & 0xfff) as i32);
         let angle = ((draw >> 24) & u64::from(ANGLES - 1)) as u32;
         Walk {
-            width,
             x: ((start % width) as i32 * ONE) | fx,
             y: ((start / width) as i32 * ONE) | fy,
             x_end: width as i32 * ONE,
@@ -98,6 +97,7 @@ impl<'a> Walk<'a> {
             angle,
             span: 2 * turning.half_width + 1,
             half_width: turning.half_width as i32,
+            directions: directions(),
             rng,
             bits: 0,
             bits_left: 0,
@@ -116,13 +116,13 @@ impl<'a> Walk<'a> {
         v
     }
 
-    /// One step; returns the index of the pixel the walk is in afterwards (often the same one:
-    /// a step is one pixel long in any direction).
+    /// One step; returns the pixel (x, y) the walk is in afterwards (often the same one: a
+    /// step is one pixel long in any direction).
     #[inline]
-    pub(super) fn step(&mut self) -> usize {
+    pub(super) fn step(&mut self) -> (usize, usize) {
         let turn = ((self.draw16() * self.span) >> 16) as i32 - self.half_width;
         self.angle = (self.angle as i32 + turn) as u32 & (ANGLES - 1);
-        let (dx, dy) = directions()[self.angle as usize];
+        let (dx, dy) = self.directions[self.angle as usize];
         self.x += dx;
         self.y += dy;
         // A mirror on the outer edge of the border: x → −x (−1 in fixed point keeps the
@@ -141,7 +141,7 @@ impl<'a> Walk<'a> {
             self.y = 2 * self.y_end - self.y - 1;
             self.angle = (ANGLES - self.angle) & (ANGLES - 1);
         }
-        (self.y >> FRACTION_BITS) as usize * self.width + (self.x >> FRACTION_BITS) as usize
+        ((self.x >> FRACTION_BITS) as usize, (self.y >> FRACTION_BITS) as usize)
     }
 }
 
@@ -164,12 +164,12 @@ mod tests {
             let mut rng = KeyedRng::from_parts(&[5, i]);
             let start = (h / 2) * w + w / 2;
             let mut walk = Walk::new(&mut rng, w, h, start, turning);
-            let mut p = start;
+            let mut p = (w / 2, h / 2);
             for _ in 0..k {
                 p = walk.step();
             }
-            let dx = (p % w) as f64 - (w / 2) as f64;
-            let dy = (p / w) as f64 - (h / 2) as f64;
+            let dx = p.0 as f64 - (w / 2) as f64;
+            let dy = p.1 as f64 - (h / 2) as f64;
             axis += dx * dx - dy * dy;
             diagonal += 2.0 * dx * dy;
             msd += dx * dx + dy * dy;
@@ -191,7 +191,8 @@ mod tests {
         let mut walk = Walk::new(&mut rng, w, h, 10, Turning::with_persistence(5.0));
         let mut seen = vec![0u32; w * h];
         for _ in 0..200_000 {
-            seen[walk.step()] += 1;
+            let (x, y) = walk.step();
+            seen[y * w + x] += 1;
         }
         // Every pixel, the corners included, is visited about equally often.
         let mean = 200_000.0 / (w * h) as f64;

@@ -37,6 +37,11 @@
 //! Logs are held in fixed point, 1/1024 of a natural-log unit (a 0.1 % step), relative to the
 //! brightest cleaned value of each channel and floored at e⁻²⁰ of it.
 
+mod bilateral;
+mod median;
+
+use bilateral::{bilateral, noise_sigma, regions};
+use median::{median, opening};
 use rayon::prelude::*;
 
 /// Fixed-point units per natural-log unit.
@@ -46,17 +51,9 @@ pub(super) const LOG_FLOOR: f32 = -20.0;
 /// Lane 3 of a pixel's logs for a light source; a surface's is its framework, 0 or more.
 pub(super) const EMITTER: i16 = -1;
 
-/// The bilateral mean's spatial σ, in pixels, and its window's half-width.
-const SPATIAL_SIGMA_PX: f32 = 1.25;
-const RADIUS: i32 = 2;
 /// The bilateral mean is applied this many times (each pass with the range cut of the input's
 /// noise): noise falls with every pass while edges stronger than the cut stay.
 const BILATERAL_PASSES: usize = 4;
-/// Neighbours within this many noise σ of the pixel (in every channel) are averaged. At 3σ the
-/// rendered travertine of `render/tests/retinex_rendered.rs` lost 13° of hue to its grey
-/// ground, whose S differs by 7 % (about the render's noise); at 2σ, 4°, and a flat noisy field
-/// is averaged as well.
-const RANGE_SIGMAS: f32 = 2.0;
 
 /// The cleaned image, as the paths read it.
 pub(super) struct WhiteImage {
@@ -77,159 +74,6 @@ pub(super) fn ln(v: f32) -> f32 {
     if v > 0.0 { v.ln() } else { f32::NEG_INFINITY }
 }
 
-/// The 3×3 median of one channel's logs over surface pixels (light sources left out; a light
-/// source keeps its own value).
-fn median(logs: &[f32], emitter: &[bool], width: usize, height: usize) -> Vec<f32> {
-    (0..width * height)
-        .into_par_iter()
-        .map(|p| {
-            if emitter[p] {
-                return logs[p];
-            }
-            let (x, y) = ((p % width) as i32, (p / width) as i32);
-            let mut window = [0f32; 9];
-            let mut n = 0;
-            for dy in -1..=1 {
-                for dx in -1..=1 {
-                    let (qx, qy) = (x + dx, y + dy);
-                    if qx < 0 || qy < 0 || qx >= width as i32 || qy >= height as i32 {
-                        continue;
-                    }
-                    let q = qy as usize * width + qx as usize;
-                    if !emitter[q] {
-                        window[n] = logs[q];
-                        n += 1;
-                    }
-                }
-            }
-            let window = &mut window[..n];
-            window.sort_unstable_by(f32::total_cmp);
-            // An even count (at a border or beside a light source): the lower middle, so that
-            // the median is always one of the values.
-            window[(n - 1) / 2]
-        })
-        .collect()
-}
-
-/// The 2×2 opening of one channel's logs (each pixel: the largest, over the 2×2 blocks inside
-/// the image that hold it, of the block's smallest surface value). An area that is a union of
-/// 2×2 blocks keeps every pixel, its corners included, which the 3×3 median would cut off.
-fn opening(logs: &[f32], emitter: &[bool], width: usize, height: usize) -> Vec<f32> {
-    let block_min = |bx: usize, by: usize| {
-        let mut m = f32::INFINITY;
-        for q in
-            [by * width + bx, by * width + bx + 1, (by + 1) * width + bx, (by + 1) * width + bx + 1]
-        {
-            if !emitter[q] {
-                m = m.min(logs[q]);
-            }
-        }
-        m
-    };
-    (0..width * height)
-        .into_par_iter()
-        .map(|p| {
-            let (x, y) = (p % width, p / width);
-            let mut best = f32::NEG_INFINITY;
-            for by in y.saturating_sub(1)..=y.min(height.saturating_sub(2)) {
-                for bx in x.saturating_sub(1)..=x.min(width.saturating_sub(2)) {
-                    if by + 1 < height && bx + 1 < width {
-                        let m = block_min(bx, by);
-                        if m < f32::INFINITY {
-                            best = best.max(m);
-                        }
-                    }
-                }
-            }
-            best
-        })
-        .collect()
-}
-
-/// What the filters need to know of a pixel besides its logs: whether it is a light source
-/// (`None`) or a surface of which framework.
-fn region(emitter: &[bool], frameworks: &[u8], p: usize) -> Option<u8> {
-    (!emitter[p]).then(|| frameworks[p])
-}
-
-/// The robust noise σ of one channel's logs in framework `f`: 1.4826 · median
-/// |ℓ(x+1) − ℓ(x)| / √2 over horizontal pairs of its surface pixels with finite logs.
-fn noise_sigma(logs: &[f32], emitter: &[bool], frameworks: &[u8], width: usize, f: u8) -> f32 {
-    let mut differences: Vec<f32> = (0..logs.len() / width)
-        .into_par_iter()
-        .flat_map_iter(|y| {
-            (y * width..(y + 1) * width - 1).filter_map(move |p| {
-                let d = (logs[p + 1] - logs[p]).abs();
-                let same = region(emitter, frameworks, p) == Some(f)
-                    && region(emitter, frameworks, p + 1) == Some(f);
-                (same && d.is_finite()).then_some(d)
-            })
-        })
-        .collect();
-    if differences.is_empty() {
-        return 0.0;
-    }
-    let middle = differences.len() / 2;
-    let (_, m, _) = differences.select_nth_unstable_by(middle, f32::total_cmp);
-    1.4826 * *m / std::f32::consts::SQRT_2
-}
-
-/// One pass of the joint bilateral mean of the three channels' median images (see the module
-/// comment): a neighbour is taken only if it is within the cut in *every* channel, so an edge
-/// that is strong in one channel keeps the others from mixing across it too (a travertine on
-/// grey ground differs by 7 % in S but by 40 % in L).
-fn bilateral(
-    channels: &[Vec<f32>; 3],
-    emitter: &[bool],
-    frameworks: &[u8],
-    (width, height): (usize, usize),
-    noise: &[[f32; 3]],
-) -> [Vec<f32>; 3] {
-    let cuts: Vec<[f32; 3]> = noise.iter().map(|n| n.map(|n| RANGE_SIGMAS * n)).collect();
-    let weight = |dx: i32, dy: i32| {
-        (-((dx * dx + dy * dy) as f32) / (2.0 * SPATIAL_SIGMA_PX * SPATIAL_SIGMA_PX)).exp()
-    };
-    let side = (2 * RADIUS + 1) as usize;
-    let kernel: Vec<f32> = (0..side * side)
-        .map(|i| weight(i as i32 % side as i32 - RADIUS, i as i32 / side as i32 - RADIUS))
-        .collect();
-    let out: Vec<[f32; 3]> = (0..width * height)
-        .into_par_iter()
-        .map(|p| {
-            let centre: [f32; 3] = std::array::from_fn(|c| channels[c][p]);
-            let Some(own) = region(emitter, frameworks, p) else { return centre };
-            let cut = cuts[usize::from(own)];
-            if centre.iter().any(|v| !v.is_finite()) || cut.contains(&0.0) {
-                return centre;
-            }
-            let (x, y) = ((p % width) as i32, (p / width) as i32);
-            let (mut sum, mut total) = ([0.0f32; 3], 0.0f32);
-            for dy in -RADIUS..=RADIUS {
-                for dx in -RADIUS..=RADIUS {
-                    let (qx, qy) = (x + dx, y + dy);
-                    if qx < 0 || qy < 0 || qx >= width as i32 || qy >= height as i32 {
-                        continue;
-                    }
-                    let q = qy as usize * width + qx as usize;
-                    let v: [f32; 3] = std::array::from_fn(|c| channels[c][q]);
-                    if region(emitter, frameworks, q) != Some(own)
-                        || (0..3).any(|c| (v[c] - centre[c]).abs() > cut[c])
-                    {
-                        continue;
-                    }
-                    let k = kernel[((dy + RADIUS) * side as i32 + dx + RADIUS) as usize];
-                    for c in 0..3 {
-                        sum[c] += k * v[c];
-                    }
-                    total += k;
-                }
-            }
-            sum.map(|s| s / total)
-        })
-        .collect();
-    std::array::from_fn(|c| out.iter().map(|v| v[c]).collect())
-}
-
 /// The cleaned image of `pixels` (non-negative, finite), with `emitter` marking light sources
 /// and `frameworks` each surface's framework (0..count). `area` false gives the paper's image:
 /// every pixel as it is.
@@ -245,7 +89,7 @@ pub(super) fn white_image(
         std::array::from_fn(|c| pixels.par_iter().map(|p| ln(p[c])).collect());
     let mut noise = vec![[0f32; 3]; count];
     let cleaned: [Vec<f32>; 3] = if area {
-        let mut medians: [Vec<f32>; 3] = std::array::from_fn(|c| {
+        let medians: [Vec<f32>; 3] = std::array::from_fn(|c| {
             let open = opening(&logs[c], emitter, width, height);
             let mut m = median(&logs[c], emitter, width, height);
             m.par_iter_mut().zip(&open).zip(emitter.par_iter()).for_each(|((m, o), e)| {
@@ -255,13 +99,16 @@ pub(super) fn white_image(
             });
             m
         });
+        let regions = regions(emitter, frameworks);
         noise = (0..count as u8)
-            .map(|f| std::array::from_fn(|c| noise_sigma(&logs[c], emitter, frameworks, width, f)))
+            .map(|f| std::array::from_fn(|c| noise_sigma(&logs[c], &regions, width, f)))
             .collect();
+        let mut image: Vec<[f32; 3]> =
+            (0..pixels.len()).into_par_iter().map(|p| medians.each_ref().map(|m| m[p])).collect();
         for _ in 0..BILATERAL_PASSES {
-            medians = bilateral(&medians, emitter, frameworks, (width, height), &noise);
+            image = bilateral(&image, &regions, (width, height), &noise);
         }
-        medians
+        std::array::from_fn(|c| image.par_iter().map(|v| v[c]).collect())
     } else {
         logs
     };

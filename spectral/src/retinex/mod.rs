@@ -163,6 +163,21 @@ pub struct RetinexStats {
     pub noise: Vec<[f32; 3]>,
     /// The frameworks of illumination told apart (1 when none were given or one covers all).
     pub frameworks: usize,
+    /// Where the time went (wall clock), for `restauro bench retinex`.
+    pub seconds: PhaseSeconds,
+}
+
+/// The wall-clock seconds of each phase of a run.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct PhaseSeconds {
+    /// The frameworks and the cleaned image the paths read (median, opening, bilateral).
+    pub cleaning: f64,
+    /// Phase 1: the shared paths.
+    pub shared_paths: f64,
+    /// Phase 2: the paths of the pixels short of N samples.
+    pub top_up: f64,
+    /// Each pixel's lightness from its samples.
+    pub lightness: f64,
 }
 
 pub const MAX_PATHS: u32 = 4096;
@@ -330,6 +345,14 @@ pub fn retinex(
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Result<(Vec<[f32; 3]>, RetinexStats)> {
     check(pixels, width, height, params)?;
+    let clock = std::time::Instant::now();
+    let lap = |since: &mut f64| {
+        let now = clock.elapsed().as_secs_f64();
+        let lap = now - *since;
+        *since = now;
+        lap
+    };
+    let mut since = 0.0;
     let n = pixels.len();
     let no_emitters;
     let emitters = match &params.emitters {
@@ -346,6 +369,7 @@ pub fn retinex(
     let area = params.white == WhiteReference::Area;
     let white =
         white_image(pixels, emitters, (&frameworks.labels, frameworks.count), width, height, area);
+    let cleaning = lap(&mut since);
     let adaptation = framework_adaptation(&frameworks, params.framework_weight);
     let (persistence, reach_length) = walk_for_reach(params.reach * diagonal(width, height));
     let length = params.length.unwrap_or(reach_length);
@@ -364,8 +388,10 @@ pub fn retinex(
     let samples_per_path = u64::from(steps - burn_in + 1);
     let shared_paths = (2 * u64::from(params.paths) * n as u64).div_ceil(samples_per_path);
     let mut sums = walker.shared(params.seed, shared_paths, steps, burn_in, progress);
+    let shared_seconds = lap(&mut since);
     let (top_up_paths, top_up_steps) =
         walker.top_up(&mut sums, params.seed, params.paths, steps, burn_in);
+    let top_up = lap(&mut since);
 
     let out = (0..n)
         .into_par_iter()
@@ -385,6 +411,12 @@ pub fn retinex(
         max_samples: sums.iter().map(count).max().unwrap_or(0),
         noise: white.noise,
         frameworks: frameworks.count,
+        seconds: PhaseSeconds {
+            cleaning,
+            shared_paths: shared_seconds,
+            top_up,
+            lightness: lap(&mut since),
+        },
     };
     Ok((out, stats))
 }

@@ -52,11 +52,60 @@ fn kernel() -> [f32; SIDE * SIDE] {
     })
 }
 
+/// The bilateral sums of one pixel as its window is read.
+#[derive(Clone, Copy)]
+struct Window {
+    centre: [f32; 3],
+    own: u8,
+    cut: [f32; 3],
+    sum: [f32; 3],
+    total: f32,
+}
+
+impl Window {
+    /// The window of a pixel that is filtered, or `None` for one that keeps its value (a light
+    /// source, a log of −∞, a framework without noise).
+    fn of(centre: [f32; 3], own: u8, cuts: &[[f32; 3]]) -> Option<Self> {
+        if own == LIGHT {
+            return None;
+        }
+        let cut = cuts[usize::from(own)];
+        if centre.iter().any(|v| !v.is_finite()) || cut.contains(&0.0) {
+            return None;
+        }
+        Some(Self { centre, own, cut, sum: [0.0; 3], total: 0.0 })
+    }
+
+    /// A neighbour of logs `v` in region `r` at spatial weight `k`.
+    #[inline(always)]
+    fn take(&mut self, v: [f32; 3], r: u8, k: f32) {
+        let outside = (v[0] - self.centre[0]).abs() > self.cut[0]
+            || (v[1] - self.centre[1]).abs() > self.cut[1]
+            || (v[2] - self.centre[2]).abs() > self.cut[2];
+        if r != self.own || outside {
+            return;
+        }
+        for (sum, v) in self.sum.iter_mut().zip(v) {
+            *sum += k * v;
+        }
+        self.total += k;
+    }
+
+    fn mean(&self) -> [f32; 3] {
+        self.sum.map(|s| s / self.total)
+    }
+}
+
 /// One pass of the joint bilateral mean of the three channels' median logs: a neighbour is
 /// taken only if it is in the pixel's own framework and within the cut in *every* channel, so
 /// an edge that is strong in one channel keeps the others from mixing across it too (a
 /// travertine on grey ground differs by 7 % in S but by 40 % in L). Light sources, pixels with
 /// a log of −∞ and frameworks without noise keep their value.
+///
+/// Each pixel's window is read row by row and left to right, as it always was: the same floats
+/// added in the same order give the same image. Inside the image two neighbouring pixels are
+/// filtered together, so that their chains of additions, each of which waits on itself, run
+/// side by side.
 pub(super) fn bilateral(
     image: &[[f32; 3]],
     regions: &[u8],
@@ -65,43 +114,44 @@ pub(super) fn bilateral(
 ) -> Vec<[f32; 3]> {
     let cuts: Vec<[f32; 3]> = noise.iter().map(|n| n.map(|n| RANGE_SIGMAS * n)).collect();
     let kernel = kernel();
-    let mut out = vec![[0f32; 3]; image.len()];
+    let mut out = image.to_vec();
     out.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
-        for (x, pixel) in row.iter_mut().enumerate() {
-            let p = y * width + x;
-            let (centre, own) = (image[p], regions[p]);
-            *pixel = centre;
-            if own == LIGHT {
-                continue;
-            }
-            let cut = cuts[usize::from(own)];
-            if centre.iter().any(|v| !v.is_finite()) || cut.contains(&0.0) {
-                continue;
-            }
-            let (x0, x1) = (x.saturating_sub(RADIUS), (x + RADIUS).min(width - 1));
-            let (y0, y1) = (y.saturating_sub(RADIUS), (y + RADIUS).min(height - 1));
-            let (mut sum, mut total) = ([0.0f32; 3], 0.0f32);
-            // Row by row and left to right, as the sum was always taken: the same floats in
-            // the same order give the same image.
-            for qy in y0..=y1 {
-                let weights = &kernel[(qy + RADIUS - y) * SIDE..][..SIDE];
-                let values = &image[qy * width..][x0..=x1];
-                let neighbours = &regions[qy * width..][x0..=x1];
-                for (i, (v, &r)) in values.iter().zip(neighbours).enumerate() {
-                    let outside = (v[0] - centre[0]).abs() > cut[0]
-                        || (v[1] - centre[1]).abs() > cut[1]
-                        || (v[2] - centre[2]).abs() > cut[2];
-                    if r != own || outside {
-                        continue;
+        let window = |x: usize| Window::of(image[y * width + x], regions[y * width + x], &cuts);
+        let rows_inside = y >= RADIUS && y + RADIUS < height;
+        let mut x = 0;
+        while x < width {
+            let pair_inside = rows_inside && x >= RADIUS && x + 1 + RADIUS < width;
+            match (window(x), pair_inside.then(|| window(x + 1)).flatten()) {
+                (Some(mut a), Some(mut b)) => {
+                    for dy in 0..SIDE {
+                        let q = (y + dy - RADIUS) * width + x - RADIUS;
+                        let (values, neighbours) =
+                            (&image[q..q + SIDE + 1], &regions[q..q + SIDE + 1]);
+                        for dx in 0..SIDE {
+                            let k = kernel[dy * SIDE + dx];
+                            a.take(values[dx], neighbours[dx], k);
+                            b.take(values[dx + 1], neighbours[dx + 1], k);
+                        }
                     }
-                    let k = weights[x0 + i + RADIUS - x];
-                    for c in 0..3 {
-                        sum[c] += k * v[c];
+                    row[x] = a.mean();
+                    row[x + 1] = b.mean();
+                    x += 2;
+                }
+                (a, _) => {
+                    if let Some(mut a) = a {
+                        let (x0, x1) = (x.saturating_sub(RADIUS), (x + RADIUS).min(width - 1));
+                        let (y0, y1) = (y.saturating_sub(RADIUS), (y + RADIUS).min(height - 1));
+                        for qy in y0..=y1 {
+                            for qx in x0..=x1 {
+                                let k = kernel[(qy + RADIUS - y) * SIDE + qx + RADIUS - x];
+                                a.take(image[qy * width + qx], regions[qy * width + qx], k);
+                            }
+                        }
+                        row[x] = a.mean();
                     }
-                    total += k;
+                    x += 1;
                 }
             }
-            *pixel = sum.map(|s| s / total);
         }
     });
     out

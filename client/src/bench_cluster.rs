@@ -21,6 +21,8 @@ struct ClusterBench {
     samples_per_pixel: u32,
     integrator: &'static str,
     workers: usize,
+    /// The tiles the image is split into (the automatic tile size, as `restauro render` picks).
+    tiles: u32,
     repeats: u32,
     /// Wall-clock seconds of each in-process render.
     in_process_seconds: Vec<f64>,
@@ -31,6 +33,8 @@ struct ClusterBench {
     /// The cluster's throughput as a fraction of one process's: in-process median / cluster
     /// median (the target is at least 0.95).
     throughput_ratio: f64,
+    /// Tiles delivered per second through the cluster, end to end (tiles / cluster median).
+    cluster_tiles_per_second: f64,
 }
 
 fn median(v: &[f64]) -> f64 {
@@ -82,6 +86,11 @@ pub fn bench(args: &BenchArgs) -> Result<String> {
         }
     }
     let (a, b) = (median(&in_process_seconds), median(&cluster_seconds));
+    let tiles = restauro_scene::plan::tile_count(
+        args.width as u32,
+        args.height as u32,
+        restauro_scene::plan::auto_tile(args.width as u32, args.height as u32),
+    );
     let report = ClusterBench {
         benchmark: "cluster",
         width: args.width,
@@ -89,12 +98,14 @@ pub fn bench(args: &BenchArgs) -> Result<String> {
         samples_per_pixel: args.spp,
         integrator: "path",
         workers,
+        tiles,
         repeats: args.repeats.max(1),
         in_process_seconds,
         cluster_seconds,
         in_process_median_seconds: a,
         cluster_median_seconds: b,
         throughput_ratio: a / b,
+        cluster_tiles_per_second: f64::from(tiles) / b,
     };
     Ok(serde_json::to_string_pretty(&report)? + "\n")
 }

@@ -15,6 +15,7 @@ use restauro_scene::load::{Limits, LoadedScene, load_scene};
 use restauro_scene::scene_file::Integrator;
 use serde::Serialize;
 use std::fmt::Write as _;
+use std::path::Path;
 use std::time::Instant;
 
 /// The process's CPU time (user + system), seconds.
@@ -137,6 +138,11 @@ fn load(
     Ok((scene, dir))
 }
 
+/// A scene file of the user's, loaded with the default limits.
+fn load_file(path: &Path) -> Result<LoadedScene> {
+    load_scene(path, &Limits::default()).with_context(|| format!("bench scene {}", path.display()))
+}
+
 #[derive(Serialize)]
 struct Run {
     threads: usize,
@@ -181,8 +187,19 @@ fn run(threads: usize, wall_s: f64, cpu_s: f64, rays: u64, samples: u64) -> Run 
 pub fn bench(args: &BenchArgs) -> Result<String> {
     let (w, h) = (args.width, args.height);
     let say = |what: String| crate::progress::say(&format!("bench tracer: {what}"));
-    say(format!("loading the {:?} scene at {w}×{h}, {} samples per pixel", args.scene, args.spp));
-    let (scene, _dir) = load(args.scene, w, h)?;
+    let name = match &args.scene_file {
+        Some(path) => path.display().to_string(),
+        None => format!("{:?}", args.scene).to_lowercase(),
+    };
+    say(format!("loading the {name} scene at {w}×{h}, {} samples per pixel", args.spp));
+    let (mut scene, _dir) = match &args.scene_file {
+        Some(path) => (load_file(path)?, None),
+        None => {
+            let (scene, dir) = load(args.scene, w, h)?;
+            (scene, Some(dir))
+        }
+    };
+    (scene.camera.width, scene.camera.height) = (w as u32, h as u32);
     let base = Settings {
         integrator: Integrator::Whitted,
         samples_per_pixel: args.spp,
@@ -273,7 +290,7 @@ pub fn bench(args: &BenchArgs) -> Result<String> {
     let path_runs = render_runs(&path, "path tracing")?;
     let report = TracerBench {
         benchmark: "tracer",
-        scene: format!("{:?}", args.scene).to_lowercase(),
+        scene: name,
         triangles: whitted.triangle_count(),
         lights: whitted.lights.len(),
         width: w,

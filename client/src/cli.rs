@@ -558,6 +558,10 @@ pub struct BenchArgs {
     /// Tracer: the scene (the cluster benchmark renders the Aosta facade).
     #[arg(long, value_enum, default_value = "aosta")]
     pub scene: BenchScene,
+    /// Tracer: a scene file of your own instead of a built-in scene, rendered at --width ×
+    /// --height with --spp; the path integrator uses the file's `max_depth`.
+    #[arg(long, value_name = "SCENE.toml")]
+    pub scene_file: Option<PathBuf>,
     /// Tracer and cluster: samples per pixel.
     #[arg(long, default_value_t = 4)]
     pub spp: u32,

@@ -17,6 +17,9 @@
 //! was already counted at the vertex it left, through any glass on the way (Whitted's mirror
 //! rays therefore do not reflect the sky). Shadow rays pass through glass by its transmittance.
 //!
+//! Surfaces shade by their hit's shading normal (the mesh's vertex normals interpolated, or the
+//! triangle's own); the geometric normal decides which side rays leave from ([`below_surface`]).
+//!
 //! All 81 bands travel together on every ray; nothing here allocates.
 
 use crate::bsdf::{Bsdf, cosine_sample};
@@ -104,6 +107,17 @@ pub fn lift_along(point: Vec3A, normal: Vec3A) -> Vec3A {
     point + normal * (2e-5 * scale)
 }
 
+/// Whether a bounce `direction`, above the surface by the shading normal, goes into the surface
+/// by its geometric normal: the path then ends (a shading normal bends the light's angle, never
+/// which side it leaves from). Always false on a flat triangle. Light is not tested so: its
+/// shadow ray, from the point moved out to the smooth surface ([`Hit::point`]), finds whether
+/// the facet or its neighbours hide it, which keeps the terminator of a coarse round mesh
+/// smooth (Hanika 2021) rather than stepped facet by facet.
+#[inline]
+fn below_surface(hit: &Hit, direction: Vec3A) -> bool {
+    hit.shading != hit.normal && direction.dot(hit.normal) <= 0.0
+}
+
 /// What the light arriving at a vertex is multiplied by on its way to the camera: one at the
 /// camera's hit, a neutral factor behind Whitted's Fresnel-weighted mirror bounces, a spectrum
 /// behind diffuse or glossy bounces of the path tracer.
@@ -187,7 +201,7 @@ fn add_direct(
     add_sky(scene, v, origin, weight, sampler, rays, out);
     for (i, light) in scene.lights.iter().enumerate() {
         let Some(inc) = light.sampled_incident(hit.point, || sampler.next2()) else { continue };
-        let cos = inc.direction.dot(hit.normal);
+        let cos = inc.direction.dot(hit.shading);
         if cos <= 0.0 {
             continue;
         }
@@ -225,7 +239,7 @@ fn add_sky(
     let (u1, u2) = sampler.next2();
     let cosine = v.frame.to_world(cosine_sample(u1, u2));
     let bsdf = &scene.materials[v.hit.material as usize];
-    for sample in sky.samples(v.hit.normal, cosine, || sampler.next2()).into_iter().flatten() {
+    for sample in sky.samples(v.hit.shading, cosine, || sampler.next2()).into_iter().flatten() {
         if sample.luminance_cd_m2 <= 0.0 {
             continue;
         }
@@ -334,9 +348,11 @@ pub fn trace(
             }
             return Seen { sky: view, lit_by: lit_mask(&lux) };
         };
-        let frame = Frame::new(hit.normal);
-        let wo = frame.to_local(-direction);
         let bsdf = &scene.materials[hit.material as usize];
+        // Panes are flat: glass keeps the geometric normal; other surfaces shade by theirs.
+        let is_glass = matches!(bsdf, Bsdf::Glass(_));
+        let frame = Frame::new(if is_glass { hit.normal } else { hit.shading });
+        let wo = frame.to_local(-direction);
         if let Bsdf::Glass(glass) = bsdf {
             if depth + 1 == max_depth {
                 break;
@@ -368,6 +384,9 @@ pub fn trace(
                     None => neutral *= f,
                 }
                 direction = frame.to_world(Vec3A::new(-wo.x, -wo.y, wo.z));
+                if below_surface(&hit, direction) {
+                    break;
+                }
             }
             Integrator::Path => {
                 let (u, u1, u2) = (sampler.next_1d(), sampler.next_1d(), sampler.next_1d());
@@ -381,6 +400,9 @@ pub fn trace(
                     None => spectral.insert(f * neutral),
                 };
                 direction = frame.to_world(wi);
+                if below_surface(&hit, direction) {
+                    break;
+                }
                 if depth >= 2 {
                     let survive = throughput.max_value().min(0.95);
                     if sampler.next_1d() >= survive {

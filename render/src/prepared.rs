@@ -67,6 +67,11 @@ pub struct PreparedScene {
     /// Triangles in BVH order.
     triangles: Vec<RtTriangle>,
     normals: Vec<Vec3A>,
+    /// Per triangle in BVH order, its index in `vertex_normals`, or [`FLAT`]; empty when no
+    /// triangle has shading normals (most scenes: the facade's blocks are flat).
+    smooth_of: Vec<u32>,
+    /// The vertex normals of the triangles shaded smooth.
+    vertex_normals: Vec<[Vec3A; 3]>,
     material_of: Vec<u32>,
     pub materials: Vec<Bsdf>,
     pub lights: Vec<Light>,
@@ -80,12 +85,20 @@ pub struct PreparedScene {
     has_glass: bool,
 }
 
+/// A triangle without shading normals in [`PreparedScene::smooth_of`].
+const FLAT: u32 = u32::MAX;
+
 /// A surface hit.
 pub struct Hit {
     pub t: f32,
+    /// Where rays leave the surface from: the hit itself, or on a triangle with shading normals
+    /// the point moved out to the smooth surface those normals describe ([`terminator_point`]).
     pub point: Vec3A,
     /// The geometric normal, turned to face the incoming ray.
     pub normal: Vec3A,
+    /// The shading normal, on the same side: the vertex normals interpolated at the hit, or
+    /// the geometric normal on a flat triangle.
+    pub shading: Vec3A,
     pub material: u32,
 }
 
@@ -115,6 +128,7 @@ impl PreparedScene {
         let mut materials = Vec::new();
         let mut tris = Vec::new();
         let mut material_of = Vec::new();
+        let mut smooth = Vec::new();
         for o in &scene.objects {
             let m = &o.mesh;
             let group_bsdf: Vec<u32> = m
@@ -139,6 +153,7 @@ impl PreparedScene {
                 let [a, b, c] = t.map(|i| Vec3A::from(m.positions[i as usize]));
                 tris.push(Triangle { v0: a, v1: b, v2: c });
                 material_of.push(group_bsdf[g as usize]);
+                smooth.push(m.normals.as_ref().and_then(|n| smooth_normals(n, t, [a, b, c])));
             }
         }
         if tris.is_empty() {
@@ -161,6 +176,7 @@ impl PreparedScene {
             })
             .collect();
         let material_of: Vec<u32> = order.iter().map(|&i| material_of[i as usize]).collect();
+        let (smooth_of, vertex_normals) = in_bvh_order(&smooth, order);
         let mut lights = Vec::new();
         let mut sky = None;
         for l in &scene.lights {
@@ -201,6 +217,8 @@ impl PreparedScene {
             bvh,
             triangles,
             normals,
+            smooth_of,
+            vertex_normals,
             material_of,
             materials,
             lights,
@@ -223,6 +241,8 @@ impl PreparedScene {
             + self.bvh.primitive_indices.len() * size_of::<u32>()
             + self.triangles.len() * size_of::<RtTriangle>()
             + self.normals.len() * size_of::<Vec3A>()
+            + self.smooth_of.len() * size_of::<u32>()
+            + self.vertex_normals.len() * size_of::<[Vec3A; 3]>()
             + self.material_of.len() * size_of::<u32>()
             + self.materials.len() * size_of::<Bsdf>()
             + self.lights.iter().map(Light::memory_bytes).sum::<usize>()
@@ -240,12 +260,43 @@ impl PreparedScene {
         let slot = hit.primitive_id as usize;
         let n = self.normals[slot];
         let normal = if n.dot(direction) > 0.0 { -n } else { n };
-        Some(Hit {
-            t: hit.t,
-            point: origin + direction * hit.t,
-            normal,
-            material: self.material_of[slot],
-        })
+        let point = origin + direction * hit.t;
+        let material = self.material_of[slot];
+        match self.smooth_of.get(slot) {
+            Some(&k) if k != FLAT => {
+                let corners = &self.vertex_normals[k as usize];
+                Some(self.smooth_hit(slot, corners, (origin, direction), hit.t, normal, material))
+            }
+            _ => Some(Hit { t: hit.t, point, normal, shading: normal, material }),
+        }
+    }
+
+    /// A hit on a triangle with shading normals: the normals interpolated at the hit, turned to
+    /// the side the ray came from, and the point moved out to the smooth surface. Out of line:
+    /// flat scenes never come here.
+    #[inline(never)]
+    fn smooth_hit(
+        &self,
+        slot: usize,
+        corners: &[Vec3A; 3],
+        (origin, direction): (Vec3A, Vec3A),
+        t: f32,
+        normal: Vec3A,
+        material: u32,
+    ) -> Hit {
+        let tri = &self.triangles[slot];
+        let vertices = [tri.v0, tri.v0 - tri.e1, tri.v0 + tri.e2];
+        let point = origin + direction * t;
+        let weights = barycentric(vertices, point);
+        let interpolated =
+            corners[0] * weights[0] + corners[1] * weights[1] + corners[2] * weights[2];
+        // The file's normals may face either way whatever the winding (scans often mix them):
+        // they are taken on the side the ray came from, as the geometric normal is.
+        let side = if interpolated.dot(normal) < 0.0 { -1.0 } else { 1.0 };
+        let shading = (interpolated * side).normalize_or(normal);
+        let facing = corners.map(|n| n * side);
+        let point = terminator_point(vertices, facing, weights, point);
+        Hit { t, point, normal, shading, material }
     }
 
     /// The nearest area luminaire the ray meets before `tmax`, and whether on its emitting
@@ -447,4 +498,73 @@ fn light(scene: &LoadedScene, l: &ResolvedLight) -> Result<Light, TraceError> {
             return Err(TraceError::Scene("the sky is not a delta light".into()));
         }
     })
+}
+
+/// A triangle's vertex normals when the mesh gives all three and they bend away from its face
+/// (a triangle whose normals all equal its face normal is flat, and traced as such).
+fn smooth_normals(normals: &[[f32; 3]], t: &[u32; 3], v: [Vec3A; 3]) -> Option<[Vec3A; 3]> {
+    let corners = t.map(|i| normals.get(i as usize).map_or(Vec3A::ZERO, |n| Vec3A::from(*n)));
+    if corners.contains(&Vec3A::ZERO) {
+        return None;
+    }
+    let face = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
+    let flat = corners.iter().all(|n| n.dot(face).abs() > 1.0 - 1e-6);
+    (!flat).then_some(corners)
+}
+
+/// `smooth` (in the meshes' order) as per-triangle indices in BVH order into a list of the
+/// smooth triangles' vertex normals; both empty when every triangle is flat.
+fn in_bvh_order(smooth: &[Option<[Vec3A; 3]>], order: &[u32]) -> (Vec<u32>, Vec<[Vec3A; 3]>) {
+    if smooth.iter().all(Option::is_none) {
+        return (Vec::new(), Vec::new());
+    }
+    let mut corners = Vec::new();
+    let index = order
+        .iter()
+        .map(|&i| match smooth[i as usize] {
+            Some(c) => {
+                corners.push(c);
+                (corners.len() - 1) as u32
+            }
+            None => FLAT,
+        })
+        .collect();
+    (index, corners)
+}
+
+/// The barycentric weights of `p` (on the triangle's plane) for its vertices a, b, c.
+#[inline]
+fn barycentric([a, b, c]: [Vec3A; 3], p: Vec3A) -> [f32; 3] {
+    let (e1, e2, d) = (b - a, c - a, p - a);
+    let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+    let (d1, d2) = (d.dot(e1), d.dot(e2));
+    let det = d11 * d22 - d12 * d12;
+    if det <= 0.0 {
+        return [1.0 / 3.0; 3];
+    }
+    let u = (d22 * d1 - d12 * d2) / det;
+    let v = (d11 * d2 - d12 * d1) / det;
+    [1.0 - u - v, u, v]
+}
+
+/// The point from which rays leave a triangle with shading normals: the hit moved out to the
+/// curved surface the vertex normals describe, so that a coarse mesh of a round surface does
+/// not shadow itself in facets near the terminator (Hanika, "Hacking the shadow terminator",
+/// Ray Tracing Gems II, ch. 4, 2021): the hit is projected onto each vertex's tangent plane
+/// where it lies below it, and the projections are blended by the barycentric weights. Where
+/// the surface is concave the hit stays where it is.
+#[inline]
+pub(crate) fn terminator_point(
+    vertices: [Vec3A; 3],
+    normals: [Vec3A; 3],
+    weights: [f32; 3],
+    p: Vec3A,
+) -> Vec3A {
+    let mut offset = Vec3A::ZERO;
+    for k in 0..3 {
+        let to_p = p - vertices[k];
+        let below = to_p.dot(normals[k]).min(0.0);
+        offset += (to_p - normals[k] * below) * weights[k];
+    }
+    p + offset
 }

@@ -139,10 +139,13 @@ pub fn scene_glb(scene: &LoadedScene, colour: impl Fn(&str) -> [f32; 3]) -> Prev
         let positions: Vec<[f32; 3]> =
             o.mesh.positions.iter().map(|&p| to_gltf(p, offset)).collect();
         let position = w.vec3s(&positions, true);
-        let normal = o.mesh.normals.as_ref().map(|n| {
-            let turned: Vec<[f32; 3]> = n.iter().map(|v| [v[0], v[2], -v[1]]).collect();
-            w.vec3s(&turned, false)
-        });
+        // glTF normals must be unit vectors: a mesh with flat parts (zero normals) goes
+        // without, and the viewer shades it flat, as it does a mesh that has none.
+        let normal =
+            o.mesh.normals.as_ref().filter(|n| n.iter().all(|v| *v != [0.0; 3])).map(|n| {
+                let turned: Vec<[f32; 3]> = n.iter().map(|v| [v[0], v[2], -v[1]]).collect();
+                w.vec3s(&turned, false)
+            });
         let representative =
             cell_m.map(|c| vertex_clustering::representatives(&o.mesh.positions, c));
         let (mut primitives, mut coarse) = (Vec::new(), Vec::new());

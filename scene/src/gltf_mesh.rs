@@ -13,7 +13,7 @@
 use crate::error::{Result, SceneError};
 use crate::guard;
 use crate::load::Limits;
-use crate::mesh::{Group, Mesh};
+use crate::mesh::{Group, Mesh, unit_or_zero};
 use crate::vrml::Viewpoint;
 use base64::Engine;
 use glam::{Mat4, Vec3};
@@ -301,6 +301,19 @@ fn add_node(
                         .into(),
                 });
             }
+            let has_normals = match prim.get(&gltf::Semantic::Normals) {
+                Some(a) => check_accessor(
+                    &a,
+                    buffers,
+                    path,
+                    "NORMAL",
+                    &[(DataType::F32, Dimensions::Vec3)],
+                    "VEC3 of float (componentType 5126)",
+                )?,
+                None => false,
+            };
+            // Normals go through the inverse transpose, so a non-uniform scale keeps them normal.
+            let normal_matrix = glam::Mat3::from_mat4(world).inverse().transpose();
             let reader = prim.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
             let read = guard::catch(|| {
                 let positions: Option<Vec<[f32; 3]>> = reader.read_positions().map(|ps| {
@@ -308,10 +321,15 @@ fn add_node(
                 });
                 let indices: Option<Vec<u32>> =
                     reader.read_indices().map(|i| i.into_u32().collect());
-                (positions, indices)
+                let normals: Option<Vec<[f32; 3]>> =
+                    reader.read_normals().filter(|_| has_normals).map(|ns| {
+                        ns.map(|n| unit_or_zero((normal_matrix * Vec3::from(n)).to_array()))
+                            .collect()
+                    });
+                (positions, indices, normals)
             })
             .map_err(|_| SceneError::invalid(path, place(), guard::gave_up("glTF")))?;
-            let (Some(positions), indices) = read else {
+            let (Some(positions), indices, normals) = read else {
                 return Err(SceneError::invalid(
                     path,
                     place(),
@@ -361,6 +379,12 @@ fn add_node(
             // A mirroring transform (negative determinant) turns the winding around.
             let flip = world.determinant() < 0.0;
             let base = mesh.positions.len() as u32;
+            let shading = mesh.normals.get_or_insert_with(Vec::new);
+            match normals {
+                Some(n) if n.len() == positions.len() => shading.extend(n),
+                // Without NORMAL the primitive is flat, as glTF 2.0 §3.7.2.1 says.
+                _ => shading.resize(base as usize + positions.len(), [0.0; 3]),
+            }
             mesh.positions.extend(positions);
             for t in indices.chunks_exact(3) {
                 let tri = if flip { [t[0], t[2], t[1]] } else { [t[0], t[1], t[2]] };
@@ -516,6 +540,7 @@ pub fn parse_with_cameras(
     for node in scene.nodes() {
         add_node(node, Mat4::IDENTITY, &buffers, &mut mesh, path, 0, &mut totals)?;
     }
+    mesh.drop_flat_normals();
     Ok((mesh, totals.cameras))
 }
 
@@ -574,6 +599,50 @@ mod tests {
             "bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":6}}],
             "buffers":[{{"byteLength":42,"uri":"data:application/octet-stream;base64,{data}"}}]}}"#
         )
+    }
+
+    /// NORMAL goes through the inverse transpose of the node's transform (a non-uniform scale
+    /// tilts it) and is scaled to unit length; a primitive without NORMAL is flat (zeros).
+    #[test]
+    fn normals_are_read_and_carried_through_the_transform() {
+        let mut bin = Vec::new();
+        let h = std::f32::consts::FRAC_1_SQRT_2;
+        let floats = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]].into_iter().chain([
+            [0.0, 0.0, 1.0],
+            [0.0, h, h],
+            [1.0, 0.0, 0.0],
+        ]);
+        for v in floats {
+            for c in v {
+                bin.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+        for i in [0u16, 1, 2] {
+            bin.extend_from_slice(&i.to_le_bytes());
+        }
+        let data = base64::engine::general_purpose::STANDARD.encode(&bin);
+        let gltf = format!(
+            r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0,1]}}],
+            "nodes":[{{"mesh":0,"scale":[1,2,1]}},{{"mesh":1}}],
+            "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"NORMAL":2}},"indices":1}}]}},
+                      {{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1}}]}}],
+            "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+                         {{"bufferView":2,"componentType":5123,"count":3,"type":"SCALAR"}},
+                         {{"bufferView":1,"componentType":5126,"count":3,"type":"VEC3"}}],
+            "bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":36}},
+                           {{"buffer":0,"byteOffset":72,"byteLength":6}}],
+            "buffers":[{{"byteLength":78,"uri":"data:application/octet-stream;base64,{data}"}}]}}"#
+        );
+        let mesh = parse(gltf.as_bytes(), Path::new("n.gltf")).unwrap();
+        let normals = mesh.normals.expect("normals");
+        // (0, ½√2, ½√2) through diag(1, ½, 1): (0, 1, 2)/√5.
+        let expect = [[0.0, 0.0, 1.0], [0.0, 0.4472136, 0.8944272], [1.0, 0.0, 0.0], [0.0; 3]];
+        for (k, e) in expect.iter().enumerate() {
+            for c in 0..3 {
+                assert!((normals[k][c] - e[c]).abs() < 1e-6, "vertex {k}: {:?}", normals[k]);
+            }
+        }
+        assert_eq!(&normals[3..], &[[0.0; 3]; 3]);
     }
 
     #[test]

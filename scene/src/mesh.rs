@@ -24,7 +24,8 @@ impl Group {
 pub struct Mesh {
     pub positions: Vec<[f32; 3]>,
     /// Per-vertex shading normals, when the file gives or implies them (same length as
-    /// `positions`).
+    /// `positions`; unit length, or zero at a vertex that has none, whose triangles are then
+    /// shaded flat).
     pub normals: Option<Vec<[f32; 3]>>,
     pub triangles: Vec<[u32; 3]>,
     /// For each triangle, its index in `groups`.
@@ -73,18 +74,71 @@ impl Mesh {
         out
     }
 
+    /// Forget the normals when no vertex has one: the mesh is flat.
+    pub fn drop_flat_normals(&mut self) {
+        if self.normals.as_ref().is_some_and(|n| n.iter().all(|v| *v == [0.0; 3])) {
+            self.normals = None;
+        }
+    }
+
     /// Append another mesh, keeping group names unique (parts with the same name merge).
     pub fn append(&mut self, other: &Mesh) {
         let base = self.positions.len() as u32;
         let remap: Vec<u32> = other.groups.iter().map(|g| self.group_index(g.clone())).collect();
+        // A part without normals keeps its flat faces beside one with them (zero normals).
         match (&mut self.normals, &other.normals) {
             (Some(a), Some(b)) => a.extend_from_slice(b),
-            (a @ Some(_), None) => *a = None,
-            (None, Some(_)) if self.positions.is_empty() => self.normals = other.normals.clone(),
-            _ => {}
+            (Some(a), None) => a.resize(a.len() + other.positions.len(), [0.0; 3]),
+            (None, Some(b)) => {
+                let mut a = vec![[0.0; 3]; self.positions.len()];
+                a.extend_from_slice(b);
+                self.normals = Some(a);
+            }
+            (None, None) => {}
         }
         self.positions.extend_from_slice(&other.positions);
         self.triangles.extend(other.triangles.iter().map(|t| t.map(|i| i + base)));
         self.triangle_group.extend(other.triangle_group.iter().map(|&g| remap[g as usize]));
+    }
+}
+
+/// `v` scaled to unit length, or zero when it has no direction (zero, or not finite): a
+/// vertex normal that cannot shade.
+pub fn unit_or_zero(v: [f32; 3]) -> [f32; 3] {
+    let length = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    if length.is_finite() && length > 1e-12 { v.map(|c| c / length) } else { [0.0; 3] }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn triangle(z: f32, normals: Option<[f32; 3]>) -> Mesh {
+        let mut m = Mesh {
+            positions: vec![[0.0, 0.0, z], [1.0, 0.0, z], [0.0, 1.0, z]],
+            normals: normals.map(|n| vec![n; 3]),
+            triangles: vec![[0, 1, 2]],
+            ..Mesh::default()
+        };
+        m.triangle_group = vec![m.group_index(Group::named("part"))];
+        m
+    }
+
+    /// Appending a flat mesh to a smooth one, or the other way, keeps the smooth one's normals
+    /// and gives the flat one zeros: neither loses its shading.
+    #[test]
+    fn smooth_and_flat_parts_keep_their_shading_when_appended() {
+        let up = [0.0, 0.0, 1.0];
+        let mut a = triangle(0.0, Some(up));
+        a.append(&triangle(1.0, None));
+        assert_eq!(a.normals, Some(vec![up, up, up, [0.0; 3], [0.0; 3], [0.0; 3]]));
+        let mut b = triangle(0.0, None);
+        b.append(&triangle(1.0, Some(up)));
+        assert_eq!(b.normals, Some(vec![[0.0; 3], [0.0; 3], [0.0; 3], up, up, up]));
+        let mut c = triangle(0.0, None);
+        c.append(&triangle(1.0, None));
+        assert_eq!(c.normals, None);
+        assert_eq!(unit_or_zero([0.0, 3.0, 4.0]), [0.0, 0.6, 0.8]);
+        assert_eq!(unit_or_zero([f32::NAN, 0.0, 1.0]), [0.0; 3]);
     }
 }

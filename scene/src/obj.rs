@@ -206,8 +206,8 @@ pub fn parse_limited(text: &str, path: &Path, limits: &Limits) -> Result<Mesh> {
         let map = names.iter().enumerate().map(|(i, n)| (n.clone(), i)).collect();
         Ok((materials, map))
     };
-    let options =
-        tobj::LoadOptions { triangulate: true, single_index: false, ..Default::default() };
+    // One index per corner: a vertex with two normals (a crease) becomes two vertices.
+    let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
     let (models, _) = guard::catch(|| {
         tobj::load_obj_buf(&mut with_library.as_bytes(), &options, loader)
     })
@@ -220,6 +220,7 @@ pub fn parse_limited(text: &str, path: &Path, limits: &Limits) -> Result<Mesh> {
         )
     })?;
     let mut mesh = Mesh::default();
+    let mut normals: Vec<[f32; 3]> = Vec::new();
     for model in &models {
         let m = &model.mesh;
         let group_name = match m.material_id {
@@ -231,6 +232,13 @@ pub fn parse_limited(text: &str, path: &Path, limits: &Limits) -> Result<Mesh> {
         let base = mesh.positions.len() as u32;
         mesh.positions.extend(m.positions.chunks_exact(3).map(|p| [p[0], p[1], p[2]]));
         let count = m.positions.len() / 3;
+        // `vn` normals where the faces give them; a part without them stays flat (zero normals).
+        if m.normals.len() == m.positions.len() {
+            let unit = |n: &[f32]| crate::mesh::unit_or_zero([n[0], n[1], n[2]]);
+            normals.extend(m.normals.chunks_exact(3).map(unit));
+        } else {
+            normals.resize(mesh.positions.len(), [0.0; 3]);
+        }
         for t in m.indices.chunks_exact(3) {
             if t.iter().any(|&i| i as usize >= count) {
                 return Err(SceneError::invalid(
@@ -243,6 +251,8 @@ pub fn parse_limited(text: &str, path: &Path, limits: &Limits) -> Result<Mesh> {
             mesh.triangle_group.push(group);
         }
     }
+    mesh.normals = Some(normals);
+    mesh.drop_flat_normals();
     Ok(mesh)
 }
 
@@ -262,6 +272,42 @@ mod tests {
         );
         let b = mesh.bounds().unwrap();
         assert_eq!((b.min, b.max), ([0.0; 3], [1.0, 1.0, 0.0]));
+    }
+
+    /// Each corner keeps the normal its `f` line names (a vertex with two becomes two), scaled
+    /// to unit length; a part without `vn` stays flat (zero normals), and a file without any
+    /// has none.
+    #[test]
+    fn vertex_normals_are_read_per_corner() {
+        let text = "o bent\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvn 0 0 2\nvn 0 3 4\n\
+                    f 1//1 2//1 3//2\nf 1//1 3//1 4//1\n\
+                    o plain\nv 5 0 0\nv 6 0 0\nv 6 1 0\nf 5 6 7\n";
+        let mesh = parse(text, Path::new("n.obj")).unwrap();
+        let normals = mesh.normals.as_ref().expect("normals");
+        assert_eq!(normals.len(), mesh.positions.len());
+        let corners: Vec<([f32; 3], [f32; 3])> = mesh
+            .triangles
+            .iter()
+            .flatten()
+            .map(|&i| (mesh.positions[i as usize], normals[i as usize]))
+            .collect();
+        let (up, bent, none) = ([0.0, 0.0, 1.0], [0.0, 0.6, 0.8], [0.0; 3]);
+        assert_eq!(
+            corners,
+            vec![
+                ([0.0, 0.0, 0.0], up),
+                ([1.0, 0.0, 0.0], up),
+                ([1.0, 1.0, 0.0], bent),
+                ([0.0, 0.0, 0.0], up),
+                ([1.0, 1.0, 0.0], up),
+                ([0.0, 1.0, 0.0], up),
+                ([5.0, 0.0, 0.0], none),
+                ([6.0, 0.0, 0.0], none),
+                ([6.0, 1.0, 0.0], none),
+            ]
+        );
+        let flat = parse("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", Path::new("f.obj")).unwrap();
+        assert_eq!(flat.normals, None);
     }
 
     #[test]

@@ -5,7 +5,7 @@
 use crate::error::{Result, SceneError};
 use crate::guard;
 use crate::load::Limits;
-use crate::mesh::{Group, Mesh};
+use crate::mesh::{Group, Mesh, unit_or_zero};
 use crate::ply_layout;
 use ply_rs::parser::Parser;
 use ply_rs::ply::{DefaultElement, Property};
@@ -78,6 +78,7 @@ pub fn parse_limited(bytes: &[u8], path: &Path, limits: &Limits) -> Result<Mesh>
         )
     })?;
     let mut mesh = Mesh::default();
+    let mut normals = Vec::with_capacity(vertices.len());
     for (i, v) in vertices.iter().enumerate() {
         let coord = |k: &str| -> Result<f32> {
             v.get(k).and_then(number).map(|x| x as f32).ok_or_else(|| {
@@ -89,7 +90,15 @@ pub fn parse_limited(bytes: &[u8], path: &Path, limits: &Limits) -> Result<Mesh>
             })
         };
         mesh.positions.push([coord("x")?, coord("y")?, coord("z")?]);
+        // nx, ny, nz (the names scanners write, as the Stanford format's examples do).
+        let normal = ["nx", "ny", "nz"].map(|k| v.get(k).and_then(number).map(|x| x as f32));
+        normals.push(match normal {
+            [Some(x), Some(y), Some(z)] => unit_or_zero([x, y, z]),
+            _ => [0.0; 3],
+        });
     }
+    mesh.normals = Some(normals);
+    mesh.drop_flat_normals();
     // One part, named as an OBJ's part without groups: not after the file, whose name a
     // bundle replaces by its hash.
     let group = mesh.group_index(Group::named("default"));
@@ -153,6 +162,19 @@ mod tests {
         let mesh = parse(&binary(), Path::new("b.ply")).unwrap();
         assert_eq!(mesh.triangles.len(), 1);
         assert_eq!(mesh.bounds().unwrap().max, [1.0, 1.0, 5.0]);
+    }
+
+    /// A scanner's `nx ny nz` become the vertices' shading normals, scaled to unit length; a
+    /// file without them has none.
+    #[test]
+    fn vertex_normals_are_read() {
+        let text = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+                    property float z\nproperty float nx\nproperty float ny\nproperty float nz\n\
+                    element face 1\nproperty list uchar int vertex_indices\nend_header\n\
+                    0 0 0 0 0 2\n1 0 0 0 3 4\n0 1 0 0 0 0\n3 0 1 2\n";
+        let mesh = parse(text.as_bytes(), Path::new("n.ply")).unwrap();
+        assert_eq!(mesh.normals, Some(vec![[0.0, 0.0, 1.0], [0.0, 0.6, 0.8], [0.0; 3]]));
+        assert_eq!(parse(ASCII.as_bytes(), Path::new("scan.ply")).unwrap().normals, None);
     }
 
     #[test]

@@ -64,6 +64,7 @@ pub fn run(args: &BenchArgs) -> Result<String> {
         BenchTarget::Tracer => crate::bench_tracer::bench(args),
         BenchTarget::Cluster => crate::bench_cluster::bench(args),
         BenchTarget::Scheduler => crate::bench_scheduler::bench(args),
+        BenchTarget::Mesh => crate::bench_mesh::bench(args),
         BenchTarget::Retinex => {
             let (w, h) = (args.width, args.height);
             let img = mondrian(w, h, 1);

@@ -574,6 +574,9 @@ pub struct BenchArgs {
     /// Scheduler: tile edge in pixels.
     #[arg(long, default_value_t = 16)]
     pub tile: u32,
+    /// Mesh: the sizes of the relief measured, in triangles.
+    #[arg(long, value_delimiter = ',', default_value = "50000,500000,5000000")]
+    pub triangles: Vec<usize>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -586,6 +589,8 @@ pub enum BenchTarget {
     Cluster,
     /// The coordinator's leases and results per second over gRPC, with simulated workers.
     Scheduler,
+    /// A survey mesh of 50 k, 500 k and 5 M triangles: reading, BVH build, memory, tracing.
+    Mesh,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]

@@ -2,6 +2,7 @@
 
 pub mod bench;
 pub mod bench_cluster;
+pub mod bench_mesh;
 pub mod bench_scheduler;
 pub mod bench_tracer;
 pub mod cli;

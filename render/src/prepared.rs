@@ -153,7 +153,11 @@ impl PreparedScene {
                 let [a, b, c] = t.map(|i| Vec3A::from(m.positions[i as usize]));
                 tris.push(Triangle { v0: a, v1: b, v2: c });
                 material_of.push(group_bsdf[g as usize]);
-                smooth.push(m.normals.as_ref().and_then(|n| smooth_normals(n, t, [a, b, c])));
+                if let Some(corners) =
+                    m.normals.as_ref().and_then(|n| smooth_normals(n, t, [a, b, c]))
+                {
+                    smooth.push((tris.len() as u32 - 1, corners));
+                }
             }
         }
         if tris.is_empty() {
@@ -512,24 +516,18 @@ fn smooth_normals(normals: &[[f32; 3]], t: &[u32; 3], v: [Vec3A; 3]) -> Option<[
     (!flat).then_some(corners)
 }
 
-/// `smooth` (in the meshes' order) as per-triangle indices in BVH order into a list of the
-/// smooth triangles' vertex normals; both empty when every triangle is flat.
-fn in_bvh_order(smooth: &[Option<[Vec3A; 3]>], order: &[u32]) -> (Vec<u32>, Vec<[Vec3A; 3]>) {
-    if smooth.iter().all(Option::is_none) {
+/// The smooth triangles' vertex normals (by triangle, in the meshes' order) as per-triangle
+/// indices in BVH order into a list of them; both empty when every triangle is flat.
+fn in_bvh_order(smooth: &[(u32, [Vec3A; 3])], order: &[u32]) -> (Vec<u32>, Vec<[Vec3A; 3]>) {
+    if smooth.is_empty() {
         return (Vec::new(), Vec::new());
     }
-    let mut corners = Vec::new();
-    let index = order
-        .iter()
-        .map(|&i| match smooth[i as usize] {
-            Some(c) => {
-                corners.push(c);
-                (corners.len() - 1) as u32
-            }
-            None => FLAT,
-        })
-        .collect();
-    (index, corners)
+    let mut of_triangle = vec![FLAT; order.len()];
+    for (k, (t, _)) in smooth.iter().enumerate() {
+        of_triangle[*t as usize] = k as u32;
+    }
+    let index = order.iter().map(|&i| of_triangle[i as usize]).collect();
+    (index, smooth.iter().map(|(_, c)| *c).collect())
 }
 
 /// The barycentric weights of `p` (on the triangle's plane) for its vertices a, b, c.

@@ -1,15 +1,54 @@
-//! Stanford PLY meshes, ASCII and binary, read with ply-rs: the `vertex` element's x, y, z and
+//! Stanford PLY meshes, ASCII and binary: the `vertex` element's x, y, z (and nx, ny, nz) and
 //! the `face` element's `vertex_indices` (or `vertex_index`) lists. Polygons are split into
 //! fans. PLY has no materials, so the whole mesh is one part, named after the file.
+//!
+//! Binary files (what scanners export, and the big ones) are decoded straight into columns
+//! ([`crate::ply_binary`]); ASCII files are read with ply-rs, whose element maps cost several
+//! hundred bytes a vertex. Both are checked first by [`ply_layout`].
 
 use crate::error::{Result, SceneError};
 use crate::guard;
 use crate::load::Limits;
 use crate::mesh::{Group, Mesh, unit_or_zero};
-use crate::ply_layout;
+use crate::ply_layout::{self, Encoding, Header};
 use ply_rs::parser::Parser;
 use ply_rs::ply::{DefaultElement, Property};
 use std::path::Path;
+
+/// What a mesh takes from a PLY body, however it was read.
+#[derive(Default)]
+pub(crate) struct Columns {
+    /// Each vertex's x, y, z.
+    pub(crate) positions: Vec<[f64; 3]>,
+    /// Each vertex's nx, ny, nz, when the vertices have all three.
+    pub(crate) normals: Option<Vec<[f64; 3]>>,
+    /// Every face's vertex indices one after another, and where each face's start (one more
+    /// entry than there are faces).
+    pub(crate) indices: Vec<i64>,
+    pub(crate) starts: Vec<usize>,
+}
+
+/// The vertex coordinate the vertices lack, or the face list the faces lack: the header says,
+/// for every element alike.
+fn missing(header: &Header) -> Option<(String, String)> {
+    let find = |name: &str| header.elements.iter().find(|e| e.name == name);
+    let vertex = find("vertex")?;
+    for k in ["x", "y", "z"] {
+        let scalar = vertex
+            .properties
+            .iter()
+            .any(|p| p.name == k && matches!(p.kind, ply_layout::Kind::Scalar(_)));
+        if !scalar && vertex.count > 0 {
+            return Some(("vertex 0".into(), format!("no numeric `{k}` property")));
+        }
+    }
+    let face = find("face")?;
+    let list = face.properties.iter().any(|p| {
+        ply_layout::is_face_list(face, p)
+            && matches!(p.kind, ply_layout::Kind::List(_, item) if item.is_integer())
+    });
+    (!list && face.count > 0).then(|| ("face 0".into(), "no `vertex_indices` list".into()))
+}
 
 fn number(p: &Property) -> Option<f64> {
     Some(match p {
@@ -25,16 +64,17 @@ fn number(p: &Property) -> Option<f64> {
     })
 }
 
-fn list(p: &Property) -> Option<Vec<i64>> {
-    Some(match p {
-        Property::ListChar(v) => v.iter().map(|&x| i64::from(x)).collect(),
-        Property::ListUChar(v) => v.iter().map(|&x| i64::from(x)).collect(),
-        Property::ListShort(v) => v.iter().map(|&x| i64::from(x)).collect(),
-        Property::ListUShort(v) => v.iter().map(|&x| i64::from(x)).collect(),
-        Property::ListInt(v) => v.iter().map(|&x| i64::from(x)).collect(),
-        Property::ListUInt(v) => v.iter().map(|&x| i64::from(x)).collect(),
+fn extend_list(p: &Property, out: &mut Vec<i64>) -> Option<()> {
+    match p {
+        Property::ListChar(v) => out.extend(v.iter().map(|&x| i64::from(x))),
+        Property::ListUChar(v) => out.extend(v.iter().map(|&x| i64::from(x))),
+        Property::ListShort(v) => out.extend(v.iter().map(|&x| i64::from(x))),
+        Property::ListUShort(v) => out.extend(v.iter().map(|&x| i64::from(x))),
+        Property::ListInt(v) => out.extend(v.iter().map(|&x| i64::from(x))),
+        Property::ListUInt(v) => out.extend(v.iter().map(|&x| i64::from(x))),
         _ => return None,
-    })
+    }
+    Some(())
 }
 
 /// Read PLY bytes. `path` names the file in messages and, by its stem, the mesh's one part.
@@ -44,9 +84,34 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Mesh> {
 
 /// [`parse`] within `limits` (faces, vertices of one polygon).
 pub fn parse_limited(bytes: &[u8], path: &Path, limits: &Limits) -> Result<Mesh> {
-    // Everything ply-rs would refuse, panic on or loop over is refused first, in words.
+    // Everything ply-rs would refuse, panic on or loop over is refused first, in words; the
+    // binary decoder relies on the same checks.
     let header = ply_layout::read_header(bytes, path)?;
     ply_layout::check_body(&header, bytes, path, limits)?;
+    for (name, need) in [
+        ("vertex", "a PLY mesh needs vertices with x, y, z"),
+        ("face", "restauro needs faces, not a point cloud"),
+    ] {
+        if !header.elements.iter().any(|e| e.name == name) {
+            return Err(SceneError::invalid(
+                path,
+                "header",
+                format!("no `{name}` element; {need}"),
+            ));
+        }
+    }
+    if let Some((place, problem)) = missing(&header) {
+        return Err(SceneError::invalid(path, place, problem));
+    }
+    let columns = match header.encoding {
+        Encoding::Ascii => ascii_columns(bytes, path)?,
+        Encoding::BigEndian | Encoding::LittleEndian => crate::ply_binary::decode(&header, bytes),
+    };
+    mesh_of(columns, path)
+}
+
+/// The columns of an ASCII file, read with ply-rs.
+fn ascii_columns(bytes: &[u8], path: &Path) -> Result<Columns> {
     let parser = Parser::<DefaultElement>::new();
     let mut reader = bytes;
     let ply = guard::catch(move || parser.read_ply(&mut reader))
@@ -63,51 +128,45 @@ pub fn parse_limited(bytes: &[u8], path: &Path, limits: &Limits) -> Result<Mesh>
                 ),
             )
         })?;
-    let vertices = ply.payload.get("vertex").ok_or_else(|| {
-        SceneError::invalid(
-            path,
-            "header",
-            "no `vertex` element; a PLY mesh needs vertices with x, y, z",
-        )
-    })?;
-    let faces = ply.payload.get("face").ok_or_else(|| {
-        SceneError::invalid(
-            path,
-            "header",
-            "no `face` element; restauro needs faces, not a point cloud",
-        )
-    })?;
-    let mut mesh = Mesh::default();
+    let empty = Vec::new();
+    let vertices = ply.payload.get("vertex").unwrap_or(&empty);
+    let faces = ply.payload.get("face").unwrap_or(&empty);
+    let mut c = Columns::default();
     let mut normals = Vec::with_capacity(vertices.len());
-    for (i, v) in vertices.iter().enumerate() {
-        let coord = |k: &str| -> Result<f32> {
-            v.get(k).and_then(number).map(|x| x as f32).ok_or_else(|| {
-                SceneError::invalid(
-                    path,
-                    format!("vertex {i}"),
-                    format!("no numeric `{k}` property"),
-                )
-            })
-        };
-        mesh.positions.push([coord("x")?, coord("y")?, coord("z")?]);
-        // nx, ny, nz (the names scanners write, as the Stanford format's examples do).
-        let normal = ["nx", "ny", "nz"].map(|k| v.get(k).and_then(number).map(|x| x as f32));
-        normals.push(match normal {
-            [Some(x), Some(y), Some(z)] => unit_or_zero([x, y, z]),
-            _ => [0.0; 3],
-        });
+    for v in vertices {
+        let get = |k: &str| v.get(k).and_then(number);
+        // `missing` made sure every vertex has them.
+        c.positions.push(["x", "y", "z"].map(|k| get(k).unwrap_or(f64::NAN)));
+        normals.push(["nx", "ny", "nz"].map(get));
     }
-    mesh.normals = Some(normals);
+    if normals.iter().all(|n| n.iter().all(Option::is_some)) {
+        c.normals = Some(normals.iter().map(|n| n.map(|x| x.unwrap_or(0.0))).collect());
+    }
+    c.starts.push(0);
+    for f in faces {
+        let list = f.get("vertex_indices").or_else(|| f.get("vertex_index"));
+        list.and_then(|l| extend_list(l, &mut c.indices));
+        c.starts.push(c.indices.len());
+    }
+    Ok(c)
+}
+
+/// The mesh of the columns: each polygon a fan of triangles, its indices checked.
+fn mesh_of(c: Columns, path: &Path) -> Result<Mesh> {
+    let mut mesh = Mesh {
+        positions: c.positions.iter().map(|p| p.map(|x| x as f32)).collect(),
+        // nx, ny, nz (the names scanners write, as the Stanford format's examples do).
+        normals: c.normals.map(|n| n.iter().map(|v| unit_or_zero(v.map(|x| x as f32))).collect()),
+        ..Mesh::default()
+    };
     mesh.drop_flat_normals();
     // One part, named as an OBJ's part without groups: not after the file, whose name a
     // bundle replaces by its hash.
     let group = mesh.group_index(Group::named("default"));
     let n = mesh.positions.len() as i64;
-    for (i, f) in faces.iter().enumerate() {
-        let indices =
-            f.get("vertex_indices").or_else(|| f.get("vertex_index")).and_then(list).ok_or_else(
-                || SceneError::invalid(path, format!("face {i}"), "no `vertex_indices` list"),
-            )?;
+    mesh.triangles.reserve(c.indices.len().saturating_sub(2 * c.starts.len()));
+    for (i, w) in c.starts.windows(2).enumerate() {
+        let indices = &c.indices[w[0]..w[1]];
         if indices.len() < 3 {
             return Err(SceneError::invalid(
                 path,
@@ -127,9 +186,9 @@ pub fn parse_limited(bytes: &[u8], path: &Path, limits: &Limits) -> Result<Mesh>
         }
         for k in 1..indices.len() - 1 {
             mesh.triangles.push([indices[0] as u32, indices[k] as u32, indices[k + 1] as u32]);
-            mesh.triangle_group.push(group);
         }
     }
+    mesh.triangle_group = vec![group; mesh.triangles.len()];
     Ok(mesh)
 }
 
@@ -175,6 +234,70 @@ mod tests {
         let mesh = parse(text.as_bytes(), Path::new("n.ply")).unwrap();
         assert_eq!(mesh.normals, Some(vec![[0.0, 0.0, 1.0], [0.0, 0.6, 0.8], [0.0; 3]]));
         assert_eq!(parse(ASCII.as_bytes(), Path::new("scan.ply")).unwrap().normals, None);
+    }
+
+    /// The binary decoder reads what ply-rs reads from the same mesh written as ASCII, in both
+    /// byte orders, skipping the properties it does not need (a colour, a face's flags).
+    #[test]
+    fn binary_files_read_as_their_ascii_twin() {
+        let vertices: [([f32; 3], [f64; 3], u8); 4] = [
+            ([0.0, 0.0, 0.0], [0.0, 0.0, 1.0], 10),
+            ([2.0, 0.0, 0.5], [0.0, 0.6, 0.8], 20),
+            ([2.0, 3.0, 0.0], [0.0, 0.0, 2.0], 30),
+            ([0.0, 3.0, 1.0], [1.0, 0.0, 0.0], 40),
+        ];
+        let faces: [&[i32]; 2] = [&[0, 1, 2, 3], &[3, 2, 1]];
+        let header = |format: &str| {
+            format!(
+                "ply\nformat {format} 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
+                 property float z\nproperty uchar red\nproperty double nx\nproperty double ny\n\
+                 property double nz\nelement face 2\nproperty uchar flags\n\
+                 property list uchar int vertex_indices\nend_header\n"
+            )
+        };
+        let mut ascii = header("ascii");
+        for (p, n, r) in vertices {
+            ascii += &format!("{} {} {} {r} {} {} {}\n", p[0], p[1], p[2], n[0], n[1], n[2]);
+        }
+        for f in faces {
+            let list: Vec<String> = f.iter().map(i32::to_string).collect();
+            ascii += &format!("7 {} {}\n", f.len(), list.join(" "));
+        }
+        let binary = |big: bool| {
+            let order = if big { "binary_big_endian" } else { "binary_little_endian" };
+            let mut b = header(order).into_bytes();
+            let put = |bytes: &mut [u8], b: &mut Vec<u8>| {
+                if big {
+                    bytes.reverse();
+                }
+                b.extend_from_slice(bytes);
+            };
+            for (p, n, r) in vertices {
+                for c in p {
+                    put(&mut c.to_le_bytes(), &mut b);
+                }
+                b.push(r);
+                for c in n {
+                    put(&mut c.to_le_bytes(), &mut b);
+                }
+            }
+            for f in faces {
+                b.extend_from_slice(&[7, f.len() as u8]);
+                for &i in f {
+                    put(&mut i.to_le_bytes(), &mut b);
+                }
+            }
+            b
+        };
+        let twin = parse(ascii.as_bytes(), Path::new("a.ply")).unwrap();
+        assert_eq!(twin.triangles, vec![[0, 1, 2], [0, 2, 3], [3, 2, 1]]);
+        assert_eq!(twin.normals.as_ref().unwrap()[2], [0.0, 0.0, 1.0]);
+        for big in [false, true] {
+            let mesh = parse(&binary(big), Path::new("b.ply")).unwrap();
+            assert_eq!(mesh.positions, twin.positions, "big-endian: {big}");
+            assert_eq!(mesh.normals, twin.normals, "big-endian: {big}");
+            assert_eq!(mesh.triangles, twin.triangles, "big-endian: {big}");
+        }
     }
 
     #[test]

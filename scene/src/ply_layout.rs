@@ -23,7 +23,7 @@ pub(crate) enum Encoding {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Scalar {
+pub(crate) enum Scalar {
     Char,
     UChar,
     Short,
@@ -50,7 +50,7 @@ impl Scalar {
         })
     }
 
-    fn size(self) -> usize {
+    pub(crate) fn size(self) -> usize {
         match self {
             Scalar::Char | Scalar::UChar => 1,
             Scalar::Short | Scalar::UShort => 2,
@@ -86,8 +86,35 @@ impl Scalar {
         }
     }
 
+    /// A binary value of this type at the start of `b` (which holds at least its size), as a
+    /// number.
+    pub(crate) fn value(self, b: &[u8], big: bool) -> f64 {
+        let mut raw = [0u8; 8];
+        raw[..self.size()].copy_from_slice(&b[..self.size()]);
+        if big {
+            raw[..self.size()].reverse();
+        }
+        // Little-endian from here on.
+        let [b0, b1, b2, b3, ..] = raw;
+        match self {
+            Scalar::Char => f64::from(b0 as i8),
+            Scalar::UChar => f64::from(b0),
+            Scalar::Short => f64::from(i16::from_le_bytes([b0, b1])),
+            Scalar::UShort => f64::from(u16::from_le_bytes([b0, b1])),
+            Scalar::Int => f64::from(i32::from_le_bytes([b0, b1, b2, b3])),
+            Scalar::UInt => f64::from(u32::from_le_bytes([b0, b1, b2, b3])),
+            Scalar::Float => f64::from(f32::from_le_bytes([b0, b1, b2, b3])),
+            Scalar::Double => f64::from_le_bytes(raw),
+        }
+    }
+
+    /// Whether the type holds whole numbers (a list of vertex indices must).
+    pub(crate) fn is_integer(self) -> bool {
+        !matches!(self, Scalar::Float | Scalar::Double)
+    }
+
     /// A binary list count as ply-rs converts it (`as usize`), `None` when it is negative.
-    fn count(self, b: &[u8], big: bool) -> Option<u64> {
+    pub(crate) fn count(self, b: &[u8], big: bool) -> Option<u64> {
         let two = |b: &[u8]| if big { [b[0], b[1]] } else { [b[1], b[0]] };
         let four = |b: &[u8]| if big { [b[0], b[1], b[2], b[3]] } else { [b[3], b[2], b[1], b[0]] };
         // Big-endian order of the bytes, whatever the file's.
@@ -105,23 +132,23 @@ impl Scalar {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Kind {
+pub(crate) enum Kind {
     Scalar(Scalar),
     /// The count's type and the items' type.
     List(Scalar, Scalar),
 }
 
 #[derive(Clone, Debug)]
-struct Property {
-    name: String,
-    kind: Kind,
+pub(crate) struct Property {
+    pub(crate) name: String,
+    pub(crate) kind: Kind,
 }
 
 #[derive(Clone, Debug)]
 pub(crate) struct Element {
     pub(crate) name: String,
     pub(crate) count: u64,
-    properties: Vec<Property>,
+    pub(crate) properties: Vec<Property>,
     /// The header line that declares it.
     line: usize,
 }
@@ -132,7 +159,7 @@ pub(crate) struct Header {
     pub(crate) encoding: Encoding,
     pub(crate) elements: Vec<Element>,
     /// The byte offset of the body, and the number of header lines before it.
-    body: usize,
+    pub(crate) body: usize,
     lines: usize,
 }
 
@@ -385,7 +412,7 @@ fn is_number(token: &str) -> bool {
 }
 
 /// Whether `element`'s `property` is the face list restauro triangulates.
-fn is_face_list(element: &Element, property: &Property) -> bool {
+pub(crate) fn is_face_list(element: &Element, property: &Property) -> bool {
     element.name == "face" && (property.name == "vertex_indices" || property.name == "vertex_index")
 }
 

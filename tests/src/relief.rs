@@ -22,51 +22,8 @@ pub fn relief_studio(dir: &Path, nx: usize, ny: usize) -> (Coordinator, String, 
 
 /// Writes `relief.ply` and `scene.toml` into `dir` (which exists).
 pub fn relief_scene(dir: &Path, nx: usize, ny: usize) {
-    relief(&dir.join("relief.ply"), nx, ny);
-    std::fs::write(
-        dir.join("scene.toml"),
-        "format = 1\n[camera]\nposition = [0.0, -60.0, 12.0]\ntarget = [0.0, 0.0, 12.0]\n\
-         width = 160\nheight = 90\n[spectra]\nstone = \"travertine_tufa_solid__eco_ward73\"\n\
-         sun = { illuminant = \"D55\" }\n[materials.stone]\nmodel = \"lambert\"\nreflectance = \"stone\"\n\
-         [[objects]]\nname = \"relief\"\nmesh = \"relief.ply\"\nmaterial = \"stone\"\n\
-         [[lights]]\nkind = \"sun\"\npreset = \"sun\"\nspectrum = \"sun\"\n",
-    )
-    .unwrap();
-}
-
-/// A binary PLY of a relief `nx × ny` quads (2 triangles each) over 50 m × 25 m, 2 m high.
-fn relief(path: &std::path::Path, nx: usize, ny: usize) {
-    let mut f = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
-    let vertices = (nx + 1) * (ny + 1);
-    let faces = 2 * nx * ny;
-    write!(
-        f,
-        "ply\nformat binary_little_endian 1.0\nelement vertex {vertices}\nproperty float x\n\
-         property float y\nproperty float z\nelement face {faces}\n\
-         property list uchar int vertex_indices\nend_header\n"
-    )
-    .unwrap();
-    for j in 0..=ny {
-        for i in 0..=nx {
-            let (x, z) = (50.0 * i as f32 / nx as f32, 25.0 * j as f32 / ny as f32);
-            let y = -(2.0 * ((x * 1.3).sin() * (z * 0.7).cos()).abs());
-            for v in [x - 25.0, y, z] {
-                f.write_all(&v.to_le_bytes()).unwrap();
-            }
-        }
-    }
-    let at = |i: usize, j: usize| (j * (nx + 1) + i) as i32;
-    for j in 0..ny {
-        for i in 0..nx {
-            for t in [
-                [at(i, j), at(i + 1, j), at(i + 1, j + 1)],
-                [at(i, j), at(i + 1, j + 1), at(i, j + 1)],
-            ] {
-                f.write_all(&[3u8]).unwrap();
-                for v in t {
-                    f.write_all(&v.to_le_bytes()).unwrap();
-                }
-            }
-        }
-    }
+    let mut f = std::io::BufWriter::new(std::fs::File::create(dir.join("relief.ply")).unwrap());
+    restauro_scene::relief::write_ply(&mut f, nx, ny).unwrap();
+    f.flush().unwrap();
+    std::fs::write(dir.join("scene.toml"), restauro_scene::relief::SCENE_TOML).unwrap();
 }

@@ -60,3 +60,38 @@ fn the_tracer_benchmark_refuses_a_missing_scene_file_by_name() {
     assert!(!o.status.success());
     assert!(text(&o).contains("/nowhere/scene.toml"), "{}", text(&o));
 }
+
+/// `restauro bench mesh` reads, prepares and traces reliefs of the sizes asked for, as real
+/// PLY files, and reports each.
+#[test]
+fn the_mesh_benchmark_reports_each_size() {
+    let o = restauro(&[
+        "bench",
+        "mesh",
+        "--triangles",
+        "2000,20000",
+        "--width",
+        "32",
+        "--height",
+        "18",
+        "--spp",
+        "1",
+        "--progress",
+        "none",
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let sizes = report["sizes"].as_array().unwrap();
+    assert_eq!(sizes.len(), 2);
+    for (size, asked) in sizes.iter().zip([2000u64, 20000]) {
+        let triangles = size["triangles"].as_u64().unwrap();
+        assert!(triangles.abs_diff(asked) * 20 < asked, "{triangles} triangles for {asked}");
+        // A triangle takes a few dozen bytes prepared (BVH, triangle, normal, material), and the
+        // file 12 + 13 bytes or so (its share of a vertex, and its face).
+        let prepared = size["prepared_bytes_per_triangle"].as_f64().unwrap();
+        assert!((40.0..400.0).contains(&prepared), "{prepared} bytes a triangle");
+        let file_bytes = size["file_mib"].as_f64().unwrap() * 1048576.0 / triangles as f64;
+        assert!((15.0..25.0).contains(&file_bytes), "{file_bytes} bytes a triangle in the file");
+        assert!(size["rays_per_cpu_s"].as_f64().unwrap() > 0.0);
+    }
+}

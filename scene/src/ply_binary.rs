@@ -1,0 +1,96 @@
+//! Binary PLY bodies decoded straight into the columns a mesh needs, one pass over the bytes
+//! and no allocation per element: a scan of millions of triangles reads in seconds and in
+//! little more memory than its mesh. The body's layout has been checked before (by
+//! [`crate::ply_layout::check_body`]: every element and list fits in the file); a byte the
+//! checks missed reads as the end of the body, never as a panic.
+
+use crate::ply::Columns;
+use crate::ply_layout::{Encoding, Header, Kind, Scalar, is_face_list};
+
+/// Where an element's wanted values sit among its properties.
+#[derive(Default)]
+struct Wanted {
+    /// Property indices of x, y, z and of nx, ny, nz.
+    position: [Option<usize>; 3],
+    normal: [Option<usize>; 3],
+    /// The property index of the face's vertex list.
+    list: Option<usize>,
+}
+
+fn wanted(e: &crate::ply_layout::Element) -> Wanted {
+    let find = |name: &str| {
+        e.properties.iter().position(|p| p.name == name && matches!(p.kind, Kind::Scalar(_)))
+    };
+    let mut w = Wanted::default();
+    if e.name == "vertex" {
+        w.position = ["x", "y", "z"].map(find);
+        w.normal = ["nx", "ny", "nz"].map(find);
+    }
+    if e.name == "face" {
+        w.list = e.properties.iter().position(|p| {
+            is_face_list(e, p) && matches!(p.kind, Kind::List(_, item) if item.is_integer())
+        });
+    }
+    w
+}
+
+/// The columns of a binary body (either byte order).
+pub(crate) fn decode(header: &Header, bytes: &[u8]) -> Columns {
+    let big = header.encoding == Encoding::BigEndian;
+    let mut c = Columns { starts: vec![0], ..Columns::default() };
+    let mut normals = Vec::new();
+    let mut at = header.body;
+    let mut values: Vec<f64> = Vec::new();
+    'body: for e in &header.elements {
+        let w = wanted(e);
+        let keep_normals = w.normal.iter().all(Option::is_some);
+        values.resize(e.properties.len(), 0.0);
+        for _ in 0..e.count {
+            for (i, p) in e.properties.iter().enumerate() {
+                match p.kind {
+                    Kind::Scalar(s) => {
+                        let Some(b) = bytes.get(at..at + s.size()) else { break 'body };
+                        values[i] = s.value(b, big);
+                        at += s.size();
+                    }
+                    Kind::List(count, item) => {
+                        let Some(n) =
+                            bytes.get(at..at + count.size()).and_then(|b| count.count(b, big))
+                        else {
+                            break 'body;
+                        };
+                        at += count.size();
+                        let Some(end) = (n as usize).checked_mul(item.size()).map(|s| at + s)
+                        else {
+                            break 'body;
+                        };
+                        let Some(items) = bytes.get(at..end) else { break 'body };
+                        if w.list == Some(i) {
+                            let whole = |b: &[u8]| index_value(item, b, big);
+                            c.indices.extend(items.chunks_exact(item.size()).map(whole));
+                        }
+                        at = end;
+                    }
+                }
+            }
+            if let [Some(x), Some(y), Some(z)] = w.position {
+                c.positions.push([values[x], values[y], values[z]]);
+                if let ([Some(a), Some(b), Some(d)], true) = (w.normal, keep_normals) {
+                    normals.push([values[a], values[b], values[d]]);
+                }
+            }
+            if w.list.is_some() {
+                c.starts.push(c.indices.len());
+            }
+        }
+    }
+    if !normals.is_empty() && normals.len() == c.positions.len() {
+        c.normals = Some(normals);
+    }
+    c
+}
+
+/// A list item as a whole number (vertex lists hold integer types only).
+fn index_value(item: Scalar, b: &[u8], big: bool) -> i64 {
+    item.value(b, big) as i64
+}

@@ -43,7 +43,8 @@ def rates(bench):
             "samples_per_cpu_s_1_thread": runs[1]["samples_per_cpu_s"],
             "samples_per_cpu_s_2_threads": runs[2]["samples_per_cpu_s"],
             "rays_per_cpu_s_1_thread": runs[1]["rays_per_cpu_s"],
-            "speedup_2_threads": runs[1]["wall_s"] / runs[2]["wall_s"],
+            "speedup_2_threads": (runs[1]["wall_s"] / runs[1]["repetitions"])
+            / (runs[2]["wall_s"] / runs[2]["repetitions"]),
         }
     return out
 

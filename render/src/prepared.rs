@@ -153,9 +153,10 @@ impl PreparedScene {
                 let [a, b, c] = t.map(|i| Vec3A::from(m.positions[i as usize]));
                 tris.push(Triangle { v0: a, v1: b, v2: c });
                 material_of.push(group_bsdf[g as usize]);
-                if let Some(corners) =
-                    m.normals.as_ref().and_then(|n| smooth_normals(n, t, [a, b, c]))
-                {
+                // Panes are traced flat: through glass, rays go on from the hit itself.
+                let pane = matches!(materials[group_bsdf[g as usize] as usize], Bsdf::Glass(_));
+                let normals = m.normals.as_ref().filter(|_| !pane);
+                if let Some(corners) = normals.and_then(|n| smooth_normals(n, t, [a, b, c])) {
                     smooth.push((tris.len() as u32 - 1, corners));
                 }
             }

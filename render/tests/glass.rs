@@ -13,10 +13,23 @@ use restauro_spectral::Spectrum;
 
 const T_60: f64 = 0.84349;
 
-/// A black floor at z = 0 and a 10 × 10 m pane at z = 1 over it, of `glass` keys.
+/// A black floor at z = 0 and a 10 × 10 m pane at z = 1 over it.
+const MESH: &str = "o floor\nv -5 -5 0\nv 5 -5 0\nv 5 5 0\nv -5 5 0\nusemtl floor\nf 1 2 3 4\n\
+                    o pane\nv -5 -5 1\nv 5 -5 1\nv 5 5 1\nv -5 5 1\nusemtl pane\nf 5 6 7 8\n";
+
+/// [`MESH`], its pane of `glass` keys.
 fn load(dir: &std::path::Path, glass: &str, camera: &str, lights: &str) -> LoadedScene {
-    let obj = "o floor\nv -5 -5 0\nv 5 -5 0\nv 5 5 0\nv -5 5 0\nusemtl floor\nf 1 2 3 4\n\
-               o pane\nv -5 -5 1\nv 5 -5 1\nv 5 5 1\nv -5 5 1\nusemtl pane\nf 5 6 7 8\n";
+    load_mesh(dir, MESH, glass, camera, lights)
+}
+
+/// `obj` (with a floor and a pane part), the pane of `glass` keys.
+fn load_mesh(
+    dir: &std::path::Path,
+    obj: &str,
+    glass: &str,
+    camera: &str,
+    lights: &str,
+) -> LoadedScene {
     std::fs::write(dir.join("mesh.obj"), obj).unwrap();
     let toml = format!(
         "format = 1\n{camera}\n[render]\nintegrator = \"whitted\"\nsamples_per_pixel = 16384\n\
@@ -82,6 +95,22 @@ fn the_sun_passes_through_a_pane_by_its_transmittance() {
     let e = under(&scene);
     let expected = 100_000.0 * 0.5 * T_60;
     assert!((e / expected - 1.0).abs() < 1e-4, "{e} lx against {expected}");
+}
+
+/// A pane whose file gives it bent vertex normals (as a curved glazing's would) is traced
+/// flat: the sun through it is the flat pane's, to the bit.
+#[test]
+fn a_pane_with_vertex_normals_is_traced_flat() {
+    let dir = tempfile::tempdir().unwrap();
+    let sun = "[[lights]]\nkind = \"sun\"\nilluminance_lux = 100000.0\nazimuth_deg = 180.0\n\
+               elevation_deg = 60.0\nspectrum = \"day\"";
+    let flat = under(&load(dir.path(), "", CAMERA, sun));
+    let bent = MESH.replace(
+        "usemtl pane\nf 5 6 7 8\n",
+        "vn 0.3 0 1\nvn 0 0.3 1\nvn -0.3 0 1\nvn 0 -0.3 1\nusemtl pane\nf 5//1 6//2 7//3 8//4\n",
+    );
+    let curved = under(&load_mesh(dir.path(), &bent, "", CAMERA, sun));
+    assert_eq!(flat, curved);
 }
 
 /// A uniform sky seen through a clear pane from below at 60° from the zenith: L · T(60°); and

@@ -88,7 +88,8 @@ def main():
         whitted = next(r for r in b["whitted"] if r["threads"] == 1)
         report["lights"].append({
             "lights": n,
-            "whitted_rays_per_sample": whitted["rays"] / (640 * 360 * 4),
+            "whitted_rays_per_sample": whitted["rays"]
+            / (640 * 360 * 4 * whitted["repetitions"]),
             **rates(b),
         })
     c = json.loads(run([exe, "bench", "cluster", "--width", "960", "--height", "540",

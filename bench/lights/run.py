@@ -129,7 +129,8 @@ def main():
         report["lights"][name] = {
             "whitted_samples_per_cpu_s": whitted["samples_per_cpu_s"],
             "whitted_rays_per_cpu_s": whitted["rays_per_cpu_s"],
-            "whitted_rays_per_sample": whitted["rays"] / (a.width * a.height * a.spp),
+            "whitted_rays_per_sample": whitted["rays"]
+            / (a.width * a.height * a.spp * whitted["repetitions"]),
             "path_samples_per_cpu_s": path["samples_per_cpu_s"],
             "path_rays_per_cpu_s": path["rays_per_cpu_s"],
             "mean_luminance_cd_m2": mean,

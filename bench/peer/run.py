@@ -183,7 +183,8 @@ def timing(mi, args, w: int, h: int, spp: int) -> dict:
     scene = peer.load_toml(args.scene)
     ours = restauro_bench(args, w, h, spp)
     out = {"width": w, "height": h, "spp": spp, "samples": w * h * spp,
-           "restauro_rays_per_sample": {k: ours[k][0]["rays"] / (w * h * spp)
+           "restauro_rays_per_sample": {k: ours[k][0]["rays"]
+                                        / (w * h * spp * ours[k][0].get("repetitions", 1))
                                         for k in ("whitted", "path")}}
     cases = (("whitted", "direct", None, "whitted_vs_direct"),
              ("path", "path", None, "path_vs_path"),

@@ -5,7 +5,7 @@
 //! prepared scene's own count (what a worker's scene cache charges for it) and the process's
 //! peak resident set while reading and preparing, reset before each size (Linux).
 
-use crate::bench_tracer::process_cpu_seconds;
+use crate::bench_tracer::timed;
 use crate::cli::BenchArgs;
 use anyhow::{Context, Result};
 use restauro_render::prepared::{PreparedScene, Settings};
@@ -109,13 +109,8 @@ pub fn bench(args: &BenchArgs) -> Result<String> {
         drop(scene);
         say("tracing".into());
         let full = Rect { x: 0, y: 0, width: w as u32, height: h as u32 };
-        // Rendered again until a fifth of a CPU-second has passed: the clock ticks in 10 ms.
-        let cpu = process_cpu_seconds("self");
-        let (mut rays, mut cpu_s) = (0u64, 0.0);
-        while cpu_s < 0.2 {
-            rays += render_tile(&prepared, full, false).rays;
-            cpu_s = process_cpu_seconds("self") - cpu;
-        }
+        let threads = rayon::current_num_threads();
+        let (rays, _, _, cpu_s) = timed(threads, || render_tile(&prepared, full, false).rays)?;
         let n_log_n = |n: usize| n as f64 * (n as f64).log2();
         let (read_0, prepare_0, n_0) = sizes
             .first()

@@ -40,7 +40,10 @@ const MIN_CPU_S: f64 = 0.2;
 
 /// `f` run on `threads` threads until [`MIN_CPU_S`] of CPU time has passed: the sum of its
 /// counts, the runs, and the wall and CPU seconds.
-fn timed(threads: usize, f: impl Fn() -> u64 + Send + Sync) -> Result<(u64, u64, f64, f64)> {
+pub(crate) fn timed(
+    threads: usize,
+    f: impl Fn() -> u64 + Send + Sync,
+) -> Result<(u64, u64, f64, f64)> {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
     let (c0, t0) = (cpu_seconds(), Instant::now());
     let (mut sum, mut runs) = (0, 0);

@@ -270,7 +270,7 @@ impl PreparedScene {
         match self.smooth_of.get(slot) {
             Some(&k) if k != FLAT => {
                 let corners = &self.vertex_normals[k as usize];
-                Some(self.smooth_hit(slot, corners, (origin, direction), hit.t, normal, material))
+                Some(self.smooth_hit(slot, corners, point, hit.t, normal, material))
             }
             _ => Some(Hit { t: hit.t, point, normal, shading: normal, material }),
         }
@@ -284,14 +284,13 @@ impl PreparedScene {
         &self,
         slot: usize,
         corners: &[Vec3A; 3],
-        (origin, direction): (Vec3A, Vec3A),
+        point: Vec3A,
         t: f32,
         normal: Vec3A,
         material: u32,
     ) -> Hit {
         let tri = &self.triangles[slot];
         let vertices = [tri.v0, tri.v0 - tri.e1, tri.v0 + tri.e2];
-        let point = origin + direction * t;
         let weights = barycentric(vertices, point);
         let interpolated =
             corners[0] * weights[0] + corners[1] * weights[1] + corners[2] * weights[2];

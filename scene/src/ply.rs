@@ -34,19 +34,12 @@ fn missing(header: &Header) -> Option<(String, String)> {
     let find = |name: &str| header.elements.iter().find(|e| e.name == name);
     let vertex = find("vertex")?;
     for k in ["x", "y", "z"] {
-        let scalar = vertex
-            .properties
-            .iter()
-            .any(|p| p.name == k && matches!(p.kind, ply_layout::Kind::Scalar(_)));
-        if !scalar && vertex.count > 0 {
+        if vertex.scalar(k).is_none() && vertex.count > 0 {
             return Some(("vertex 0".into(), format!("no numeric `{k}` property")));
         }
     }
     let face = find("face")?;
-    let list = face.properties.iter().any(|p| {
-        ply_layout::is_face_list(face, p)
-            && matches!(p.kind, ply_layout::Kind::List(_, item) if item.is_integer())
-    });
+    let list = face.face_list().is_some();
     (!list && face.count > 0).then(|| ("face 0".into(), "no `vertex_indices` list".into()))
 }
 

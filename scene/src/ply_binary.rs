@@ -5,7 +5,7 @@
 //! checks missed reads as the end of the body, never as a panic.
 
 use crate::ply::Columns;
-use crate::ply_layout::{Encoding, Header, Kind, Scalar, is_face_list};
+use crate::ply_layout::{Encoding, Header, Kind, Scalar};
 
 /// Where an element's wanted values sit among its properties.
 #[derive(Default)]
@@ -18,18 +18,13 @@ struct Wanted {
 }
 
 fn wanted(e: &crate::ply_layout::Element) -> Wanted {
-    let find = |name: &str| {
-        e.properties.iter().position(|p| p.name == name && matches!(p.kind, Kind::Scalar(_)))
-    };
     let mut w = Wanted::default();
     if e.name == "vertex" {
-        w.position = ["x", "y", "z"].map(find);
-        w.normal = ["nx", "ny", "nz"].map(find);
+        w.position = ["x", "y", "z"].map(|k| e.scalar(k));
+        w.normal = ["nx", "ny", "nz"].map(|k| e.scalar(k));
     }
     if e.name == "face" {
-        w.list = e.properties.iter().position(|p| {
-            is_face_list(e, p) && matches!(p.kind, Kind::List(_, item) if item.is_integer())
-        });
+        w.list = e.face_list();
     }
     w
 }

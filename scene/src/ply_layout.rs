@@ -153,6 +153,20 @@ pub(crate) struct Element {
     line: usize,
 }
 
+impl Element {
+    /// The index of the scalar property `name`, if the element has one.
+    pub(crate) fn scalar(&self, name: &str) -> Option<usize> {
+        self.properties.iter().position(|p| p.name == name && matches!(p.kind, Kind::Scalar(_)))
+    }
+
+    /// The index of a face's list of vertex indices (of a whole-number type), if it has one.
+    pub(crate) fn face_list(&self) -> Option<usize> {
+        self.properties.iter().position(|p| {
+            is_face_list(self, p) && matches!(p.kind, Kind::List(_, item) if item.is_integer())
+        })
+    }
+}
+
 /// What the header says.
 #[derive(Clone, Debug)]
 pub(crate) struct Header {

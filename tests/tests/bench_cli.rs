@@ -3,11 +3,18 @@
 
 use restauro_tests::{aosta_scene, restauro, text};
 
+/// The JSON report of `restauro <args>`, which must succeed.
+fn report(args: &[&str]) -> serde_json::Value {
+    let o = restauro(args);
+    assert!(o.status.success(), "{}", text(&o));
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
 #[test]
 fn the_tracer_benchmark_measures_a_scene_file_at_the_size_asked_for() {
     let dir = tempfile::tempdir().unwrap();
     let scene = aosta_scene(dir.path(), 320, 240);
-    let o = restauro(&[
+    let report = report(&[
         "bench",
         "tracer",
         "--scene-file",
@@ -23,8 +30,6 @@ fn the_tracer_benchmark_measures_a_scene_file_at_the_size_asked_for() {
         "--progress",
         "none",
     ]);
-    assert!(o.status.success(), "{}", text(&o));
-    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(report["scene"], scene.as_str());
     assert_eq!((report["width"].as_u64(), report["height"].as_u64()), (Some(48), Some(32)));
     let samples = 48 * 32 * 2;
@@ -69,7 +74,7 @@ fn the_tracer_benchmark_refuses_a_missing_scene_file_by_name() {
 /// PLY files, and reports each.
 #[test]
 fn the_mesh_benchmark_reports_each_size() {
-    let o = restauro(&[
+    let report = report(&[
         "bench",
         "mesh",
         "--triangles",
@@ -83,8 +88,6 @@ fn the_mesh_benchmark_reports_each_size() {
         "--progress",
         "none",
     ]);
-    assert!(o.status.success(), "{}", text(&o));
-    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let sizes = report["sizes"].as_array().unwrap();
     assert_eq!(sizes.len(), 2);
     for (size, asked) in sizes.iter().zip([2000u64, 20000]) {

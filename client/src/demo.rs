@@ -618,7 +618,7 @@ fn floodlighting(
         .ok_or_else(|| anyhow!("the floodlit grid is missing"))?;
     let exr = f.dir.join(format!("{}.exr", f.record.job));
     let image = read_exr(&exr, usize::MAX).with_context(|| format!("reading {}", exr.display()))?;
-    let grids = grid_results(&scenes[&job.scene].grids, &image, &exr)?;
+    let grids = grid_results(&scenes[&job.scene], &image, &exr)?;
     let document =
         Document { schema: SCHEMA, scene: relative(out, &job.scene), variant: None, grids };
     let json = serde_json::to_string_pretty(&document)? + "\n";

@@ -17,8 +17,7 @@ use restauro_image::false_colour::{
     FalseColour, LEGEND_PX, Range, Scale, Unit, nice_above, picture,
 };
 use restauro_image::image_files::{MAX_PIXELS, PngPixels, XyzImage, read_exr, write_png};
-use restauro_scene::grid::ResolvedGrid;
-use restauro_scene::load::{Limits, load_scene};
+use restauro_scene::load::{Limits, LoadedScene, load_scene};
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -88,7 +87,7 @@ pub fn run(args: &IlluminanceArgs) -> Result<String> {
         schema: SCHEMA,
         scene: args.scene.display().to_string(),
         variant: args.variant.clone(),
-        grids: grid_results(&scene.grids, &image, &exr)?,
+        grids: grid_results(&scene, &image, &exr)?,
     };
     let json = serde_json::to_string_pretty(&document)? + "\n";
     let mut text = computed;
@@ -137,12 +136,10 @@ pub fn write_documents(dir: &Path, document: &Document, json: &str) -> Result<Wr
     Ok(Written { per_grid, json: json_path })
 }
 
-/// Each grid's points from the EXR's columns (row 0 direct, row 1 indirect; Y is lux).
-pub fn grid_results(
-    grids: &[ResolvedGrid],
-    image: &XyzImage,
-    exr: &Path,
-) -> Result<Vec<GridResult>> {
+/// Each grid's points from the EXR's columns (row 0 direct, row 1 indirect; Y is lux), placed
+/// in the scene file's coordinates (a georeferenced scene's `origin` added back).
+pub fn grid_results(scene: &LoadedScene, image: &XyzImage, exr: &Path) -> Result<Vec<GridResult>> {
+    let grids = &scene.grids;
     let total: usize = grids.iter().map(|g| g.points.len()).sum();
     if image.width != total || image.height != 2 {
         bail!(
@@ -164,7 +161,7 @@ pub fn grid_results(
                 let indirect_lux = image.pixels[total + column][1];
                 column += 1;
                 PointResult {
-                    position,
+                    position: restauro_scene::origin::to_file(position, scene.origin_m),
                     normal: g.normal,
                     lux: direct_lux + indirect_lux,
                     direct_lux,

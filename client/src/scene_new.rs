@@ -134,6 +134,13 @@ fn camera(bounds: [[f64; 3]; 2]) -> ([f64; 3], [f64; 3]) {
     (position, centre)
 }
 
+/// For a model far from zero (a survey in UTM), the whole metres of its centre: the scene's
+/// `origin`.
+fn survey_origin(bounds: [[f64; 3]; 2]) -> Option<[f64; 3]> {
+    let far = bounds.iter().flatten().any(|c| c.abs() > restauro_scene::mesh::ANCHOR_BEYOND_M);
+    far.then(|| std::array::from_fn(|k| (0.5 * (bounds[0][k] + bounds[1][k])).round()))
+}
+
 fn vector(v: [f64; 3]) -> String {
     format!("[{:.3}, {:.3}, {:.3}]", v[0], v[1], v[2])
 }
@@ -175,6 +182,15 @@ fn scene_text(mesh: &str, survey: &Survey, site: Option<(f64, f64)>) -> String {
          # `restauro scene check`, render it with `restauro render`; docs/scene-format.md has\n\
          # every field. World: +X east, +Y north, +Z up, metres.\nformat = 1\n"
     );
+    if let Some(origin) = survey_origin(bounds) {
+        let _ = writeln!(
+            s,
+            "# The model is in survey coordinates: positions are moved by -origin before they\n\
+             # become 32-bit numbers, so millimetres survive. Everything below stays in the\n\
+             # survey's coordinates.\norigin = {}\n",
+            vector(origin)
+        );
+    }
     let _ = writeln!(
         s,
         "[camera]\n# Framing the model ({} × {} × {} m) from its wider side; move it where a person\n\
@@ -293,6 +309,14 @@ pub fn run(args: &SceneNewArgs) -> Result<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A survey in UTM gets an origin at its centre's whole metres; a model near zero none.
+    #[test]
+    fn a_survey_far_from_zero_gets_an_origin() {
+        let utm = [[5_000_000.2, 4_000_000.0, 10.0], [5_000_040.2, 4_000_002.0, 30.0]];
+        assert_eq!(survey_origin(utm), Some([5_000_020.0, 4_000_001.0, 20.0]));
+        assert_eq!(survey_origin([[-20.0, 0.0, 0.0], [20.0, 2.0, 20.0]]), None);
+    }
 
     #[test]
     fn a_facade_is_framed_from_the_front() {

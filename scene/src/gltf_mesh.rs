@@ -16,7 +16,7 @@ use crate::load::Limits;
 use crate::mesh::{Group, Mesh, unit_or_zero};
 use crate::vrml::Viewpoint;
 use base64::Engine;
-use glam::{Mat4, Vec3};
+use glam::{DMat3, DMat4, DVec3};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 use std::path::Path;
@@ -168,7 +168,7 @@ struct Totals<'a> {
 /// A node's perspective camera as a viewpoint in the file's coordinates: glTF cameras look
 /// along their local −Z with +Y up (glTF 2.0 §3.10), as VRML's do, and `yfov` is the vertical
 /// field of view in radians. The node's scale is dropped (a camera has none).
-fn camera_viewpoint(node: &gltf::Node, world: Mat4) -> Option<Viewpoint> {
+fn camera_viewpoint(node: &gltf::Node, world: DMat4) -> Option<Viewpoint> {
     let camera = node.camera()?;
     let gltf::camera::Projection::Perspective(p) = camera.projection() else { return None };
     let (_, rotation, translation) = world.to_scale_rotation_translation();
@@ -180,7 +180,7 @@ fn camera_viewpoint(node: &gltf::Node, world: Mat4) -> Option<Viewpoint> {
     let finite = translation.is_finite() && axis.is_finite() && angle.is_finite();
     (finite && p.yfov().is_finite() && p.yfov() > 0.0).then(|| Viewpoint {
         position: translation.to_array(),
-        orientation: (axis.to_array(), angle),
+        orientation: (axis.as_vec3().to_array(), angle as f32),
         field_of_view: p.yfov(),
         description: name,
     })
@@ -188,7 +188,7 @@ fn camera_viewpoint(node: &gltf::Node, world: Mat4) -> Option<Viewpoint> {
 
 fn add_node(
     node: gltf::Node,
-    parent: Mat4,
+    parent: DMat4,
     buffers: &[Vec<u8>],
     mesh: &mut Mesh,
     path: &Path,
@@ -210,7 +210,8 @@ fn add_node(
             fix: "list each node once, or raise the limit with --max-instances".into(),
         });
     }
-    let local = Mat4::from_cols_array_2d(&node.transform().matrix());
+    // The chain of transforms in 64 bits: a survey's offset often sits in a node's translation.
+    let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
     let world = parent * local;
     totals.cameras.extend(camera_viewpoint(&node, world));
     if let Some(m) = node.mesh() {
@@ -313,18 +314,24 @@ fn add_node(
                 None => false,
             };
             // Normals go through the inverse transpose, so a non-uniform scale keeps them normal.
-            let normal_matrix = glam::Mat3::from_mat4(world).inverse().transpose();
+            let normal_matrix = DMat3::from_mat4(world).inverse().transpose();
             let reader = prim.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
             let read = guard::catch(|| {
-                let positions: Option<Vec<[f32; 3]>> = reader.read_positions().map(|ps| {
-                    ps.map(|p| world.transform_point3(Vec3::from(p)).to_array()).collect()
+                let positions: Option<Vec<[f64; 3]>> = reader.read_positions().map(|ps| {
+                    ps.map(|p| {
+                        world.transform_point3(DVec3::from_array(p.map(f64::from))).to_array()
+                    })
+                    .collect()
                 });
                 let indices: Option<Vec<u32>> =
                     reader.read_indices().map(|i| i.into_u32().collect());
                 let normals: Option<Vec<[f32; 3]>> =
                     reader.read_normals().filter(|_| has_normals).map(|ns| {
-                        ns.map(|n| unit_or_zero((normal_matrix * Vec3::from(n)).to_array()))
-                            .collect()
+                        ns.map(|n| {
+                            let n = normal_matrix * DVec3::from_array(n.map(f64::from));
+                            unit_or_zero(n.as_vec3().to_array())
+                        })
+                        .collect()
                     });
                 (positions, indices, normals)
             })
@@ -385,7 +392,9 @@ fn add_node(
                 // Without NORMAL the primitive is flat, as glTF 2.0 §3.7.2.1 says.
                 _ => shading.resize(base as usize + positions.len(), [0.0; 3]),
             }
-            mesh.positions.extend(positions);
+            for p in positions {
+                mesh.push_position(p);
+            }
             for t in indices.chunks_exact(3) {
                 let tri = if flip { [t[0], t[2], t[1]] } else { [t[0], t[1], t[2]] };
                 mesh.triangles.push(tri.map(|i| base + i));
@@ -538,7 +547,7 @@ pub fn parse_with_cameras(
     let mut mesh = Mesh::default();
     let mut totals = Totals { limits, instances: 0, cameras: Vec::new() };
     for node in scene.nodes() {
-        add_node(node, Mat4::IDENTITY, &buffers, &mut mesh, path, 0, &mut totals)?;
+        add_node(node, DMat4::IDENTITY, &buffers, &mut mesh, path, 0, &mut totals)?;
     }
     mesh.drop_flat_normals();
     Ok((mesh, totals.cameras))

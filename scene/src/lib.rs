@@ -27,6 +27,7 @@ pub mod limits;
 pub mod load;
 pub mod note_image;
 pub mod obj;
+pub mod origin;
 pub mod photometric;
 pub mod plan;
 pub mod ply;

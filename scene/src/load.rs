@@ -193,7 +193,12 @@ fn write_photometry(
 /// A scene that has passed every check.
 #[derive(Clone, Debug)]
 pub struct LoadedScene {
+    /// The file as rendered: recentred on its `origin` when it has one (then `origin` is
+    /// `None` here, and every position is relative to [`LoadedScene::origin_m`]).
     pub file: SceneFile,
+    /// What was taken out of every position (m; zero for a scene without `origin`): add it to
+    /// report a position in the file's coordinates.
+    pub origin_m: [f64; 3],
     pub camera: ResolvedCamera,
     /// Every named spectrum on the grid.
     pub spectra: BTreeMap<String, Spectrum>,
@@ -983,10 +988,15 @@ fn check_placed(ctx: &Ctx, mesh: &Mesh, place: &str, reference: &str) -> Result<
     }
 }
 
+/// Place the mesh: its file coordinates (anchor and all, in 64 bits) through `m`, which
+/// includes the scene's `origin`; the placed mesh has no anchor.
 fn transform_mesh(mesh: &mut Mesh, m: DMat4) {
+    let anchor = DVec3::from_array(mesh.anchor_m);
     for p in &mut mesh.positions {
-        *p = m.transform_point3(DVec3::from_array(p.map(f64::from))).as_vec3().to_array();
+        let in_file = anchor + DVec3::from_array(p.map(f64::from));
+        *p = m.transform_point3(in_file).as_vec3().to_array();
     }
+    mesh.anchor_m = [0.0; 3];
     let normal_matrix = DMat3::from_mat4(m).inverse().transpose();
     if let Some(normals) = &mut mesh.normals {
         for n in normals.iter_mut() {
@@ -1020,6 +1030,18 @@ fn photometry(ctx: &Ctx, reference: &Option<String>, place: &str) -> Result<Opti
 
 /// Validate and resolve a parsed scene, reading its files through `assets`.
 pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<LoadedScene> {
+    if let Some(o) = file.origin
+        && !o.iter().all(|&x| placeable(x))
+    {
+        return Err(SceneError::invalid(
+            assets.scene_path(),
+            "origin",
+            format!(
+                "{o:?} is out of range; every coordinate must be finite and within ±{MAX_COORDINATE_M:e} m"
+            ),
+        ));
+    }
+    let (file, origin_m) = crate::origin::recentre(file);
     let mut ctx = Ctx {
         path: assets.scene_path().to_owned(),
         file: &file,
@@ -1237,7 +1259,7 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
                 DVec3::from_array(axis.map(f64::from)).normalize_or(DVec3::Y),
                 f64::from(angle),
             );
-            let pos = DVec3::from_array(v.position.map(f64::from));
+            let pos = DVec3::from_array(v.position);
             let look = rot * DVec3::NEG_Z;
             let up = rot * DVec3::Y;
             let to_world = |p: DVec3| matrix.transform_point3(p);
@@ -1502,7 +1524,7 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
     }
 
     let Ctx { notes, spectra, .. } = ctx;
-    Ok(LoadedScene { camera, spectra, objects, lights, grids, notes, file })
+    Ok(LoadedScene { camera, spectra, objects, lights, grids, notes, file, origin_m })
 }
 
 /// An illuminance (sun or sky): finite, ≥ 0 and at most [`MAX_ILLUMINANCE_LUX`].

@@ -18,10 +18,20 @@ impl Group {
     }
 }
 
+/// Beyond this distance from zero (m), a file's coordinates are stored relative to an
+/// [`Mesh::anchor_m`]: a 32-bit float there still resolves 0.06 mm, where at a survey's
+/// 5 000 000 m it resolves only 0.5 m.
+pub const ANCHOR_BEYOND_M: f64 = 1000.0;
+
 /// Triangles with counter-clockwise front faces (seen from the front, in a right-handed
 /// coordinate system), in metres.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Mesh {
+    /// The point (in the file's own coordinates, m) that `positions` are relative to: zero,
+    /// unless the file is georeferenced (its first vertex beyond [`ANCHOR_BEYOND_M`]); then
+    /// the whole metres of that vertex. The scene's placement takes it back out in 64-bit
+    /// arithmetic, so survey coordinates lose nothing on the way to 32 bits.
+    pub anchor_m: [f64; 3],
     pub positions: Vec<[f32; 3]>,
     /// Per-vertex shading normals, when the file gives or implies them (same length as
     /// `positions`; unit length, or zero at a vertex that has none, whose triangles are then
@@ -50,6 +60,21 @@ impl Mesh {
                 (self.groups.len() - 1) as u32
             }
         }
+    }
+
+    /// Add a vertex given in the file's coordinates (m); the first one beyond
+    /// [`ANCHOR_BEYOND_M`] in a mesh with no vertices yet sets the anchor.
+    pub fn push_position(&mut self, p: [f64; 3]) {
+        if self.positions.is_empty() && p.iter().any(|c| c.abs() > ANCHOR_BEYOND_M) {
+            self.anchor_m = p.map(|c| if c.is_finite() { c.round() } else { 0.0 });
+        }
+        self.positions.push(std::array::from_fn(|k| (p[k] - self.anchor_m[k]) as f32));
+    }
+
+    /// A vertex in the file's coordinates (m), in 64 bits.
+    pub fn position_m(&self, i: usize) -> [f64; 3] {
+        let p = self.positions[i];
+        std::array::from_fn(|k| self.anchor_m[k] + f64::from(p[k]))
     }
 
     /// The bounding box of the vertices that triangles use; `None` for an empty mesh.
@@ -83,6 +108,9 @@ impl Mesh {
 
     /// Append another mesh, keeping group names unique (parts with the same name merge).
     pub fn append(&mut self, other: &Mesh) {
+        if self.positions.is_empty() {
+            self.anchor_m = other.anchor_m;
+        }
         let base = self.positions.len() as u32;
         let remap: Vec<u32> = other.groups.iter().map(|g| self.group_index(g.clone())).collect();
         // A part without normals keeps its flat faces beside one with them (zero normals).
@@ -96,7 +124,18 @@ impl Mesh {
             }
             (None, None) => {}
         }
-        self.positions.extend_from_slice(&other.positions);
+        if other.anchor_m == self.anchor_m {
+            self.positions.extend_from_slice(&other.positions);
+        } else {
+            // Moved onto this mesh's anchor in 64 bits.
+            let shift: [f64; 3] = std::array::from_fn(|k| other.anchor_m[k] - self.anchor_m[k]);
+            self.positions.extend(
+                other
+                    .positions
+                    .iter()
+                    .map(|p| std::array::from_fn(|k| (f64::from(p[k]) + shift[k]) as f32)),
+            );
+        }
         self.triangles.extend(other.triangles.iter().map(|t| t.map(|i| i + base)));
         self.triangle_group.extend(other.triangle_group.iter().map(|&g| remap[g as usize]));
     }

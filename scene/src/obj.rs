@@ -230,11 +230,14 @@ pub fn parse_limited(text: &str, path: &Path, limits: &Limits) -> Result<Mesh> {
         };
         let group = mesh.group_index(Group::named(group_name));
         let base = mesh.positions.len() as u32;
-        mesh.positions.extend(m.positions.chunks_exact(3).map(|p| [p[0], p[1], p[2]]));
+        for p in m.positions.chunks_exact(3) {
+            mesh.push_position([p[0], p[1], p[2]]);
+        }
         let count = m.positions.len() / 3;
         // `vn` normals where the faces give them; a part without them stays flat (zero normals).
         if m.normals.len() == m.positions.len() {
-            let unit = |n: &[f32]| crate::mesh::unit_or_zero([n[0], n[1], n[2]]);
+            // tobj reads in 64 bits (its `use_f64`), for survey coordinates.
+            let unit = |n: &[f64]| crate::mesh::unit_or_zero([n[0], n[1], n[2]].map(|c| c as f32));
             normals.extend(m.normals.chunks_exact(3).map(unit));
         } else {
             normals.resize(mesh.positions.len(), [0.0; 3]);

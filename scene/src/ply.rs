@@ -147,11 +147,14 @@ fn ascii_columns(bytes: &[u8], path: &Path) -> Result<Columns> {
 /// The mesh of the columns: each polygon a fan of triangles, its indices checked.
 fn mesh_of(c: Columns, path: &Path) -> Result<Mesh> {
     let mut mesh = Mesh {
-        positions: c.positions.iter().map(|p| p.map(|x| x as f32)).collect(),
+        positions: Vec::with_capacity(c.positions.len()),
         // nx, ny, nz (the names scanners write, as the Stanford format's examples do).
         normals: c.normals.map(|n| n.iter().map(|v| unit_or_zero(v.map(|x| x as f32))).collect()),
         ..Mesh::default()
     };
+    for &p in &c.positions {
+        mesh.push_position(p);
+    }
     mesh.drop_flat_normals();
     // One part, named as an OBJ's part without groups: not after the file, whose name a
     // bundle replaces by its hash.

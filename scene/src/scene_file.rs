@@ -60,6 +60,16 @@ pub const FORMAT: u32 = 1;
 pub struct SceneFile {
     /// The version of this schema; must be [`FORMAT`].
     pub format: u32,
+    /// A georeferenced scene's working origin (m), in the coordinates its files and positions
+    /// are given in (UTM, say): every position is moved by −origin before it is rendered, so
+    /// that millimetres survive 32-bit arithmetic far from zero (see [`crate::origin`]). Not
+    /// written when absent.
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "vec3::opt_origin"
+    )]
+    pub origin: Option<[f64; 3]>,
     pub camera: Camera,
     #[serde(default)]
     pub render: Render,

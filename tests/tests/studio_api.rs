@@ -1297,3 +1297,68 @@ fn exposure_and_false_colour_are_restauro_displays() {
         assert!(error_of(&r).contains("min_cd_m2"), "{bad}: {}", error_of(&r));
     }
 }
+
+/// A scene in survey coordinates (5 000 000 m east): the page works near zero, and what it
+/// saves goes back into the file in the survey's coordinates, the scene's `origin` included.
+#[test]
+fn a_georeferenced_scene_is_shown_near_zero_and_edited_in_survey_coordinates() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (c, _) = Coordinator::with_studio(d);
+    let s = c.studio.clone().unwrap();
+    let auth = [("Authorization", BEARER)];
+    let (e, n) = (5_000_000.25, 4_000_000.5);
+    let folder = d.join("survey");
+    std::fs::create_dir_all(&folder).unwrap();
+    let corners = [[e, n, 0.0], [e + 10.0, n, 0.0], [e + 10.0, n + 10.0, 0.0], [e, n + 10.0, 0.0]];
+    let obj: String = corners.iter().map(|[x, y, z]| format!("v {x} {y} {z}\n")).collect();
+    std::fs::write(folder.join("ground.obj"), obj + "f 1 2 3 4\n").unwrap();
+    let scene = format!(
+        "format = 1\norigin = [5000000.0, 4000000.0, 0.0]\n\
+         [camera]\nposition = [{}, {}, 1.6]\ntarget = [{}, {}, 0.0]\nwidth = 32\nheight = 18\n\
+         [spectra]\ngrey = {{ constant = 0.5 }}\nlamp = {{ illuminant = \"A\" }}\n\
+         [materials.grey]\nmodel = \"lambert\"\nreflectance = \"grey\"\n\
+         [[objects]]\nname = \"ground\"\nmesh = \"ground.obj\"\nmaterial = \"grey\"\n\
+         [[lights]]\nkind = \"point\"\nposition = [{}, {}, 3.0]\nintensity_cd = 1000.0\nspectrum = \"lamp\"\n",
+        e + 5.0,
+        n - 5.0,
+        e + 5.0,
+        n + 5.0,
+        e + 5.0,
+        n + 5.0
+    );
+    let path = folder.join("survey.toml");
+    std::fs::write(&path, scene).unwrap();
+    submit(path.to_str().unwrap(), &["--spp", "1"], &c.url, &d.join("client.token"));
+    let id = get(&s, "/api/scenes", &auth).json()[0]["id"].as_str().unwrap().to_owned();
+    let view = get(&s, &format!("/api/scenes/{id}"), &auth).json();
+    let offset: Vec<f64> = serde_json::from_value(view["offset_m"].clone()).unwrap();
+    assert!(
+        (offset[0] - 5_000_000.0).abs() < 100.0,
+        "the page's zero is in the survey: {offset:?}"
+    );
+    let camera = &view["camera"]["position"];
+    let near = (0..3).all(|k| camera[k].as_f64().unwrap().abs() < 100.0);
+    assert!(near, "the page's camera is near its zero: {camera}");
+    // The luminaires' table shows the file's own coordinates.
+    assert_eq!(view["lights"][0]["light"]["position"], serde_json::json!([e + 5.0, n + 5.0, 3.0]));
+
+    let r = request(
+        &s,
+        "POST",
+        &format!("/api/scenes/{id}/edits"),
+        &auth,
+        serde_json::json!({"edit": "save-view", "view": {"name": "corner",
+            "position": [1.0, 1.6, 8.0], "target": [1.0, 0.0, 0.0], "up": [0.0, 1.0, 0.0]}})
+        .to_string()
+        .as_bytes(),
+    );
+    assert_eq!(r.status, 200, "{}", r.text());
+    let manifest = get(&s, &format!("/api/scenes/{id}/scene.json"), &auth).json();
+    assert_eq!(manifest["origin"], serde_json::json!([5_000_000.0, 4_000_000.0, 0.0]));
+    let kept = &manifest["views"][0]["position"];
+    let want = [1.0 + offset[0], -8.0 + offset[1], 1.6 + offset[2]];
+    for (k, want) in want.iter().enumerate() {
+        assert!((kept[k].as_f64().unwrap() - want).abs() < 1e-6, "{kept} against {want:?}");
+    }
+}

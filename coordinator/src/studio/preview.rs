@@ -198,7 +198,9 @@ fn light_views(scene: &LoadedScene, offset: [f64; 3]) -> Vec<LightView> {
     for (index, light) in scene.file.lights.iter().enumerate() {
         let mut view = LightView {
             index,
-            light: light.clone(),
+            // As the file gives it: the page edits the file (a georeferenced scene's `origin`
+            // back in).
+            light: restauro_scene::origin::light_in_file(light, scene.origin_m),
             position: None,
             aim: None,
             intensity_cd: None,
@@ -278,6 +280,8 @@ pub struct SceneView {
     pub id: String,
     /// The revision shown (0: as first submitted).
     pub revision: u32,
+    /// The point of the scene file's coordinates (its `origin` included) that the GLB's zero
+    /// stands for: [`to_world`] with it turns the page's positions into the file's.
     pub offset_m: [f64; 3],
     pub triangles: usize,
     /// The triangles of the coarser copy the page draws while the view moves (0: none).
@@ -440,7 +444,8 @@ fn build(id: &str, revision: u32, scene: &LoadedScene) -> ScenePreview {
         lights: light_views(scene, offset_m),
         light_spectra: light_spectra(scene),
         preview_lights: lights.iter().map(appearance::Light::choice).collect(),
-        offset_m,
+        // The page's positions go back into the file: the scene's `origin` is part of it.
+        offset_m: restauro_scene::origin::to_file(offset_m, scene.origin_m),
         triangles,
         coarse_triangles,
         camera,

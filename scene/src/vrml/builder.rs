@@ -233,7 +233,7 @@ impl Builder<'_> {
             ));
         }
         self.viewpoints.push(Viewpoint {
-            position: p.map(|c| c as f32),
+            position: p,
             orientation: (axis.map(|c| c as f32), angle as f32),
             field_of_view: fov as f32,
             description,
@@ -373,7 +373,7 @@ impl Builder<'_> {
                 ));
             }
             let n = normalized(apply_linear(&normal_m, n)).unwrap_or(n);
-            self.mesh.positions.push(p.map(|c| c as f32));
+            self.mesh.push_position(p);
             if let Some(normals) = &mut self.mesh.normals {
                 normals.push(n.map(|c| c as f32));
             }

@@ -75,7 +75,8 @@ use parser::Parser;
 /// A camera of the file (§6.53), in the file's root coordinate system.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Viewpoint {
-    pub position: [f32; 3],
+    /// In the file's coordinates, in 64 bits (a georeferenced world's are in the millions).
+    pub position: [f64; 3],
     /// Axis (unit length) and angle in radians, rotating the default view direction (−Z, with
     /// +Y up).
     pub orientation: ([f32; 3], f32),

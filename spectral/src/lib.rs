@@ -17,6 +17,7 @@
 //! | [`ciede2000`] | the CIEDE2000 colour difference |
 //! | [`adaptation`] | chromatic adaptation: von Kries, Bradford, CAT02 |
 //! | [`rgb_space`] | display RGB spaces from primaries: sRGB, Display P3, Rec. 2020, Adobe RGB |
+//! | [`rgb_upsampling`] | linear sRGB reflectance → smooth spectrum, after Jakob & Hanika (2019) |
 //! | [`photometry`] | the paper's Eq. 2 and Eq. 8, and distant sources in lux |
 //! | [`keyed_random`] | random numbers that are pure functions of a key |
 //! | [`retinex`] | the Marini–Rizzi Brownian-path Retinex |
@@ -41,6 +42,7 @@ pub mod photometry;
 pub mod planck;
 pub mod retinex;
 pub mod rgb_space;
+pub mod rgb_upsampling;
 pub mod spectrum;
 pub mod tabulated;
 pub mod tone;

@@ -97,9 +97,16 @@ impl RgbSpace {
     /// The matrix from linear RGB to XYZ (Y = 1 for white): the columns are the primaries' XYZ,
     /// each scaled so that R = G = B = 1 gives the white point (SMPTE RP 177-1993 §3.3).
     pub fn rgb_to_xyz(self) -> DMat3 {
+        self.rgb_to_xyz_with_white(self.white())
+    }
+
+    /// The matrix from linear RGB to XYZ for these primaries with another white: R = G = B = 1
+    /// gives `white`, on its scale. For a white that the standard rounds (sRGB's D65 is
+    /// x = 0.3127, y = 0.3290) but a computation sums exactly, e.g. D65 over restauro's grid.
+    pub fn rgb_to_xyz_with_white(self, white: Xyz) -> DMat3 {
         let [r, g, b] = self.primaries().map(|p| to_vec(p.to_xyz(1.0)));
         let unscaled = DMat3::from_cols(r, g, b);
-        let s = unscaled.inverse() * to_vec(self.white());
+        let s = unscaled.inverse() * to_vec(white);
         DMat3::from_cols(r * s.x, g * s.y, b * s.z)
     }
 

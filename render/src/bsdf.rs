@@ -94,8 +94,15 @@ impl Bsdf {
     /// f(wo, wi), spectral, in sr⁻¹.
     #[inline]
     pub fn eval(&self, wo: Vec3A, wi: Vec3A) -> Spectrum {
+        self.eval_with(self.rho(), wo, wi)
+    }
+
+    /// f(wo, wi) with the diffuse reflectance `rho` in place of the material's own: its value
+    /// at a point of a textured surface ([`crate::prepared::PreparedScene::reflectance`]).
+    #[inline]
+    pub fn eval_with(&self, rho: &Spectrum, wo: Vec3A, wi: Vec3A) -> Spectrum {
         let (a, b) = self.parts(wo, wi);
-        let mut f = *self.rho() * a;
+        let mut f = *rho * a;
         if b != 0.0 {
             f += b;
         }

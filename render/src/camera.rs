@@ -43,6 +43,12 @@ impl Camera {
         }
     }
 
+    /// The angle (rad) one pixel subtends at the image's centre: a pixel's ray cone widens by
+    /// this much per metre travelled (texture filtering, [`crate::texture`]).
+    pub fn pixel_spread(&self) -> f32 {
+        self.y_per_px
+    }
+
     /// The unit direction through the image point (px, py) in pixels from the top-left corner.
     #[inline]
     pub fn direction(&self, px: f32, py: f32) -> Vec3A {

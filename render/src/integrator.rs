@@ -133,6 +133,8 @@ struct Vertex<'a> {
     hit: &'a Hit,
     frame: Frame,
     wo: Vec3A,
+    /// The diffuse reflectance there (a textured surface's varies from point to point).
+    rho: &'a Spectrum,
 }
 
 impl Weight<'_> {
@@ -215,7 +217,7 @@ fn add_direct(
             continue;
         }
         let k = inc.scale * cos;
-        weight.add_through(&through, out, inc.spectrum, bsdf.rho(), (a * k, b * k));
+        weight.add_through(&through, out, inc.spectrum, v.rho, (a * k, b * k));
         if let Some(lux) = lit.as_deref_mut() {
             lux[i.min(LIT_BITS - 1)] += inc.illuminance_lux * cos * through.mean();
         }
@@ -253,7 +255,7 @@ fn add_sky(
             continue;
         }
         let k = sample.luminance_cd_m2 * sample.weight;
-        weight.add_through(&through, out, &sky.per_nit, bsdf.rho(), (a * k, b * k));
+        weight.add_through(&through, out, &sky.per_nit, v.rho, (a * k, b * k));
     }
 }
 
@@ -326,6 +328,11 @@ pub fn trace(
     // far was glass, so what the ray meets is what the camera sees.
     let mut counts = escape == Escape::SeesSky;
     let mut view = true;
+    // The width of the ray's cone (a pixel's, widening with the distance travelled), for the
+    // filtering of photo textures; and where a textured surface's reflectance is put.
+    let spread = scene.camera.pixel_spread();
+    let mut travelled_m = 0.0f32;
+    let mut textured_rho = Spectrum::ZERO;
     for depth in 0..max_depth {
         *rays += 1;
         let hit = scene.intersect(origin, direction, f32::INFINITY);
@@ -348,6 +355,7 @@ pub fn trace(
             }
             return Seen { sky: view, lit_by: lit_mask(&lux) };
         };
+        travelled_m += hit.t;
         let bsdf = &scene.materials[hit.material as usize];
         // Panes are flat: glass keeps the geometric normal; other surfaces shade by theirs.
         let is_glass = matches!(bsdf, Bsdf::Glass(_));
@@ -370,8 +378,12 @@ pub fn trace(
             }
             continue;
         }
+        // The cone's width over a slanted surface: w/√|cos θ| (the mean of its two axes).
+        let footprint_m = spread * travelled_m / wo.z.abs().max(0.01).sqrt();
+        let rho = scene.reflectance(&hit, footprint_m, &mut textured_rho);
         let lit = view.then_some(&mut lux);
-        add_direct(scene, &Vertex { hit: &hit, frame, wo }, through, sampler, rays, out, lit);
+        let vertex = Vertex { hit: &hit, frame, wo, rho };
+        add_direct(scene, &vertex, through, sampler, rays, out, lit);
         (counts, view) = (false, false);
         if depth + 1 == max_depth {
             break;
@@ -391,7 +403,7 @@ pub fn trace(
             Integrator::Path => {
                 let (u, u1, u2) = (sampler.next_1d(), sampler.next_1d(), sampler.next_1d());
                 let Some((wi, pdf)) = bsdf.sample(wo, u, u1, u2) else { break };
-                let f = bsdf.eval(wo, wi) * (wi.z / pdf);
+                let f = bsdf.eval_with(rho, wo, wi) * (wi.z / pdf);
                 let throughput = match &mut spectral {
                     Some(t) => {
                         *t *= f;

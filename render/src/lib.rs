@@ -1,7 +1,7 @@
 //! restauro-render: the spectral tracer as a library — scene preparation with a CWBVH
 //! ([`prepared`]), the pinhole [`camera`], keyed [`sampler`], the [`bsdf`]s, photometric
-//! [`light`]s and the [`sky`], the Whitted and path [`integrator`]s, the calculation grids' [`sensor`]s and
-//! [`tile`] rendering. It knows nothing of the network: the worker process and `restauro render
+//! [`light`]s and the [`sky`], the Whitted and path [`integrator`]s, the calculation grids' [`sensor`]s, photo
+//! [`texture`]s as detail over measured spectra, and [`tile`] rendering. It knows nothing of the network: the worker process and `restauro render
 //! --in-process` both call it.
 
 pub mod bsdf;
@@ -14,4 +14,5 @@ pub mod sampler;
 pub mod sensor;
 pub mod sky;
 pub mod spherical_rectangle;
+pub mod texture;
 pub mod tile;

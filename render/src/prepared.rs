@@ -9,7 +9,8 @@ use crate::light::{Distribution, Light, Panel};
 use crate::sampler::Strata;
 use crate::sensor::Sensor;
 use crate::sky::Sky;
-use glam::Vec3A;
+use crate::texture::{Detail, Pyramid, TexturePoint, TexturedTriangle};
+use glam::{Vec2, Vec3A};
 use obvhs::BvhBuildParams;
 use obvhs::cwbvh::CwBvh;
 use obvhs::ray::{Ray, RayHit};
@@ -17,7 +18,7 @@ use obvhs::rt_triangle::RtTriangle;
 use obvhs::triangle::Triangle;
 use restauro_scene::load::{LoadedScene, ResolvedLight};
 use restauro_scene::plan::Plan;
-use restauro_scene::scene_file::{Integrator, MaterialModel, Transmittance};
+use restauro_scene::scene_file::{Detail as DetailKind, Integrator, MaterialModel, Transmittance};
 use restauro_spectral::Spectrum;
 use restauro_spectral::grid::BANDS;
 use restauro_spectral::photometry::LuminousSpectrum;
@@ -74,6 +75,14 @@ pub struct PreparedScene {
     vertex_normals: Vec<[Vec3A; 3]>,
     material_of: Vec<u32>,
     pub materials: Vec<Bsdf>,
+    /// Per material, its photo texture as detail over its reflectance, if it has one.
+    details: Vec<Option<Detail>>,
+    /// Per triangle in BVH order, its index in `textured`, or [`FLAT`]; empty when no
+    /// triangle carries a texture.
+    texture_of: Vec<u32>,
+    textured: Vec<TexturedTriangle>,
+    /// The photos' pyramids, held once however many materials share one.
+    pyramids: Vec<Pyramid>,
     pub lights: Vec<Light>,
     /// The sky, sampled over the hemisphere (at most one: the loader refuses two).
     pub sky: Option<Sky>,
@@ -100,6 +109,8 @@ pub struct Hit {
     /// the geometric normal on a flat triangle.
     pub shading: Vec3A,
     pub material: u32,
+    /// Where the hit falls on its material's photo, on a textured triangle.
+    pub texture: Option<TexturePoint>,
 }
 
 impl PreparedScene {
@@ -129,6 +140,8 @@ impl PreparedScene {
         let mut tris = Vec::new();
         let mut material_of = Vec::new();
         let mut smooth = Vec::new();
+        let mut photos = Photos::default();
+        let mut textured = Vec::new();
         for o in &scene.objects {
             let m = &o.mesh;
             let group_bsdf: Vec<u32> = m
@@ -142,6 +155,7 @@ impl PreparedScene {
                         .to_owned();
                     *index.entry((name.clone(), state.clone())).or_insert_with(|| {
                         materials.push(bsdf(scene, name, &state));
+                        photos.add_material(scene, name, &state);
                         (materials.len() - 1) as u32
                     })
                 })
@@ -158,6 +172,10 @@ impl PreparedScene {
                 let normals = m.normals.as_ref().filter(|_| !pane);
                 if let Some(corners) = normals.and_then(|n| smooth_normals(n, t, [a, b, c])) {
                     smooth.push((tris.len() as u32 - 1, corners));
+                }
+                let bsdf_index = group_bsdf[g as usize];
+                if let Some(t) = photos.triangle(bsdf_index, m, t, [a, b, c]) {
+                    textured.push((tris.len() as u32 - 1, t));
                 }
             }
         }
@@ -182,6 +200,8 @@ impl PreparedScene {
             .collect();
         let material_of: Vec<u32> = order.iter().map(|&i| material_of[i as usize]).collect();
         let (smooth_of, vertex_normals) = in_bvh_order(&smooth, order);
+        let (texture_of, textured) = in_bvh_order(&textured, order);
+        let (details, pyramids) = photos.details();
         let mut lights = Vec::new();
         let mut sky = None;
         for l in &scene.lights {
@@ -226,6 +246,10 @@ impl PreparedScene {
             vertex_normals,
             material_of,
             materials,
+            details,
+            texture_of,
+            textured,
+            pyramids,
             lights,
             sky,
         })
@@ -250,6 +274,9 @@ impl PreparedScene {
             + self.vertex_normals.len() * size_of::<[Vec3A; 3]>()
             + self.material_of.len() * size_of::<u32>()
             + self.materials.len() * size_of::<Bsdf>()
+            + self.texture_of.len() * size_of::<u32>()
+            + self.textured.len() * size_of::<TexturedTriangle>()
+            + self.pyramids.iter().map(|p| p.memory_bytes()).sum::<usize>()
             + self.lights.iter().map(Light::memory_bytes).sum::<usize>()
             + self.sensors.len() * size_of::<Sensor>()
     }
@@ -267,12 +294,47 @@ impl PreparedScene {
         let normal = if n.dot(direction) > 0.0 { -n } else { n };
         let point = origin + direction * hit.t;
         let material = self.material_of[slot];
+        let texture = match self.texture_of.get(slot) {
+            Some(&k) if k != FLAT => Some(self.texture_point(slot, k, point)),
+            _ => None,
+        };
         match self.smooth_of.get(slot) {
             Some(&k) if k != FLAT => {
                 let corners = &self.vertex_normals[k as usize];
-                Some(self.smooth_hit(slot, corners, point, hit.t, normal, material))
+                let mut hit = self.smooth_hit(slot, corners, point, hit.t, normal, material);
+                hit.texture = texture;
+                Some(hit)
             }
-            _ => Some(Hit { t: hit.t, point, normal, shading: normal, material }),
+            _ => Some(Hit { t: hit.t, point, normal, shading: normal, material, texture }),
+        }
+    }
+
+    /// The texture coordinates of a hit on textured triangle `slot`. Out of line: untextured
+    /// scenes never come here.
+    #[inline(never)]
+    fn texture_point(&self, slot: usize, k: u32, point: Vec3A) -> TexturePoint {
+        let tri = &self.triangles[slot];
+        let weights = barycentric([tri.v0, tri.v0 - tri.e1, tri.v0 + tri.e2], point);
+        self.textured[k as usize].at(weights)
+    }
+
+    /// The diffuse reflectance at a hit: its material's own, or on a textured surface that
+    /// spectrum under the photo's detail there, filtered over `footprint_m` (the width of the
+    /// ray's cone on the surface). `buffer` holds the latter.
+    #[inline]
+    pub fn reflectance<'a>(
+        &'a self,
+        hit: &Hit,
+        footprint_m: f32,
+        buffer: &'a mut Spectrum,
+    ) -> &'a Spectrum {
+        let own = self.materials[hit.material as usize].rho();
+        match (&self.details[hit.material as usize], hit.texture) {
+            (Some(detail), Some(at)) => {
+                detail.reflectance(own, at, footprint_m, buffer);
+                buffer
+            }
+            _ => own,
         }
     }
 
@@ -300,7 +362,7 @@ impl PreparedScene {
         let shading = (interpolated * side).normalize_or(normal);
         let facing = corners.map(|n| n * side);
         let point = terminator_point(vertices, facing, weights, point);
-        Hit { t, point, normal, shading, material }
+        Hit { t, point, normal, shading, material, texture: None }
     }
 
     /// The nearest area luminaire the ray meets before `tmax`, and whether on its emitting
@@ -382,6 +444,70 @@ impl PreparedScene {
             .map(|t| t.intersect(&ray))
             .filter(|t| t.is_finite())
             .min_by(f32::total_cmp)
+    }
+}
+
+/// The photo textures of the materials being prepared: a pyramid per photo and kind of detail,
+/// and per material the mean of its photo over the surfaces it covers (area-weighted; each
+/// triangle sampled at 16 points spread over it, on the level where it spans about 4 × 4
+/// texels).
+#[derive(Default)]
+struct Photos {
+    pyramids: BTreeMap<(String, DetailKind), Pyramid>,
+    /// Per material (in the order of `materials`): its photo, Σ area·colour, Σ area.
+    of_material: Vec<Option<(Pyramid, [f64; 3], f64)>>,
+}
+
+impl Photos {
+    fn add_material(&mut self, scene: &LoadedScene, name: &str, state: &str) {
+        let m = &scene.file.materials[name];
+        let kind = m.detail.unwrap_or_default();
+        let photo = m.texture_of(state).and_then(|reference| {
+            let texture = scene.textures.get(reference)?;
+            let key = (reference.clone(), kind);
+            Some(self.pyramids.entry(key).or_insert_with(|| Pyramid::new(texture, kind)).clone())
+        });
+        self.of_material.push(photo.map(|p| (p, [0.0; 3], 0.0)));
+    }
+
+    /// A triangle of material `bsdf` as a textured one, when its material has a photo (the
+    /// loader made sure its vertices have texture coordinates).
+    fn triangle(
+        &mut self,
+        bsdf: u32,
+        mesh: &restauro_scene::mesh::Mesh,
+        t: &[u32; 3],
+        [a, b, c]: [Vec3A; 3],
+    ) -> Option<TexturedTriangle> {
+        let (pyramid, sum, sum_area) = self.of_material.get_mut(bsdf as usize)?.as_mut()?;
+        let texcoords = mesh.texcoords.as_ref()?;
+        let uv = t.map(|i| Vec2::from(texcoords[i as usize]));
+        let area_m2 = 0.5 * (b - a).cross(c - a).length();
+        let triangle = TexturedTriangle::new(uv, area_m2, pyramid.size());
+        let lod = (triangle.whole_level(pyramid.size()) - 2.0).max(0.0);
+        let points = TexturedTriangle::spread_points();
+        let weight = f64::from(area_m2) / points.len() as f64;
+        for w in points {
+            let colour = pyramid.colour(triangle.at(w).uv, lod);
+            (0..3).for_each(|k| sum[k] += f64::from(colour[k]) * weight);
+        }
+        *sum_area += f64::from(area_m2);
+        Some(triangle)
+    }
+
+    /// Each material's detail, and the pyramids to account for.
+    fn details(self) -> (Vec<Option<Detail>>, Vec<Pyramid>) {
+        let details = self
+            .of_material
+            .into_iter()
+            .map(|photo| {
+                let (pyramid, sum, sum_area) = photo?;
+                // A photo on no surface has no mean, and no detail to give.
+                (sum_area > 0.0).then_some(())?;
+                pyramid.detail(sum.map(|c| (c / sum_area) as f32))
+            })
+            .collect();
+        (details, self.pyramids.into_values().collect())
     }
 }
 
@@ -516,9 +642,10 @@ fn smooth_normals(normals: &[[f32; 3]], t: &[u32; 3], v: [Vec3A; 3]) -> Option<[
     (!flat).then_some(corners)
 }
 
-/// The smooth triangles' vertex normals (by triangle, in the meshes' order) as per-triangle
-/// indices in BVH order into a list of them; both empty when every triangle is flat.
-fn in_bvh_order(smooth: &[(u32, [Vec3A; 3])], order: &[u32]) -> (Vec<u32>, Vec<[Vec3A; 3]>) {
+/// Per-triangle attributes of some triangles (the smooth ones' vertex normals, the textured
+/// ones' coordinates; by triangle, in the meshes' order) as per-triangle indices in BVH order
+/// into a list of them ([`FLAT`] for a triangle without); both empty when no triangle has one.
+fn in_bvh_order<T: Copy>(smooth: &[(u32, T)], order: &[u32]) -> (Vec<u32>, Vec<T>) {
     if smooth.is_empty() {
         return (Vec::new(), Vec::new());
     }

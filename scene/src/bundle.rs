@@ -121,6 +121,16 @@ impl Bundle {
                 out.push((format!("spectra.{name}"), file));
             }
         }
+        for (name, m) in &mut scene.materials {
+            if let Some(t) = &mut m.texture {
+                out.push((format!("materials.{name}.texture"), t));
+            }
+            for (state, o) in [("degraded", &mut m.degraded), ("cleaned", &mut m.cleaned)] {
+                if let Some(t) = o.as_mut().and_then(|o| o.texture.as_mut()) {
+                    out.push((format!("materials.{name}.{state}.texture"), t));
+                }
+            }
+        }
         for (i, o) in scene.objects.iter_mut().enumerate() {
             out.push((format!("objects[{i}].mesh"), &mut o.mesh));
         }

@@ -313,6 +313,21 @@ fn add_node(
                 )?,
                 None => false,
             };
+            let has_texcoords = match prim.get(&gltf::Semantic::TexCoords(0)) {
+                Some(a) => check_accessor(
+                    &a,
+                    buffers,
+                    path,
+                    "TEXCOORD_0",
+                    &[
+                        (DataType::F32, Dimensions::Vec2),
+                        (DataType::U8, Dimensions::Vec2),
+                        (DataType::U16, Dimensions::Vec2),
+                    ],
+                    "VEC2 of float, or of normalized unsigned byte or short",
+                )?,
+                None => false,
+            };
             // Normals go through the inverse transpose, so a non-uniform scale keeps them normal.
             let normal_matrix = DMat3::from_mat4(world).inverse().transpose();
             let reader = prim.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
@@ -333,10 +348,14 @@ fn add_node(
                         })
                         .collect()
                     });
-                (positions, indices, normals)
+                let texcoords: Option<Vec<[f32; 2]>> = reader
+                    .read_tex_coords(0)
+                    .filter(|_| has_texcoords)
+                    .map(|t| t.into_f32().collect());
+                (positions, indices, normals, texcoords)
             })
             .map_err(|_| SceneError::invalid(path, place(), guard::gave_up("glTF")))?;
-            let (Some(positions), indices, normals) = read else {
+            let (Some(positions), indices, normals, texcoords) = read else {
                 return Err(SceneError::invalid(
                     path,
                     place(),
@@ -391,6 +410,11 @@ fn add_node(
                 Some(n) if n.len() == positions.len() => shading.extend(n),
                 // Without NORMAL the primitive is flat, as glTF 2.0 §3.7.2.1 says.
                 _ => shading.resize(base as usize + positions.len(), [0.0; 3]),
+            }
+            let uv = mesh.texcoords.get_or_insert_with(Vec::new);
+            match texcoords {
+                Some(t) if t.len() == positions.len() => uv.extend(t),
+                _ => uv.resize(base as usize + positions.len(), [f32::NAN; 2]),
             }
             for p in positions {
                 mesh.push_position(p);

@@ -37,6 +37,7 @@ pub mod relief;
 pub mod samples;
 pub mod scene_file;
 pub mod sky_shape;
+pub mod texture;
 pub mod upright;
 pub mod vertex_clustering;
 pub mod vrml;

@@ -199,6 +199,8 @@ pub struct LoadedScene {
     /// What was taken out of every position (m; zero for a scene without `origin`): add it to
     /// report a position in the file's coordinates.
     pub origin_m: [f64; 3],
+    /// The materials' photo textures, decoded, by their reference in the file.
+    pub textures: BTreeMap<String, std::sync::Arc<crate::texture::Texture>>,
     pub camera: ResolvedCamera,
     /// Every named spectrum on the grid.
     pub spectra: BTreeMap<String, Spectrum>,
@@ -1112,6 +1114,8 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
         }
     }
 
+    let textures = load_textures(&ctx, limits)?;
+
     // Objects.
     let mut objects: Vec<LoadedObject> = Vec::new();
     let mut viewpoints: BTreeMap<String, (Vec<vrml::Viewpoint>, DMat4)> = BTreeMap::new();
@@ -1179,6 +1183,22 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
                 return Err(ctx.invalid(
                     &place,
                     unknown("material", material, file.materials.keys().map(String::as_str)),
+                ));
+            }
+            let textured = file.materials[material].texture_of("base").is_some()
+                || ["degraded", "cleaned"]
+                    .iter()
+                    .any(|st| file.materials[material].texture_of(st).is_some());
+            let group = group_materials.len() as u32;
+            if textured && !mesh.group_has_texcoords(group) {
+                return Err(ctx.invalid(
+                    &place,
+                    format!(
+                        "part `{}` of `{}` has no texture coordinates (OBJ `vt`, glTF TEXCOORD_0), \
+                         but its material `{material}` has a texture; export the model with its \
+                         texture coordinates, or take the texture off the material",
+                        g.name, o.mesh
+                    ),
                 ));
             }
             group_materials.push(material.clone());
@@ -1524,7 +1544,48 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
     }
 
     let Ctx { notes, spectra, .. } = ctx;
-    Ok(LoadedScene { camera, spectra, objects, lights, grids, notes, file, origin_m })
+    Ok(LoadedScene { camera, spectra, objects, lights, grids, notes, file, origin_m, textures })
+}
+
+/// Every material's photo textures (the base one and the states'), decoded once each.
+fn load_textures(
+    ctx: &Ctx,
+    limits: &Limits,
+) -> Result<BTreeMap<String, std::sync::Arc<crate::texture::Texture>>> {
+    let mut out = BTreeMap::new();
+    for (name, m) in &ctx.file.materials {
+        let states = [("", m.texture.as_ref())].into_iter().chain(
+            [("degraded", &m.degraded), ("cleaned", &m.cleaned)]
+                .map(|(st, o)| (st, o.as_ref().and_then(|o| o.texture.as_ref()))),
+        );
+        for (state, reference) in states {
+            let Some(reference) = reference else { continue };
+            let place = match state {
+                "" => format!("materials.{name}.texture"),
+                s => format!("materials.{name}.{s}.texture"),
+            };
+            if m.model == MaterialModel::Glass {
+                return Err(
+                    ctx.invalid(place, "glass takes no texture; give it to the stone behind")
+                );
+            }
+            if out.contains_key(reference) {
+                continue;
+            }
+            let ext = extension(reference);
+            if !crate::texture::EXTENSIONS.contains(&ext.as_str()) {
+                return Err(ctx.invalid(
+                    place,
+                    format!("`{reference}`: `.{ext}` is not an image restauro reads; use a PNG or JPEG file"),
+                ));
+            }
+            let bytes = ctx.assets.read(reference, &place)?;
+            let shown = ctx.assets.display_path(reference);
+            let texture = crate::texture::decode(&bytes, &ext, &shown, limits.max_pixels)?;
+            out.insert(reference.clone(), std::sync::Arc::new(texture));
+        }
+    }
+    Ok(out)
 }
 
 /// An illuminance (sun or sky): finite, ≥ 0 and at most [`MAX_ILLUMINANCE_LUX`].

@@ -37,6 +37,10 @@ pub struct Mesh {
     /// `positions`; unit length, or zero at a vertex that has none, whose triangles are then
     /// shaded flat).
     pub normals: Option<Vec<[f32; 3]>>,
+    /// Per-vertex texture coordinates when the file gives them (same length as `positions`),
+    /// in glTF's convention: (0, 0) the image's top-left corner, v downwards (OBJ's v, which
+    /// counts from the bottom, is turned over as it is read). NaN at a vertex that has none.
+    pub texcoords: Option<Vec<[f32; 2]>>,
     pub triangles: Vec<[u32; 3]>,
     /// For each triangle, its index in `groups`.
     pub triangle_group: Vec<u32>,
@@ -99,11 +103,26 @@ impl Mesh {
         out
     }
 
-    /// Forget the normals when no vertex has one: the mesh is flat.
+    /// Forget the normals when no vertex has one: the mesh is flat. The same for texture
+    /// coordinates.
     pub fn drop_flat_normals(&mut self) {
         if self.normals.as_ref().is_some_and(|n| n.iter().all(|v| *v == [0.0; 3])) {
             self.normals = None;
         }
+        if self.texcoords.as_ref().is_some_and(|t| t.iter().all(|uv| uv[0].is_nan())) {
+            self.texcoords = None;
+        }
+    }
+
+    /// Whether every vertex of every triangle of group `group` has texture coordinates.
+    pub fn group_has_texcoords(&self, group: u32) -> bool {
+        let Some(uv) = &self.texcoords else { return false };
+        let finite = |i: u32| uv[i as usize].iter().all(|c| c.is_finite());
+        self.triangles
+            .iter()
+            .zip(&self.triangle_group)
+            .filter(|(_, g)| **g == group)
+            .all(|(t, _)| t.iter().all(|&i| finite(i)))
     }
 
     /// Append another mesh, keeping group names unique (parts with the same name merge).
@@ -121,6 +140,18 @@ impl Mesh {
                 let mut a = vec![[0.0; 3]; self.positions.len()];
                 a.extend_from_slice(b);
                 self.normals = Some(a);
+            }
+            (None, None) => {}
+        }
+        // A part without texture coordinates beside one with them: NaN, none.
+        let none = [f32::NAN; 2];
+        match (&mut self.texcoords, &other.texcoords) {
+            (Some(a), Some(b)) => a.extend_from_slice(b),
+            (Some(a), None) => a.resize(a.len() + other.positions.len(), none),
+            (None, Some(b)) => {
+                let mut a = vec![none; self.positions.len()];
+                a.extend_from_slice(b);
+                self.texcoords = Some(a);
             }
             (None, None) => {}
         }

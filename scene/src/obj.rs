@@ -221,6 +221,7 @@ pub fn parse_limited(text: &str, path: &Path, limits: &Limits) -> Result<Mesh> {
     })?;
     let mut mesh = Mesh::default();
     let mut normals: Vec<[f32; 3]> = Vec::new();
+    let mut texcoords: Vec<[f32; 2]> = Vec::new();
     for model in &models {
         let m = &model.mesh;
         let group_name = match m.material_id {
@@ -242,6 +243,13 @@ pub fn parse_limited(text: &str, path: &Path, limits: &Limits) -> Result<Mesh> {
         } else {
             normals.resize(mesh.positions.len(), [0.0; 3]);
         }
+        // `vt` where the faces give them, v turned to count from the top (glTF's convention).
+        if m.texcoords.len() == 2 * count {
+            let uv = m.texcoords.chunks_exact(2).map(|t| [t[0] as f32, (1.0 - t[1]) as f32]);
+            texcoords.extend(uv);
+        } else {
+            texcoords.resize(mesh.positions.len(), [f32::NAN; 2]);
+        }
         for t in m.indices.chunks_exact(3) {
             if t.iter().any(|&i| i as usize >= count) {
                 return Err(SceneError::invalid(
@@ -255,6 +263,7 @@ pub fn parse_limited(text: &str, path: &Path, limits: &Limits) -> Result<Mesh> {
         }
     }
     mesh.normals = Some(normals);
+    mesh.texcoords = Some(texcoords);
     mesh.drop_flat_normals();
     Ok(mesh)
 }

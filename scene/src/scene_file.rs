@@ -326,6 +326,19 @@ pub struct MixPart {
     pub weight: f64,
 }
 
+/// How a material's photo texture varies its measured reflectance ρₘ(λ) (a photo carries the
+/// light it was taken under and an unknown white balance, so it is used relatively).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Detail {
+    /// ρ(λ, x) = ρₘ(λ)·Y(x)/Ȳ, at most 1: the photo's lightness only.
+    #[default]
+    Luminance,
+    /// ρ(λ, x) = ρₘ(λ)·S_x(λ)/S̄(λ), at most 1, with S_x and S̄ smooth spectra fitted to the
+    /// texel's colour and to the mean colour (Jakob & Hanika 2019): stains keep their hue.
+    Chromatic,
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum MaterialModel {
@@ -360,6 +373,15 @@ pub struct Material {
     /// … the index of refraction n, from which F0 = ((n − 1)/(n + 1))².
     #[serde(default)]
     pub ior: Option<f64>,
+    /// A photo of the surface (PNG or JPEG), laid on by the mesh's texture coordinates: not a
+    /// colour but a relative detail map over `reflectance` (see `detail`). Not written when
+    /// absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub texture: Option<String>,
+    /// How `texture` varies the measured reflectance: `luminance` (the default) or `chromatic`.
+    /// Not written when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub detail: Option<Detail>,
     /// The surface as found (soiled, weathered).
     #[serde(default)]
     pub degraded: Option<SurfaceOverride>,
@@ -369,6 +391,11 @@ pub struct Material {
 }
 
 impl Material {
+    /// The photo texture of `state`: the state's own, or the base one.
+    pub fn texture_of(&self, state: &str) -> Option<&String> {
+        self.state(state).and_then(|o| o.texture.as_ref()).or(self.texture.as_ref())
+    }
+
     /// The fields that `state` changes: `None` for `base`, and for a state the material does
     /// not define (it then keeps its base surface).
     pub fn state(&self, state: &str) -> Option<&SurfaceOverride> {
@@ -391,6 +418,10 @@ impl Material {
 pub struct SurfaceOverride {
     #[serde(default)]
     pub reflectance: Option<String>,
+    /// The state's own photo (the soiled stone photographed as found), in place of the base
+    /// one. Not written when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub texture: Option<String>,
     #[serde(default)]
     pub roughness: Option<f64>,
     #[serde(default)]

@@ -339,6 +339,39 @@ spectrum = "light"
 
 const QUAD_OBJ: &str = "v 0 0 0\nv 1 0 0\nv 1 0 1\nv 0 0 1\nf 1 2 3 4\n";
 
+/// The quad with texture coordinates, for the photo textures.
+const TEXTURED_QUAD_OBJ: &str =
+    "v 0 0 0\nv 1 0 0\nv 1 0 1\nv 0 0 1\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nf 1/1 2/2 3/3 4/4\n";
+
+/// Photo textures: small PNGs of every colour type and depth, and a JPEG made by Pillow.
+fn texture_seeds(extension: &str) -> Vec<(String, Vec<u8>)> {
+    if extension == "jpg" {
+        return vec![("gradient.jpg".into(), read("scene/tests/data/texture/gradient.jpg"))];
+    }
+    let kinds = [
+        (png::ColorType::Rgb, png::BitDepth::Eight, 3),
+        (png::ColorType::Rgba, png::BitDepth::Sixteen, 8),
+        (png::ColorType::Grayscale, png::BitDepth::Eight, 1),
+        (png::ColorType::GrayscaleAlpha, png::BitDepth::Eight, 2),
+    ];
+    kinds
+        .iter()
+        .map(|&(colour, depth, bytes_per_texel)| {
+            let mut out = Vec::new();
+            {
+                let mut encoder = png::Encoder::new(&mut out, 5, 3);
+                encoder.set_color(colour);
+                encoder.set_depth(depth);
+                let mut w = encoder.write_header().unwrap();
+                let data: Vec<u8> =
+                    (0..15 * bytes_per_texel).map(|i| (i * 37 % 251) as u8).collect();
+                w.write_image_data(&data).unwrap();
+            }
+            (format!("{colour:?}-{depth:?}.png"), out)
+        })
+        .collect()
+}
+
 fn obj_seeds() -> Vec<(String, Vec<u8>)> {
     let board = restauro_scene::samples::generate("D65", 16, 12, 1).board_obj;
     let rich = "# parts by material and group, texture coordinates, normals, negative indices\n\
@@ -740,6 +773,29 @@ fn readers() -> Vec<Reader> {
         names_file: names_own_file,
     };
 
+    let texture_reader = |name: &'static str, file: &'static str, detail: &str| Reader {
+        name,
+        file,
+        seeds: texture_seeds(file.rsplit('.').next().unwrap_or("")),
+        bench: Bench::new(&[
+            ("grey.csv", grey),
+            ("quad.obj", TEXTURED_QUAD_OBJ.as_bytes()),
+            (
+                "scene.toml",
+                scene_around("quad.obj", "")
+                    .replace(
+                        "reflectance = \"grey\"\n",
+                        &format!(
+                            "reflectance = \"grey\"\ntexture = \"{file}\"\ndetail = \"{detail}\"\n"
+                        ),
+                    )
+                    .as_bytes(),
+            ),
+        ]),
+        run: |folder| load_and_trace(&folder.join("scene.toml")),
+        names_file: names_own_file,
+    };
+
     // The scene TOML itself: the demo's scenes and one that uses every kind of file and light.
     let aosta = restauro_scene::aosta::generate(16, 9, 1);
     let samples = restauro_scene::samples::generate("A", 16, 12, 1);
@@ -792,6 +848,8 @@ fn readers() -> Vec<Reader> {
         mesh_reader("gltf", "input.gltf", gltf_seeds()),
         mesh_reader("glb", "input.glb", glb_seeds()),
         mesh_reader("vrml", "input.wrl", vrml_seeds()),
+        texture_reader("png", "input.png", "luminance"),
+        texture_reader("jpeg", "input.jpg", "chromatic"),
         light_reader("ies", "input.ies", ".ies"),
         light_reader("ldt", "input.ldt", ".ldt"),
         Reader {

@@ -1,0 +1,121 @@
+//! Photo textures (PNG or JPEG), decoded once at load. restauro never takes a photo for an
+//! albedo: a texture only modulates a material's measured reflectance as a relative detail map
+//! (`restauro_render::texture`), so it is kept as the file gives it, sRGB-encoded.
+
+use crate::error::{Result, SceneError};
+use crate::guard;
+use std::path::Path;
+
+/// The extensions a texture may have.
+pub const EXTENSIONS: [&str; 3] = ["png", "jpg", "jpeg"];
+
+/// A decoded image: rows from the top, each texel's sRGB-encoded red, green and blue scaled to
+/// 0..=65535 (8-bit files times 257, so both depths share one type).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Texture {
+    pub width: u32,
+    pub height: u32,
+    pub texels: Vec<[u16; 3]>,
+}
+
+impl Texture {
+    /// Texel (x, y), x from the left and y from the top, as linear sRGB in 0..1 (IEC
+    /// 61966-2-1's decoding function).
+    pub fn linear_rgb(&self, x: u32, y: u32) -> [f32; 3] {
+        let t = self.texels[(y * self.width + x) as usize];
+        t.map(|c| srgb_to_linear(f32::from(c) / 65535.0))
+    }
+}
+
+/// IEC 61966-2-1:1999 §5.2, the sRGB decoding function (8-bit files and 16-bit PNGs alike).
+pub fn srgb_to_linear(v: f32) -> f32 {
+    if v <= 0.04045 { v / 12.92 } else { ((v + 0.055) / 1.055).powf(2.4) }
+}
+
+/// Decode a texture file by its extension, refusing one of more than `max_pixels` texels
+/// before its texels are allocated. Messages name `path`.
+pub fn decode(bytes: &[u8], extension: &str, path: &Path, max_pixels: u64) -> Result<Texture> {
+    let (format, decoded) = match extension {
+        "png" => ("PNG", guard::catch(|| decode_png(bytes, max_pixels))),
+        "jpg" | "jpeg" => ("JPEG", guard::catch(|| decode_jpeg(bytes, max_pixels))),
+        other => {
+            return Err(SceneError::invalid(
+                path,
+                "texture",
+                format!("`.{other}` is not an image restauro reads; use a PNG or JPEG file"),
+            ));
+        }
+    };
+    let texture = decoded
+        .map_err(|_| SceneError::invalid(path, "texture", guard::gave_up(format)))?
+        .map_err(|problem| SceneError::invalid(path, "texture", problem))?;
+    if texture.width == 0 || texture.height == 0 {
+        return Err(SceneError::invalid(path, "texture", "the image has no pixels"));
+    }
+    Ok(texture)
+}
+
+fn too_big(width: u64, height: u64, max_pixels: u64) -> Option<String> {
+    (width * height > max_pixels).then(|| {
+        format!(
+            "{width} × {height} texels is more than the {max_pixels} allowed; scale the image \
+             down, or raise the limit with --max-pixels"
+        )
+    })
+}
+
+fn decode_png(bytes: &[u8], max_pixels: u64) -> std::result::Result<Texture, String> {
+    let not_png = |e: png::DecodingError| format!("not a PNG image restauro can read ({e})");
+    let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
+    // Palettes and grey levels below 8 bits become 8-bit channels; 16 bits stay 16.
+    decoder.set_transformations(png::Transformations::EXPAND);
+    let mut reader = decoder.read_info().map_err(not_png)?;
+    let (width, height) = (reader.info().width, reader.info().height);
+    if let Some(problem) = too_big(u64::from(width), u64::from(height), max_pixels) {
+        return Err(problem);
+    }
+    let size = reader.output_buffer_size().ok_or("the PNG image is too large to decode")?;
+    let mut buffer = vec![0; size];
+    let frame = reader.next_frame(&mut buffer).map_err(not_png)?;
+    let channels = frame.color_type.samples();
+    let sixteen = frame.bit_depth == png::BitDepth::Sixteen;
+    let bytes_per_texel = channels * if sixteen { 2 } else { 1 };
+    let sample = |t: &[u8], k: usize| -> u16 {
+        if sixteen { u16::from_be_bytes([t[2 * k], t[2 * k + 1]]) } else { u16::from(t[k]) * 257 }
+    };
+    let mut texels = Vec::with_capacity(width as usize * height as usize);
+    for row in buffer[..frame.buffer_size()].chunks_exact(frame.line_size) {
+        for t in row.chunks_exact(bytes_per_texel).take(width as usize) {
+            // Grey (with or without alpha) is the same in every channel; alpha is dropped.
+            texels.push(if channels < 3 {
+                [sample(t, 0); 3]
+            } else {
+                std::array::from_fn(|k| sample(t, k))
+            });
+        }
+    }
+    Ok(Texture { width, height, texels })
+}
+
+fn decode_jpeg(bytes: &[u8], max_pixels: u64) -> std::result::Result<Texture, String> {
+    use zune_core::bytestream::ZCursor;
+    use zune_core::colorspace::ColorSpace;
+    use zune_core::options::DecoderOptions;
+    let not_jpeg =
+        |e: zune_jpeg::errors::DecodeErrors| format!("not a JPEG image restauro can read ({e:?})");
+    let options = DecoderOptions::default().jpeg_set_out_colorspace(ColorSpace::RGB);
+    let mut decoder = zune_jpeg::JpegDecoder::new_with_options(ZCursor::new(bytes), options);
+    decoder.decode_headers().map_err(not_jpeg)?;
+    let info = decoder.info().ok_or("the JPEG image has no frame header")?;
+    let (width, height) = (u32::from(info.width), u32::from(info.height));
+    if let Some(problem) = too_big(u64::from(width), u64::from(height), max_pixels) {
+        return Err(problem);
+    }
+    let rgb = decoder.decode().map_err(not_jpeg)?;
+    if rgb.len() != width as usize * height as usize * 3 {
+        return Err("the JPEG image decoded to fewer texels than its header gives".into());
+    }
+    let texels =
+        rgb.chunks_exact(3).map(|t| [t[0], t[1], t[2]].map(|c| u16::from(c) * 257)).collect();
+    Ok(Texture { width, height, texels })
+}

@@ -19,10 +19,12 @@ use obvhs::triangle::Triangle;
 use restauro_scene::load::{LoadedScene, ResolvedLight};
 use restauro_scene::plan::Plan;
 use restauro_scene::scene_file::{Detail as DetailKind, Integrator, MaterialModel, Transmittance};
+use restauro_scene::texture::Texture;
 use restauro_spectral::Spectrum;
 use restauro_spectral::grid::BANDS;
 use restauro_spectral::photometry::LuminousSpectrum;
 use std::collections::BTreeMap;
+use std::sync::Arc;
 use std::time::Duration;
 
 #[derive(Debug, thiserror::Error)]
@@ -134,8 +136,9 @@ impl PreparedScene {
                 known: if known.is_empty() { "none".into() } else { known.join(", ") },
             });
         }
-        // Materials: one BSDF per (material, state).
-        let mut index: BTreeMap<(String, String), u32> = BTreeMap::new();
+        // Materials: one BSDF per (material, state), and per part's own photo where one
+        // shows (the file's photo of a part, under a material without a texture of its own).
+        let mut index: BTreeMap<(String, String, Option<String>), u32> = BTreeMap::new();
         let mut materials = Vec::new();
         let mut tris = Vec::new();
         let mut material_of = Vec::new();
@@ -153,9 +156,11 @@ impl PreparedScene {
                         .and_then(|v| scene.state_of(v, &o.name, &g.name))
                         .unwrap_or("base")
                         .to_owned();
-                    *index.entry((name.clone(), state.clone())).or_insert_with(|| {
+                    let own = own_photo(scene, name, &state, &o.name, g);
+                    let key = (name.clone(), state.clone(), own.as_ref().map(|(k, _)| k.clone()));
+                    *index.entry(key).or_insert_with(|| {
                         materials.push(bsdf(scene, name, &state));
-                        photos.add_material(scene, name, &state);
+                        photos.add_material(scene, name, &state, own);
                         (materials.len() - 1) as u32
                     })
                 })
@@ -459,13 +464,30 @@ struct Photos {
 }
 
 impl Photos {
-    fn add_material(&mut self, scene: &LoadedScene, name: &str, state: &str) {
+    /// The next material: `own` is the part's own photo, by a key, when it shows.
+    fn add_material(
+        &mut self,
+        scene: &LoadedScene,
+        name: &str,
+        state: &str,
+        own: Option<(String, Arc<Texture>)>,
+    ) {
         let m = &scene.file.materials[name];
         let kind = m.detail.unwrap_or_default();
-        let photo = m.texture_of(state).and_then(|reference| {
-            let texture = scene.textures.get(reference)?;
-            let key = (reference.clone(), kind);
-            Some(self.pyramids.entry(key).or_insert_with(|| Pyramid::new(texture, kind)).clone())
+        let source = match m.texture_of(state) {
+            Some(reference) => {
+                scene.textures.get(reference).map(|t| (reference.clone(), t.clone()))
+            }
+            None => own,
+        };
+        let photo = source.and_then(|(key, texture)| {
+            let pyramid = match self.pyramids.entry((key, kind)) {
+                std::collections::btree_map::Entry::Occupied(e) => e.get().clone(),
+                std::collections::btree_map::Entry::Vacant(e) => {
+                    e.insert(Pyramid::new(&texture, kind)?).clone()
+                }
+            };
+            Some(pyramid)
         });
         self.of_material.push(photo.map(|p| (p, [0.0; 3], 0.0)));
     }
@@ -509,6 +531,21 @@ impl Photos {
             .collect();
         (details, self.pyramids.into_values().collect())
     }
+}
+
+/// A part's own photo (from its mesh file), by a key naming the part, when it shows: the
+/// scene's material gives no texture of its own for `state` and does not say `detail = "none"`.
+fn own_photo(
+    scene: &LoadedScene,
+    material: &str,
+    state: &str,
+    object: &str,
+    group: &restauro_scene::mesh::Group,
+) -> Option<(String, Arc<Texture>)> {
+    let m = &scene.file.materials[material];
+    let shows = m.texture_of(state).is_none() && m.detail != Some(DetailKind::None);
+    let photo = group.photo.as_ref().filter(|_| shows)?;
+    Some((format!("{object}#{}", group.name), photo.clone()))
 }
 
 /// The BSDF of material `name` in `state`: the state's fields over the base ones.

@@ -67,11 +67,13 @@ pub enum Pyramid {
 }
 
 impl Pyramid {
-    pub fn new(texture: &Texture, kind: restauro_scene::scene_file::Detail) -> Self {
+    /// The pyramid `kind` of detail needs; `None` for no detail.
+    pub fn new(texture: &Texture, kind: restauro_scene::scene_file::Detail) -> Option<Self> {
         use restauro_scene::scene_file::Detail as Kind;
         match kind {
-            Kind::Luminance => Pyramid::Luminance(Arc::new(LuminancePyramid::new(texture))),
-            Kind::Chromatic => Pyramid::Chromatic(Arc::new(ChromaticPyramid::new(texture))),
+            Kind::Luminance => Some(Pyramid::Luminance(Arc::new(LuminancePyramid::new(texture)))),
+            Kind::Chromatic => Some(Pyramid::Chromatic(Arc::new(ChromaticPyramid::new(texture)))),
+            Kind::None => None,
         }
     }
 

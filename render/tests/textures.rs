@@ -232,3 +232,59 @@ fn chromatic_detail_keeps_the_stains_hue_and_gives_back_the_measured_spectrum() 
         assert!(rho.0.iter().all(|r| (0.0..=1.0).contains(r)), "{rho:?}");
     }
 }
+
+/// A textured glTF, as a photogrammetry tool exports it: the part's base colour photo (a PNG in
+/// a `data:` URI, moved by `KHR_texture_transform` half its width) shows as detail over the
+/// spectrum the scene binds the part to, without the scene naming the photo; `detail = "none"`
+/// turns it off.
+#[test]
+fn a_textured_gltf_shows_its_own_photo_over_the_bound_spectrum() {
+    use base64::Engine as _;
+    let dir = tempfile::tempdir().unwrap();
+    let (dark, light) = (60u8, 180u8);
+    png_file(&dir.path().join("photo.png"), 2, 1, |x, _| if x == 0 { dark } else { light });
+    let image = base64::engine::general_purpose::STANDARD
+        .encode(std::fs::read(dir.path().join("photo.png")).unwrap());
+    // Y up: file (x, y, z) is world (x, −z, y); the quad lies on the ground, u along world x.
+    let positions: [f32; 12] = [-1.0, 0.0, 1.0, 1.0, 0.0, 1.0, 1.0, 0.0, -1.0, -1.0, 0.0, -1.0];
+    let uv: [f32; 8] = [0.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0];
+    let indices: [u16; 6] = [0, 1, 2, 0, 2, 3];
+    let mut buffer: Vec<u8> = positions.iter().chain(&uv).flat_map(|v| v.to_le_bytes()).collect();
+    buffer.extend(indices.iter().flat_map(|i| i.to_le_bytes()));
+    let data = base64::engine::general_purpose::STANDARD.encode(&buffer);
+    let gltf = format!(
+        r#"{{"asset":{{"version":"2.0"}},"extensionsUsed":["KHR_texture_transform"],"scene":0,"scenes":[{{"nodes":[0]}}],
+        "nodes":[{{"mesh":0}}],
+        "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"TEXCOORD_0":1}},"indices":2,"material":0}}]}}],
+        "materials":[{{"name":"stone","doubleSided":true,"pbrMetallicRoughness":{{"baseColorTexture":{{"index":0,
+            "extensions":{{"KHR_texture_transform":{{"offset":[0.5,0.0]}}}}}}}}}}],
+        "textures":[{{"source":0}}],
+        "images":[{{"uri":"data:image/png;base64,{image}"}}],
+        "buffers":[{{"byteLength":92,"uri":"data:application/octet-stream;base64,{data}"}}],
+        "bufferViews":[{{"buffer":0,"byteLength":48}},{{"buffer":0,"byteOffset":48,"byteLength":32}},{{"buffer":0,"byteOffset":80,"byteLength":12}}],
+        "accessors":[{{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3","min":[-1,0,-1],"max":[1,0,1]}},
+                     {{"bufferView":1,"componentType":5126,"count":4,"type":"VEC2"}},
+                     {{"bufferView":2,"componentType":5123,"count":6,"type":"SCALAR"}}]}}"#
+    );
+    std::fs::write(dir.path().join("scan.gltf"), gltf).unwrap();
+    let load = |detail: &str| {
+        let toml = format!(
+            "format = 1\n{ABOVE}\n[spectra]\nday = {{ illuminant = \"D65\" }}\nstone = {{ constant = 0.3 }}\n\
+             [materials.stone]\nmodel = \"lambert\"\nreflectance = \"stone\"\n{detail}\n\
+             [[objects]]\nname = \"scan\"\nmesh = \"scan.gltf\"\nmaterial = \"stone\"\n\
+             [[lights]]\nkind = \"sun\"\nilluminance_lux = 10000.0\nazimuth_deg = 180.0\nelevation_deg = 60.0\nspectrum = \"day\"\n"
+        );
+        std::fs::write(dir.path().join("scene.toml"), toml).unwrap();
+        prepare(&load_scene(&dir.path().join("scene.toml"), &Limits::default()).unwrap())
+    };
+    let prepared = load("");
+    let (left, right) = (reflectance_at(&prepared, -0.5, 0.0), reflectance_at(&prepared, 0.5, 0.0));
+    // The offset moved the photo half its width: the light texel is on the left now.
+    let want = linear(light) / linear(dark);
+    let ratio = f64::from(left.0[40] / right.0[40]);
+    assert!((ratio / want - 1.0).abs() < 1e-4, "{ratio} against {want}");
+    let plain = load("detail = \"none\"");
+    let hit = plain.intersect(Vec3A::new(-0.5, 0.0, 5.0), Vec3A::NEG_Z, f32::INFINITY).unwrap();
+    let mut buffer = Spectrum::ZERO;
+    assert_eq!(plain.reflectance(&hit, 0.0, &mut buffer).0, [0.3; 81]);
+}

@@ -27,7 +27,7 @@ pub type External<'a> = &'a dyn Fn(&str) -> Result<Vec<u8>>;
 
 /// The path a glTF's buffer URI names, relative to the glTF's own folder: a relative URI,
 /// percent-decoded; anything else (a scheme, an absolute path) is refused.
-fn external_path(uri: &str, path: &Path, index: usize) -> Result<String> {
+pub(crate) fn external_path(uri: &str, path: &Path, index: usize) -> Result<String> {
     let decoded = percent_encoding::percent_decode_str(uri).decode_utf8_lossy().into_owned();
     if decoded.contains("://") || decoded.starts_with('/') || decoded.contains(':') {
         return Err(SceneError::invalid(
@@ -163,6 +163,10 @@ struct Totals<'a> {
     instances: u64,
     /// The perspective cameras met, as viewpoints.
     cameras: Vec<Viewpoint>,
+    /// Reads a file beside the model (buffers, images).
+    external: External<'a>,
+    /// The materials' photos decoded so far.
+    images: crate::gltf_texture::Decoded,
 }
 
 /// A node's perspective camera as a viewpoint in the file's coordinates: glTF cameras look
@@ -313,12 +317,21 @@ fn add_node(
                 )?,
                 None => false,
             };
-            let has_texcoords = match prim.get(&gltf::Semantic::TexCoords(0)) {
+            let material = prim.material();
+            let photo = crate::gltf_texture::base_colour_photo(
+                &material,
+                buffers,
+                path,
+                (totals.external, totals.limits.max_pixels),
+                &mut totals.images,
+            )?;
+            let set = photo.as_ref().map_or(0, |p| p.set);
+            let has_texcoords = match prim.get(&gltf::Semantic::TexCoords(set)) {
                 Some(a) => check_accessor(
                     &a,
                     buffers,
                     path,
-                    "TEXCOORD_0",
+                    "TEXCOORD",
                     &[
                         (DataType::F32, Dimensions::Vec2),
                         (DataType::U8, Dimensions::Vec2),
@@ -348,10 +361,11 @@ fn add_node(
                         })
                         .collect()
                     });
-                let texcoords: Option<Vec<[f32; 2]>> = reader
-                    .read_tex_coords(0)
-                    .filter(|_| has_texcoords)
-                    .map(|t| t.into_f32().collect());
+                let transform = photo.as_ref().and_then(|p| p.transform);
+                let texcoords: Option<Vec<[f32; 2]>> =
+                    reader.read_tex_coords(set).filter(|_| has_texcoords).map(|t| {
+                        t.into_f32().map(|uv| transform.map_or(uv, |x| x.apply(uv))).collect()
+                    });
                 (positions, indices, normals, texcoords)
             })
             .map_err(|_| SceneError::invalid(path, place(), guard::gave_up("glTF")))?;
@@ -390,7 +404,6 @@ fn add_node(
                     ),
                 ));
             }
-            let material = prim.material();
             let name = match (material.name(), material.index()) {
                 (Some(n), _) => n.to_owned(),
                 (None, Some(i)) => format!("material{i}"),
@@ -401,6 +414,7 @@ fn add_node(
                 name,
                 colour: Some([r, g, b]),
                 double_sided: material.double_sided(),
+                photo: photo.map(|p| p.texture),
             });
             // A mirroring transform (negative determinant) turns the winding around.
             let flip = world.determinant() < 0.0;
@@ -569,7 +583,8 @@ pub fn parse_with_cameras(
         .or_else(|| doc.scenes().next())
         .ok_or_else(|| SceneError::invalid(path, "scenes", "the file has no scene"))?;
     let mut mesh = Mesh::default();
-    let mut totals = Totals { limits, instances: 0, cameras: Vec::new() };
+    let mut totals =
+        Totals { limits, instances: 0, cameras: Vec::new(), external, images: Default::default() };
     for node in scene.nodes() {
         add_node(node, DMat4::IDENTITY, &buffers, &mut mesh, path, 0, &mut totals)?;
     }
@@ -577,8 +592,9 @@ pub fn parse_with_cameras(
     Ok((mesh, totals.cameras))
 }
 
-/// A `.gltf` with the buffers it keeps in separate files embedded as base64 `data:` URIs, so
-/// that it is one file (for a bundle); a model with none (or a `.glb`) is returned as it is.
+/// A `.gltf` with the buffers and images it keeps in separate files embedded as base64 `data:`
+/// URIs, so that it is one file (for a bundle); a model with none (or a `.glb`) is returned as
+/// it is.
 pub fn embed_buffers(bytes: &[u8], path: &Path, external: External<'_>) -> Result<Vec<u8>> {
     if bytes.starts_with(b"glTF") {
         return Ok(bytes.to_vec());
@@ -587,19 +603,25 @@ pub fn embed_buffers(bytes: &[u8], path: &Path, external: External<'_>) -> Resul
         SceneError::invalid(path, "glTF", format!("{e}; the file is not valid glTF 2.0 JSON"))
     };
     let mut json: serde_json::Value = serde_json::from_slice(bytes).map_err(not_json)?;
-    let Some(buffers) = json.get_mut("buffers").and_then(|b| b.as_array_mut()) else {
-        return Ok(bytes.to_vec());
-    };
     let mut changed = false;
-    for (index, buffer) in buffers.iter_mut().enumerate() {
-        let Some(uri) = buffer.get("uri").and_then(|u| u.as_str()) else { continue };
-        if uri.starts_with("data:") {
-            continue;
+    // Buffers, and the images of the materials' photos.
+    for key in ["buffers", "images"] {
+        let Some(items) = json.get_mut(key).and_then(|b| b.as_array_mut()) else { continue };
+        for (index, item) in items.iter_mut().enumerate() {
+            let Some(uri) = item.get("uri").and_then(|u| u.as_str()) else { continue };
+            if uri.starts_with("data:") {
+                continue;
+            }
+            let data = external(&external_path(uri, path, index)?)?;
+            let media = match key {
+                "buffers" => "application/octet-stream",
+                _ if data.starts_with(&[0xff, 0xd8, 0xff]) => "image/jpeg",
+                _ => "image/png",
+            };
+            let encoded = base64::engine::general_purpose::STANDARD.encode(&data);
+            item["uri"] = format!("data:{media};base64,{encoded}").into();
+            changed = true;
         }
-        let data = external(&external_path(uri, path, index)?)?;
-        let encoded = base64::engine::general_purpose::STANDARD.encode(&data);
-        buffer["uri"] = format!("data:application/octet-stream;base64,{encoded}").into();
-        changed = true;
     }
     Ok(if changed { serde_json::to_vec(&json).map_err(not_json)? } else { bytes.to_vec() })
 }
@@ -687,7 +709,8 @@ mod tests {
             vec![Group {
                 name: "marble".into(),
                 colour: Some([0.9, 0.8, 0.7]),
-                double_sided: true
+                double_sided: true,
+                photo: None,
             }]
         );
         // The second instance: scaled by 2, moved to x = 10, then turned 90° about +Z, so its

@@ -20,6 +20,7 @@ pub mod folder;
 pub mod glazing;
 pub mod gltf_export;
 pub mod gltf_mesh;
+pub mod gltf_texture;
 pub mod grid;
 pub mod guard;
 pub mod job;

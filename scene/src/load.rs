@@ -1148,6 +1148,15 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
         // The notes name the mesh file and its line; the object says which use of it.
         ctx.notes.extend(file_notes.into_iter().map(|n| format!("object `{}`: {n}", o.name)));
         check_mesh(&mut ctx, &mut mesh, &place, &o.mesh)?;
+        for g in 0..mesh.groups.len() {
+            if mesh.groups[g].photo.is_some() && !mesh.group_has_texcoords(g as u32) {
+                mesh.groups[g].photo = None;
+                ctx.notes.push(format!(
+                    "object `{}`: part `{}` has a photo in `{}` but no texture coordinates for it; it is shown without",
+                    o.name, mesh.groups[g].name, o.mesh
+                ));
+            }
+        }
         if o.up_axis.is_none() && file_up == UpAxis::Z {
             note_if_on_its_back(&mut ctx, &mesh, &place, &o.mesh);
         }

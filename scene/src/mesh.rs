@@ -10,11 +10,14 @@ pub struct Group {
     pub colour: Option<[f32; 3]>,
     /// Whether both sides of the faces are visible (VRML `solid FALSE`, glTF `doubleSided`).
     pub double_sided: bool,
+    /// The photo the file lays on the part (glTF `baseColorTexture`): detail over the
+    /// spectrum the scene binds it to, unless the scene's material gives its own.
+    pub photo: Option<std::sync::Arc<crate::texture::Texture>>,
 }
 
 impl Group {
     pub fn named(name: impl Into<String>) -> Self {
-        Self { name: name.into(), colour: None, double_sided: false }
+        Self { name: name.into(), colour: None, double_sided: false, photo: None }
     }
 }
 

@@ -337,6 +337,8 @@ pub enum Detail {
     /// ρ(λ, x) = ρₘ(λ)·S_x(λ)/S̄(λ), at most 1, with S_x and S̄ smooth spectra fitted to the
     /// texel's colour and to the mean colour (Jakob & Hanika 2019): stains keep their hue.
     Chromatic,
+    /// No detail: the mesh file's own photo of the part is not used (the surface is uniform).
+    None,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

@@ -161,3 +161,33 @@ fn a_jpeg_decodes_as_an_independent_decoder_reads_it() {
         "channels differ from libjpeg-turbo's by up to {worst} levels, {mean} on average"
     );
 }
+
+/// A `.gltf` whose photo is a file beside it: read at load, and embedded when bundled, so the
+/// bundle alone (as a worker has it) still shows the part's photo.
+#[test]
+fn a_gltf_photo_beside_the_model_travels_in_the_bundle() {
+    let positions: [f32; 9] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, -1.0];
+    let uv: [f32; 6] = [0.0, 1.0, 1.0, 1.0, 0.0, 0.0];
+    let mut buffer: Vec<u8> = positions.iter().flat_map(|v| v.to_le_bytes()).collect();
+    buffer.extend(uv.iter().flat_map(|v| v.to_le_bytes()));
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("tri.bin"), &buffer).unwrap();
+    std::fs::write(dir.path().join("albedo.png"), png_bytes()).unwrap();
+    let gltf = r#"{"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],
+        "meshes":[{"primitives":[{"attributes":{"POSITION":0,"TEXCOORD_0":1},"material":0}]}],
+        "materials":[{"name":"stone","pbrMetallicRoughness":{"baseColorTexture":{"index":0}}}],
+        "textures":[{"source":0}],"images":[{"uri":"albedo.png"}],
+        "buffers":[{"byteLength":60,"uri":"tri.bin"}],
+        "bufferViews":[{"buffer":0,"byteLength":36},{"buffer":0,"byteOffset":36,"byteLength":24}],
+        "accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,-1],"max":[1,0,0]},
+                     {"bufferView":1,"componentType":5126,"count":3,"type":"VEC2"}]}"#;
+    // The part's photo is read with the model (the scene's material, with a photo of its own,
+    // takes precedence when it renders).
+    let scene =
+        load_with(dir.path(), ("tri.gltf", gltf.as_bytes()), ("photo.png", &png_bytes())).unwrap();
+    let photo = scene.objects[0].mesh.groups[0].photo.as_ref().expect("the model's photo");
+    assert_eq!(photo.texels[0], [65535, 0, 0]);
+    let bundle = bundle_scene(&dir.path().join("scene.toml"), &Limits::default()).unwrap();
+    let loaded = bundle.load(&Limits::default()).unwrap();
+    assert_eq!(loaded.objects[0].mesh.groups[0].photo.as_deref(), Some(&**photo));
+}

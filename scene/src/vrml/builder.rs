@@ -323,6 +323,7 @@ impl Builder<'_> {
             name: name.to_string(),
             colour,
             double_sided: local.double_sided,
+            photo: None,
         });
         if let Some(g) = self.mesh.groups.get_mut(group as usize) {
             g.double_sided |= local.double_sided;

@@ -144,6 +144,7 @@ impl PreparedScene {
         let mut material_of = Vec::new();
         let mut smooth = Vec::new();
         let mut photos = Photos::default();
+        let viewer = scene.viewer();
         let mut textured = Vec::new();
         for o in &scene.objects {
             let m = &o.mesh;
@@ -165,8 +166,10 @@ impl PreparedScene {
                     })
                 })
                 .collect();
-            for (t, &g) in m.triangles.iter().zip(&m.triangle_group) {
-                if o.hidden_groups[g as usize] {
+            // Levels of detail: the camera's choice ([`restauro_scene::lod`]).
+            let shown = m.levels.shown(&viewer);
+            for (k, (t, &g)) in m.triangles.iter().zip(&m.triangle_group).enumerate() {
+                if o.hidden_groups[g as usize] || shown.as_ref().is_some_and(|s| !s[k]) {
                     continue;
                 }
                 let [a, b, c] = t.map(|i| Vec3A::from(m.positions[i as usize]));

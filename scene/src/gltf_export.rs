@@ -149,6 +149,8 @@ pub fn scene_glb(scene: &LoadedScene, colour: impl Fn(&str) -> [f32; 3]) -> Prev
         let representative =
             cell_m.map(|c| vertex_clustering::representatives(&o.mesh.positions, c));
         let (mut primitives, mut coarse) = (Vec::new(), Vec::new());
+        // The levels of detail the scene's camera shows, as a render does.
+        let shown = o.mesh.levels.shown(&scene.viewer());
         for (g, group) in o.mesh.groups.iter().enumerate() {
             if o.hidden_groups[g] {
                 continue;
@@ -158,8 +160,9 @@ pub fn scene_glb(scene: &LoadedScene, colour: impl Fn(&str) -> [f32; 3]) -> Prev
                 .triangles
                 .iter()
                 .zip(&o.mesh.triangle_group)
-                .filter(|(_, tg)| **tg as usize == g)
-                .flat_map(|(t, _)| *t)
+                .enumerate()
+                .filter(|(k, (_, tg))| **tg as usize == g && shown.as_ref().is_none_or(|s| s[*k]))
+                .flat_map(|(_, (t, _))| *t)
                 .collect();
             if tris.is_empty() {
                 continue;

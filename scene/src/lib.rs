@@ -26,6 +26,7 @@ pub mod guard;
 pub mod job;
 pub mod limits;
 pub mod load;
+pub mod lod;
 pub mod note_image;
 pub mod obj;
 pub mod origin;

@@ -214,6 +214,15 @@ pub struct LoadedScene {
 }
 
 impl LoadedScene {
+    /// The camera as the levels of detail see it ([`crate::lod`]).
+    pub fn viewer(&self) -> crate::lod::Viewer {
+        crate::lod::Viewer {
+            position_m: self.camera.position,
+            vertical_fov_deg: self.camera.vertical_fov_deg,
+            height_px: self.camera.height,
+        }
+    }
+
     pub fn triangle_count(&self) -> usize {
         self.objects.iter().map(|o| o.mesh.triangles.len()).sum()
     }
@@ -778,6 +787,8 @@ fn check_mesh(ctx: &mut Ctx, mesh: &mut Mesh, place: &str, reference: &str) -> R
     mesh.triangles.retain(|_| *k.next().unwrap_or(&true));
     let mut k = keep.iter();
     mesh.triangle_group.retain(|_| *k.next().unwrap_or(&true));
+    let mut k = keep.iter();
+    mesh.levels.of_triangle.retain(|_| *k.next().unwrap_or(&true));
     let dropped = before - mesh.triangles.len();
     if mesh.triangles.is_empty() {
         return Err(ctx.invalid(
@@ -999,6 +1010,7 @@ fn transform_mesh(mesh: &mut Mesh, m: DMat4) {
         *p = m.transform_point3(in_file).as_vec3().to_array();
     }
     mesh.anchor_m = [0.0; 3];
+    mesh.levels.transform(m);
     let normal_matrix = DMat3::from_mat4(m).inverse().transpose();
     if let Some(normals) = &mut mesh.normals {
         for n in normals.iter_mut() {

@@ -48,6 +48,9 @@ pub struct Mesh {
     /// For each triangle, its index in `groups`.
     pub triangle_group: Vec<u32>,
     pub groups: Vec<Group>,
+    /// Levels of detail (VRML97 `LOD`): every level is kept; a render shows those its camera
+    /// calls for.
+    pub levels: crate::lod::Levels,
 }
 
 /// An axis-aligned box.
@@ -170,8 +173,42 @@ impl Mesh {
                     .map(|p| std::array::from_fn(|k| (f64::from(p[k]) + shift[k]) as f32)),
             );
         }
+        self.append_levels(other);
         self.triangles.extend(other.triangles.iter().map(|t| t.map(|i| i + base)));
         self.triangle_group.extend(other.triangle_group.iter().map(|&g| remap[g as usize]));
+    }
+}
+
+impl Mesh {
+    /// `other`'s levels of detail after this mesh's (call before its triangles are added).
+    fn append_levels(&mut self, other: &Mesh) {
+        if self.levels.lods.is_empty() && other.levels.lods.is_empty() {
+            return;
+        }
+        if self.levels.of_triangle.is_empty() {
+            self.levels.of_triangle = vec![self.levels.path_index(&[]); self.triangles.len()];
+        }
+        let first = self.levels.lods.len() as u32;
+        self.levels.lods.extend(other.levels.lods.iter().cloned());
+        let remap: Vec<u32> = other
+            .levels
+            .paths
+            .iter()
+            .map(|p| {
+                let moved: Vec<(u32, u32)> = p.iter().map(|&(l, v)| (l + first, v)).collect();
+                self.levels.path_index(&moved)
+            })
+            .collect();
+        let empty = self.levels.path_index(&[]);
+        match other.levels.of_triangle.is_empty() {
+            true => {
+                self.levels.of_triangle.extend(std::iter::repeat_n(empty, other.triangles.len()))
+            }
+            false => self
+                .levels
+                .of_triangle
+                .extend(other.levels.of_triangle.iter().map(|&p| remap[p as usize])),
+        }
     }
 }
 

@@ -28,6 +28,8 @@ pub(super) struct Builder<'a> {
     /// The triangulation of each geometry node walked, by node address (the nodes live as
     /// long as the builder).
     cache: HashMap<usize, Rc<Local>>,
+    /// The (LOD, level) chain the walk is inside.
+    lod_path: Vec<(u32, u32)>,
 }
 
 /// A field's place and name, for messages: "12:5: `translation` of Transform `arch`".
@@ -62,6 +64,7 @@ impl<'a> Builder<'a> {
             max_instances: limits.max_instances,
             max_polygon_vertices: limits.max_polygon_vertices,
             cache: HashMap::new(),
+            lod_path: Vec::new(),
         }
     }
 }
@@ -162,10 +165,7 @@ impl Builder<'_> {
                     None => Ok(()),
                 }
             }
-            "LOD" => match node.nodes("level").first() {
-                Some(child) => self.walk(child, m, group_name, depth + 1),
-                None => Ok(()),
-            },
+            "LOD" => self.lod(node, m, group_name, depth),
             "Shape" => self.shape(node, m, group_name),
             "Viewpoint" => self.viewpoint(node, m),
             _ => {
@@ -173,6 +173,44 @@ impl Builder<'_> {
                 Ok(())
             }
         }
+    }
+
+    /// §6.26: every level is kept, each triangle marked with the level it is in; the render
+    /// chooses ([`crate::lod`]).
+    fn lod(&mut self, node: &Node, m: &Mat, name: Option<&str>, depth: usize) -> crate::Result<()> {
+        let levels = node.nodes("level");
+        if levels.is_empty() {
+            return Ok(());
+        }
+        let center = self.numbers(node, "center", [0.0; 3])?;
+        let ranges = self.finite_list(node, "range")?.unwrap_or(&[]).to_vec();
+        if ranges.iter().any(|r| *r < 0.0) || ranges.windows(2).any(|w| w[1] < w[0]) {
+            return Err(self.invalid_field(
+                node,
+                "range",
+                "the ranges must be 0 or more and in ascending order (VRML97 §6.26)",
+            ));
+        }
+        let scale = det3(&linear(m)).abs().cbrt();
+        let lods = &mut self.mesh.levels;
+        if lods.lods.is_empty() {
+            // Triangles met before the first LOD lie in none.
+            lods.of_triangle = vec![lods.path_index(&[]); self.mesh.triangles.len()];
+        }
+        let id = lods.lods.len() as u32;
+        lods.lods.push(crate::lod::Lod {
+            center_m: apply_point(m, center),
+            units_per_m: if scale > 0.0 { 1.0 / scale } else { 1.0 },
+            ranges,
+            levels: levels.len() as u32,
+        });
+        for (i, child) in levels.iter().enumerate() {
+            self.lod_path.push((id, i as u32));
+            let walked = self.walk(child, m, name, depth + 1);
+            self.lod_path.pop();
+            walked?;
+        }
+        Ok(())
     }
 
     fn walk_all(
@@ -378,6 +416,15 @@ impl Builder<'_> {
             if let Some(normals) = &mut self.mesh.normals {
                 normals.push(n.map(|c| c as f32));
             }
+        }
+        let path = if self.mesh.levels.lods.is_empty() {
+            None
+        } else {
+            Some(self.mesh.levels.path_index(&self.lod_path))
+        };
+        if let Some(path) = path {
+            let n = local.triangles.len();
+            self.mesh.levels.of_triangle.extend(std::iter::repeat_n(path, n));
         }
         for &[a, b, c] in &local.triangles {
             // A mirror (negative determinant) turns counter-clockwise faces clockwise.

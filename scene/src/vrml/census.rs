@@ -94,7 +94,8 @@ impl<'a> Census<'a> {
             }
             // Whichever choice is drawn, at most all of them.
             "Switch" => node.nodes("choice").to_vec(),
-            "LOD" => node.nodes("level").first().cloned().into_iter().collect(),
+            // Every level is kept (the render chooses one).
+            "LOD" => node.nodes("level").to_vec(),
             _ => Vec::new(),
         };
         let (mut instances, mut triangles) = (1u64, 0u64);

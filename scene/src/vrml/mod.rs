@@ -21,7 +21,8 @@
 //!   its instances are not drawn;
 //! - `Transform` (§6.52), `Group` (§6.21), and, as plain groups, `Anchor` (§6.2), `Billboard`
 //!   (§6.6, its screen alignment is ignored) and `Collision` (§6.8); `Switch` (§6.46) descends
-//!   into `choice[whichChoice]` and `LOD` (§6.26) into its first (most detailed) `level`;
+//!   into `choice[whichChoice]`; `LOD` (§6.26) keeps every `level`, and each render shows
+//!   the one its camera calls for (`crate::lod`);
 //! - `Shape` (§6.41) with `Appearance { material Material { diffuseColor } }` (§6.3, §6.27)
 //!   and as geometry: `IndexedFaceSet` (§6.23) with `Coordinate` (§6.12), `coordIndex`, `ccw`,
 //!   `solid`, `convex` and `creaseAngle` (its `normal`, `color` and `texCoord` are not read:

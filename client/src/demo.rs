@@ -41,6 +41,7 @@ use restauro_proto as pb;
 use restauro_scene::bundle::bundle_scene;
 use restauro_scene::job::{JobName, JobSpec};
 use restauro_scene::load::{Limits, LoadedScene, ResolvedLight, load_scene};
+use restauro_scene::photo_block;
 use restauro_scene::plan::RenderOptions;
 use restauro_scene::samples::{self, PixelRect, SAMPLES, WHITE_REFLECTANCE};
 use restauro_scene::scene_file::Integrator;
@@ -129,6 +130,8 @@ enum Kind {
     Night,
     /// The floodlit scene's calculation grid.
     Grid,
+    /// The pudding-stone blocks, flat and with a photo, as found and cleaned.
+    Block,
 }
 
 impl Kind {
@@ -137,6 +140,7 @@ impl Kind {
         match self {
             Kind::Facade { variant, .. } => Some(variant.to_string()),
             Kind::Night => Some("cleaned".into()),
+            Kind::Block => Some(photo_block::VARIANT.into()),
             Kind::Samples { .. } | Kind::Grid => None,
         }
     }
@@ -389,6 +393,12 @@ fn write_scenes(out: &Path, size: &Size) -> Result<Vec<Job>> {
         kind: Kind::Grid,
         spp: size.grid_spp,
     });
+    jobs.push(Job {
+        key: "block".into(),
+        scene: write_photo_block(&out.join("scenes/block"), size)?,
+        kind: Kind::Block,
+        spp: size.facade_spp,
+    });
     let dir = out.join("scenes/samples");
     for illuminant in ILLUMINANTS {
         let g = samples::generate(illuminant, size.samples.0, size.samples.1, size.samples_spp);
@@ -410,6 +420,30 @@ fn write_scenes(out: &Path, size: &Size) -> Result<Vec<Job>> {
         });
     }
     Ok(jobs)
+}
+
+/// The photo block's scene, its meshes and its photo, in `dir`; returns the scene's path.
+fn write_photo_block(dir: &Path, size: &Size) -> Result<PathBuf> {
+    let (w, _) = size.facade;
+    let g = photo_block::generate(w, w * 3 / 8, size.facade_spp);
+    let scene = dir.join("blocks.toml");
+    let mut files: Vec<(PathBuf, &[u8])> = g
+        .blocks
+        .iter()
+        .map(|(name, obj)| (dir.join(format!("blocks/{name}.obj")), obj.as_bytes()))
+        .collect();
+    files.push((dir.join("blocks/ground.obj"), photo_block::GROUND_OBJ.as_bytes()));
+    files.push((dir.join(photo_block::PHOTO_FILE), photo_block::PHOTO));
+    files.push((scene.clone(), g.scene_toml.as_bytes()));
+    for (path, bytes) in files {
+        if let Some(parent) = path.parent() {
+            std::fs::create_dir_all(parent)
+                .with_context(|| format!("cannot create {}", parent.display()))?;
+        }
+        atomic_file::write(&path, bytes)
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    Ok(scene)
 }
 
 /// A render fetched from the cluster.
@@ -711,8 +745,10 @@ fn analyse(
     // The facade: pairs by light and hypothesis.
     let mut facade: BTreeMap<(FacadeLight, &str), (Pair, &Job)> = BTreeMap::new();
     let mut stones: BTreeMap<&str, Pair> = BTreeMap::new();
+    let mut block = None;
     for (job, f) in jobs.iter().zip(finished) {
         match &job.kind {
+            Kind::Block => block = Some(read_pair(f)?),
             Kind::Facade { light, variant } => {
                 facade.insert((*light, variant), (read_pair(f)?, job));
             }
@@ -962,8 +998,41 @@ fn analyse(
         &grid,
         "contact sheet: the whole sample board under each illuminant, rendered and seen",
     )?);
+    let block = block.ok_or_else(|| anyhow!("the photo block's render is missing"))?;
+    images.push(photo_block_sheet(out, size, &block)?);
     let floodlighting = floodlighting(out, jobs, finished, scenes, &mut images)?;
     Ok(Analysis { images, stones: table, cleaning, floodlighting })
+}
+
+/// The photo block's contact sheet: the render and what a person sees.
+fn photo_block_sheet(out: &Path, size: &Size, block: &Pair) -> Result<Image> {
+    let exposure = Exposure::Automatic { key: 0.18 };
+    let width = 2 * size.sheet_cell;
+    let labels: Vec<&str> = photo_block::BLOCKS.iter().map(|b| b.3).collect();
+    let sheet = Grid {
+        title: "Pudding stone: a photograph as detail over the measured spectrum",
+        column_labels: vec![labels.join(" | ")],
+        row_labels: vec!["as rendered".into(), "as seen (Retinex)".into()],
+        cells: vec![
+            vec![Some(picture(&block.rendered, exposure).resized_to_width(width))],
+            vec![Some(picture(&block.seen, Exposure::Relative).resized_to_width(width))],
+        ],
+        captions: Vec::new(),
+        cell_width: width,
+        footer: vec![
+            "Each block reflects the conglomerate's measured spectrum (USGS/ECOSTRESS), as found with".into(),
+            "30 % soot proxy (derived). The photo blocks vary it by a photograph's relative luminance,".into(),
+            "rho(lambda, x) = rho_m(lambda) Y(x)/mean Y: the same colour, the stones' detail. Photo: Gravel04,".into(),
+            "CC0Textures (ambientCG), CC0, via scikit-image. Summer afternoon sun and clear sky.".into(),
+        ],
+    }
+    .render();
+    write_sheet(
+        out,
+        "block.png",
+        &sheet,
+        "contact sheet: pudding-stone blocks, flat and with a photograph as detail, as found and cleaned",
+    )
 }
 
 /// The sRGB picture of the pixels of `r`.

@@ -588,7 +588,7 @@ divisions = [12, 42]
 normal = [0.0, -1.0, 0.0]
 "#;
 
-const SUMMER_AFTERNOON: &str = r#"[[lights]]
+pub(crate) const SUMMER_AFTERNOON: &str = r#"[[lights]]
 # A summer afternoon at the theatre (45.7371° N, 7.3228° E, 583 m): the sun by NREL's SPA,
 # 100 000 lux on a surface facing it; its direct beam is close to D55.
 kind = "sun"

@@ -30,6 +30,7 @@ pub mod lod;
 pub mod note_image;
 pub mod obj;
 pub mod origin;
+pub mod photo_block;
 pub mod photometric;
 pub mod plan;
 pub mod ply;

@@ -94,8 +94,8 @@ fn the_quick_demo_writes_what_it_lists_and_the_retinex_adapts() {
     }
     let renders = report["renders"].as_array().unwrap();
     // The facade under three lights, as found and cleaned; the stones under four illuminants;
-    // the facade floodlit at night, and its grid.
-    assert_eq!(renders.len(), 12);
+    // the facade floodlit at night, and its grid; the photo block.
+    assert_eq!(renders.len(), 13);
     // The floodlit bay: its figures are its grid's, and its map is listed.
     let f = &report["floodlighting"];
     let document: Value = serde_json::from_str(
@@ -120,7 +120,7 @@ fn the_quick_demo_writes_what_it_lists_and_the_retinex_adapts() {
         }
         assert!(r["render_s"].as_f64().unwrap() > 0.0, "{r}");
     }
-    for sheet in ["facade.png", "cleaning-delta-e.png", "stones.png", "boards.png"] {
+    for sheet in ["facade.png", "cleaning-delta-e.png", "stones.png", "boards.png", "block.png"] {
         assert!(listed.contains(&format!("sheets/{sheet}").as_str()), "{sheet}");
     }
     // Nothing half-written is left: every file was written under a temporary name and renamed.

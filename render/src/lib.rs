@@ -6,6 +6,7 @@
 
 pub mod bsdf;
 pub mod camera;
+pub mod degradation;
 pub mod glass;
 pub mod integrator;
 pub mod light;

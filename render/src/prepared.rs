@@ -4,12 +4,13 @@
 
 use crate::bsdf::Bsdf;
 use crate::camera::Camera;
+use crate::degradation::ClassMap;
 use crate::glass::Transmission;
 use crate::light::{Distribution, Light, Panel};
 use crate::sampler::Strata;
 use crate::sensor::Sensor;
 use crate::sky::Sky;
-use crate::texture::{Detail, Pyramid, TexturePoint, TexturedTriangle};
+use crate::texture::{Detail, LuminancePyramid, Pyramid, TexturePoint, TexturedTriangle};
 use glam::{Vec2, Vec3A};
 use obvhs::BvhBuildParams;
 use obvhs::cwbvh::CwBvh;
@@ -85,6 +86,8 @@ pub struct PreparedScene {
     textured: Vec<TexturedTriangle>,
     /// The photos' pyramids, held once however many materials share one.
     pyramids: Vec<Pyramid>,
+    /// Per material, the degradation map its state shows, if any; empty when none has one.
+    maps: Vec<Option<ClassMap>>,
     pub lights: Vec<Light>,
     /// The sky, sampled over the hemisphere (at most one: the loader refuses two).
     pub sky: Option<Sky>,
@@ -144,6 +147,8 @@ impl PreparedScene {
         let mut material_of = Vec::new();
         let mut smooth = Vec::new();
         let mut photos = Photos::default();
+        // Per material: its name and state, for the degradation maps.
+        let mut map_of: Vec<(String, String)> = Vec::new();
         let viewer = scene.viewer();
         let mut textured = Vec::new();
         for o in &scene.objects {
@@ -161,6 +166,7 @@ impl PreparedScene {
                     let key = (name.clone(), state.clone(), own.as_ref().map(|(k, _)| k.clone()));
                     *index.entry(key).or_insert_with(|| {
                         materials.push(bsdf(scene, name, &state));
+                        map_of.push((name.clone(), state.clone()));
                         photos.add_material(scene, name, &state, own);
                         (materials.len() - 1) as u32
                     })
@@ -255,6 +261,7 @@ impl PreparedScene {
             material_of,
             materials,
             details,
+            maps: class_maps(scene, &map_of)?,
             texture_of,
             textured,
             pyramids,
@@ -285,6 +292,7 @@ impl PreparedScene {
             + self.texture_of.len() * size_of::<u32>()
             + self.textured.len() * size_of::<TexturedTriangle>()
             + self.pyramids.iter().map(|p| p.memory_bytes()).sum::<usize>()
+            + self.maps.iter().flatten().map(ClassMap::memory_bytes).sum::<usize>()
             + self.lights.iter().map(Light::memory_bytes).sum::<usize>()
             + self.sensors.len() * size_of::<Sensor>()
     }
@@ -336,14 +344,24 @@ impl PreparedScene {
         footprint_m: f32,
         buffer: &'a mut Spectrum,
     ) -> &'a Spectrum {
-        let own = self.materials[hit.material as usize].rho();
-        match (&self.details[hit.material as usize], hit.texture) {
-            (Some(detail), Some(at)) => {
-                detail.reflectance(own, at, footprint_m, buffer);
-                buffer
-            }
-            _ => own,
+        let m = hit.material as usize;
+        let own = self.materials[m].rho();
+        let map = self.maps.get(m).and_then(Option::as_ref);
+        let detail = match (&self.details[m], hit.texture) {
+            (Some(detail), Some(at)) => Some((detail, at)),
+            _ => None,
+        };
+        if map.is_none() && detail.is_none() {
+            return own;
         }
+        *buffer = *own;
+        if let Some(map) = map {
+            map.mix(hit.point, footprint_m, buffer);
+        }
+        if let Some((detail, at)) = detail {
+            detail.apply(at, footprint_m, buffer);
+        }
+        buffer
     }
 
     /// A hit on a triangle with shading normals: the normals interpolated at the hit, turned to
@@ -534,6 +552,51 @@ impl Photos {
             .collect();
         (details, self.pyramids.into_values().collect())
     }
+}
+
+/// Per material (by name and state), the degradation map its state names, with the classes it
+/// shows; empty when no state names one. Each class's coverage is built once.
+fn class_maps(
+    scene: &LoadedScene,
+    map_of: &[(String, String)],
+) -> Result<Vec<Option<ClassMap>>, TraceError> {
+    let mut coverages: BTreeMap<(String, String), Arc<LuminancePyramid>> = BTreeMap::new();
+    let mut out = Vec::with_capacity(map_of.len());
+    for (name, state) in map_of {
+        let Some(o) = scene.file.materials[name].state(state) else {
+            out.push(None);
+            continue;
+        };
+        let Some(map) = o.map.as_ref().and_then(|m| scene.file.maps.iter().find(|x| &x.name == m))
+        else {
+            out.push(None);
+            continue;
+        };
+        let image = scene.textures.get(&map.image).ok_or_else(|| {
+            TraceError::Scene(format!("map `{}`: its image was not loaded", map.name))
+        })?;
+        let shown = |c: &&restauro_scene::scene_file::DegradationClass| {
+            o.classes.as_ref().is_none_or(|list| list.contains(&c.name))
+        };
+        let classes = map
+            .classes
+            .iter()
+            .filter(shown)
+            .map(|c| {
+                let key = (map.name.clone(), c.name.clone());
+                let pyramid = coverages
+                    .entry(key)
+                    .or_insert_with(|| Arc::new(crate::degradation::coverage(image, c.colour)))
+                    .clone();
+                (pyramid, scene.spectra[&c.spectrum])
+            })
+            .collect();
+        out.push(Some(ClassMap::new(map, (image.width, image.height), classes)));
+    }
+    if out.iter().all(Option::is_none) {
+        out.clear();
+    }
+    Ok(out)
 }
 
 /// A part's own photo (from its mesh file), by a key naming the part, when it shows: the

@@ -31,28 +31,22 @@ pub enum Detail {
 }
 
 impl Detail {
-    /// ρ(λ) at texture point `at`, the photo filtered over `footprint_m`, into `out`.
+    /// ρ(λ) at texture point `at` (ρₘ in, ρ out), the photo filtered over `footprint_m`.
     #[inline]
-    pub fn reflectance(
-        &self,
-        rho: &Spectrum,
-        at: TexturePoint,
-        footprint_m: f32,
-        out: &mut Spectrum,
-    ) {
+    pub fn apply(&self, at: TexturePoint, footprint_m: f32, rho: &mut Spectrum) {
+        let lod = level_of_detail(footprint_m, at.texel_m);
         match self {
             Detail::Luminance { pyramid, inverse_mean } => {
-                let lod = level_of_detail(footprint_m, at.texel_m);
                 let k = pyramid.sample(at.uv, lod) * inverse_mean;
-                for (o, r) in out.0.iter_mut().zip(&rho.0) {
-                    *o = (r * k).min(1.0);
+                for r in &mut rho.0 {
+                    *r = (*r * k).min(1.0);
                 }
             }
             Detail::Chromatic { pyramid, inverse_mean } => {
-                let lod = level_of_detail(footprint_m, at.texel_m);
-                pyramid.sample(at.uv, lod, out);
-                for ((o, r), k) in out.0.iter_mut().zip(&rho.0).zip(&inverse_mean.0) {
-                    *o = (*o * r * k).min(1.0);
+                let mut texel = Spectrum::ZERO;
+                pyramid.sample(at.uv, lod, &mut texel);
+                for ((r, t), k) in rho.0.iter_mut().zip(&texel.0).zip(&inverse_mean.0) {
+                    *r = (*r * t * k).min(1.0);
                 }
             }
         }
@@ -141,10 +135,16 @@ impl LuminancePyramid {
         for row in 0..h {
             y.extend((0..w).map(|x| luminance(texture.linear_rgb(x, row))));
         }
-        let mut levels = vec![Level { width: w, height: h, y }];
+        Self::from_values(w, h, y)
+    }
+
+    /// A pyramid of given values (0..1), rows from the top: a degradation class's coverage.
+    pub fn from_values(width: u32, height: u32, values: Vec<f32>) -> Self {
+        let mut levels = vec![Level { width, height, y: values }];
         while let Some(last) = levels.last().filter(|l| l.width > 1 || l.height > 1) {
             let span = 1 << (levels.len() - 1);
-            let shape = Shape { width: last.width, height: last.height, full: (w, h), span };
+            let shape =
+                Shape { width: last.width, height: last.height, full: (width, height), span };
             levels.push(half(last, shape));
         }
         Self { levels }
@@ -153,6 +153,12 @@ impl LuminancePyramid {
     /// The full-size texels across and down.
     pub fn size(&self) -> (u32, u32) {
         (self.levels[0].width, self.levels[0].height)
+    }
+
+    /// As [`LuminancePyramid::sample`], but clamped at the edges instead of repeating (a map
+    /// laid over one rectangle).
+    pub fn sample_clamped(&self, uv: Vec2, lod: f32) -> f32 {
+        self.sample(uv.clamp(Vec2::ZERO, Vec2::ONE - Vec2::splat(1e-6)), lod)
     }
 
     /// Y at texture coordinates `uv` (repeating outside 0..1, as glTF's default sampler), on

@@ -131,6 +131,9 @@ impl Bundle {
                 }
             }
         }
+        for (i, m) in scene.maps.iter_mut().enumerate() {
+            out.push((format!("maps[{i}].image"), &mut m.image));
+        }
         for (i, o) in scene.objects.iter_mut().enumerate() {
             out.push((format!("objects[{i}].mesh"), &mut o.mesh));
         }

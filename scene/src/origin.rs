@@ -37,6 +37,9 @@ pub fn recentre(mut file: SceneFile) -> (SceneFile, [f64; 3]) {
     for o in &mut file.objects {
         at(o.transform.translate.get_or_insert([0.0; 3]));
     }
+    for m in &mut file.maps {
+        at(&mut m.corner);
+    }
     (file, origin)
 }
 

@@ -96,6 +96,46 @@ pub struct SceneFile {
     /// written when there are none.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub grids: Vec<Grid>,
+    /// Degradation maps: where on the building each form of decay is, as a restorer records
+    /// it. Not written when there are none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub maps: Vec<DegradationMap>,
+}
+
+/// A degradation map (ICOMOS-ISCS glossary, UNI 11182): an image of classes, one flat colour
+/// per form of decay, laid over a rectangle of the building (an elevation drawing, an
+/// orthophoto's mapping) and projected onto the model square to it. A material's state that
+/// names the map takes each class's spectrum where that class is.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DegradationMap {
+    /// Its name, which material states refer to.
+    pub name: String,
+    /// The image: PNG (lossless, so its class colours stay exact).
+    pub image: String,
+    /// The rectangle's corner under the image's bottom-left corner (m).
+    #[serde(deserialize_with = "vec3::corner")]
+    pub corner: [f64; 3],
+    /// The image's bottom edge, left to right (m).
+    #[serde(deserialize_with = "vec3::u")]
+    pub u: [f64; 3],
+    /// The image's left edge, bottom to top (m).
+    #[serde(deserialize_with = "vec3::v")]
+    pub v: [f64; 3],
+    /// The forms of decay, each with its colour in the image and its spectrum.
+    pub classes: Vec<DegradationClass>,
+}
+
+/// One form of decay on a map.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DegradationClass {
+    /// Its name (`black-crust`, `biological-colonisation`, `efflorescence`, …).
+    pub name: String,
+    /// Its colour in the image, 8-bit sRGB.
+    pub colour: [u8; 3],
+    /// The reflectance of the surface where it is: a name in `[spectra]`.
+    pub spectrum: String,
 }
 
 /// A calculation grid (a lighting designer's calculation surface): virtual sensors that cast
@@ -420,6 +460,14 @@ impl Material {
 pub struct SurfaceOverride {
     #[serde(default)]
     pub reflectance: Option<String>,
+    /// A degradation map (`[[maps]]`) whose classes vary this state over the surface. Not
+    /// written when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub map: Option<String>,
+    /// The map's classes this state shows (all of them unless given): a cleaning that removes
+    /// some forms of decay and leaves others lists those left. Not written when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub classes: Option<Vec<String>>,
     /// The state's own photo (the soiled stone photographed as found), in place of the base
     /// one. Not written when absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -801,13 +801,14 @@ fn readers() -> Vec<Reader> {
     let samples = restauro_scene::samples::generate("A", 16, 12, 1);
     let facade = "g travertine\nv 0 0 0\nv 1 0 0\nv 1 0 1\nf 1 2 3\ng puddinga\nf 1 3 2\ng mortar\nf 2 3 1\ng paving\nf 1 2 3\ng ground\nf 3 2 1\ng interior\nf 2 1 3\n";
     let everything = format!(
-        "{}\n[[objects]]\nname = \"scan\"\nmesh = \"meshes/scan.ply\"\nmaterial = \"grey\"\ntransform = {{ translate = [0.0, 1.0, 0.0], rotate_deg = [0.0, 0.0, 30.0], scale = [1.0, 2.0, 1.0] }}\nup_axis = \"y\"\n\n[[objects]]\nname = \"model\"\nmesh = \"meshes/model.glb\"\nmaterials = {{ marble = \"shiny\" }}\nmaterial = \"grey\"\n\n[[objects]]\nname = \"world\"\nmesh = \"meshes/world.wrl\"\nmaterial = \"grey\"\nreplaces = {{ object = \"m\", groups = [\"default\"] }}\n\n[materials.shiny]\nmodel = \"cook-torrance\"\nreflectance = \"dirty\"\nroughness = 0.3\nior = 1.5\ndegraded = {{ reflectance = \"grey\" }}\n\n[spectra.lamp]\nfile = \"spectra/lamp.csv\"\nextrapolate = true\n\n[spectra.dirty]\nmix = [{{ spectrum = \"grey\", weight = 0.6 }}, {{ spectrum = \"soot\", weight = 0.4 }}]\n\n[[lights]]\nkind = \"spot\"\nposition = [0.0, -3.0, 3.0]\naim = [0.0, 0.0, 0.0]\nintensity_cd = 2000.0\ncone_deg = 20.0\nfalloff_deg = 5.0\nspectrum = \"lamp\"\nies = \"lamps/lamp.ldt\"\n\n[[lights]]\nkind = \"sky\"\npreset = \"overcast\"\nspectrum = \"light\"\n\n[[lights]]\nkind = \"sun\"\nspectrum = \"light\"\npreset = \"sun\"\nsite = {{ latitude_deg = 45.7, longitude_deg = 7.3, height_m = 580.0, datetime = \"2026-06-21T12:00:00+02:00\" }}\n\n[variants.as-found]\nstate = \"degraded\"\nstates = {{ \"model/marble\" = \"base\" }}\n",
+        "{}\n[[objects]]\nname = \"scan\"\nmesh = \"meshes/scan.ply\"\nmaterial = \"grey\"\ntransform = {{ translate = [0.0, 1.0, 0.0], rotate_deg = [0.0, 0.0, 30.0], scale = [1.0, 2.0, 1.0] }}\nup_axis = \"y\"\n\n[[objects]]\nname = \"model\"\nmesh = \"meshes/model.glb\"\nmaterials = {{ marble = \"shiny\" }}\nmaterial = \"grey\"\n\n[[objects]]\nname = \"world\"\nmesh = \"meshes/world.wrl\"\nmaterial = \"grey\"\nreplaces = {{ object = \"m\", groups = [\"default\"] }}\n\n[materials.shiny]\nmodel = \"cook-torrance\"\nreflectance = \"dirty\"\nroughness = 0.3\nior = 1.5\ndegraded = {{ reflectance = \"grey\", map = \"survey\", classes = [\"crust\"] }}\n\n[[maps]]\nname = \"survey\"\nimage = \"maps/survey.png\"\ncorner = [0.0, 0.0, 0.0]\nu = [1.0, 0.0, 0.0]\nv = [0.0, 0.0, 1.0]\nclasses = [{{ name = \"crust\", colour = [0, 0, 0], spectrum = \"soot\" }}, {{ name = \"moss\", colour = [0, 128, 0], spectrum = \"grey\" }}]\n\n[spectra.lamp]\nfile = \"spectra/lamp.csv\"\nextrapolate = true\n\n[spectra.dirty]\nmix = [{{ spectrum = \"grey\", weight = 0.6 }}, {{ spectrum = \"soot\", weight = 0.4 }}]\n\n[[lights]]\nkind = \"spot\"\nposition = [0.0, -3.0, 3.0]\naim = [0.0, 0.0, 0.0]\nintensity_cd = 2000.0\ncone_deg = 20.0\nfalloff_deg = 5.0\nspectrum = \"lamp\"\nies = \"lamps/lamp.ldt\"\n\n[[lights]]\nkind = \"sky\"\npreset = \"overcast\"\nspectrum = \"light\"\n\n[[lights]]\nkind = \"sun\"\nspectrum = \"light\"\npreset = \"sun\"\nsite = {{ latitude_deg = 45.7, longitude_deg = 7.3, height_m = 580.0, datetime = \"2026-06-21T12:00:00+02:00\" }}\n\n[variants.as-found]\nstate = \"degraded\"\nstates = {{ \"model/marble\" = \"base\" }}\n",
         scene_around("quad.obj", "")
             .replace("[spectra]\n", "[spectra]\nsoot = \"carbon_black_soot_proxy__usgs_GDS68\"\n")
     );
     let ldt = read("scene/tests/data/photometric/ldt_isym4_quadrant.ldt");
     let (scan, model, world) = (ply_ascii_seeds(), glb_seeds(), vrml_seeds());
     let lamp_csv = b"380,10\n555,100\n780,40\n";
+    let survey = texture_seeds("png").remove(0).1;
     let scene_files: Vec<(&str, &[u8])> = vec![
         ("grey.csv", grey),
         ("white.csv", samples.white_csv.as_bytes()),
@@ -819,6 +820,7 @@ fn readers() -> Vec<Reader> {
         ("meshes/world.wrl", world[0].1.as_slice()),
         ("lamps/lamp.ldt", ldt.as_slice()),
         ("spectra/lamp.csv", lamp_csv),
+        ("maps/survey.png", survey.as_slice()),
     ];
     let scene_bench = Bench::new(&scene_files);
 

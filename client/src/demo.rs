@@ -799,7 +799,7 @@ fn analyse(
             "Summer afternoon: the sun at 15:30 CEST on 15 July at 45.74 N 7.32 E, and a clear sky of 15 000 lux.".into(),
             "Overcast: the CIE standard overcast sky, 10 000 lux. Each light's two renders share one exposure.".into(),
             "CIE clear sky: the same sun under the CIE standard clear sky (general sky type 12), 15 000 lux, over a ground of reflectance 0.2.".into(),
-            "As found = stone + 30 % soot-proxy mixture (derived, not measured).".into(),
+            "As found = a soot proxy where no sky or driving rain washes the stone, up to 70 % (derived, not measured).".into(),
             "As seen: Marini-Rizzi Brownian-path Retinex on CAT02 l, m, s cone responses; the paths pass over the sky; sun and shadow adapted apart.".into(),
         ],
     }

@@ -71,12 +71,19 @@ function readout() {
   chart();
 }
 
+// The newest sun-path request: answers may arrive out of order (the date and the offset changed
+// one after the other), and only the answer to the form as it is now may be shown.
+let asked = 0;
+
 async function refresh(onError) {
+  const mine = ++asked;
   try {
-    path = await api.sunPath(site());
+    const answer = await api.sunPath(site());
+    if (mine !== asked) return;
+    path = answer;
     readout();
   } catch (e) {
-    onError(e);
+    if (mine === asked) onError(e);
   }
 }
 

@@ -333,6 +333,7 @@ pub fn trace(
     let spread = scene.camera.pixel_spread();
     let mut travelled_m = 0.0f32;
     let mut textured_rho = Spectrum::ZERO;
+    let mut soiled_rho = Spectrum::ZERO;
     for depth in 0..max_depth {
         *rays += 1;
         let hit = scene.intersect(origin, direction, f32::INFINITY);
@@ -380,7 +381,12 @@ pub fn trace(
         }
         // The cone's width over a slanted surface: w/√|cos θ| (the mean of its two axes).
         let footprint_m = spread * travelled_m / wo.z.abs().max(0.01).sqrt();
-        let rho = scene.reflectance(&hit, footprint_m, &mut textured_rho);
+        let mut rho = scene.reflectance(&hit, footprint_m, &mut textured_rho);
+        if let Some(soiling) = scene.soiling(hit.material) {
+            let share = soiling.share(scene, lift(&hit), hit.shading, sampler, rays);
+            soiling.mix(rho, share, &mut soiled_rho);
+            rho = &soiled_rho;
+        }
         let lit = view.then_some(&mut lux);
         let vertex = Vertex { hit: &hit, frame, wo, rho };
         add_direct(scene, &vertex, through, sampler, rays, out, lit);

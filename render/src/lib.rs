@@ -14,6 +14,7 @@ pub mod prepared;
 pub mod sampler;
 pub mod sensor;
 pub mod sky;
+pub mod soiling;
 pub mod spherical_rectangle;
 pub mod texture;
 pub mod tile;

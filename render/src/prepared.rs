@@ -10,6 +10,7 @@ use crate::light::{Distribution, Light, Panel};
 use crate::sampler::Strata;
 use crate::sensor::Sensor;
 use crate::sky::Sky;
+use crate::soiling::Soiling;
 use crate::texture::{Detail, LuminancePyramid, Pyramid, TexturePoint, TexturedTriangle};
 use glam::{Vec2, Vec3A};
 use obvhs::BvhBuildParams;
@@ -88,6 +89,8 @@ pub struct PreparedScene {
     pyramids: Vec<Pyramid>,
     /// Per material, the degradation map its state shows, if any; empty when none has one.
     maps: Vec<Option<ClassMap>>,
+    /// Per material, its state's exposure-driven soiling, if any; empty when none has one.
+    soilings: Vec<Option<Soiling>>,
     pub lights: Vec<Light>,
     /// The sky, sampled over the hemisphere (at most one: the loader refuses two).
     pub sky: Option<Sky>,
@@ -262,6 +265,7 @@ impl PreparedScene {
             materials,
             details,
             maps: class_maps(scene, &map_of)?,
+            soilings: soilings(scene, &map_of),
             texture_of,
             textured,
             pyramids,
@@ -332,6 +336,12 @@ impl PreparedScene {
         let tri = &self.triangles[slot];
         let weights = barycentric([tri.v0, tri.v0 - tri.e1, tri.v0 + tri.e2], point);
         self.textured[k as usize].at(weights)
+    }
+
+    /// The exposure-driven soiling of material `material`'s state, if it has one.
+    #[inline]
+    pub fn soiling(&self, material: u32) -> Option<&Soiling> {
+        self.soilings.get(material as usize)?.as_ref()
     }
 
     /// The diffuse reflectance at a hit: its material's own, or on a textured surface that
@@ -552,6 +562,18 @@ impl Photos {
             .collect();
         (details, self.pyramids.into_values().collect())
     }
+}
+
+/// Per material (by name and state), its state's soiling; empty when none has one.
+fn soilings(scene: &LoadedScene, map_of: &[(String, String)]) -> Vec<Option<Soiling>> {
+    let out: Vec<Option<Soiling>> = map_of
+        .iter()
+        .map(|(name, state)| {
+            let s = scene.file.materials[name].state(state)?.soiling.as_ref()?;
+            Some(Soiling::new(s, scene.spectra[&s.spectrum]))
+        })
+        .collect();
+    if out.iter().all(Option::is_none) { Vec::new() } else { out }
 }
 
 /// Per material (by name and state), the degradation map its state names, with the classes it

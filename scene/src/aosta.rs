@@ -661,25 +661,27 @@ skylight = {{ illuminant = "daylight:12000" }}
 # Floodlights: a 4000 K ceramic metal-halide lamp and a 3000 K LED, as Planckian radiators.
 metal_halide = {{ illuminant = "blackbody:4000" }}
 led = {{ illuminant = "blackbody:3000" }}
-# DERIVED, not measured: the mortar as found, 20 % of its surface covered by the soot proxy.
-mortar_soiled = {{ mix = [{{ spectrum = "mortar", weight = 0.8 }}, {{ spectrum = "soot", weight = 0.2 }}] }}
 
+# As found: DERIVED, not measured. The soot proxy covers the stone where the weather leaves it:
+# up to 70 % of the surface where neither the open sky nor the driving rain (from the
+# south-west, 30° from vertical) washes it, under the cornice and in the arches' recesses, and
+# little of the faces the rain reaches (exposure-driven soiling, see docs/scene-format.md).
 [materials.travertine]
 model = "lambert"
 reflectance = "travertine"
-degraded = {{ reflectance = "travertine_soiled" }}
+degraded = {{ reflectance = "travertine", soiling = {{ spectrum = "soot", max_fraction = 0.7 }} }}
 cleaned = {{ reflectance = "travertine" }}
 
 [materials.puddinga]
 model = "lambert"
 reflectance = "puddinga"
-degraded = {{ reflectance = "puddinga_soiled" }}
+degraded = {{ reflectance = "puddinga", soiling = {{ spectrum = "soot", max_fraction = 0.7 }} }}
 cleaned = {{ reflectance = "puddinga" }}
 
 [materials.mortar]
 model = "lambert"
 reflectance = "mortar"
-degraded = {{ reflectance = "mortar_soiled" }}
+degraded = {{ reflectance = "mortar", soiling = {{ spectrum = "soot", max_fraction = 0.5 }} }}
 
 [materials.paving]
 model = "cook-torrance"

@@ -1626,6 +1626,9 @@ fn check_maps(
         for (state, o) in [("degraded", &material.degraded), ("cleaned", &material.cleaned)] {
             let Some(o) = o else { continue };
             let place = format!("materials.{name}.{state}");
+            if let Some(soiling) = &o.soiling {
+                check_soiling(ctx, &format!("{place}.soiling"), soiling)?;
+            }
             let map = match (&o.map, &o.classes) {
                 (None, None) => continue,
                 (None, Some(_)) => {
@@ -1647,6 +1650,29 @@ fn check_maps(
                     ));
                 }
             }
+        }
+    }
+    Ok(())
+}
+
+/// A state's soiling: a reflectance for its deposit, its numbers in range.
+fn check_soiling(ctx: &mut Ctx, place: &str, s: &crate::scene_file::Soiling) -> Result<()> {
+    ctx.reflectance(&s.spectrum, &format!("{place}.spectrum"))?;
+    let checks = [
+        ("max_fraction", Some(s.max_fraction), 0.0, 1.0),
+        ("rain_azimuth_deg", s.rain_azimuth_deg, -360.0, 360.0),
+        ("rain_angle_deg", s.rain_angle_deg, 0.0, 80.0),
+        ("sky_weight", s.sky_weight, 0.0, 10.0),
+        ("rain_weight", s.rain_weight, 0.0, 10.0),
+    ];
+    for (key, value, low, high) in checks {
+        if let Some(v) = value
+            && !(v.is_finite() && (low..=high).contains(&v))
+        {
+            return Err(ctx.invalid(
+                format!("{place}.{key}"),
+                format!("{v} is out of range; use {low} to {high}"),
+            ));
         }
     }
     Ok(())

@@ -102,6 +102,45 @@ pub struct SceneFile {
     pub maps: Vec<DegradationMap>,
 }
 
+/// Exposure-driven soiling: a deposit (`spectrum`, soot for black crusts) covering up to
+/// `max_fraction` of the surface where neither the open sky nor driving rain reaches it. The
+/// tracer estimates, at each point it shades, the share washed,
+/// W = min(1, `sky_weight`·v_sky + `rain_weight`·v_rain·cos θ/sin θ_rain), from one
+/// cosine-distributed direction (v_sky: 1 if it reaches the sky above the horizon) and one
+/// direction into the driving rain (v_rain: 1 if the rain reaches the point from there;
+/// θ its angle to the surface's normal); the deposit covers s = `max_fraction`·(1 − W) of the
+/// surface, so the state's reflectance is (1 − s)·ρ + s·ρ_deposit, averaged by the pixel's
+/// samples. Sheltered zones (under cornices, in recesses) come out dark, faces the rain washes
+/// light.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Soiling {
+    /// The deposit's reflectance: a name in `[spectra]`.
+    pub spectrum: String,
+    /// The share of the surface it covers where nothing washes it, 0 to 1.
+    pub max_fraction: f64,
+    /// Where the driving rain comes from: an azimuth (0° north, 90° east), 225 (south-west)
+    /// unless given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rain_azimuth_deg: Option<f64>,
+    /// How far from vertical the rain falls, 30 unless given (0 to 80).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rain_angle_deg: Option<f64>,
+    /// The weight of the open sky in washing, 0.5 unless given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sky_weight: Option<f64>,
+    /// The weight of driving rain in washing, 1 unless given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rain_weight: Option<f64>,
+}
+
+impl Soiling {
+    pub const DEFAULT_RAIN_AZIMUTH_DEG: f64 = 225.0;
+    pub const DEFAULT_RAIN_ANGLE_DEG: f64 = 30.0;
+    pub const DEFAULT_SKY_WEIGHT: f64 = 0.5;
+    pub const DEFAULT_RAIN_WEIGHT: f64 = 1.0;
+}
+
 /// A degradation map (ICOMOS-ISCS glossary, UNI 11182): an image of classes, one flat colour
 /// per form of decay, laid over a rectangle of the building (an elevation drawing, an
 /// orthophoto's mapping) and projected onto the model square to it. A material's state that
@@ -468,6 +507,10 @@ pub struct SurfaceOverride {
     /// some forms of decay and leaves others lists those left. Not written when absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub classes: Option<Vec<String>>,
+    /// Soiling where the weather leaves it: a deposit that covers the surface where rain does
+    /// not wash it (see [`Soiling`]). Not written when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub soiling: Option<Soiling>,
     /// The state's own photo (the soiled stone photographed as found), in place of the base
     /// one. Not written when absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -44,13 +44,26 @@ pub struct StateView {
 pub const FIRST_NM: f64 = 380.0;
 pub const STEP_NM: f64 = 5.0;
 
+/// A state's view; a state soiled by exposure shows its deposit at half its most, as a typical
+/// share (the render places it where the weather leaves it).
 fn state_view(
     state: &'static str,
     spectrum: &str,
+    soiling: Option<&restauro_scene::scene_file::Soiling>,
     scene: &LoadedScene,
     lights: &[appearance::Light],
 ) -> Option<StateView> {
-    let rho = scene.spectra.get(spectrum)?;
+    let own = scene.spectra.get(spectrum)?;
+    let rho = &match soiling {
+        Some(s) => {
+            let deposit = scene.spectra.get(&s.spectrum)?;
+            let share = (s.max_fraction / 2.0) as f32;
+            restauro_spectral::Spectrum(std::array::from_fn(|i| {
+                own.0[i] + share * (deposit.0[i] - own.0[i])
+            }))
+        }
+        None => *own,
+    };
     let under = appearance::Light::looks(rho, lights);
     // D65 is among the lights: its look is the state's own colour.
     let (lab, colour_linear_srgb) = under
@@ -360,7 +373,9 @@ fn state_spectrum<'a>(
     m: &'a restauro_scene::scene_file::Material,
     state: &str,
 ) -> Option<&'a String> {
-    m.state(state)?.reflectance.as_ref()
+    let o = m.state(state)?;
+    // A state soiled by exposure changes the surface even with the base's spectrum.
+    o.reflectance.as_ref().or(o.soiling.as_ref().map(|_| &m.reflectance))
 }
 
 fn build(id: &str, revision: u32, scene: &LoadedScene) -> ScenePreview {
@@ -376,7 +391,10 @@ fn build(id: &str, revision: u32, scene: &LoadedScene) -> ScenePreview {
                 ("cleaned", state_spectrum(m, "cleaned")),
             ]
             .into_iter()
-            .filter_map(|(state, spectrum)| state_view(state, spectrum?, scene, &lights))
+            .filter_map(|(state, spectrum)| {
+                let soiling = m.state(state).and_then(|o| o.soiling.as_ref());
+                state_view(state, spectrum?, soiling, scene, &lights)
+            })
             .collect();
             MaterialView {
                 name: name.clone(),

@@ -8,6 +8,7 @@
 //! [`Rgb8`] that the caller encodes however it likes.
 
 use font8x8::{BASIC_FONTS, GREEK_FONTS, LATIN_FONTS, UnicodeFonts};
+use restauro_spectral::rgb_space::Transfer;
 
 /// Sheet background: dark neutral grey, so neither bright nor dark renders dominate.
 pub const BACKGROUND: [u8; 3] = [24, 24, 24];
@@ -189,15 +190,14 @@ fn glyph(ch: char) -> [u8; 8] {
     found.or_else(|| BASIC_FONTS.get('?')).unwrap_or_default()
 }
 
+/// An 8-bit sRGB code's linear value (IEC 61966-2-1).
 fn srgb_to_linear(v: u8) -> f64 {
-    let c = f64::from(v) / 255.0;
-    if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
+    Transfer::Srgb.decode(f64::from(v) / 255.0)
 }
 
+/// A linear value's 8-bit sRGB code (IEC 61966-2-1).
 fn linear_to_srgb(l: f64) -> u8 {
-    let l = l.clamp(0.0, 1.0);
-    let c = if l <= 0.003_130_8 { 12.92 * l } else { 1.055 * l.powf(1.0 / 2.4) - 0.055 };
-    (c * 255.0).round() as u8
+    (Transfer::Srgb.encode(l) * 255.0).round() as u8
 }
 
 /// For each of `dst` output pixels, the source pixels it covers and their normalised overlap

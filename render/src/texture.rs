@@ -18,6 +18,7 @@
 use glam::Vec2;
 use restauro_scene::texture::Texture;
 use restauro_spectral::Spectrum;
+use restauro_spectral::rgb_space::Transfer;
 use restauro_spectral::rgb_upsampling::{SigmoidPolynomial, fit};
 use std::sync::Arc;
 
@@ -210,18 +211,15 @@ impl Palette {
         let key = u32::from(srgb8[0]) << 16 | u32::from(srgb8[1]) << 8 | u32::from(srgb8[2]);
         let next = self.rgb.len() as u32;
         *self.keys.entry(key).or_insert_with(|| {
-            self.rgb
-                .push(srgb8.map(|c| restauro_scene::texture::srgb_to_linear(f32::from(c) / 255.0)));
+            self.rgb.push(srgb8.map(|c| Transfer::Srgb.decode(f64::from(c) / 255.0) as f32));
             next
         })
     }
 }
 
-/// IEC 61966-2-1 §5.3, the sRGB encoding function, to 8 bits.
+/// A linear value's 8-bit sRGB code (IEC 61966-2-1's encoding function).
 fn linear_to_srgb8(v: f32) -> u8 {
-    let v = v.clamp(0.0, 1.0);
-    let e = if v <= 0.003_130_8 { 12.92 * v } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 };
-    (e * 255.0).round() as u8
+    (Transfer::Srgb.encode(f64::from(v)) * 255.0).round() as u8
 }
 
 impl ChromaticPyramid {

@@ -4,6 +4,7 @@
 
 use crate::error::{Result, SceneError};
 use crate::guard;
+use restauro_spectral::rgb_space::Transfer;
 use std::path::Path;
 
 /// The extensions a texture may have.
@@ -23,13 +24,8 @@ impl Texture {
     /// 61966-2-1's decoding function).
     pub fn linear_rgb(&self, x: u32, y: u32) -> [f32; 3] {
         let t = self.texels[(y * self.width + x) as usize];
-        t.map(|c| srgb_to_linear(f32::from(c) / 65535.0))
+        t.map(|c| Transfer::Srgb.decode(f64::from(c) / 65535.0) as f32)
     }
-}
-
-/// IEC 61966-2-1:1999 §5.2, the sRGB decoding function (8-bit files and 16-bit PNGs alike).
-pub fn srgb_to_linear(v: f32) -> f32 {
-    if v <= 0.04045 { v / 12.92 } else { ((v + 0.055) / 1.055).powf(2.4) }
 }
 
 /// Decode a texture file by its extension, refusing one of more than `max_pixels` texels

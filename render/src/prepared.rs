@@ -150,8 +150,8 @@ impl PreparedScene {
         let mut material_of = Vec::new();
         let mut smooth = Vec::new();
         let mut photos = Photos::default();
-        // Per material: its name and state, for the degradation maps.
-        let mut map_of: Vec<(String, String)> = Vec::new();
+        // Per material: its name and state, for its degradation map and soiling.
+        let mut material_states: Vec<(String, String)> = Vec::new();
         let viewer = scene.viewer();
         let mut textured = Vec::new();
         for o in &scene.objects {
@@ -169,7 +169,7 @@ impl PreparedScene {
                     let key = (name.clone(), state.clone(), own.as_ref().map(|(k, _)| k.clone()));
                     *index.entry(key).or_insert_with(|| {
                         materials.push(bsdf(scene, name, &state));
-                        map_of.push((name.clone(), state.clone()));
+                        material_states.push((name.clone(), state.clone()));
                         photos.add_material(scene, name, &state, own);
                         (materials.len() - 1) as u32
                     })
@@ -264,8 +264,8 @@ impl PreparedScene {
             material_of,
             materials,
             details,
-            maps: class_maps(scene, &map_of)?,
-            soilings: soilings(scene, &map_of),
+            maps: class_maps(scene, &material_states)?,
+            soilings: soilings(scene, &material_states),
             texture_of,
             textured,
             pyramids,
@@ -565,8 +565,8 @@ impl Photos {
 }
 
 /// Per material (by name and state), its state's soiling; empty when none has one.
-fn soilings(scene: &LoadedScene, map_of: &[(String, String)]) -> Vec<Option<Soiling>> {
-    let out: Vec<Option<Soiling>> = map_of
+fn soilings(scene: &LoadedScene, material_states: &[(String, String)]) -> Vec<Option<Soiling>> {
+    let out: Vec<Option<Soiling>> = material_states
         .iter()
         .map(|(name, state)| {
             let s = scene.file.materials[name].state(state)?.soiling.as_ref()?;
@@ -580,11 +580,11 @@ fn soilings(scene: &LoadedScene, map_of: &[(String, String)]) -> Vec<Option<Soil
 /// shows; empty when no state names one. Each class's coverage is built once.
 fn class_maps(
     scene: &LoadedScene,
-    map_of: &[(String, String)],
+    material_states: &[(String, String)],
 ) -> Result<Vec<Option<ClassMap>>, TraceError> {
     let mut coverages: BTreeMap<(String, String), Arc<LuminancePyramid>> = BTreeMap::new();
-    let mut out = Vec::with_capacity(map_of.len());
-    for (name, state) in map_of {
+    let mut out = Vec::with_capacity(material_states.len());
+    for (name, state) in material_states {
         let Some(o) = scene.file.materials[name].state(state) else {
             out.push(None);
             continue;

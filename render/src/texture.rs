@@ -141,14 +141,8 @@ impl LuminancePyramid {
 
     /// A pyramid of given values (0..1), rows from the top: a degradation class's coverage.
     pub fn from_values(width: u32, height: u32, values: Vec<f32>) -> Self {
-        let mut levels = vec![Level { width, height, y: values }];
-        while let Some(last) = levels.last().filter(|l| l.width > 1 || l.height > 1) {
-            let span = 1 << (levels.len() - 1);
-            let shape =
-                Shape { width: last.width, height: last.height, full: (width, height), span };
-            levels.push(half(last, shape));
-        }
-        Self { levels }
+        let first = Level { width, height, y: values };
+        Self { levels: build_levels(first, |l| (l.width, l.height), half) }
     }
 
     /// The full-size texels across and down.
@@ -165,15 +159,12 @@ impl LuminancePyramid {
     /// Y at texture coordinates `uv` (repeating outside 0..1, as glTF's default sampler), on
     /// level `lod` (0 the full photo; fractions blend two levels).
     pub fn sample(&self, uv: Vec2, lod: f32) -> f32 {
-        let top = (self.levels.len() - 1) as f32;
-        let lod = lod.clamp(0.0, top);
-        let fine = lod.floor() as usize;
-        let t = lod - fine as f32;
+        let (fine, coarse, t) = levels_around(lod, self.levels.len());
         let a = bilinear(&self.levels[fine], uv);
         if t <= 0.0 {
             return a;
         }
-        a + (bilinear(&self.levels[(fine + 1).min(self.levels.len() - 1)], uv) - a) * t
+        a + (bilinear(&self.levels[coarse], uv) - a) * t
     }
 
     /// Bytes held, for a worker's bound on the scenes it keeps.
@@ -228,14 +219,12 @@ impl ChromaticPyramid {
         let mut palette = Palette::default();
         let to8 = |c: u16| ((u32::from(c) + 128) / 257) as u8;
         let index = texture.texels.iter().map(|t| palette.index(t.map(to8))).collect();
-        let mut levels = vec![IndexLevel { width: texture.width, height: texture.height, index }];
-        while let Some(last) = levels.last().filter(|l| l.width > 1 || l.height > 1) {
-            let span = 1 << (levels.len() - 1);
-            let full = (texture.width, texture.height);
-            let shape = Shape { width: last.width, height: last.height, full, span };
-            let next = half_indices(last, shape, &mut palette);
-            levels.push(next);
-        }
+        let first = IndexLevel { width: texture.width, height: texture.height, index };
+        let levels = build_levels(
+            first,
+            |l| (l.width, l.height),
+            |l, shape| half_indices(l, shape, &mut palette),
+        );
         // A colour no sigmoid reaches (none of the sRGB cube, the fit's tests say) would keep
         // the flat 0.5: the detail then leaves that texel's reflectance as measured.
         let fits: Vec<SigmoidPolynomial> =
@@ -251,13 +240,10 @@ impl ChromaticPyramid {
     /// then blended (bilinearly on each of the two levels, then between them).
     pub fn sample(&self, uv: Vec2, lod: f32, out: &mut Spectrum) {
         *out = Spectrum::ZERO;
-        let top = (self.levels.len() - 1) as f32;
-        let lod = lod.clamp(0.0, top);
-        let fine = lod.floor() as usize;
-        let t = lod - fine as f32;
+        let (fine, coarse, t) = levels_around(lod, self.levels.len());
         self.add_bilinear(fine, uv, 1.0 - t, out);
         if t > 0.0 {
-            self.add_bilinear((fine + 1).min(self.levels.len() - 1), uv, t, out);
+            self.add_bilinear(coarse, uv, t, out);
         }
     }
 
@@ -325,18 +311,48 @@ impl Shape {
     /// by the share of the photo's texels it spans, so that every level's mean, and the last
     /// texel, is the photo's mean whatever its size.
     fn children(self, col: u32, row: u32) -> impl Iterator<Item = (usize, f32)> {
+        // The two texels along one axis and the photo's texels each spans (0 past the edge).
         let span = self.span;
-        let covers = move |i: u32, full: u32| span.min(full.saturating_sub(i * span)) as f32;
-        let xs = (2 * col..(2 * col + 2).min(self.width)).map(move |x| (x, covers(x, self.full.0)));
-        let ys: Vec<(u32, f32)> = (2 * row..(2 * row + 2).min(self.height))
-            .map(|y| (y, covers(y, self.full.1)))
-            .collect();
-        let total: f32 =
-            xs.clone().map(|(_, a)| a).sum::<f32>() * ys.iter().map(|(_, b)| b).sum::<f32>();
-        xs.flat_map(move |(x, a)| {
-            ys.clone().into_iter().map(move |(y, b)| ((y * self.width + x) as usize, a * b / total))
+        let axis = move |i: u32, n: u32, full: u32| {
+            [2 * i, 2 * i + 1].map(|k| {
+                (k, if k < n { span.min(full.saturating_sub(k * span)) as f32 } else { 0.0 })
+            })
+        };
+        let xs = axis(col, self.width, self.full.0);
+        let ys = axis(row, self.height, self.full.1);
+        let total = (xs[0].1 + xs[1].1) * (ys[0].1 + ys[1].1);
+        xs.into_iter().filter(|&(_, a)| a > 0.0).flat_map(move |(x, a)| {
+            ys.into_iter()
+                .filter(|&(_, b)| b > 0.0)
+                .map(move |(y, b)| ((y * self.width + x) as usize, a * b / total))
         })
     }
+}
+
+/// The levels either side of `lod` in a pyramid of `count` levels, and how far `lod` lies from
+/// the finer towards the coarser (`lod` clamped to the pyramid).
+fn levels_around(lod: f32, count: usize) -> (usize, usize, f32) {
+    let lod = lod.clamp(0.0, (count - 1) as f32);
+    let fine = lod.floor() as usize;
+    (fine, (fine + 1).min(count - 1), lod - fine as f32)
+}
+
+/// A pyramid's levels: `first`, then each made by `halve` from the one before, down to one
+/// texel; `size` gives a level's texels across and down.
+fn build_levels<L>(
+    first: L,
+    size: impl Fn(&L) -> (u32, u32),
+    mut halve: impl FnMut(&L, Shape) -> L,
+) -> Vec<L> {
+    let full = size(&first);
+    let mut levels = vec![first];
+    while let Some(last) = levels.last().filter(|l| size(l) != (1, 1)) {
+        let (width, height) = size(last);
+        let shape = Shape { width, height, full, span: 1 << (levels.len() - 1) };
+        let next = halve(last, shape);
+        levels.push(next);
+    }
+    levels
 }
 
 /// The four texels around `uv` (wrapping) and their bilinear weights.

@@ -150,21 +150,25 @@ impl LuminancePyramid {
         (self.levels[0].width, self.levels[0].height)
     }
 
-    /// As [`LuminancePyramid::sample`], but clamped at the edges instead of repeating (a map
-    /// laid over one rectangle).
+    /// As [`LuminancePyramid::sample`], but with the edge texels held beyond the edges instead
+    /// of repeating (a map laid over one rectangle: its east edge is not its west one).
     pub fn sample_clamped(&self, uv: Vec2, lod: f32) -> f32 {
-        self.sample(uv.clamp(Vec2::ZERO, Vec2::ONE - Vec2::splat(1e-6)), lod)
+        self.sample_with(uv, lod, Edges::Clamp)
     }
 
     /// Y at texture coordinates `uv` (repeating outside 0..1, as glTF's default sampler), on
     /// level `lod` (0 the full photo; fractions blend two levels).
     pub fn sample(&self, uv: Vec2, lod: f32) -> f32 {
+        self.sample_with(uv, lod, Edges::Repeat)
+    }
+
+    fn sample_with(&self, uv: Vec2, lod: f32, edges: Edges) -> f32 {
         let (fine, coarse, t) = levels_around(lod, self.levels.len());
-        let a = bilinear(&self.levels[fine], uv);
+        let a = bilinear(&self.levels[fine], uv, edges);
         if t <= 0.0 {
             return a;
         }
-        a + (bilinear(&self.levels[coarse], uv) - a) * t
+        a + (bilinear(&self.levels[coarse], uv, edges) - a) * t
     }
 
     /// Bytes held, for a worker's bound on the scenes it keeps.
@@ -249,7 +253,7 @@ impl ChromaticPyramid {
 
     fn add_bilinear(&self, level: usize, uv: Vec2, weight: f32, out: &mut Spectrum) {
         let l = &self.levels[level];
-        for (x, y, w) in bilinear_taps(l.width, l.height, uv) {
+        for (x, y, w) in bilinear_taps(l.width, l.height, uv, Edges::Repeat) {
             let (_, s) = &self.palette[l.index[(y * l.width + x) as usize] as usize];
             let w = w * weight;
             if w > 0.0 {
@@ -265,7 +269,7 @@ impl ChromaticPyramid {
         let level = (lod.round().max(0.0) as usize).min(self.levels.len() - 1);
         let l = &self.levels[level];
         let mut c = [0.0f32; 3];
-        for (x, y, w) in bilinear_taps(l.width, l.height, uv) {
+        for (x, y, w) in bilinear_taps(l.width, l.height, uv, Edges::Repeat) {
             let (rgb, _) = &self.palette[l.index[(y * l.width + x) as usize] as usize];
             for k in 0..3 {
                 c[k] += w * rgb[k];
@@ -355,13 +359,25 @@ fn build_levels<L>(
     levels
 }
 
-/// The four texels around `uv` (wrapping) and their bilinear weights.
-fn bilinear_taps(width: u32, height: u32, uv: Vec2) -> [(u32, u32, f32); 4] {
+/// What lies beyond an image's edges.
+#[derive(Clone, Copy)]
+enum Edges {
+    /// The image again (a photo tiling a surface; glTF's default sampler).
+    Repeat,
+    /// The edge texels (an image laid over one rectangle).
+    Clamp,
+}
+
+/// The four texels around `uv` and their bilinear weights.
+fn bilinear_taps(width: u32, height: u32, uv: Vec2, edges: Edges) -> [(u32, u32, f32); 4] {
     let x = uv.x * width as f32 - 0.5;
     let y = uv.y * height as f32 - 0.5;
     let (x0, y0) = (x.floor(), y.floor());
     let (fx, fy) = (x - x0, y - y0);
-    let wrap = |i: f32, n: u32| (i as i64).rem_euclid(i64::from(n)) as u32;
+    let wrap = move |i: f32, n: u32| match edges {
+        Edges::Repeat => (i as i64).rem_euclid(i64::from(n)) as u32,
+        Edges::Clamp => (i as i64).clamp(0, i64::from(n) - 1) as u32,
+    };
     let (xa, xb) = (wrap(x0, width), wrap(x0 + 1.0, width));
     let (ya, yb) = (wrap(y0, height), wrap(y0 + 1.0, height));
     [
@@ -385,9 +401,9 @@ fn half(l: &Level, shape: Shape) -> Level {
     Level { width: w, height: h, y }
 }
 
-/// Bilinear interpolation between the four texel centres around `uv`, wrapping at the edges.
-fn bilinear(l: &Level, uv: Vec2) -> f32 {
-    bilinear_taps(l.width, l.height, uv)
+/// Bilinear interpolation between the four texel centres around `uv`.
+fn bilinear(l: &Level, uv: Vec2, edges: Edges) -> f32 {
+    bilinear_taps(l.width, l.height, uv, edges)
         .iter()
         .map(|&(x, y, w)| w * l.y[(y * l.width + x) as usize])
         .sum()

@@ -102,6 +102,8 @@ fn each_class_shows_its_spectrum_and_a_cleaning_removes_the_classes_it_leaves_ou
     assert_close(&at(&s, "as-found", 0.5), &spectrum("crust"), "as found, the crust");
     assert_close(&at(&s, "as-found", 1.5), &spectrum("lichen"), "as found, the lichen");
     assert_close(&at(&s, "as-found", 3.5), &spectrum("stone_soiled"), "as found, no class");
+    // The map ends at the wall's edge: its last column does not blend with its first.
+    assert_close(&at(&s, "as-found", 3.96), &spectrum("stone_soiled"), "as found, the east edge");
     // On the edge between crust and lichen, half of each.
     let edge = Spectrum([0.5 * (0.05 + 0.25); 81]);
     assert_close(&at(&s, "as-found", 1.0), &edge, "as found, the classes' edge");

@@ -1126,6 +1126,9 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
                     o.specular,
                     o.ior,
                 )?;
+                if let Some(soiling) = &o.soiling {
+                    check_soiling(&mut ctx, &format!("{p}.soiling"), soiling)?;
+                }
             }
         }
     }
@@ -1211,10 +1214,9 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
                     unknown("material", material, file.materials.keys().map(String::as_str)),
                 ));
             }
-            let textured = file.materials[material].texture_of("base").is_some()
-                || ["degraded", "cleaned"]
-                    .iter()
-                    .any(|st| file.materials[material].texture_of(st).is_some());
+            let m = &file.materials[material];
+            let textured =
+                ["base", "degraded", "cleaned"].iter().any(|st| m.texture_of(st).is_some());
             let group = group_materials.len() as u32;
             if textured && !mesh.group_has_texcoords(group) {
                 return Err(ctx.invalid(
@@ -1626,9 +1628,6 @@ fn check_maps(
         for (state, o) in [("degraded", &material.degraded), ("cleaned", &material.cleaned)] {
             let Some(o) = o else { continue };
             let place = format!("materials.{name}.{state}");
-            if let Some(soiling) = &o.soiling {
-                check_soiling(ctx, &format!("{place}.soiling"), soiling)?;
-            }
             let map = match (&o.map, &o.classes) {
                 (None, None) => continue,
                 (None, Some(_)) => {

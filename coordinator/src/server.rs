@@ -72,6 +72,11 @@ pub struct CoordinatorArgs {
     /// `studio on http://ADDR/`.
     #[arg(long, env = "RESTAURO_STUDIO_LISTEN")]
     pub studio_listen: Option<SocketAddr>,
+    /// Let scenes sent to the studio name files on loopback, private and link-local addresses
+    /// (an intranet's servers). Off by default: the coordinator fetches for its users, who must
+    /// not reach the farm's own network through it.
+    #[arg(long)]
+    pub fetch_private_urls: bool,
     /// Exit when standard input closes (an embedded cluster's processes end with their parent).
     #[arg(long, hide = true)]
     pub exit_with_stdin: bool,
@@ -120,6 +125,11 @@ pub fn run(args: &CoordinatorArgs) -> Result<()> {
     if client == worker {
         bail!("the client and worker tokens are the same; give each role its own token");
     }
+    // Files that scenes sent to the studio name by URL: fetched into the data folder.
+    restauro_scene::remote::set_policy(restauro_scene::remote::Policy {
+        public_only: !args.fetch_private_urls,
+        cache_dir: Some(args.data.join("downloads")),
+    });
     let config = Config {
         data_dir: args.data.clone(),
         tokens: Tokens::new(&client, &worker),

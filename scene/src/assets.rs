@@ -21,12 +21,17 @@ pub trait Assets {
 }
 
 /// The reference of a file that the file `reference` names by the relative path `relative`
-/// (a glTF's buffer `model.bin` beside `meshes/model.gltf` is `meshes/model.bin`).
-pub fn sibling(reference: &str, relative: &str) -> String {
-    match Path::new(reference).parent().filter(|p| !p.as_os_str().is_empty()) {
+/// (a glTF's buffer `model.bin` beside `meshes/model.gltf` is `meshes/model.bin`; beside
+/// `https://x.org/scan/model.gltf` it is `https://x.org/scan/model.bin`).
+pub fn sibling(reference: &str, relative: &str) -> Result<String, String> {
+    if crate::remote::is_url(reference) {
+        let base = crate::remote::WebUrl::parse(reference)?;
+        return base.join(relative).map(|url| url.to_string());
+    }
+    Ok(match Path::new(reference).parent().filter(|p| !p.as_os_str().is_empty()) {
         Some(folder) => folder.join(relative).to_string_lossy().into_owned(),
         None => relative.to_owned(),
-    }
+    })
 }
 
 /// How to raise [`crate::load::Limits::max_file_bytes`].
@@ -102,10 +107,12 @@ pub fn utf8_text(bytes: Vec<u8>, path: &Path) -> Result<String> {
 
 /// The files of a scene folder. References are relative to the scene file and may not leave
 /// its folder (symbolic links are followed before the check), nor name the scene file itself.
+/// A reference may also be a URL pinned in the scene's `[pins]` (see [`crate::remote`]).
 pub struct FolderAssets {
     scene_file: PathBuf,
     dir: PathBuf,
     max_file_bytes: u64,
+    remote: crate::remote::Remote,
 }
 
 impl FolderAssets {
@@ -113,7 +120,25 @@ impl FolderAssets {
         let scene_file =
             scene_file.canonicalize().map_err(|error| SceneError::io(scene_file, error))?;
         let dir = scene_file.parent().map(Path::to_owned).unwrap_or_else(|| PathBuf::from("/"));
-        Ok(Self { scene_file, dir, max_file_bytes })
+        let remote = crate::remote::Remote::new(&scene_file, &BTreeMap::new())?;
+        Ok(Self { scene_file, dir, max_file_bytes, remote })
+    }
+
+    /// The folder of the scene file at `path`, whose files named by URL are pinned by `pins`.
+    pub fn with_pins(
+        scene_file: &Path,
+        max_file_bytes: u64,
+        pins: &BTreeMap<String, crate::scene_file::Pin>,
+    ) -> Result<Self> {
+        let mut assets = Self::new(scene_file, max_file_bytes)?;
+        assets.remote = crate::remote::Remote::new(scene_file, pins)?;
+        Ok(assets)
+    }
+
+    /// Fetches files named by URL with `config` rather than the environment's.
+    pub fn with_remote_config(mut self, config: crate::remote::RemoteConfig) -> Self {
+        self.remote = self.remote.with_config(config);
+        self
     }
 
     /// The checked path of `reference`.
@@ -150,6 +175,9 @@ impl FolderAssets {
 
 impl Assets for FolderAssets {
     fn read(&self, reference: &str, place: &str) -> Result<Vec<u8>> {
+        if crate::remote::is_url(reference) {
+            return self.remote.read(reference, place, self.max_file_bytes);
+        }
         let path = self.resolve(reference, place)?;
         read_regular_file(&path, self.max_file_bytes, MAX_FILE_FIX)
     }
@@ -159,6 +187,9 @@ impl Assets for FolderAssets {
     }
 
     fn display_path(&self, reference: &str) -> PathBuf {
+        if crate::remote::is_url(reference) {
+            return PathBuf::from(reference);
+        }
         self.dir.join(reference)
     }
 }
@@ -207,5 +238,10 @@ impl Assets for BundleAssets<'_> {
 
 /// The extension of a reference (folder path or bundle reference), lower case.
 pub fn extension(reference: &str) -> String {
+    // A URL's query and fragment are not part of its file name.
+    let reference = match crate::remote::is_url(reference) {
+        true => reference.split(['?', '#']).next().unwrap_or(reference),
+        false => reference,
+    };
     Path::new(reference).extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase()
 }

@@ -28,8 +28,13 @@ pub fn bundle_scene(path: &Path, limits: &Limits) -> Result<Bundle> {
     if crate::archive::is_archive(path) {
         return crate::archive::read_archive(path, limits);
     }
-    let mut scene = read_scene_file(path, limits)?;
-    let assets = FolderAssets::new(path, limits.max_file_bytes)?;
+    let scene = read_scene_file(path, limits)?;
+    let assets = FolderAssets::with_pins(path, limits.max_file_bytes, &scene.pins)?;
+    bundle_folder(scene, &assets)
+}
+
+/// Bundle `scene` with the files `assets` holds (a folder, whose URLs are fetched once).
+pub fn bundle_folder(mut scene: SceneFile, assets: &FolderAssets) -> Result<Bundle> {
     let mut files = BTreeMap::new();
     let mut add = |reference: &mut String, place: String| -> Result<()> {
         let mut bytes = assets.read(reference, &place)?;
@@ -37,9 +42,9 @@ pub fn bundle_scene(path: &Path, limits: &Limits) -> Result<Bundle> {
             // One file in the bundle: the model with its separate buffers embedded.
             let shown = assets.display_path(reference);
             let beside = |uri: &str| {
-                assets.read(&crate::assets::sibling(reference, uri), &place).map_err(|e| {
-                    SceneError::invalid(&shown, format!("buffer `{uri}`"), e.to_string())
-                })
+                let invalid = |e: String| SceneError::invalid(&shown, format!("buffer `{uri}`"), e);
+                let file = crate::assets::sibling(reference, uri).map_err(invalid)?;
+                assets.read(&file, &place).map_err(|e| invalid(e.to_string()))
             };
             bytes = crate::gltf_mesh::embed_buffers(&bytes, &shown, &beside)?;
         }
@@ -51,6 +56,9 @@ pub fn bundle_scene(path: &Path, limits: &Limits) -> Result<Bundle> {
     for (place, reference) in Bundle::placed_references_mut(&mut scene) {
         add(reference, place)?;
     }
+    // Every file is named by its hash now: the pins have done their work, and a scene says
+    // the same thing whether its files came from a folder or from the web.
+    scene.pins.clear();
     Ok(Bundle { scene, files })
 }
 

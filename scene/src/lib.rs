@@ -37,6 +37,7 @@ pub mod ply;
 mod ply_binary;
 mod ply_layout;
 pub mod relief;
+pub mod remote;
 pub mod samples;
 pub mod scene_file;
 pub mod sky_shape;

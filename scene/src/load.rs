@@ -365,7 +365,7 @@ pub fn load_scene(path: &Path, limits: &Limits) -> Result<LoadedScene> {
         return crate::archive::read_archive(path, limits)?.load(limits);
     }
     let file = read_scene_file(path, limits)?;
-    let assets = FolderAssets::new(path, limits.max_file_bytes)?;
+    let assets = FolderAssets::with_pins(path, limits.max_file_bytes, &file.pins)?;
     load(file, &assets, limits)
 }
 
@@ -705,9 +705,9 @@ fn import_mesh(
         "gltf" | "glb" => {
             // A buffer that cannot be read is the model's problem: the message names the model.
             let beside = |uri: &str| {
-                ctx.assets.read(&crate::assets::sibling(reference, uri), place).map_err(|e| {
-                    SceneError::invalid(&name, format!("buffer `{uri}`"), e.to_string())
-                })
+                let invalid = |e: String| SceneError::invalid(&name, format!("buffer `{uri}`"), e);
+                let file = crate::assets::sibling(reference, uri).map_err(invalid)?;
+                ctx.assets.read(&file, place).map_err(|e| invalid(e.to_string()))
             };
             let (mesh, cameras) = gltf_mesh::parse_with_cameras(&bytes, &name, limits, &beside)?;
             (mesh, cameras, UpAxis::Y, Vec::new())

@@ -100,6 +100,22 @@ pub struct SceneFile {
     /// it. Not written when there are none.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub maps: Vec<DegradationMap>,
+    /// The content hash of every file the scene names by URL (`https://…`), by URL: what makes
+    /// a render from remote files reproducible (see [`crate::remote`]). Bundles name files by
+    /// hash and carry none. Not written when there are none.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub pins: BTreeMap<String, Pin>,
+}
+
+/// The content a URL must serve: its SHA-256 (what `sha256sum` prints) or its BLAKE3 (what
+/// `b3sum` prints) in hexadecimal, one of the two.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Pin {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sha256: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub blake3: Option<String>,
 }
 
 /// Exposure-driven soiling: a deposit (`spectrum`, soot for black crusts) covering up to

@@ -7,6 +7,7 @@
 pub mod browser;
 pub mod http;
 pub mod relief;
+pub mod web;
 pub mod wire;
 
 use std::io::{BufRead, BufReader};

@@ -1362,3 +1362,45 @@ fn a_georeferenced_scene_is_shown_near_zero_and_edited_in_survey_coordinates() {
         assert!((kept[k].as_f64().unwrap() - want).abs() < 1e-6, "{kept} against {want:?}");
     }
 }
+
+/// A scene folder sent to the studio whose scene names its files by URL: the coordinator
+/// fetches them for the user, but by default only from public servers (loopback stands for the
+/// farm's own network here), and with `--fetch-private-urls` from any; the scene then has the
+/// identity of the same folder with the files in it, and the files are in the coordinator's
+/// data folder.
+#[test]
+fn a_scene_sent_with_files_by_url_is_fetched_only_from_where_the_operator_allows() {
+    use restauro_tests::web::{scene_by_url, serve_folder};
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = std::path::PathBuf::from(aosta_scene(d, 64, 36));
+    let folder = scene.parent().unwrap().to_owned();
+    let (base, requests) = serve_folder(folder.clone());
+    let web = d.join("web");
+    std::fs::create_dir_all(web.join("aosta")).unwrap();
+    let files = scene_by_url(&scene, &base, &web.join("aosta/aosta.toml"));
+    let auth = [("Authorization", BEARER)];
+    let send = |studio: &str, name: &str, body: &[u8]| {
+        let path = format!("/api/scenes?name={name}&scene=aosta/aosta.toml");
+        request(studio, "POST", &path, &auth, body)
+    };
+
+    let (c, _) = Coordinator::with_studio(d);
+    let r = send(c.studio.as_deref().unwrap(), "by-url", &folder_tar(&web.join("aosta"), "aosta"));
+    assert_eq!(r.status, 400, "{}", r.text());
+    assert!(error_of(&r).contains("not a public address"), "{}", error_of(&r));
+    assert!(error_of(&r).contains("--fetch-private-urls"), "{}", error_of(&r));
+    assert!(requests.lock().unwrap().is_empty(), "nothing fetched");
+    drop(c);
+
+    let data = d.join("data-intranet");
+    let args = ["--studio-listen", "127.0.0.1:0", "--fetch-private-urls"];
+    let c = Coordinator::start(d, &data, "127.0.0.1:0", &args);
+    let studio = c.studio.as_deref().unwrap();
+    let from_folder = send(studio, "in-folder", &folder_tar(&folder, "aosta"));
+    let from_web = send(studio, "by-url", &folder_tar(&web.join("aosta"), "aosta"));
+    assert_eq!(from_web.status, 200, "{}", from_web.text());
+    assert_eq!(from_web.json()["scene"], from_folder.json()["scene"], "one scene");
+    assert_eq!(requests.lock().unwrap().len(), files);
+    assert!(data.join("downloads/blake3").read_dir().unwrap().count() >= files);
+}

@@ -1,0 +1,333 @@
+//! Files a scene names by URL. Any file reference (a mesh, a spectrum's `file`, a photometric
+//! file, a photo, a degradation map's image, a glTF's buffers and images) may be an
+//! `https://` or `http://` URL; the scene's `[pins]` table gives the content hash each URL
+//! must serve, so that a render made from remote files can be made again:
+//!
+//! ```toml
+//! mesh = "https://survey.example.org/aosta/facade.glb"
+//!
+//! [pins]
+//! "https://survey.example.org/aosta/facade.glb" = { sha256 = "9f86d081…" }
+//! ```
+//!
+//! The process that reads the scene folder — the client, or the coordinator for a scene sent
+//! to the studio — fetches each file once into a user cache folder (by hash, under a size
+//! bound), resumes a download broken off, checks the hash and refuses a file that does not
+//! match. A bundle names the file by its BLAKE3 hash like any other file, so workers never
+//! fetch: they get every file from the coordinator.
+//!
+//! The environment sets the cache and the network's bounds:
+//!
+//! | variable | default |
+//! |---|---|
+//! | `RESTAURO_CACHE_DIR` | `$XDG_CACHE_HOME/restauro/downloads`, else `~/.cache/restauro/downloads` |
+//! | `RESTAURO_CACHE_MB` | 4096 |
+//! | `RESTAURO_DOWNLOAD_TIMEOUT_S` (connecting, waiting for an answer, any stretch without data) | 30 |
+//! | `RESTAURO_CA_FILE` (PEM certificates trusted besides the system's) | none |
+//!
+//! The system's certificates are those `rustls-native-certs` finds (`SSL_CERT_FILE` and
+//! `SSL_CERT_DIR` are honoured).
+
+pub mod cache;
+mod http;
+pub mod web_url;
+
+use crate::error::{Result, SceneError};
+use crate::scene_file::Pin;
+pub use http::is_public;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, OnceLock};
+use std::time::Duration;
+pub use web_url::{WebUrl, is_url};
+
+/// What to do when a server's certificate is not trusted.
+const TLS_FIX: &str = "if the server uses a private certificate authority, give its certificate \
+                       (PEM) in RESTAURO_CA_FILE";
+
+/// A hash function a pin may use.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Algorithm {
+    Sha256,
+    Blake3,
+}
+
+impl Algorithm {
+    pub fn name(self) -> &'static str {
+        match self {
+            Algorithm::Sha256 => "sha256",
+            Algorithm::Blake3 => "blake3",
+        }
+    }
+
+    /// The hash of `bytes` in lower-case hexadecimal.
+    pub fn hex(self, bytes: &[u8]) -> String {
+        match self {
+            Algorithm::Sha256 => ring::digest::digest(&ring::digest::SHA256, bytes)
+                .as_ref()
+                .iter()
+                .map(|b| format!("{b:02x}"))
+                .collect(),
+            Algorithm::Blake3 => blake3::hash(bytes).to_hex().to_string(),
+        }
+    }
+}
+
+/// A checked pin: which hash, and its 64 hexadecimal digits in lower case.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ContentHash {
+    pub algorithm: Algorithm,
+    pub hex: String,
+}
+
+impl ContentHash {
+    pub fn matches(&self, bytes: &[u8]) -> bool {
+        self.algorithm.hex(bytes) == self.hex
+    }
+}
+
+impl std::fmt::Display for ContentHash {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} = \"{}\"", self.algorithm.name(), self.hex)
+    }
+}
+
+impl TryFrom<&Pin> for ContentHash {
+    type Error = String;
+
+    fn try_from(pin: &Pin) -> Result<Self, String> {
+        let (algorithm, hex) = match (&pin.sha256, &pin.blake3) {
+            (Some(hex), None) => (Algorithm::Sha256, hex),
+            (None, Some(hex)) => (Algorithm::Blake3, hex),
+            _ => return Err("give one hash: `{ sha256 = \"…\" }` or `{ blake3 = \"…\" }`".into()),
+        };
+        let hex = hex.trim().to_ascii_lowercase();
+        if hex.len() != 64 || !hex.bytes().all(|b| b.is_ascii_hexdigit()) {
+            return Err(format!(
+                "the {} `{hex}` is not 64 hexadecimal digits; copy it whole from `{}sum`",
+                algorithm.name(),
+                if algorithm == Algorithm::Sha256 { "sha256" } else { "b3" }
+            ));
+        }
+        Ok(ContentHash { algorithm, hex })
+    }
+}
+
+/// What a process lets files by URL reach, set once when it starts. The coordinator fetches
+/// for the studio's users: unless its operator allows more, only from public addresses (a user
+/// must not reach the farm's own network, or a cloud's metadata service, through it), into its
+/// data folder.
+#[derive(Clone, Debug, Default)]
+pub struct Policy {
+    pub public_only: bool,
+    pub cache_dir: Option<PathBuf>,
+}
+
+static POLICY: OnceLock<Policy> = OnceLock::new();
+
+/// Sets this process's policy; false if it was set already.
+pub fn set_policy(policy: Policy) -> bool {
+    POLICY.set(policy).is_ok()
+}
+
+/// Where downloads are cached and how long the network may take.
+#[derive(Clone, Debug)]
+pub struct RemoteConfig {
+    pub cache: cache::Cache,
+    pub timeout: Duration,
+    /// Certificates (PEM) trusted besides the system's.
+    pub ca_file: Option<PathBuf>,
+    /// Refuse hosts at loopback, private, link-local and other non-public addresses.
+    pub public_only: bool,
+}
+
+impl RemoteConfig {
+    /// The configuration the environment gives (see the module's table).
+    pub fn from_env() -> Result<RemoteConfig> {
+        let var = |name: &str| std::env::var(name).ok().filter(|v| !v.trim().is_empty());
+        let number = |name: &str, default: u64| -> Result<u64> {
+            var(name).map_or(Ok(default), |v| {
+                v.trim().parse().map_err(|_| {
+                    SceneError::invalid(
+                        "the environment",
+                        name,
+                        format!("`{v}` is not a whole number"),
+                    )
+                })
+            })
+        };
+        let policy = POLICY.get().cloned().unwrap_or_default();
+        let dir = policy.cache_dir.or_else(|| var("RESTAURO_CACHE_DIR").map(PathBuf::from));
+        let dir = dir.unwrap_or_else(|| {
+            let base = var("XDG_CACHE_HOME")
+                .map(PathBuf::from)
+                .or_else(|| var("HOME").map(|h| Path::new(&h).join(".cache")))
+                .unwrap_or_else(std::env::temp_dir);
+            base.join("restauro").join("downloads")
+        });
+        Ok(RemoteConfig {
+            cache: cache::Cache { dir, max_bytes: number("RESTAURO_CACHE_MB", 4096)? << 20 },
+            timeout: Duration::from_secs(number("RESTAURO_DOWNLOAD_TIMEOUT_S", 30)?.max(1)),
+            ca_file: var("RESTAURO_CA_FILE").map(PathBuf::from),
+            public_only: policy.public_only,
+        })
+    }
+
+    /// The TLS client: the system's certificates and those of `ca_file`.
+    fn tls(&self) -> Result<Arc<rustls::ClientConfig>, String> {
+        use rustls::pki_types::CertificateDer;
+        use rustls::pki_types::pem::PemObject;
+        let mut roots = rustls::RootCertStore::empty();
+        let native = rustls_native_certs::load_native_certs();
+        for cert in native.certs {
+            let _ = roots.add(cert);
+        }
+        if let Some(path) = &self.ca_file {
+            let certs: Vec<_> = CertificateDer::pem_file_iter(path)
+                .and_then(|certs| certs.collect::<Result<Vec<_>, _>>())
+                .map_err(|e| format!("RESTAURO_CA_FILE {}: {e}", path.display()))?;
+            if certs.is_empty() {
+                return Err(format!("RESTAURO_CA_FILE {}: no PEM certificate", path.display()));
+            }
+            for cert in certs {
+                roots.add(cert).map_err(|e| format!("RESTAURO_CA_FILE {}: {e}", path.display()))?;
+            }
+        }
+        let provider = Arc::new(rustls::crypto::ring::default_provider());
+        let config = rustls::ClientConfig::builder_with_provider(provider)
+            .with_safe_default_protocol_versions()
+            .map_err(|e| e.to_string())?
+            .with_root_certificates(roots)
+            .with_no_client_auth();
+        Ok(Arc::new(config))
+    }
+}
+
+/// The files a scene names by URL: its pins, and (made when the first URL is met) the
+/// configuration and TLS client.
+pub struct Remote {
+    scene_file: PathBuf,
+    pins: BTreeMap<String, ContentHash>,
+    config: Option<RemoteConfig>,
+    ready: OnceLock<std::result::Result<(RemoteConfig, Arc<rustls::ClientConfig>), String>>,
+}
+
+impl Remote {
+    /// Checks the scene's `[pins]`: each key a web URL, each value one well-formed hash.
+    pub fn new(scene_file: &Path, pins: &BTreeMap<String, Pin>) -> Result<Remote> {
+        let mut checked = BTreeMap::new();
+        for (url, pin) in pins {
+            let place = format!("pins.\"{url}\"");
+            let invalid = |problem: String| SceneError::invalid(scene_file, &place, problem);
+            let parsed = WebUrl::parse(url).map_err(invalid)?;
+            let hash = ContentHash::try_from(pin).map_err(invalid)?;
+            checked.insert(parsed.to_string(), hash);
+        }
+        Ok(Remote {
+            scene_file: scene_file.to_owned(),
+            pins: checked,
+            config: None,
+            ready: OnceLock::new(),
+        })
+    }
+
+    /// Uses `config` rather than the environment's.
+    pub fn with_config(mut self, config: RemoteConfig) -> Remote {
+        self.config = Some(config);
+        self
+    }
+
+    /// The bytes of the file at `url`, from the cache or the network, checked against its pin.
+    /// `place` says where the scene names it, for messages.
+    pub fn read(&self, url: &str, place: &str, max_bytes: u64) -> Result<Vec<u8>> {
+        let invalid = |problem: String| SceneError::invalid(&self.scene_file, place, problem);
+        let parsed = WebUrl::parse(url).map_err(invalid)?;
+        let (config, tls) = self.ready().map_err(|e| invalid(format!("{url}: {e}")))?;
+        let bounds = http::Bounds {
+            max_bytes,
+            timeout: config.timeout,
+            tls: tls.clone(),
+            public_only: config.public_only,
+        };
+        let fetched = match self.pins.get(&parsed.to_string()) {
+            Some(hash) => fetch_pinned(&parsed, hash, &config.cache, &bounds),
+            None => Err(unpinned(&parsed, &config.cache, &bounds)),
+        };
+        fetched.map_err(|problem| invalid(format!("{parsed}: {problem}")))
+    }
+
+    fn ready(&self) -> std::result::Result<&(RemoteConfig, Arc<rustls::ClientConfig>), String> {
+        self.ready
+            .get_or_init(|| {
+                let config = match &self.config {
+                    Some(c) => c.clone(),
+                    None => RemoteConfig::from_env().map_err(|e| e.to_string())?,
+                };
+                let tls = config.tls()?;
+                Ok((config, tls))
+            })
+            .as_ref()
+            .map_err(Clone::clone)
+    }
+}
+
+/// The file pinned by `hash`: from the cache, or downloaded, checked and cached.
+fn fetch_pinned(
+    url: &WebUrl,
+    hash: &ContentHash,
+    cache: &cache::Cache,
+    bounds: &http::Bounds,
+) -> std::result::Result<Vec<u8>, String> {
+    if let Some(bytes) = cache.get(hash) {
+        return Ok(bytes);
+    }
+    let cache_problem =
+        |e: std::io::Error| format!("the download cache {}: {e}", cache.dir.display());
+    let mut partial =
+        cache.partial(&format!("{}-{}", hash.algorithm.name(), hash.hex)).map_err(cache_problem)?;
+    // Another process may have finished it while this one waited for the lock.
+    if let Some(bytes) = cache.get(hash) {
+        return Ok(bytes);
+    }
+    tracing::info!(%url, "downloading");
+    http::download(url, &mut partial.file, bounds).map_err(|f| f.problem)?;
+    let bytes = std::fs::read(&partial.path).map_err(cache_problem)?;
+    let actual = hash.algorithm.hex(&bytes);
+    if actual != hash.hex {
+        let _ = std::fs::remove_file(&partial.path);
+        return Err(format!(
+            "it serves a file whose {} is {actual}, but the scene pins {}: the file changed \
+             where it is kept, or the pin is wrong; check the file, then correct [pins]",
+            hash.algorithm.name(),
+            hash.hex
+        ));
+    }
+    cache.store(partial, hash).map_err(cache_problem)?;
+    Ok(bytes)
+}
+
+/// The refusal of a URL without a pin. The file is fetched all the same (and cached), so that
+/// the message can give the pin of what the URL serves now, for the user to check and add.
+fn unpinned(url: &WebUrl, cache: &cache::Cache, bounds: &http::Bounds) -> String {
+    let fix = |found: String| {
+        format!(
+            "the URL has no pin in [pins], so a render from it could not be made again; {found}"
+        )
+    };
+    let name = format!("url-{}", &blake3::hash(url.to_string().as_bytes()).to_hex()[..32]);
+    let outcome = cache.partial(&name).map_err(|e| e.to_string()).and_then(|mut partial| {
+        partial.file.set_len(0).map_err(|e| e.to_string())?;
+        http::download(url, &mut partial.file, bounds).map_err(|f| f.problem)?;
+        let bytes = std::fs::read(&partial.path).map_err(|e| e.to_string())?;
+        let hash = ContentHash { algorithm: Algorithm::Sha256, hex: Algorithm::Sha256.hex(&bytes) };
+        cache.store(partial, &hash).map_err(|e| e.to_string())?;
+        Ok(hash)
+    });
+    match outcome {
+        Ok(hash) => fix(format!(
+            "it serves a file with {hash}: check that file, then add under [pins] the line \
+             \"{url}\" = {{ {hash} }}"
+        )),
+        Err(problem) => fix(format!("and it cannot be fetched either: {problem}")),
+    }
+}

@@ -56,6 +56,14 @@ fn place_mesh(mesh: &Path, out: &Path) -> Result<String> {
             mesh.display()
         );
     }
+    let is_wrl = mesh.extension().is_some_and(|e| e.eq_ignore_ascii_case("wrl"));
+    if is_wrl && std::fs::read_to_string(mesh).is_ok_and(|text| text.contains("Inline")) {
+        bail!(
+            "{}: the world inlines other files, which are found beside it; write the scene \
+             beside the model (leave out --out)",
+            mesh.display()
+        );
+    }
     let target = out.join("meshes").join(&file);
     std::fs::create_dir_all(out.join("meshes"))
         .with_context(|| format!("creating {}", out.join("meshes").display()))?;

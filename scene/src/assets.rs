@@ -6,8 +6,9 @@ use crate::error::{Result, SceneError};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-/// A source of the files a scene refers to.
-pub trait Assets {
+/// A source of the files a scene refers to (shared with the thread that reads a VRML97
+/// world, hence `Sync`).
+pub trait Assets: Sync {
     /// The bytes of the file the scene calls `reference`; `place` says where the scene refers
     /// to it (e.g. `objects[2].mesh`), for messages.
     fn read(&self, reference: &str, place: &str) -> Result<Vec<u8>>;
@@ -24,14 +25,50 @@ pub trait Assets {
 /// (a glTF's buffer `model.bin` beside `meshes/model.gltf` is `meshes/model.bin`; beside
 /// `https://x.org/scan/model.gltf` it is `https://x.org/scan/model.bin`).
 pub fn sibling(reference: &str, relative: &str) -> Result<String, String> {
+    if crate::remote::is_url(relative) {
+        return Ok(relative.to_owned());
+    }
     if crate::remote::is_url(reference) {
         let base = crate::remote::WebUrl::parse(reference)?;
         return base.join(relative).map(|url| url.to_string());
     }
-    Ok(match Path::new(reference).parent().filter(|p| !p.as_os_str().is_empty()) {
-        Some(folder) => folder.join(relative).to_string_lossy().into_owned(),
-        None => relative.to_owned(),
-    })
+    let joined = match Path::new(reference).parent().filter(|p| !p.as_os_str().is_empty()) {
+        Some(folder) => folder.join(relative),
+        None => PathBuf::from(relative),
+    };
+    // `parts/../world.wrl` is `world.wrl`: one file, one reference (an Inline's cycle is
+    // found by its reference). What climbs above the scene's folder keeps its `..`, and the
+    // folder refuses it.
+    let mut parts: Vec<String> = Vec::new();
+    for component in joined.components() {
+        use std::path::Component;
+        match component {
+            Component::CurDir => {}
+            Component::ParentDir if parts.last().is_some_and(|p| p != "..") => {
+                parts.pop();
+            }
+            Component::ParentDir => parts.push("..".into()),
+            Component::RootDir => parts.push(String::new()),
+            other => parts.push(other.as_os_str().to_string_lossy().into_owned()),
+        }
+    }
+    Ok(parts.join("/"))
+}
+
+/// The files a VRML97 world's `Inline`s name, read through `assets`: a url is relative to the
+/// file that holds the Inline. `place` is where the scene names the world, for messages.
+pub fn vrml_inlines<'a>(
+    assets: &'a dyn Assets,
+    place: &'a str,
+) -> impl Fn(&str, &str) -> Result<crate::vrml::Inlined> + Sync + 'a {
+    move |base: &str, url: &str| {
+        let reference = sibling(base, url).map_err(|e| {
+            SceneError::invalid(assets.display_path(base), format!("Inline `{url}`"), e)
+        })?;
+        let shown = assets.display_path(&reference);
+        let text = utf8_text(assets.read(&reference, place)?, &shown)?;
+        Ok(crate::vrml::Inlined { reference, shown, text })
+    }
 }
 
 /// How to raise [`crate::load::Limits::max_file_bytes`].

@@ -30,14 +30,35 @@ pub fn bundle_scene(path: &Path, limits: &Limits) -> Result<Bundle> {
     }
     let scene = read_scene_file(path, limits)?;
     let assets = FolderAssets::with_pins(path, limits.max_file_bytes, &scene.pins)?;
-    bundle_folder(scene, &assets)
+    bundle_folder(scene, &assets, limits)
 }
 
 /// Bundle `scene` with the files `assets` holds (a folder, whose URLs are fetched once).
-pub fn bundle_folder(mut scene: SceneFile, assets: &FolderAssets) -> Result<Bundle> {
+pub fn bundle_folder(
+    mut scene: SceneFile,
+    assets: &FolderAssets,
+    limits: &Limits,
+) -> Result<Bundle> {
     let mut files = BTreeMap::new();
+    let mut included = Vec::new();
     let mut add = |reference: &mut String, place: String| -> Result<()> {
         let mut bytes = assets.read(reference, &place)?;
+        if extension(reference) == "wrl" {
+            // The inlined worlds travel as files of their own, named by hash in the world.
+            let shown = assets.display_path(reference);
+            let text = crate::assets::utf8_text(bytes, &shown)?;
+            let mut store = |bytes: Vec<u8>| {
+                let hash = blake3::hash(&bytes).to_hex().to_string();
+                let named = format!("blake3:{hash}.wrl");
+                files.insert(hash, bytes);
+                included.push(named.clone());
+                named
+            };
+            let source = crate::assets::vrml_inlines(assets, &place);
+            bytes =
+                crate::vrml::embed_inlines(&text, &shown, reference, limits, &source, &mut store)?
+                    .into_bytes();
+        }
         if extension(reference) == "gltf" {
             // One file in the bundle: the model with its separate buffers embedded.
             let shown = assets.display_path(reference);
@@ -59,6 +80,9 @@ pub fn bundle_folder(mut scene: SceneFile, assets: &FolderAssets) -> Result<Bund
     // Every file is named by its hash now: the pins have done their work, and a scene says
     // the same thing whether its files came from a folder or from the web.
     scene.pins.clear();
+    included.sort();
+    included.dedup();
+    scene.included = included;
     Ok(Bundle { scene, files })
 }
 
@@ -154,6 +178,9 @@ impl Bundle {
             for (k, image) in a.images.iter_mut().enumerate() {
                 out.push((format!("annotations[{i}].images[{k}]"), image));
             }
+        }
+        for (i, file) in scene.included.iter_mut().enumerate() {
+            out.push((format!("included[{i}]"), file));
         }
         out
     }

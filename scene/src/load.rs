@@ -714,7 +714,8 @@ fn import_mesh(
         }
         "wrl" => {
             let text = utf8_text(bytes, &name)?;
-            let scene = vrml::parse_limited(&text, &name, limits)?;
+            let inlines = crate::assets::vrml_inlines(ctx.assets, place);
+            let scene = vrml::parse_with_inlines(&text, &name, reference, limits, &inlines)?;
             (scene.mesh, scene.viewpoints, UpAxis::Y, scene.notes)
         }
         other => {

@@ -105,6 +105,12 @@ pub struct SceneFile {
     /// hash and carry none. Not written when there are none.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub pins: BTreeMap<String, Pin>,
+    /// Written by bundles: the files that the scene's files name inside themselves (the worlds
+    /// VRML97 `Inline`s draw, an OBJ's material library and its photos), by hash, so that a
+    /// bundle names every file it carries. A scene you write leaves it out. Not written when
+    /// empty.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub included: Vec<String>,
 }
 
 /// The content a URL must serve: its SHA-256 (what `sha256sum` prints) or its BLAKE3 (what

@@ -439,7 +439,7 @@ fn a_scene_from_the_web_bundles_like_the_same_scene_from_its_folder() {
     let assets = FolderAssets::with_pins(&path, 1 << 30, &file.pins)
         .unwrap()
         .with_remote_config(config(web.path(), None));
-    let from_web = bundle_folder(file, &assets).unwrap();
+    let from_web = bundle_folder(file, &assets, &Limits::default()).unwrap();
     assert_eq!(from_web.id(), from_folder.id(), "the same scene, the same identity");
     assert!(from_web.scene.pins.is_empty());
     let loaded = from_web.load(&Limits::default()).unwrap();
@@ -461,4 +461,55 @@ fn a_process_that_fetches_from_public_addresses_only_refuses_loopback() {
     assert!(e.contains(&url) && e.contains("127.0.0.1, not a public address"), "{e}");
     assert!(e.contains("--fetch-private-urls"), "{e}");
     assert!(server.requests.lock().unwrap().is_empty());
+}
+
+/// A remote VRML97 world whose `Inline` names a file relative to it: the url resolves against
+/// the world's (RFC 3986) and is fetched and pinned like the world; an inlined file without a
+/// pin is refused with its pin.
+#[test]
+fn a_remote_worlds_inline_resolves_against_its_url_and_is_pinned_too() {
+    let world =
+        b"#VRML V2.0 utf8\nShape { geometry Box {} }\nInline { url \"../parts/column.wrl\" }\n";
+    let column =
+        b"#VRML V2.0 utf8\nTransform { translation 5 0 0 children Shape { geometry Box {} } }\n";
+    let server = serve(
+        vec![
+            ("/site/world.wrl", Route::File(world.to_vec())),
+            ("/parts/column.wrl", Route::File(column.to_vec())),
+        ],
+        None,
+    );
+    let (world_url, column_url) =
+        (format!("{}/site/world.wrl", server.base), format!("{}/parts/column.wrl", server.base));
+    let scene = |pins: &[(&str, &[u8])]| {
+        let mut toml = format!(
+            "format = 1\n[camera]\nposition = [0.0, -20.0, 2.0]\ntarget = [0.0, 0.0, 2.0]\nwidth = 8\nheight = 8\n\
+             [spectra]\nday = {{ illuminant = \"D65\" }}\ngrey = {{ constant = 0.5 }}\n\
+             [materials.stone]\nmodel = \"lambert\"\nreflectance = \"grey\"\n\
+             [[objects]]\nname = \"world\"\nmesh = \"{world_url}\"\nmaterial = \"stone\"\n\
+             [[lights]]\nkind = \"sun\"\nilluminance_lux = 1000.0\nazimuth_deg = 0.0\nelevation_deg = 60.0\nspectrum = \"day\"\n\
+             [pins]\n"
+        );
+        for (url, bytes) in pins {
+            toml += &format!("\"{url}\" = {{ sha256 = \"{}\" }}\n", sha256sum(bytes));
+        }
+        toml
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let bundle = |toml: String| {
+        let path = dir.path().join("scene.toml");
+        std::fs::write(&path, toml).unwrap();
+        let file = read_scene_file(&path, &Limits::default()).unwrap();
+        let assets = FolderAssets::with_pins(&path, 1 << 30, &file.pins)
+            .unwrap()
+            .with_remote_config(config(dir.path(), None));
+        bundle_folder(file, &assets, &Limits::default())
+    };
+    let e = bundle(scene(&[(&world_url, world)])).unwrap_err().to_string();
+    assert!(e.contains(&column_url) && e.contains("no pin in [pins]"), "{e}");
+    assert!(e.contains(&sha256sum(column)), "{e}");
+    let done = bundle(scene(&[(&world_url, world), (&column_url, column)])).unwrap();
+    assert_eq!(done.scene.included.len(), 1);
+    let loaded = done.load(&Limits::default()).unwrap();
+    assert_eq!(loaded.objects[0].mesh.triangles.len(), 24, "the world's box and the column's");
 }

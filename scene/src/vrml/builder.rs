@@ -16,8 +16,17 @@ use crate::load::Limits;
 use crate::mesh::{Group, Mesh};
 
 /// Turns the parsed nodes into the mesh, instance by instance.
-pub(super) struct Builder<'a> {
-    pub path: &'a Path,
+pub(super) struct Builder<'s> {
+    /// The file being walked: the world's, or an `Inline`d file's while its nodes are walked.
+    pub path: Rc<Path>,
+    /// Where `Inline`d files come from; without it, an Inline is noted and not drawn.
+    pub inline: Option<&'s super::InlineFn<'s>>,
+    /// The references of the files being walked, the world's first (an Inline's url is
+    /// relative to the file it is in).
+    pub files: Vec<String>,
+    /// Inlined files parsed, by (the file inlining, the url).
+    pub inlined: HashMap<(String, String), Rc<super::inline::InlinedFile>>,
+    pub limits: Limits,
     pub mesh: Mesh,
     pub viewpoints: Vec<Viewpoint>,
     pub notes: Notes,
@@ -52,10 +61,20 @@ const GROUPS: [&str; 5] = ["Transform", "Group", "Anchor", "Billboard", "Collisi
 const GEOMETRY: [&str; 7] =
     ["IndexedFaceSet", "Box", "Sphere", "Cone", "Cylinder", "ElevationGrid", "Extrusion"];
 
-impl<'a> Builder<'a> {
-    pub fn new(path: &'a Path, limits: &Limits) -> Builder<'a> {
+impl<'s> Builder<'s> {
+    /// A builder of the world at `path`, whose reference in the scene is `reference`.
+    pub fn new(
+        path: &Path,
+        reference: &str,
+        limits: &Limits,
+        inline: Option<&'s super::InlineFn<'s>>,
+    ) -> Builder<'s> {
         Builder {
-            path,
+            path: Rc::from(path),
+            inline,
+            files: vec![reference.to_owned()],
+            inlined: HashMap::new(),
+            limits: *limits,
             mesh: Mesh { normals: Some(Vec::new()), ..Mesh::default() },
             viewpoints: Vec::new(),
             notes: Notes::default(),
@@ -79,7 +98,7 @@ impl Builder<'_> {
         };
         if let Some(&n) = nums.iter().find(|n| !fits_f32(**n)) {
             return Err(SceneError::invalid(
-                self.path,
+                &*self.path,
                 place(field, node),
                 format!(
                     "{n} is not a finite number restauro can hold (32-bit float); fix the value"
@@ -117,7 +136,7 @@ impl Builder<'_> {
             Some(field) => place(field, node),
             None => format!("`{name}` of {}", of(node)),
         };
-        SceneError::invalid(self.path, at, problem)
+        SceneError::invalid(&*self.path, at, problem)
     }
 
     /// A `TRUE`/`FALSE` field, or `default` when absent.
@@ -126,7 +145,9 @@ impl Builder<'_> {
         match &*field.value {
             Value::Word(w) if w == "TRUE" => Ok(true),
             Value::Word(w) if w == "FALSE" => Ok(false),
-            _ => Err(SceneError::invalid(self.path, place(field, node), "expected TRUE or FALSE")),
+            _ => {
+                Err(SceneError::invalid(&*self.path, place(field, node), "expected TRUE or FALSE"))
+            }
         }
     }
 
@@ -140,12 +161,12 @@ impl Builder<'_> {
         depth: usize,
     ) -> crate::Result<()> {
         if depth > MAX_DEPTH {
-            return Err(depth_limit(self.path, node.pos, depth));
+            return Err(depth_limit(&self.path, node.pos, depth));
         }
         // The census has counted these already; this is the backstop.
         self.instances += 1;
         if self.instances > self.max_instances {
-            return Err(instances_limit(self.path, self.instances, self.max_instances));
+            return Err(instances_limit(&self.path, self.instances, self.max_instances));
         }
         let group_name = node.def.as_deref().or(name);
         match node.kind.as_str() {
@@ -168,6 +189,7 @@ impl Builder<'_> {
             "LOD" => self.lod(node, m, group_name, depth),
             "Shape" => self.shape(node, m, group_name),
             "Viewpoint" => self.viewpoint(node, m),
+            "Inline" if self.inline.is_some() => self.inline(node, m, group_name, depth),
             _ => {
                 self.notes.child(node);
                 Ok(())
@@ -213,7 +235,7 @@ impl Builder<'_> {
         Ok(())
     }
 
-    fn walk_all(
+    pub(super) fn walk_all(
         &mut self,
         nodes: &[Rc<Node>],
         m: &Mat,
@@ -253,7 +275,7 @@ impl Builder<'_> {
         let [x, y, z, a] = self.numbers(node, "orientation", [0.0, 0.0, 1.0, 0.0])?;
         let [fov] = self.numbers(node, "fieldOfView", [std::f64::consts::FRAC_PI_4])?; // §6.53: 0.785398
         let description = match node.field("description").map(|f| &*f.value) {
-            Some(Value::Strs(s)) => s.first().cloned().unwrap_or_default(),
+            Some(Value::Strs(s, _)) => s.first().cloned().unwrap_or_default(),
             _ => String::new(),
         };
         let world = rotation_part(&linear(m));
@@ -265,7 +287,7 @@ impl Builder<'_> {
         let p = apply_point(m, position);
         if !p.iter().all(|&c| fits_f32(c)) {
             return Err(SceneError::invalid(
-                self.path,
+                &*self.path,
                 format!("{}:{}: Viewpoint", node.pos.line, node.pos.column),
                 "its position is not finite once transformed; fix the enclosing Transforms",
             ));
@@ -403,7 +425,7 @@ impl Builder<'_> {
             let p = apply_point(m, p);
             if !p.iter().all(|&c| fits_f32(c)) {
                 return Err(SceneError::invalid(
-                    self.path,
+                    &*self.path,
                     format!(
                         "{}:{}: {} of shape `{name}`",
                         node.pos.line, node.pos.column, node.kind

@@ -33,7 +33,7 @@ impl Builder<'_> {
         };
         if nums.len() % 3 != 0 {
             return Err(SceneError::invalid(
-                self.path,
+                &*self.path,
                 place(field, coord),
                 format!(
                     "{} numbers is not a whole number of points (3 numbers each); add or remove \
@@ -46,7 +46,7 @@ impl Builder<'_> {
             if !fits_f32(n) {
                 let at = places.get(i).copied().unwrap_or(field.pos);
                 return Err(SceneError::syntax(
-                    self.path,
+                    &*self.path,
                     at.line as usize,
                     at.column as usize,
                     format!(
@@ -78,7 +78,7 @@ impl Builder<'_> {
                 if n.fract() != 0.0 || n < 0.0 || n >= count as f64 {
                     let pos = at(i);
                     return Err(SceneError::syntax(
-                        self.path,
+                        &*self.path,
                         pos.line as usize,
                         pos.column as usize,
                         format!(
@@ -112,7 +112,7 @@ impl Builder<'_> {
                 let len = faces.corners.len() - start;
                 if len < 3 {
                     return Err(SceneError::syntax(
-                        self.path,
+                        &*self.path,
                         face_start_pos.line as usize,
                         face_start_pos.column as usize,
                         format!(

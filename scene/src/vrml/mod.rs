@@ -32,12 +32,15 @@
 //!   and `Extrusion` (§6.18, with the spine-aligned cross-section plane of the standard),
 //!   which become faces with normals from their `creaseAngle` like an IndexedFaceSet;
 //! - `Viewpoint` (§6.53): position, orientation, fieldOfView and description, transformed to
-//!   the file's root coordinate system.
+//!   the file's root coordinate system;
+//! - `Inline` (§6.25): the first of its urls that can be read is drawn in place, relative to
+//!   the file that holds it, with DEF names and PROTOs of its own (`inline`); an Inline is
+//!   noted instead when the file is read on its own ([`parse_limited`]).
 //!
 //! What is read but not drawn, each kind noted once (`file.wrl:LINE: …`, with a count) in
 //! [`VrmlScene::notes`], which `scene check` lists: `Text` (§6.47), `IndexedLineSet` and
 //! `PointSet` (§6.24, §6.36), lights (§6.16, §6.35, §6.45: restauro's lights are the scene's
-//! `[[lights]]`), `Script` (§6.40), `Inline` (§6.25, not fetched), `Background` and `Fog`,
+//! `[[lights]]`), `Script` (§6.40), `Background` and `Fog`,
 //! textures (§6.22, §6.28, §6.33), instances of an EXTERNPROTO that is not in the file, and
 //! any node type restauro does not know. Nodes with nothing to show in a still image
 //! (`WorldInfo`, `NavigationInfo`, sensors, interpolators, sounds) and `ROUTE`s (§4.10) are
@@ -56,6 +59,7 @@ mod census;
 mod extrusion;
 mod face_set;
 mod faces;
+mod inline;
 mod lexer;
 mod math;
 mod notes;
@@ -71,6 +75,7 @@ mod tests_proto;
 
 use builder::Builder;
 use census::Census;
+pub use inline::embed_inlines;
 use parser::Parser;
 
 /// A camera of the file (§6.53), in the file's root coordinate system.
@@ -104,6 +109,18 @@ pub const MAX_DEPTH: usize = 256;
 // `max_polygon_vertices`): they are counted before anything is built (see `Census`), so a file
 // that stands for 2^40 instances is refused at once instead of walked.
 
+/// A file an `Inline` names: its reference in the scene's assets, how messages name it, and
+/// its text.
+pub struct Inlined {
+    pub reference: String,
+    pub shown: std::path::PathBuf,
+    pub text: String,
+}
+
+/// Where `Inline`d files come from: given the reference of the file that holds the Inline and
+/// one of its urls, the file.
+pub type InlineFn<'a> = dyn Fn(&str, &str) -> crate::Result<Inlined> + Sync + 'a;
+
 /// Read the file at `path` and [`parse`] it.
 pub fn load(path: &Path) -> crate::Result<VrmlScene> {
     let bytes = crate::assets::read_regular_file(
@@ -129,10 +146,32 @@ pub fn parse_limited(text: &str, path: &Path, limits: &Limits) -> crate::Result<
         let worker = std::thread::Builder::new()
             .name("vrml97".to_string())
             .stack_size(STACK_BYTES)
-            .spawn_scoped(scope, || parse_here(text, path, limits));
+            .spawn_scoped(scope, || parse_here(text, path, "", limits, None));
         match worker {
             Ok(handle) => handle.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic)),
-            Err(_) => parse_here(text, path, limits),
+            Err(_) => parse_here(text, path, "", limits, None),
+        }
+    })
+}
+
+/// [`parse_limited`] drawing the files `Inline`s name (§6.25), read through `inline`; the
+/// world's own reference is `reference` (the inlined files' urls are relative to it).
+pub fn parse_with_inlines(
+    text: &str,
+    path: &Path,
+    reference: &str,
+    limits: &Limits,
+    inline: &InlineFn<'_>,
+) -> crate::Result<VrmlScene> {
+    std::thread::scope(|scope| {
+        let work = || parse_here(text, path, reference, limits, Some(inline));
+        let worker = std::thread::Builder::new()
+            .name("vrml97".to_string())
+            .stack_size(STACK_BYTES)
+            .spawn_scoped(scope, work);
+        match worker {
+            Ok(handle) => handle.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic)),
+            Err(_) => work(),
         }
     })
 }
@@ -140,13 +179,19 @@ pub fn parse_limited(text: &str, path: &Path, limits: &Limits) -> crate::Result<
 /// The stack of the parsing thread (reserved, not committed, until used).
 const STACK_BYTES: usize = 64 << 20;
 
-fn parse_here(text: &str, path: &Path, limits: &Limits) -> crate::Result<VrmlScene> {
+fn parse_here(
+    text: &str,
+    path: &Path,
+    reference: &str,
+    limits: &Limits,
+    inline: Option<&InlineFn<'_>>,
+) -> crate::Result<VrmlScene> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     check_header(text, path)?;
     let mut parser = Parser::new(text, path, limits.max_instances)?;
     let roots = parser.parse_file()?;
     Census::new(path, limits).check(&roots)?;
-    let mut builder = Builder::new(path, limits);
+    let mut builder = Builder::new(path, reference, limits, inline);
     for root in &roots {
         builder.walk(root, &math::IDENTITY, None, 1)?;
     }
@@ -169,7 +214,7 @@ fn parse_here(text: &str, path: &Path, limits: &Limits) -> crate::Result<VrmlSce
 }
 
 /// §5.2.1: a VRML97 file starts with `#VRML V2.0 utf8`.
-fn check_header(text: &str, path: &Path) -> crate::Result<()> {
+pub(super) fn check_header(text: &str, path: &Path) -> crate::Result<()> {
     const HEADER: &str = "#VRML V2.0 utf8";
     if text.starts_with(HEADER) {
         return Ok(());

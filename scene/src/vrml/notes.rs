@@ -4,6 +4,7 @@
 
 use std::collections::{HashMap, HashSet};
 use std::path::Path;
+use std::rc::Rc;
 
 use super::lexer::Pos;
 use super::parser::{Node, Value};
@@ -30,6 +31,8 @@ const SILENT: [&str; 12] = [
 
 #[derive(Debug)]
 struct Entry {
+    /// The inlined file the node is in (`None`: the world's own file).
+    file: Option<Rc<Path>>,
     first: Pos,
     label: String,
     why: String,
@@ -44,6 +47,8 @@ pub(super) struct Notes {
     seen: HashSet<usize>,
     /// Nodes of the kinds past [`MAX_KINDS`].
     more: u64,
+    /// The `Inline`d file being walked, if any: its nodes are noted with its name.
+    pub file: Option<Rc<Path>>,
 }
 
 impl Notes {
@@ -63,8 +68,8 @@ impl Notes {
                          would change is not applied"
                 .to_string(),
             "Inline" => format!(
-                "is not fetched ({}): restauro reads one file; merge the inlined file into this \
-                 one, or give it its own object in the scene",
+                "is not drawn ({}): the file was read on its own; read it as a scene's mesh, \
+                 which draws the files its Inlines name",
                 urls(node)
             ),
             "Background" | "Fog" => "is not used: restauro's sky and atmosphere come from the \
@@ -111,15 +116,20 @@ impl Notes {
         if !self.seen.insert(node as *const Node as usize) {
             return;
         }
-        if let Some(&i) = self.by_label.get(&label) {
+        let key = match &self.file {
+            Some(file) => format!("{}\0{label}", file.display()),
+            None => label.clone(),
+        };
+        if let Some(&i) = self.by_label.get(&key) {
             let entry = &mut self.entries[i];
             entry.count += 1;
             if node.pos.line < entry.first.line {
                 entry.first = node.pos;
             }
         } else if self.entries.len() < MAX_KINDS {
-            self.by_label.insert(label.clone(), self.entries.len());
-            self.entries.push(Entry { first: node.pos, label, why, count: 1 });
+            self.by_label.insert(key, self.entries.len());
+            let file = self.file.clone();
+            self.entries.push(Entry { file, first: node.pos, label, why, count: 1 });
         } else {
             self.more += 1;
         }
@@ -128,7 +138,7 @@ impl Notes {
     /// The notes, in line order: `file.wrl:LINE: Kind is not drawn (…)`.
     pub fn lines(&self, path: &Path) -> Vec<String> {
         let mut entries: Vec<&Entry> = self.entries.iter().collect();
-        entries.sort_by_key(|e| (e.first.line, e.first.column));
+        entries.sort_by_key(|e| (e.file.clone(), e.first.line, e.first.column));
         let mut out: Vec<String> = entries
             .iter()
             .map(|e| {
@@ -137,7 +147,8 @@ impl Notes {
                 } else {
                     String::new()
                 };
-                format!("{}:{}: {} {}{count}", path.display(), e.first.line, e.label, e.why)
+                let file = e.file.as_deref().unwrap_or(path);
+                format!("{}:{}: {} {}{count}", file.display(), e.first.line, e.label, e.why)
             })
             .collect();
         if self.more > 0 {
@@ -161,7 +172,7 @@ impl Notes {
 /// An Inline's urls, quoted.
 fn urls(node: &Node) -> String {
     match node.field("url").map(|f| &*f.value) {
-        Some(Value::Strs(urls)) if !urls.is_empty() => quoted(urls),
+        Some(Value::Strs(urls, _)) if !urls.is_empty() => quoted(urls),
         _ => "no url".to_string(),
     }
 }

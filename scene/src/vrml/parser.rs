@@ -49,7 +49,8 @@ pub(super) struct Field {
 pub(super) enum Value {
     /// Numbers (SFFloat, SFVec3f, MFInt32, …), each with its position.
     Nums(Vec<f64>, Vec<Pos>),
-    Strs(Vec<String>),
+    /// Strings (SFString, MFString), each with the position of its opening quote.
+    Strs(Vec<String>, Vec<Pos>),
     /// SFNode / MFNode; `NULL` is an empty list. `USE`d nodes are shared.
     Nodes(Vec<Rc<Node>>),
     /// `TRUE`, `FALSE` or another bare word.
@@ -475,9 +476,9 @@ impl<'a> Parser<'a> {
                 Ok(Value::Nums(nums, places))
             }
             Tok::Str(s) => {
-                let s = s.clone();
+                let (s, pos) = (s.clone(), token.pos);
                 self.advance()?;
-                Ok(Value::Strs(vec![s]))
+                Ok(Value::Strs(vec![s], vec![pos]))
             }
             Tok::Word(w) if w == "NULL" => {
                 self.advance()?;
@@ -501,7 +502,7 @@ impl<'a> Parser<'a> {
     /// `[ … ]` (§5.2): numbers, strings, nodes or words.
     fn parse_list(&mut self, field: &str, open: Pos, depth: usize) -> crate::Result<Value> {
         let (mut nums, mut places) = (Vec::new(), Vec::new());
-        let mut strs = Vec::new();
+        let (mut strs, mut quotes) = (Vec::new(), Vec::new());
         let mut nodes = Vec::new();
         let mut words = false;
         loop {
@@ -519,8 +520,9 @@ impl<'a> Parser<'a> {
                     places.push(pos);
                     self.advance()?;
                 }
-                Some((Tok::Str(s), _)) => {
+                Some((Tok::Str(s), pos)) => {
                     strs.push(s.clone());
+                    quotes.push(pos);
                     self.advance()?;
                 }
                 Some((Tok::Word(w), _)) => {
@@ -542,7 +544,7 @@ impl<'a> Parser<'a> {
         Ok(match kinds.iter().filter(|&&k| k).count() {
             0 => Value::Nums(nums, places),
             1 if !nodes.is_empty() => Value::Nodes(nodes),
-            1 if !strs.is_empty() => Value::Strs(strs),
+            1 if !strs.is_empty() => Value::Strs(strs, quotes),
             1 if !nums.is_empty() => Value::Nums(nums, places),
             _ => Value::Other,
         })
@@ -664,7 +666,7 @@ impl Parser<'_> {
         let urls = match self.peek() {
             Some(Token { tok: Tok::Str(_) | Tok::OpenList, .. }) => {
                 match self.parse_value("url", 1)? {
-                    Value::Strs(urls) => urls,
+                    Value::Strs(urls, _) => urls,
                     _ => Vec::new(),
                 }
             }

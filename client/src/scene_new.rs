@@ -10,7 +10,7 @@ use crate::cli::SceneNewArgs;
 use anyhow::{Context, Result, bail};
 use restauro_scene::load::{Limits, load_scene};
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::{Component, Path, PathBuf};
 
 /// The placeholder every part starts with: a measured travertine.
 const PLACEHOLDER: &str = "travertine_tufa_solid__eco_ward73";
@@ -69,6 +69,23 @@ fn place_mesh(mesh: &Path, out: &Path) -> Result<String> {
         .with_context(|| format!("creating {}", out.join("meshes").display()))?;
     std::fs::copy(mesh, &target)
         .with_context(|| format!("copying {} to {}", mesh.display(), target.display()))?;
+    // An OBJ's material library and its photos go with it, where it names them.
+    let is_obj = mesh.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj"));
+    let text =
+        if is_obj { std::fs::read_to_string(mesh).unwrap_or_default() } else { String::new() };
+    for companion in restauro_scene::obj_library::companions(&text, folder) {
+        let inside = Path::new(&companion).components().all(|c| matches!(c, Component::Normal(_)));
+        if !inside {
+            continue;
+        }
+        let (from, to) = (folder.join(&companion), out.join("meshes").join(&companion));
+        if let Some(parent) = to.parent() {
+            std::fs::create_dir_all(parent)
+                .with_context(|| format!("creating {}", parent.display()))?;
+        }
+        std::fs::copy(&from, &to)
+            .with_context(|| format!("copying {} to {}", from.display(), to.display()))?;
+    }
     Ok(format!("meshes/{file}"))
 }
 

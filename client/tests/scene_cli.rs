@@ -226,3 +226,32 @@ fn a_y_up_model_is_stood_up() {
     assert!(check.contains("`house.obj` probably lies on its back"), "{check}");
     assert!(check.contains("add `up_axis = \"y\"`"), "{check}");
 }
+
+/// A photogrammetry export (OBJ, its material library, the photo in a subfolder) written to a
+/// scene elsewhere: the library and the photo are copied with the model, and the part shows
+/// its photo (so `scene check` notes nothing unread).
+#[test]
+fn scene_new_copies_an_objs_library_and_photos_with_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let survey = dir.path().join("survey");
+    std::fs::create_dir_all(survey.join("tex")).unwrap();
+    let obj = "mtllib scan.mtl\nv -4 0 0\nv 4 0 0\nv 4 0 4\nv -4 0 4\n\
+               vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl scan\nf 1/1 2/2 3/3 4/4\n";
+    std::fs::write(survey.join("scan.obj"), obj).unwrap();
+    std::fs::write(survey.join("scan.mtl"), "newmtl scan\nmap_Kd tex/scan_0.png\n").unwrap();
+    let mut png_bytes = Vec::new();
+    {
+        let mut encoder = png::Encoder::new(&mut png_bytes, 1, 1);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.write_header().unwrap().write_image_data(&[120, 110, 100]).unwrap();
+    }
+    std::fs::write(survey.join("tex/scan_0.png"), &png_bytes).unwrap();
+    let project = dir.path().join("project");
+    let mesh = survey.join("scan.obj");
+    ok(&["scene", "new", "--mesh", mesh.to_str().unwrap(), "--out", project.to_str().unwrap()]);
+    for copied in ["meshes/scan.obj", "meshes/scan.mtl", "meshes/tex/scan_0.png"] {
+        assert!(project.join(copied).is_file(), "{copied} was not copied");
+    }
+    let check = ok(&["scene", "check", project.join("scan.toml").to_str().unwrap()]);
+    assert!(check.contains("valid") && !check.contains("not read"), "{check}");
+}

@@ -43,22 +43,8 @@ pub fn bundle_folder(
     let mut included = Vec::new();
     let mut add = |reference: &mut String, place: String| -> Result<()> {
         let mut bytes = assets.read(reference, &place)?;
-        if extension(reference) == "wrl" {
-            // The inlined worlds travel as files of their own, named by hash in the world.
-            let shown = assets.display_path(reference);
-            let text = crate::assets::utf8_text(bytes, &shown)?;
-            let mut store = |bytes: Vec<u8>| {
-                let hash = blake3::hash(&bytes).to_hex().to_string();
-                let named = format!("blake3:{hash}.wrl");
-                files.insert(hash, bytes);
-                included.push(named.clone());
-                named
-            };
-            let source = crate::assets::vrml_inlines(assets, &place);
-            bytes =
-                crate::vrml::embed_inlines(&text, &shown, reference, limits, &source, &mut store)?
-                    .into_bytes();
-        }
+        bytes =
+            embed_nested(reference, bytes, (assets, &place), limits, &mut files, &mut included)?;
         if extension(reference) == "gltf" {
             // One file in the bundle: the model with its separate buffers embedded.
             let shown = assets.display_path(reference);
@@ -84,6 +70,41 @@ pub fn bundle_folder(
     included.dedup();
     scene.included = included;
     Ok(Bundle { scene, files })
+}
+
+/// The file `reference` (its `bytes`) with the files it names inside itself — a VRML97
+/// world's Inlines, an OBJ's material library and its photos — named by hash, those files
+/// added to `files` and listed in `included`.
+fn embed_nested(
+    reference: &str,
+    bytes: Vec<u8>,
+    (assets, place): (&FolderAssets, &str),
+    limits: &Limits,
+    files: &mut BTreeMap<String, Vec<u8>>,
+    included: &mut Vec<String>,
+) -> Result<Vec<u8>> {
+    let mut store = |bytes: Vec<u8>, extension: &str| {
+        let hash = blake3::hash(&bytes).to_hex().to_string();
+        let named = format!("blake3:{hash}.{extension}");
+        files.insert(hash, bytes);
+        included.push(named.clone());
+        named
+    };
+    let shown = assets.display_path(reference);
+    Ok(match extension(reference).as_str() {
+        "wrl" => {
+            let text = crate::assets::utf8_text(bytes, &shown)?;
+            let source = crate::assets::vrml_inlines(assets, place);
+            let mut store = |bytes: Vec<u8>| store(bytes, "wrl");
+            crate::vrml::embed_inlines(&text, &shown, reference, limits, &source, &mut store)?
+                .into_bytes()
+        }
+        "obj" => {
+            let text = crate::assets::utf8_text(bytes, &shown)?;
+            crate::obj_library::embed(&text, reference, assets, place, &mut store)?.into_bytes()
+        }
+        _ => bytes,
+    })
 }
 
 impl Bundle {

@@ -29,6 +29,7 @@ pub mod load;
 pub mod lod;
 pub mod note_image;
 pub mod obj;
+pub mod obj_library;
 pub mod origin;
 pub mod photo_block;
 pub mod photometric;

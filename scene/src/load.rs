@@ -699,7 +699,16 @@ fn import_mesh(
     Ok(match extension(reference).as_str() {
         "obj" => {
             let text = utf8_text(bytes, &name)?;
-            (obj::parse_limited(&text, &name, limits)?, Vec::new(), UpAxis::Z, Vec::new())
+            let mut mesh = obj::parse_limited(&text, &name, limits)?;
+            let notes = crate::obj_library::apply(
+                &mut mesh,
+                &text,
+                reference,
+                ctx.assets,
+                place,
+                limits.max_pixels,
+            )?;
+            (mesh, Vec::new(), UpAxis::Z, notes)
         }
         "ply" => (ply::parse_limited(&bytes, &name, limits)?, Vec::new(), UpAxis::Z, Vec::new()),
         "gltf" | "glb" => {

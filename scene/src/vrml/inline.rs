@@ -73,7 +73,8 @@ impl Builder<'_> {
             return Err(self.invalid_field(node, "url", format!("no url can be read: {all}")));
         };
         if let Some(at) = self.files.iter().position(|f| *f == file.reference) {
-            let chain = [&self.files[at..], std::slice::from_ref(&file.reference)].concat().join(" → ");
+            let chain =
+                [&self.files[at..], std::slice::from_ref(&file.reference)].concat().join(" → ");
             return Err(self.invalid_field(
                 node,
                 "url",

@@ -35,6 +35,8 @@ enum Route {
     Announce(u64),
     /// Sends bytes without a length until the client hangs up.
     Endless,
+    /// Announces 1000 bytes and sends one every 200 ms.
+    Trickle,
 }
 
 /// Each request's path and `Range` header.
@@ -137,6 +139,12 @@ fn answer<S: Read + Write>(mut stream: S, routes: &HashMap<String, Route>, log: 
             let _ = stream.flush();
             std::thread::sleep(Duration::from_secs(5));
         }
+        Route::Trickle => {
+            let _ = stream.write_all(&head("200 OK", "Content-Length: 1000\r\n".into()));
+            while stream.write_all(b"x").and_then(|()| stream.flush()).is_ok() {
+                std::thread::sleep(Duration::from_millis(200));
+            }
+        }
         Route::Endless => {
             let _ = stream.write_all(&head("200 OK", String::new()));
             let chunk = vec![b'x'; 64 * 1024];
@@ -187,6 +195,7 @@ fn config(dir: &Path, ca_file: Option<PathBuf>) -> RemoteConfig {
     RemoteConfig {
         cache: Cache { dir: dir.join("cache"), max_bytes: 1 << 30 },
         timeout: Duration::from_secs(1),
+        deadline: Duration::from_secs(30),
         ca_file,
         public_only: false,
     }
@@ -512,4 +521,23 @@ fn a_remote_worlds_inline_resolves_against_its_url_and_is_pinned_too() {
     assert_eq!(done.scene.included.len(), 1);
     let loaded = done.load(&Limits::default()).unwrap();
     assert_eq!(loaded.objects[0].mesh.triangles.len(), 24, "the world's box and the column's");
+}
+
+/// A server that sends a byte now and then, never silent for the timeout, is cut off at the
+/// download's deadline, and what came is kept for the next run to resume.
+#[test]
+fn a_trickling_server_is_cut_off_at_the_deadline() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = serve(vec![("/slow.obj", Route::Trickle)], None);
+    let url = format!("{}/slow.obj", server.base);
+    let mut short = config(dir.path(), None);
+    short.deadline = Duration::from_secs(2);
+    let assets = assets(dir.path(), &[(&url, WALL)], short);
+    let e = assets.read(&url, "objects[0].mesh").unwrap_err().to_string();
+    assert!(e.contains(&url) && e.contains("took longer than 2 s"), "{e}");
+    let kept: u64 = std::fs::read_dir(dir.path().join("cache/partial"))
+        .unwrap()
+        .map(|f| f.unwrap().metadata().unwrap().len())
+        .sum();
+    assert!(kept > 0, "what came is kept");
 }

@@ -18,12 +18,16 @@ use tokio::net::TcpStream;
 pub const MAX_REDIRECTS: usize = 10;
 /// Attempts of one download that resume a body broken off.
 const ATTEMPTS: usize = 4;
+/// The longest one download may take, in timeouts (an hour at the default 30 s).
+pub const DEADLINE_TIMEOUTS: u32 = 120;
 
 /// What a download may take.
 pub struct Bounds {
     pub max_bytes: u64,
     pub timeout: Duration,
     pub tls: Arc<rustls::ClientConfig>,
+    /// The longest the whole download may take.
+    pub deadline: Duration,
     /// Connect to public addresses only (see [`super::Policy`]).
     pub public_only: bool,
 }
@@ -52,7 +56,20 @@ pub fn download(url: &WebUrl, file: &mut std::fs::File, bounds: &Bounds) -> Resu
                     .enable_all()
                     .build()
                     .map_err(|e| fail(format!("cannot start the download ({e})")))?;
-                runtime.block_on(attempts(url, file, bounds))
+                // However a server trickles its bytes, one download ends.
+                let deadline = bounds.deadline;
+                runtime.block_on(async {
+                    tokio::time::timeout(deadline, attempts(url, file, bounds))
+                        .await
+                        .unwrap_or_else(|_| {
+                            Err(fail(format!(
+                                "the download took longer than {} s ({DEADLINE_TIMEOUTS} × \
+                                 RESTAURO_DOWNLOAD_TIMEOUT_S); what came is kept, and the next \
+                                 run resumes it",
+                                deadline.as_secs_f64()
+                            )))
+                        })
+                })
             })
             .join()
             .unwrap_or_else(|_| Err(fail("the download stopped unexpectedly")))

@@ -22,7 +22,7 @@
 //! |---|---|
 //! | `RESTAURO_CACHE_DIR` | `$XDG_CACHE_HOME/restauro/downloads`, else `~/.cache/restauro/downloads` |
 //! | `RESTAURO_CACHE_MB` | 4096 |
-//! | `RESTAURO_DOWNLOAD_TIMEOUT_S` (connecting, waiting for an answer, any stretch without data) | 30 |
+//! | `RESTAURO_DOWNLOAD_TIMEOUT_S` (connecting, waiting for an answer, any stretch without data; one download may take 120 times as long in all) | 30 |
 //! | `RESTAURO_CA_FILE` (PEM certificates trusted besides the system's) | none |
 //!
 //! The system's certificates are those `rustls-native-certs` finds (`SSL_CERT_FILE` and
@@ -34,7 +34,7 @@ pub mod web_url;
 
 use crate::error::{Result, SceneError};
 use crate::scene_file::Pin;
-pub use http::is_public;
+pub use http::{DEADLINE_TIMEOUTS, is_public};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, OnceLock};
@@ -135,6 +135,9 @@ pub fn set_policy(policy: Policy) -> bool {
 pub struct RemoteConfig {
     pub cache: cache::Cache,
     pub timeout: Duration,
+    /// The longest one download may take in all ([`DEADLINE_TIMEOUTS`] timeouts from the
+    /// environment), however a server trickles its bytes.
+    pub deadline: Duration,
     /// Certificates (PEM) trusted besides the system's.
     pub ca_file: Option<PathBuf>,
     /// Refuse hosts at loopback, private, link-local and other non-public addresses.
@@ -165,9 +168,11 @@ impl RemoteConfig {
                 .unwrap_or_else(std::env::temp_dir);
             base.join("restauro").join("downloads")
         });
+        let timeout = Duration::from_secs(number("RESTAURO_DOWNLOAD_TIMEOUT_S", 30)?.max(1));
         Ok(RemoteConfig {
             cache: cache::Cache { dir, max_bytes: number("RESTAURO_CACHE_MB", 4096)? << 20 },
-            timeout: Duration::from_secs(number("RESTAURO_DOWNLOAD_TIMEOUT_S", 30)?.max(1)),
+            timeout,
+            deadline: timeout * DEADLINE_TIMEOUTS,
             ca_file: var("RESTAURO_CA_FILE").map(PathBuf::from),
             public_only: policy.public_only,
         })
@@ -246,6 +251,7 @@ impl Remote {
         let bounds = http::Bounds {
             max_bytes,
             timeout: config.timeout,
+            deadline: config.deadline,
             tls: tls.clone(),
             public_only: config.public_only,
         };

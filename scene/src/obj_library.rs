@@ -35,21 +35,31 @@ fn photo_of(value: &str) -> String {
     file_name(value.split_whitespace().last().unwrap_or(value))
 }
 
-/// The photo (`map_Kd`) of each material of an MTL text, by material name.
+/// The photo (`map_Kd`) of each material of an MTL text, by material name. Read here rather
+/// than by tobj, whose MTL reader panics on a colour with fewer than three numbers: only two
+/// statements matter, `newmtl name` and `map_Kd [options] file`.
 fn photos(mtl: &str, path: &Path) -> Result<Vec<(String, String)>> {
-    let (materials, _) = crate::guard::catch(|| tobj::load_mtl_buf(&mut mtl.as_bytes()))
-        .map_err(|_| SceneError::invalid(path, "MTL", crate::guard::gave_up("MTL")))?
-        .map_err(|e| {
-            SceneError::invalid(
-                path,
-                "MTL",
-                format!("the material library cannot be read ({e}); check its `newmtl`, `Kd` and `map_Kd` lines"),
-            )
-        })?;
-    Ok(materials
-        .into_iter()
-        .filter_map(|m| m.diffuse_texture.map(|t| (m.name, photo_of(&t))))
-        .collect())
+    let mut out = Vec::new();
+    let mut material: Option<String> = None;
+    for (i, line) in mtl.lines().enumerate() {
+        let line = line.trim();
+        let (keyword, value) = line.split_once(char::is_whitespace).unwrap_or((line, ""));
+        match keyword {
+            "newmtl" => material = Some(value.trim().to_owned()),
+            "map_Kd" if !value.trim().is_empty() => match &material {
+                Some(name) => out.push((name.clone(), photo_of(value))),
+                None => {
+                    return Err(SceneError::invalid(
+                        path,
+                        format!("line {}", i + 1),
+                        "a `map_Kd` before any `newmtl`: name the material first",
+                    ));
+                }
+            },
+            _ => {}
+        }
+    }
+    Ok(out)
 }
 
 /// Lays the library's photos on the parts of `mesh`, read through `assets` beside the OBJ
@@ -93,7 +103,13 @@ pub fn apply(
         let shown = assets.display_path(&file);
         match assets.read(&file, place) {
             Ok(bytes) => {
-                let texture = Arc::new(decode(&bytes, &extension(&file), &shown, max_pixels)?);
+                // A refusal names the library, which chose the file, and the photo.
+                let texture =
+                    decode(&bytes, &extension(&file), &shown, max_pixels).map_err(|e| {
+                        let place = format!("map_Kd of `{}`", group.name);
+                        SceneError::invalid(assets.display_path(library), place, e.to_string())
+                    })?;
+                let texture = Arc::new(texture);
                 decoded.insert(file, texture.clone());
                 group.photo = Some(texture);
             }

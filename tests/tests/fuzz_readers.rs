@@ -343,6 +343,20 @@ const QUAD_OBJ: &str = "v 0 0 0\nv 1 0 0\nv 1 0 1\nv 0 0 1\nf 1 2 3 4\n";
 const TEXTURED_QUAD_OBJ: &str =
     "v 0 0 0\nv 1 0 0\nv 1 0 1\nv 0 0 1\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nf 1/1 2/2 3/3 4/4\n";
 
+/// The quad as a photogrammetry export names it: its library `input.mtl` and a part.
+const LIBRARY_QUAD_OBJ: &str = "mtllib input.mtl\nv 0 0 0\nv 1 0 0\nv 1 0 1\nv 0 0 1\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl stone\nf 1/1 2/2 3/3 4/4\n";
+
+/// Material libraries as exporters write them (Agisoft Metashape, RealityCapture, Blender).
+fn mtl_seeds() -> Vec<(String, Vec<u8>)> {
+    [
+        ("metashape.mtl", "newmtl stone\nKa 1.000000 1.000000 1.000000\nKd 1.000000 1.000000 1.000000\nKs 0.000000 0.000000 0.000000\nTr 1.000000\nillum 1\nNs 0.000000\nmap_Kd photo.png\n"),
+        ("options.mtl", "# Blender MTL\nnewmtl stone\nNs 250\nKd 0.8 0.8 0.8\nd 1\nmap_Kd -s 1 1 1 -o 0 0 0 -clamp on photo.png\nnewmtl other\nmap_Kd textures\\photo.png\n"),
+    ]
+    .into_iter()
+    .map(|(name, text)| (name.to_owned(), text.as_bytes().to_vec()))
+    .collect()
+}
+
 /// Photo textures: small PNGs of every colour type and depth, and a JPEG made by Pillow.
 fn texture_seeds(extension: &str) -> Vec<(String, Vec<u8>)> {
     if extension == "jpg" {
@@ -849,7 +863,28 @@ fn readers() -> Vec<Reader> {
         mesh_reader("ply-binary", "input.ply", ply_binary_seeds()),
         mesh_reader("gltf", "input.gltf", gltf_seeds()),
         mesh_reader("glb", "input.glb", glb_seeds()),
-        mesh_reader("vrml", "input.wrl", vrml_seeds()),
+        Reader {
+            // A world beside the fuzzed one, for its Inline to draw.
+            bench: Bench::new(&[
+                ("grey.csv", grey),
+                ("other.wrl", b"#VRML V2.0 utf8\nShape { geometry Box { size 0.2 0.2 0.2 } }\n"),
+                ("scene.toml", scene_around("input.wrl", "").as_bytes()),
+            ]),
+            ..mesh_reader("vrml", "input.wrl", vrml_seeds())
+        },
+        Reader {
+            name: "mtl",
+            file: "input.mtl",
+            seeds: mtl_seeds(),
+            bench: Bench::new(&[
+                ("grey.csv", grey),
+                ("quad.obj", LIBRARY_QUAD_OBJ.as_bytes()),
+                ("photo.png", texture_seeds("png").remove(0).1.as_slice()),
+                ("scene.toml", scene_around("quad.obj", "").as_bytes()),
+            ]),
+            run: |folder| load_and_trace(&folder.join("scene.toml")),
+            names_file: names_own_file,
+        },
         texture_reader("png", "input.png", "luminance"),
         texture_reader("jpeg", "input.jpg", "chromatic"),
         light_reader("ies", "input.ies", ".ies"),

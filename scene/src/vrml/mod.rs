@@ -17,7 +17,7 @@
 //!   body is known only inside it; `DEF` names in a body are its own, copied per instance. A
 //!   prototype that contains itself, directly or through others, is refused;
 //! - `EXTERNPROTO` (§4.9): resolved only when one of its urls is `"#Name"`, a PROTO of this
-//!   file declared before the instance; restauro fetches nothing, so any other is noted and
+//!   file declared before the instance; other files are not read for PROTOs, so any other is noted and
 //!   its instances are not drawn;
 //! - `Transform` (§6.52), `Group` (§6.21), and, as plain groups, `Anchor` (§6.2), `Billboard`
 //!   (§6.6, its screen alignment is ignored) and `Collision` (§6.8); `Switch` (§6.46) descends

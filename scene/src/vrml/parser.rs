@@ -656,7 +656,7 @@ impl Parser<'_> {
     }
 
     /// `EXTERNPROTO Name [ interface ] url` (§4.9): declared; only a `"#Name"` url, a PROTO
-    /// of this file, is ever resolved (restauro fetches nothing).
+    /// of this file, is ever resolved (PROTOs are not read from other files).
     fn parse_externproto(&mut self) -> crate::Result<()> {
         let pos = self.here();
         self.advance()?;

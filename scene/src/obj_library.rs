@@ -16,10 +16,22 @@ use std::collections::HashMap;
 use std::path::Path;
 use std::sync::Arc;
 
+/// A line's keyword and the rest of it (OBJ and MTL alike: words split at whitespace).
+fn statement(line: &str) -> (&str, &str) {
+    let line = line.trim();
+    line.split_once(char::is_whitespace).unwrap_or((line, ""))
+}
+
+/// The value of `line` if it is the statement `keyword` with a value.
+fn value_of<'a>(line: &'a str, keyword: &str) -> Option<&'a str> {
+    let (k, value) = statement(line);
+    (k == keyword && !value.trim().is_empty()).then_some(value)
+}
+
 /// The files an OBJ's `mtllib` lines name, in order (a line may name several).
 fn library_names(obj: &str) -> Vec<String> {
     obj.lines()
-        .filter_map(|l| l.trim_start().strip_prefix("mtllib "))
+        .filter_map(|l| value_of(l, "mtllib"))
         .flat_map(|rest| rest.split_whitespace().map(file_name))
         .collect()
 }
@@ -42,8 +54,7 @@ fn photos(mtl: &str, path: &Path) -> Result<Vec<(String, String)>> {
     let mut out = Vec::new();
     let mut material: Option<String> = None;
     for (i, line) in mtl.lines().enumerate() {
-        let line = line.trim();
-        let (keyword, value) = line.split_once(char::is_whitespace).unwrap_or((line, ""));
+        let (keyword, value) = statement(line);
         match keyword {
             "newmtl" => material = Some(value.trim().to_owned()),
             "map_Kd" if !value.trim().is_empty() => match &material {
@@ -159,7 +170,7 @@ pub fn embed(
     }
     let mut out = String::with_capacity(obj.len());
     for line in obj.split_inclusive('\n') {
-        let Some(rest) = line.trim_start().strip_prefix("mtllib ") else {
+        let Some(rest) = value_of(line, "mtllib") else {
             out.push_str(line);
             continue;
         };
@@ -202,9 +213,7 @@ fn embed_photos(
 ) -> String {
     let mut out = String::with_capacity(mtl.len());
     for line in mtl.split_inclusive('\n') {
-        let trimmed = line.trim_start();
-        let Some(value) = trimmed.strip_prefix("map_Kd").filter(|v| v.starts_with([' ', '\t']))
-        else {
+        let Some(value) = value_of(line, "map_Kd") else {
             out.push_str(line);
             continue;
         };

@@ -57,29 +57,10 @@ impl Builder<'_> {
         if urls.is_empty() {
             return Err(self.invalid_field(node, "url", "an Inline needs the url of a file"));
         }
-        let mut problems = Vec::new();
-        let mut found = None;
-        for url in &urls {
-            match self.inlined_file(url) {
-                Ok(file) => {
-                    found = Some(file);
-                    break;
-                }
-                Err(e) => problems.push(e.to_string()),
-            }
-        }
-        let Some(file) = found else {
-            let all = problems.join("; ");
-            return Err(self.invalid_field(node, "url", format!("no url can be read: {all}")));
-        };
-        if let Some(at) = self.files.iter().position(|f| *f == file.reference) {
-            let chain =
-                [&self.files[at..], std::slice::from_ref(&file.reference)].concat().join(" → ");
-            return Err(self.invalid_field(
-                node,
-                "url",
-                format!("the file inlines itself: {chain}"),
-            ));
+        let (file, _) = first_readable(&urls, |url| self.inlined_file(url))
+            .map_err(|problem| self.invalid_field(node, "url", problem))?;
+        if let Some(problem) = cycle(&self.files, &file.reference) {
+            return Err(self.invalid_field(node, "url", problem));
         }
         let outer = std::mem::replace(&mut self.path, file.shown.clone());
         self.files.push(file.reference.clone());
@@ -145,30 +126,13 @@ fn embed(
         }
         let place = node.field("url").map_or_else(String::new, |f| place(f, &node));
         let base = chain.last().cloned().unwrap_or_default();
-        let mut problems = Vec::new();
-        let mut chosen = None;
-        for (url, quote) in urls.iter().zip(quotes) {
-            match source(&base, url) {
-                Ok(inlined) => {
-                    chosen = Some((inlined, quote));
-                    break;
-                }
-                // The next url is tried, as when the world is drawn.
-                Err(e) => problems.push(e.to_string()),
-            }
-        }
-        let Some((inlined, quote)) = chosen else {
-            let all = problems.join("; ");
-            return Err(SceneError::invalid(path, place, format!("no url can be read: {all}")));
-        };
+        // The urls are tried in order, as when the world is drawn.
+        let (inlined, chosen) = first_readable(&urls, |url| source(&base, url))
+            .map_err(|problem| SceneError::invalid(path, &place, problem))?;
+        let quote = quotes[chosen];
         seen.insert((quote.line, quote.column));
-        if chain.contains(&inlined.reference) {
-            let cycle = [&chain[..], std::slice::from_ref(&inlined.reference)].concat().join(" → ");
-            return Err(SceneError::invalid(
-                path,
-                place,
-                format!("the file inlines itself: {cycle}"),
-            ));
+        if let Some(problem) = cycle(chain, &inlined.reference) {
+            return Err(SceneError::invalid(path, place, problem));
         }
         chain.push(inlined.reference.clone());
         let inner = embed(&inlined.text, &inlined.shown, limits, source, store, chain);
@@ -179,6 +143,29 @@ fn embed(
         return Ok(text.to_owned());
     }
     Ok(splice_strings(body, &replacements))
+}
+
+/// The first of `urls` that `read` reads, with its index; else every url's problem.
+fn first_readable<T>(
+    urls: &[String],
+    mut read: impl FnMut(&str) -> crate::Result<T>,
+) -> Result<(T, usize), String> {
+    let mut problems = Vec::new();
+    for (i, url) in urls.iter().enumerate() {
+        match read(url) {
+            Ok(file) => return Ok((file, i)),
+            Err(e) => problems.push(e.to_string()),
+        }
+    }
+    Err(format!("no url can be read: {}", problems.join("; ")))
+}
+
+/// The refusal of an inlined file already among the files being walked (`chain`, outermost
+/// first): the chain from its first appearance back to it.
+fn cycle(chain: &[String], reference: &str) -> Option<String> {
+    let at = chain.iter().position(|f| f == reference)?;
+    let back = [&chain[at..], std::slice::from_ref(&reference.to_owned())].concat();
+    Some(format!("the file inlines itself: {}", back.join(" → ")))
 }
 
 /// Every Inline node of the tree (each node once, however often it is `USE`d).

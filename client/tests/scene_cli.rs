@@ -255,3 +255,23 @@ fn scene_new_copies_an_objs_library_and_photos_with_it() {
     let check = ok(&["scene", "check", project.join("scan.toml").to_str().unwrap()]);
     assert!(check.contains("valid") && !check.contains("not read"), "{check}");
 }
+
+/// A VRML97 world that inlines other files is not copied away from them by `scene new --out`:
+/// the refusal says to write the scene beside the model.
+#[test]
+fn scene_new_keeps_a_world_with_inlines_beside_its_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let world = dir.path().join("world.wrl");
+    std::fs::write(&world, "#VRML V2.0 utf8\nInline { url \"parts/column.wrl\" }\n").unwrap();
+    let elsewhere = dir.path().join("project");
+    let e = refused(&[
+        "scene",
+        "new",
+        "--mesh",
+        world.to_str().unwrap(),
+        "--out",
+        elsewhere.to_str().unwrap(),
+    ]);
+    assert!(e.contains("world.wrl") && e.contains("inlines other files"), "{e}");
+    assert!(e.contains("leave out --out"), "{e}");
+}

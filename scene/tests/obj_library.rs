@@ -128,3 +128,12 @@ fn a_bundle_carries_the_library_and_its_photos() {
     let again = bundle_scene(&renamed.path().join("scene.toml"), &Limits::default()).unwrap();
     assert_eq!(again.id(), bundle.id(), "the same scan under other file names");
 }
+
+#[test]
+fn a_photo_before_any_material_is_refused_with_its_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let mtl = "# exported\nmap_Kd photo.png\nnewmtl stone\n";
+    write(dir.path(), &[("scan/model.obj", OBJ.as_bytes()), ("scan/model.mtl", mtl.as_bytes())]);
+    let e = load_scene(&dir.path().join("scene.toml"), &Limits::default()).unwrap_err().to_string();
+    assert!(e.contains("model.mtl: line 2") && e.contains("before any `newmtl`"), "{e}");
+}

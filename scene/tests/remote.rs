@@ -37,6 +37,8 @@ enum Route {
     Endless,
     /// Announces 1000 bytes and sends one every 200 ms.
     Trickle,
+    /// Answers with this status line and headers, and no body.
+    Raw(&'static str),
 }
 
 /// Each request's path and `Range` header.
@@ -138,6 +140,10 @@ fn answer<S: Read + Write>(mut stream: S, routes: &HashMap<String, Route>, log: 
             let _ = stream.write_all(&head("200 OK", format!("Content-Length: {length}\r\n")));
             let _ = stream.flush();
             std::thread::sleep(Duration::from_secs(5));
+        }
+        Route::Raw(raw) => {
+            let (status, headers) = raw.split_once("\r\n").unwrap_or((raw, ""));
+            let _ = stream.write_all(&head(status, headers.to_owned()));
         }
         Route::Trickle => {
             let _ = stream.write_all(&head("200 OK", "Content-Length: 1000\r\n".into()));
@@ -540,4 +546,61 @@ fn a_trickling_server_is_cut_off_at_the_deadline() {
         .map(|f| f.unwrap().metadata().unwrap().len())
         .sum();
     assert!(kept > 0, "what came is kept");
+}
+
+/// Pins that cannot be checked are refused before anything is fetched, naming the pin and the
+/// fix.
+#[test]
+fn pins_that_cannot_be_checked_are_refused_with_the_fix() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("scene.toml");
+    std::fs::write(&scene, "").unwrap();
+    let hex = "ab".repeat(32);
+    for (url, pin, words) in [
+        (
+            "ftp://x.org/a.obj",
+            Pin { sha256: Some(hex.clone()), blake3: None },
+            "only https:// and http://",
+        ),
+        (
+            "https://x.org/a.obj",
+            Pin { sha256: Some(hex.clone()), blake3: Some(hex.clone()) },
+            "give one hash",
+        ),
+        ("https://x.org/a.obj", Pin { sha256: None, blake3: None }, "give one hash"),
+        (
+            "https://x.org/a.obj",
+            Pin { sha256: Some("abc".into()), blake3: None },
+            "not 64 hexadecimal digits; copy it whole from `sha256sum`",
+        ),
+    ] {
+        let pins = BTreeMap::from([(url.to_owned(), pin)]);
+        let e = FolderAssets::with_pins(&scene, 1 << 20, &pins).err().expect("refused").to_string();
+        assert!(e.contains(&format!("pins.\"{url}\"")) && e.contains(words), "{e}");
+    }
+}
+
+/// Answers a download cannot go on from: a redirect without a Location, part of a file
+/// without saying which part.
+#[test]
+fn answers_without_what_they_need_are_refused_in_words() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = serve(
+        vec![
+            ("/moved", Route::Raw("302 Found\r\nContent-Length: 0\r\n")),
+            ("/part", Route::Raw("206 Partial Content\r\nContent-Length: 0\r\n")),
+        ],
+        None,
+    );
+    let url = |path: &str| format!("{}{path}", server.base);
+    let pins = [(url("/moved"), b"moved".as_slice()), (url("/part"), b"part".as_slice())];
+    let pins: Vec<(&str, &[u8])> = pins.iter().map(|(u, b)| (u.as_str(), *b)).collect();
+    let assets = assets(dir.path(), &pins, config(dir.path(), None));
+    let e = assets.read(&url("/moved"), "mesh").unwrap_err().to_string();
+    assert!(
+        e.contains(&url("/moved")) && e.contains("redirected (302 Found) without a Location"),
+        "{e}"
+    );
+    let e = assets.read(&url("/part"), "mesh").unwrap_err().to_string();
+    assert!(e.contains(&url("/part")) && e.contains("without saying which part"), "{e}");
 }

@@ -127,3 +127,13 @@ fn a_bundle_carries_the_inlined_worlds_by_hash() {
     let again = bundle_scene(&renamed.path().join("scene.toml"), &Limits::default()).unwrap();
     assert_eq!(again.id(), bundle.id(), "the same world under other file names");
 }
+
+#[test]
+fn an_inline_without_a_url_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let world = "#VRML V2.0 utf8\nShape { geometry Box {} }\nDEF EMPTY Inline { }\n";
+    write(dir.path(), &[("world.wrl", world)]);
+    let e = load(dir.path()).unwrap_err().to_string();
+    assert!(e.contains("world.wrl") && e.contains("`url` of Inline `EMPTY`"), "{e}");
+    assert!(e.contains("an Inline needs the url of a file"), "{e}");
+}

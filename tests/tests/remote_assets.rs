@@ -52,3 +52,31 @@ fn a_scene_from_a_web_server_is_fetched_once_and_rendered_by_the_cluster() {
     // The client found every file in its cache; the workers got them from the coordinator.
     assert_eq!(requests.lock().unwrap().len(), files, "nothing fetched again");
 }
+
+/// The environment's settings for fetching, when they cannot be used, are refused naming the
+/// variable, before anything is fetched.
+#[test]
+fn unusable_download_settings_are_refused_naming_the_variable() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let local = PathBuf::from(aosta_scene(d, 16, 8));
+    // A port nobody listens on: the refusals come before any connection.
+    let port = std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
+    let remote = d.join("remote.toml");
+    scene_by_url(&local, &format!("http://127.0.0.1:{port}"), &remote);
+    let not_pem = d.join("not.pem");
+    std::fs::write(&not_pem, "not a certificate").unwrap();
+    for (variable, value, words) in [
+        ("RESTAURO_CACHE_MB", "lots", "RESTAURO_CACHE_MB: `lots` is not a whole number"),
+        ("RESTAURO_CA_FILE", not_pem.to_str().unwrap(), "no PEM certificate"),
+    ] {
+        let mut command = Command::new(binary("restauro"));
+        command
+            .args(["scene", "check", remote.to_str().unwrap()])
+            .env("RESTAURO_CACHE_DIR", d.join("cache"))
+            .env(variable, value);
+        let o = output_within(&mut command, patience());
+        assert!(!o.status.success(), "{}", text(&o));
+        assert!(text(&o).contains(words), "{}", text(&o));
+    }
+}

@@ -346,11 +346,27 @@ fn a_restorer_swaps_a_stone_sets_the_sun_and_keeps_a_view() {
     let frames = "window.studioViewer.frames";
     let at = b.hold_until_still("ArrowUp", world, frames, std::time::Duration::from_secs(90));
     let y = at[1].as_f64().unwrap();
-    // A step is refused when the wall is nearer than the step and the body's radius (0.3 m);
-    // a step is at most 0.14 m (1.4 m/s over the longest frame counted, 0.1 s), so the walker
-    // stops 0.3 to 0.44 m short of what its eye ray meets, which is the face or a block's
-    // bevel a few centimetres proud of it.
-    assert!((-1.38..=-1.19).contains(&y), "stopped at y = {y} m, not short of the buttress: {at}");
+    // A step is refused when the wall is nearer than the step and the body's radius (0.3 m),
+    // at the eye or at a step's height (0.45 m); a step is at most 0.14 m (1.4 m/s over the
+    // longest frame counted, 0.1 s). So the walker stops 0.3 to 0.44 m short of the nearer of
+    // what those two rays meet: the buttress's face, or a block or base proud of it.
+    let ahead = b.eval(
+        "(() => { const v = window.studioViewer, p = v.camera.position, o = v.view.offset_m; \
+         const north = p.clone().set(0, 0, -1); \
+         return [1.6, 0.45].map(h => { const from = p.clone(); from.y = p.y - 1.6 + h; \
+           const hit = v.walker.hit(from, north, 10); \
+           return hit ? [hit.distance, -hit.point.z + o[1]] : null; }); })()",
+    );
+    let nearest = ahead
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|h| h.as_array().map(|h| (h[0].as_f64().unwrap(), h[1].as_f64().unwrap())))
+        .fold((f64::MAX, 0.0), |a, h| if h.0 < a.0 { h } else { a });
+    let (distance, wall_y) = nearest;
+    assert!((0.3..=0.44 + 1e-9).contains(&distance), "stopped {distance} m short: {ahead}");
+    assert!((-0.96..=-0.9).contains(&wall_y), "stopped by something at y = {wall_y} m: {ahead}");
+    assert!(y < -1.19, "stopped at y = {y} m, not short of the buttress: {at}");
     // Over the paving's slabs (up to 5 mm high) and its mortar bed (−20 mm) between them.
     assert!((1.58..=1.606).contains(&at[2].as_f64().unwrap()), "{at}");
     b.screenshot(&shots().join("15-walked-to-the-wall.png"));

@@ -29,14 +29,7 @@ pub fn summary(path: &Path, scene: &LoadedScene) -> String {
                 o.mesh.triangles.len(),
                 b.min,
                 b.max,
-                o.mesh
-                    .groups
-                    .iter()
-                    .map(|g| g.name.as_str())
-                    .zip(&o.group_materials)
-                    .map(|(g, m)| format!("{g}→{m}"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
+                parts(scene, &o.mesh, &o.group_materials)
             );
         }
     }
@@ -53,6 +46,26 @@ pub fn summary(path: &Path, scene: &LoadedScene) -> String {
         let _ = writeln!(s, "  note: {n}");
     }
     s
+}
+
+/// An object's parts and their materials, each with what its file lays on it as detail when
+/// its material shows that: `facade→stone`, `scan→stone (vertex colours)`.
+fn parts(scene: &LoadedScene, mesh: &restauro_scene::mesh::Mesh, materials: &[String]) -> String {
+    use restauro_scene::scene_file::Detail;
+    let part = |(k, (g, m)): (usize, (&restauro_scene::mesh::Group, &String))| {
+        let material = &scene.file.materials[m];
+        let own = if material.detail == Some(Detail::None) || material.texture.is_some() {
+            ""
+        } else if g.photo.is_some() {
+            " (its photo)"
+        } else if mesh.group_has_colours(k as u32) {
+            " (vertex colours)"
+        } else {
+            ""
+        };
+        format!("{}→{m}{own}", g.name)
+    };
+    mesh.groups.iter().zip(materials).enumerate().map(part).collect::<Vec<_>>().join(", ")
 }
 
 /// The files of a generated Aosta scene.

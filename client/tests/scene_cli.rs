@@ -275,3 +275,31 @@ fn scene_new_keeps_a_world_with_inlines_beside_its_files() {
     assert!(e.contains("world.wrl") && e.contains("inlines other files"), "{e}");
     assert!(e.contains("leave out --out"), "{e}");
 }
+
+/// A laser scan with vertex colours and a photogrammetry export with its photo, each made a
+/// scene: `scene check` says what each part shows over its spectrum, and nothing once the
+/// material says `detail = "none"`.
+#[test]
+fn scene_check_says_which_parts_show_their_files_colours() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/scans");
+    for (file, shown) in [
+        ("weathered-patch.ply", "→stone (vertex colours)"),
+        ("weathered-patch.glb", "→stone (its photo)"),
+    ] {
+        let mesh = dir.path().join(file);
+        std::fs::copy(data.join(file), &mesh).unwrap();
+        ok(&["scene", "new", "--mesh", mesh.to_str().unwrap()]);
+        let scene = mesh.with_extension("toml");
+        let check = ok(&["scene", "check", scene.to_str().unwrap()]);
+        assert!(check.contains(shown), "{check}");
+        let toml = std::fs::read_to_string(&scene).unwrap();
+        let plain = toml
+            .replace("reflectance = \"stone\"\n", "reflectance = \"stone\"\ndetail = \"none\"\n");
+        assert_ne!(plain, toml);
+        std::fs::write(&scene, plain).unwrap();
+        let check = ok(&["scene", "check", scene.to_str().unwrap()]);
+        assert!(!check.contains(shown), "{check}");
+        std::fs::remove_file(&scene).unwrap();
+    }
+}

@@ -1,5 +1,8 @@
 """Writes weathered-patch.glb: a small textured glTF 2.0 "scan" of a weathered stone face made
-here (no survey was taken), for the tests and for trying restauro on a textured model.
+here (no survey was taken), for the tests and for trying restauro on a textured model; and
+weathered-patch.ply, the same patch as a laser scanner exports it: the same vertices and
+normals with a colour per vertex (the photo averaged over each vertex's share of it), no
+photo.
 
 A 0.5 m x 0.5 m patch of a travertine face, 65 x 65 vertices (8192 triangles), relieved by up
 to 12 mm (pitting and a worn band), with a 256 x 256 JPEG photo: warm stone, black crust in the
@@ -49,7 +52,8 @@ photo[pits] = photo[pits] * 0.25 + np.array([20, 18, 16]) * 0.75
 photo[lichen] = photo[lichen] * 0.4 + np.array([118, 130, 96]) * 0.6
 photo = photo * (1 - 0.5 * rust[..., None]) + np.array([150, 80, 40]) * 0.5 * rust[..., None]
 jpeg = io.BytesIO()
-Image.fromarray(np.clip(photo, 0, 255).astype(np.uint8)).save(jpeg, "JPEG", quality=90)
+photo8 = Image.fromarray(np.clip(photo, 0, 255).astype(np.uint8))
+photo8.save(jpeg, "JPEG", quality=90)
 jpeg = jpeg.getvalue()
 
 # The relief: pits where the photo is dark, a worn band across the middle (z up in the file
@@ -113,3 +117,26 @@ glb += struct.pack("<II", len(text), 0x4E4F534A) + text
 glb += struct.pack("<II", len(binary), 0x004E4942) + binary
 open("weathered-patch.glb", "wb").write(glb)
 print(f"weathered-patch.glb: {len(glb)} bytes, {len(indices) // 3} triangles")
+
+# The scanner's export: binary little-endian PLY, the glTF's file coordinates (Y up), and a
+# colour per vertex: the photo box-filtered down to the vertex grid.
+colours = np.asarray(photo8.resize((N, N), Image.BOX), np.uint8).reshape(-1, 3)
+header = (
+    "ply\nformat binary_little_endian 1.0\n"
+    "comment made by restauro data/scans/make_patch.py; Y up\n"
+    f"element vertex {N * N}\n"
+    "property float x\nproperty float y\nproperty float z\n"
+    "property float nx\nproperty float ny\nproperty float nz\n"
+    "property uchar red\nproperty uchar green\nproperty uchar blue\n"
+    f"element face {len(indices) // 3}\n"
+    "property list uchar int vertex_indices\nend_header\n"
+).encode()
+vertex = np.dtype([("p", "<f4", 3), ("n", "<f4", 3), ("c", "u1", 3)])
+vertices = np.zeros(N * N, vertex)
+vertices["p"], vertices["n"], vertices["c"] = p, normals.reshape(-1, 3), colours
+face = np.dtype([("count", "u1"), ("i", "<i4", 3)])
+faces = np.zeros(len(indices) // 3, face)
+faces["count"], faces["i"] = 3, indices.reshape(-1, 3).astype(np.int32)
+ply = header + vertices.tobytes() + faces.tobytes()
+open("weathered-patch.ply", "wb").write(ply)
+print(f"weathered-patch.ply: {len(ply)} bytes, {len(faces)} triangles")

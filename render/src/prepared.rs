@@ -7,12 +7,14 @@ use crate::camera::Camera;
 use crate::degradation::ClassMap;
 use crate::glass::Transmission;
 use crate::light::{Distribution, Light, Panel};
+use crate::material_detail::{MaterialDetails, Surface, own_detail};
 use crate::sampler::Strata;
 use crate::sensor::Sensor;
 use crate::sky::Sky;
 use crate::soiling::Soiling;
-use crate::texture::{Detail, LuminancePyramid, Pyramid, TexturePoint, TexturedTriangle};
-use glam::{Vec2, Vec3A};
+use crate::texture::{Detail, DetailPoint, LuminancePyramid, Pyramid, TexturedTriangle};
+use crate::vertex_colour::{ColourPoint, VertexPalette};
+use glam::Vec3A;
 use obvhs::BvhBuildParams;
 use obvhs::cwbvh::CwBvh;
 use obvhs::ray::{Ray, RayHit};
@@ -20,8 +22,7 @@ use obvhs::rt_triangle::RtTriangle;
 use obvhs::triangle::Triangle;
 use restauro_scene::load::{LoadedScene, ResolvedLight};
 use restauro_scene::plan::Plan;
-use restauro_scene::scene_file::{Detail as DetailKind, Integrator, MaterialModel, Transmittance};
-use restauro_scene::texture::Texture;
+use restauro_scene::scene_file::{Integrator, MaterialModel, Transmittance};
 use restauro_spectral::Spectrum;
 use restauro_spectral::grid::BANDS;
 use restauro_spectral::photometry::LuminousSpectrum;
@@ -87,6 +88,12 @@ pub struct PreparedScene {
     textured: Vec<TexturedTriangle>,
     /// The photos' pyramids, held once however many materials share one.
     pyramids: Vec<Pyramid>,
+    /// Per triangle in BVH order, its index in `coloured`, or [`FLAT`]; empty when no
+    /// triangle takes detail from vertex colours.
+    coloured_of: Vec<u32>,
+    /// Per coloured triangle, its corners' colours in `palette`.
+    coloured: Vec<[u32; 3]>,
+    palette: Option<Arc<VertexPalette>>,
     /// Per material, the degradation map its state shows, if any; empty when none has one.
     maps: Vec<Option<ClassMap>>,
     /// Per material, its state's exposure-driven soiling, if any; empty when none has one.
@@ -105,6 +112,14 @@ pub struct PreparedScene {
 /// A triangle without shading normals in [`PreparedScene::smooth_of`].
 const FLAT: u32 = u32::MAX;
 
+/// What a hit's triangle gives its material detail from: its index in
+/// [`PreparedScene::textured`] or in [`PreparedScene::coloured`].
+#[derive(Clone, Copy)]
+enum On {
+    Photo(u32),
+    Colours(u32),
+}
+
 /// A surface hit.
 pub struct Hit {
     pub t: f32,
@@ -117,8 +132,9 @@ pub struct Hit {
     /// the geometric normal on a flat triangle.
     pub shading: Vec3A,
     pub material: u32,
-    /// Where the hit falls on its material's photo, on a textured triangle.
-    pub texture: Option<TexturePoint>,
+    /// Where the hit falls on its material's photo or vertex colours, on a triangle with
+    /// either.
+    pub detail: Option<DetailPoint>,
 }
 
 impl PreparedScene {
@@ -149,32 +165,34 @@ impl PreparedScene {
         let mut tris = Vec::new();
         let mut material_of = Vec::new();
         let mut smooth = Vec::new();
-        let mut photos = Photos::default();
+        let mut details = MaterialDetails::default();
         // Per material: its name and state, for its degradation map and soiling.
         let mut material_states: Vec<(String, String)> = Vec::new();
         let viewer = scene.viewer();
-        let mut textured = Vec::new();
+        let (mut textured, mut coloured) = (Vec::new(), Vec::new());
         for o in &scene.objects {
             let m = &o.mesh;
             let group_bsdf: Vec<u32> = m
                 .groups
                 .iter()
                 .zip(&o.group_materials)
-                .map(|(g, name)| {
+                .enumerate()
+                .map(|(k, (g, name))| {
                     let state = variant
                         .and_then(|v| scene.state_of(v, &o.name, &g.name))
                         .unwrap_or("base")
                         .to_owned();
-                    let own = own_photo(scene, name, &state, &o.name, g);
+                    let own = own_detail(scene, (name, &state), &o.name, m, k as u32);
                     let key = (name.clone(), state.clone(), own.as_ref().map(|(k, _)| k.clone()));
                     *index.entry(key).or_insert_with(|| {
                         materials.push(bsdf(scene, name, &state));
                         material_states.push((name.clone(), state.clone()));
-                        photos.add_material(scene, name, &state, own);
+                        details.add_material(scene, name, &state, own);
                         (materials.len() - 1) as u32
                     })
                 })
                 .collect();
+            let colours = details.vertex_colours(m, &group_bsdf);
             // Levels of detail: the camera's choice ([`restauro_scene::lod`]).
             let shown = m.levels.shown(&viewer);
             for (k, (t, &g)) in m.triangles.iter().zip(&m.triangle_group).enumerate() {
@@ -191,8 +209,11 @@ impl PreparedScene {
                     smooth.push((tris.len() as u32 - 1, corners));
                 }
                 let bsdf_index = group_bsdf[g as usize];
-                if let Some(t) = photos.triangle(bsdf_index, m, t, [a, b, c]) {
-                    textured.push((tris.len() as u32 - 1, t));
+                let at = tris.len() as u32 - 1;
+                match details.triangle(bsdf_index, m, t, [a, b, c], colours.as_deref()) {
+                    Some(Surface::Textured(t)) => textured.push((at, t)),
+                    Some(Surface::Coloured(corners)) => coloured.push((at, corners)),
+                    None => {}
                 }
             }
         }
@@ -218,7 +239,8 @@ impl PreparedScene {
         let material_of: Vec<u32> = order.iter().map(|&i| material_of[i as usize]).collect();
         let (smooth_of, vertex_normals) = in_bvh_order(&smooth, order);
         let (texture_of, textured) = in_bvh_order(&textured, order);
-        let (details, pyramids) = photos.details();
+        let (coloured_of, coloured) = in_bvh_order(&coloured, order);
+        let (details, pyramids, palette) = details.details();
         let mut lights = Vec::new();
         let mut sky = None;
         for l in &scene.lights {
@@ -269,6 +291,9 @@ impl PreparedScene {
             texture_of,
             textured,
             pyramids,
+            coloured_of,
+            coloured,
+            palette,
             lights,
             sky,
         })
@@ -296,6 +321,9 @@ impl PreparedScene {
             + self.texture_of.len() * size_of::<u32>()
             + self.textured.len() * size_of::<TexturedTriangle>()
             + self.pyramids.iter().map(|p| p.memory_bytes()).sum::<usize>()
+            + self.coloured_of.len() * size_of::<u32>()
+            + self.coloured.len() * size_of::<[u32; 3]>()
+            + self.palette.as_ref().map_or(0, |p| p.memory_bytes())
             + self.maps.iter().flatten().map(ClassMap::memory_bytes).sum::<usize>()
             + self.lights.iter().map(Light::memory_bytes).sum::<usize>()
             + self.sensors.len() * size_of::<Sensor>()
@@ -314,28 +342,37 @@ impl PreparedScene {
         let normal = if n.dot(direction) > 0.0 { -n } else { n };
         let point = origin + direction * hit.t;
         let material = self.material_of[slot];
-        let texture = match self.texture_of.get(slot) {
-            Some(&k) if k != FLAT => Some(self.texture_point(slot, k, point)),
+        let detail = match (self.texture_of.get(slot), self.coloured_of.get(slot)) {
+            (Some(&k), _) if k != FLAT => Some(self.detail_point(slot, point, On::Photo(k))),
+            (_, Some(&k)) if k != FLAT => Some(self.detail_point(slot, point, On::Colours(k))),
             _ => None,
         };
         match self.smooth_of.get(slot) {
             Some(&k) if k != FLAT => {
                 let corners = &self.vertex_normals[k as usize];
                 let mut hit = self.smooth_hit(slot, corners, point, hit.t, normal, material);
-                hit.texture = texture;
+                hit.detail = detail;
                 Some(hit)
             }
-            _ => Some(Hit { t: hit.t, point, normal, shading: normal, material, texture }),
+            _ => Some(Hit { t: hit.t, point, normal, shading: normal, material, detail }),
         }
     }
 
-    /// The texture coordinates of a hit on textured triangle `slot`. Out of line: untextured
-    /// scenes never come here.
+    /// Where a hit on triangle `slot` falls on its photo or among its vertex colours. Out of
+    /// line: scenes without either never come here.
     #[inline(never)]
-    fn texture_point(&self, slot: usize, k: u32, point: Vec3A) -> TexturePoint {
+    fn detail_point(&self, slot: usize, point: Vec3A, on: On) -> DetailPoint {
         let tri = &self.triangles[slot];
         let weights = barycentric([tri.v0, tri.v0 - tri.e1, tri.v0 + tri.e2], point);
-        self.textured[k as usize].at(weights)
+        match on {
+            On::Photo(k) => DetailPoint::Photo(self.textured[k as usize].at(weights)),
+            On::Colours(k) => {
+                // Inside the triangle: rounding may put a hit on an edge a hair outside.
+                let w = weights.map(|w| w.max(0.0));
+                let weights = w.map(|x| x / (w[0] + w[1] + w[2]).max(f32::MIN_POSITIVE));
+                DetailPoint::Vertices(ColourPoint { corners: self.coloured[k as usize], weights })
+            }
+        }
     }
 
     /// The exposure-driven soiling of material `material`'s state, if it has one.
@@ -357,7 +394,7 @@ impl PreparedScene {
         let m = hit.material as usize;
         let own = self.materials[m].rho();
         let map = self.maps.get(m).and_then(Option::as_ref);
-        let detail = match (&self.details[m], hit.texture) {
+        let detail = match (&self.details[m], hit.detail) {
             (Some(detail), Some(at)) => Some((detail, at)),
             _ => None,
         };
@@ -398,7 +435,7 @@ impl PreparedScene {
         let shading = (interpolated * side).normalize_or(normal);
         let facing = corners.map(|n| n * side);
         let point = terminator_point(vertices, facing, weights, point);
-        Hit { t, point, normal, shading, material, texture: None }
+        Hit { t, point, normal, shading, material, detail: None }
     }
 
     /// The nearest area luminaire the ray meets before `tmax`, and whether on its emitting
@@ -483,87 +520,6 @@ impl PreparedScene {
     }
 }
 
-/// The photo textures of the materials being prepared: a pyramid per photo and kind of detail,
-/// and per material the mean of its photo over the surfaces it covers (area-weighted; each
-/// triangle sampled at 16 points spread over it, on the level where it spans about 4 × 4
-/// texels).
-#[derive(Default)]
-struct Photos {
-    pyramids: BTreeMap<(String, DetailKind), Pyramid>,
-    /// Per material (in the order of `materials`): its photo, Σ area·colour, Σ area.
-    of_material: Vec<Option<(Pyramid, [f64; 3], f64)>>,
-}
-
-impl Photos {
-    /// The next material: `own` is the part's own photo, by a key, when it shows.
-    fn add_material(
-        &mut self,
-        scene: &LoadedScene,
-        name: &str,
-        state: &str,
-        own: Option<(String, Arc<Texture>)>,
-    ) {
-        let m = &scene.file.materials[name];
-        let kind = m.detail.unwrap_or_default();
-        let source = match m.texture_of(state) {
-            Some(reference) => {
-                scene.textures.get(reference).map(|t| (reference.clone(), t.clone()))
-            }
-            None => own,
-        };
-        let photo = source.and_then(|(key, texture)| {
-            let pyramid = match self.pyramids.entry((key, kind)) {
-                std::collections::btree_map::Entry::Occupied(e) => e.get().clone(),
-                std::collections::btree_map::Entry::Vacant(e) => {
-                    e.insert(Pyramid::new(&texture, kind)?).clone()
-                }
-            };
-            Some(pyramid)
-        });
-        self.of_material.push(photo.map(|p| (p, [0.0; 3], 0.0)));
-    }
-
-    /// A triangle of material `bsdf` as a textured one, when its material has a photo (the
-    /// loader made sure its vertices have texture coordinates).
-    fn triangle(
-        &mut self,
-        bsdf: u32,
-        mesh: &restauro_scene::mesh::Mesh,
-        t: &[u32; 3],
-        [a, b, c]: [Vec3A; 3],
-    ) -> Option<TexturedTriangle> {
-        let (pyramid, sum, sum_area) = self.of_material.get_mut(bsdf as usize)?.as_mut()?;
-        let texcoords = mesh.texcoords.as_ref()?;
-        let uv = t.map(|i| Vec2::from(texcoords[i as usize]));
-        let area_m2 = 0.5 * (b - a).cross(c - a).length();
-        let triangle = TexturedTriangle::new(uv, area_m2, pyramid.size());
-        let lod = (triangle.whole_level(pyramid.size()) - 2.0).max(0.0);
-        let points = TexturedTriangle::spread_points();
-        let weight = f64::from(area_m2) / points.len() as f64;
-        for w in points {
-            let colour = pyramid.colour(triangle.at(w).uv, lod);
-            (0..3).for_each(|k| sum[k] += f64::from(colour[k]) * weight);
-        }
-        *sum_area += f64::from(area_m2);
-        Some(triangle)
-    }
-
-    /// Each material's detail, and the pyramids to account for.
-    fn details(self) -> (Vec<Option<Detail>>, Vec<Pyramid>) {
-        let details = self
-            .of_material
-            .into_iter()
-            .map(|photo| {
-                let (pyramid, sum, sum_area) = photo?;
-                // A photo on no surface has no mean, and no detail to give.
-                (sum_area > 0.0).then_some(())?;
-                pyramid.detail(sum.map(|c| (c / sum_area) as f32))
-            })
-            .collect();
-        (details, self.pyramids.into_values().collect())
-    }
-}
-
 /// Per material (by name and state), its state's soiling; empty when none has one.
 fn soilings(scene: &LoadedScene, material_states: &[(String, String)]) -> Vec<Option<Soiling>> {
     let out: Vec<Option<Soiling>> = material_states
@@ -619,21 +575,6 @@ fn class_maps(
         out.clear();
     }
     Ok(out)
-}
-
-/// A part's own photo (from its mesh file), by a key naming the part, when it shows: the
-/// scene's material gives no texture of its own for `state` and does not say `detail = "none"`.
-fn own_photo(
-    scene: &LoadedScene,
-    material: &str,
-    state: &str,
-    object: &str,
-    group: &restauro_scene::mesh::Group,
-) -> Option<(String, Arc<Texture>)> {
-    let m = &scene.file.materials[material];
-    let shows = m.texture_of(state).is_none() && m.detail != Some(DetailKind::None);
-    let photo = group.photo.as_ref().filter(|_| shows)?;
-    Some((format!("{object}#{}", group.name), photo.clone()))
 }
 
 /// The BSDF of material `name` in `state`: the state's fields over the base ones.

@@ -15,6 +15,7 @@
 //! has travelled, widened by 1/√|cos θ| on a slanted surface (the geometric mean of the cone's
 //! two axes on the surface), over the size of one texel on that triangle.
 
+use crate::vertex_colour::{ColourPoint, VertexPalette};
 use glam::Vec2;
 use restauro_scene::texture::Texture;
 use restauro_spectral::Spectrum;
@@ -22,36 +23,86 @@ use restauro_spectral::rgb_space::Transfer;
 use restauro_spectral::rgb_upsampling::{SigmoidPolynomial, fit};
 use std::sync::Arc;
 
-/// A material state's photo as detail over its measured reflectance ρₘ.
+/// A material state's photo, or its part's vertex colours, as detail over its measured
+/// reflectance ρₘ.
 pub enum Detail {
     /// ρ(λ, x) = min(1, ρₘ(λ)·Y(x)/Ȳ).
-    Luminance { pyramid: Arc<LuminancePyramid>, inverse_mean: f32 },
+    Luminance {
+        pyramid: Arc<LuminancePyramid>,
+        inverse_mean: f32,
+    },
     /// ρ(λ, x) = min(1, ρₘ(λ)·S_x(λ)/S̄(λ)): `inverse_mean` is 1/S̄(λ), S̄ the smooth spectrum of
     /// the photo's mean colour.
-    Chromatic { pyramid: Arc<ChromaticPyramid>, inverse_mean: Box<Spectrum> },
+    Chromatic {
+        pyramid: Arc<ChromaticPyramid>,
+        inverse_mean: Box<Spectrum>,
+    },
+    /// The same two from vertex colours ([`crate::vertex_colour`]).
+    VertexLuminance {
+        palette: Arc<VertexPalette>,
+        inverse_mean: f32,
+    },
+    VertexChromatic {
+        palette: Arc<VertexPalette>,
+        inverse_mean: Box<Spectrum>,
+    },
+}
+
+/// Where a hit falls on what gives its material detail.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum DetailPoint {
+    Photo(TexturePoint),
+    Vertices(ColourPoint),
 }
 
 impl Detail {
-    /// ρ(λ) at texture point `at` (ρₘ in, ρ out), the photo filtered over `footprint_m`.
+    /// ρ(λ) at `at` (ρₘ in, ρ out), a photo filtered over `footprint_m`.
     #[inline]
-    pub fn apply(&self, at: TexturePoint, footprint_m: f32, rho: &mut Spectrum) {
-        let lod = level_of_detail(footprint_m, at.texel_m);
-        match self {
-            Detail::Luminance { pyramid, inverse_mean } => {
-                let k = pyramid.sample(at.uv, lod) * inverse_mean;
-                for r in &mut rho.0 {
-                    *r = (*r * k).min(1.0);
-                }
+    pub fn apply(&self, at: DetailPoint, footprint_m: f32, rho: &mut Spectrum) {
+        let mut smooth = Spectrum::ZERO;
+        match (self, at) {
+            (Detail::Luminance { pyramid, inverse_mean }, DetailPoint::Photo(at)) => {
+                let lod = level_of_detail(footprint_m, at.texel_m);
+                scale(rho, pyramid.sample(at.uv, lod) * inverse_mean);
             }
-            Detail::Chromatic { pyramid, inverse_mean } => {
-                let mut texel = Spectrum::ZERO;
-                pyramid.sample(at.uv, lod, &mut texel);
-                for ((r, t), k) in rho.0.iter_mut().zip(&texel.0).zip(&inverse_mean.0) {
-                    *r = (*r * t * k).min(1.0);
-                }
+            (Detail::Chromatic { pyramid, inverse_mean }, DetailPoint::Photo(at)) => {
+                let lod = level_of_detail(footprint_m, at.texel_m);
+                pyramid.sample(at.uv, lod, &mut smooth);
+                modulate(rho, &smooth, inverse_mean);
             }
+            (Detail::VertexLuminance { palette, inverse_mean }, DetailPoint::Vertices(at)) => {
+                scale(rho, palette.luminance(&at) * inverse_mean);
+            }
+            (Detail::VertexChromatic { palette, inverse_mean }, DetailPoint::Vertices(at)) => {
+                palette.spectrum(&at, &mut smooth);
+                modulate(rho, &smooth, inverse_mean);
+            }
+            // A triangle carries the kind of point its material's detail reads.
+            _ => {}
         }
     }
+}
+
+/// ρ ← min(1, ρ·k).
+#[inline]
+fn scale(rho: &mut Spectrum, k: f32) {
+    for r in &mut rho.0 {
+        *r = (*r * k).min(1.0);
+    }
+}
+
+/// ρ(λ) ← min(1, ρ(λ)·S(λ)/S̄(λ)), given 1/S̄.
+#[inline]
+fn modulate(rho: &mut Spectrum, smooth: &Spectrum, inverse_mean: &Spectrum) {
+    for ((r, s), k) in rho.0.iter_mut().zip(&smooth.0).zip(&inverse_mean.0) {
+        *r = (*r * s * k).min(1.0);
+    }
+}
+
+/// 1/S̄(λ), S̄ the smooth spectrum of linear colour `mean`; `None` when no sigmoid reaches it.
+pub fn inverse_smooth_spectrum(mean: [f32; 3]) -> Option<Box<Spectrum>> {
+    let average = fit(mean.map(f64::from)).ok()?.spectrum();
+    Some(Box::new(Spectrum(average.0.map(|s| 1.0 / s))))
 }
 
 /// A photo's pyramid for one kind of detail, shared by the materials that use it.
@@ -96,8 +147,7 @@ impl Pyramid {
                 (mean[0] > 0.0).then(|| Detail::Luminance { pyramid, inverse_mean: 1.0 / mean[0] })
             }
             Pyramid::Chromatic(pyramid) => {
-                let average = fit(mean.map(f64::from)).ok()?.spectrum();
-                let inverse_mean = Box::new(Spectrum(average.0.map(|s| 1.0 / s)));
+                let inverse_mean = inverse_smooth_spectrum(mean)?;
                 Some(Detail::Chromatic { pyramid, inverse_mean })
             }
         }
@@ -125,7 +175,7 @@ pub struct LuminancePyramid {
 }
 
 /// Rec. ITU-R BT.709 luminance of linear sRGB (the primaries sRGB shares).
-fn luminance(rgb: [f32; 3]) -> f32 {
+pub(crate) fn luminance(rgb: [f32; 3]) -> f32 {
     0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]
 }
 
@@ -195,14 +245,14 @@ struct IndexLevel {
 
 /// The palette being gathered: colours by their 8-bit sRGB key.
 #[derive(Default)]
-struct Palette {
+pub(crate) struct Palette {
     keys: std::collections::HashMap<u32, u32>,
-    rgb: Vec<[f32; 3]>,
+    pub(crate) rgb: Vec<[f32; 3]>,
 }
 
 impl Palette {
     /// The index of the colour whose 8-bit sRGB encoding is `srgb8`.
-    fn index(&mut self, srgb8: [u8; 3]) -> u32 {
+    pub(crate) fn index(&mut self, srgb8: [u8; 3]) -> u32 {
         let key = u32::from(srgb8[0]) << 16 | u32::from(srgb8[1]) << 8 | u32::from(srgb8[2]);
         let next = self.rgb.len() as u32;
         *self.keys.entry(key).or_insert_with(|| {
@@ -213,7 +263,7 @@ impl Palette {
 }
 
 /// A linear value's 8-bit sRGB code (IEC 61966-2-1's encoding function).
-fn linear_to_srgb8(v: f32) -> u8 {
+pub(crate) fn linear_to_srgb8(v: f32) -> u8 {
     (Transfer::Srgb.encode(f64::from(v)) * 255.0).round() as u8
 }
 

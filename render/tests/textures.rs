@@ -86,7 +86,7 @@ fn prepare(scene: &LoadedScene) -> PreparedScene {
 /// the photo at full resolution.
 fn reflectance_at(prepared: &PreparedScene, x: f32, y: f32) -> Spectrum {
     let hit = prepared.intersect(Vec3A::new(x, y, 5.0), Vec3A::NEG_Z, f32::INFINITY).unwrap();
-    assert!(hit.texture.is_some(), "the ground is textured");
+    assert!(hit.detail.is_some(), "the ground is textured");
     let mut buffer = Spectrum::ZERO;
     *prepared.reflectance(&hit, 0.0, &mut buffer)
 }

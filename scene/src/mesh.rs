@@ -44,6 +44,10 @@ pub struct Mesh {
     /// in glTF's convention: (0, 0) the image's top-left corner, v downwards (OBJ's v, which
     /// counts from the bottom, is turned over as it is read). NaN at a vertex that has none.
     pub texcoords: Option<Vec<[f32; 2]>>,
+    /// Per-vertex colours when the file gives them (PLY `red`, `green`, `blue`), linear sRGB
+    /// 0..1 (the file's sRGB codes decoded, IEC 61966-2-1). Like a photo, detail over the
+    /// spectrum the scene binds the part to, never an albedo. NaN at a vertex that has none.
+    pub colours: Option<Vec<[f32; 3]>>,
     pub triangles: Vec<[u32; 3]>,
     /// For each triangle, its index in `groups`.
     pub triangle_group: Vec<u32>,
@@ -118,17 +122,29 @@ impl Mesh {
         if self.texcoords.as_ref().is_some_and(|t| t.iter().all(|uv| uv[0].is_nan())) {
             self.texcoords = None;
         }
+        if self.colours.as_ref().is_some_and(|c| c.iter().all(|rgb| rgb[0].is_nan())) {
+            self.colours = None;
+        }
     }
 
     /// Whether every vertex of every triangle of group `group` has texture coordinates.
     pub fn group_has_texcoords(&self, group: u32) -> bool {
         let Some(uv) = &self.texcoords else { return false };
-        let finite = |i: u32| uv[i as usize].iter().all(|c| c.is_finite());
+        self.group_all(group, |i| uv[i as usize].iter().all(|c| c.is_finite()))
+    }
+
+    /// Whether every vertex of every triangle of group `group` has a colour.
+    pub fn group_has_colours(&self, group: u32) -> bool {
+        let Some(colours) = &self.colours else { return false };
+        self.group_all(group, |i| colours[i as usize].iter().all(|c| c.is_finite()))
+    }
+
+    fn group_all(&self, group: u32, vertex: impl Fn(u32) -> bool) -> bool {
         self.triangles
             .iter()
             .zip(&self.triangle_group)
             .filter(|(_, g)| **g == group)
-            .all(|(t, _)| t.iter().all(|&i| finite(i)))
+            .all(|(t, _)| t.iter().all(|&i| vertex(i)))
     }
 
     /// Append another mesh, keeping group names unique (parts with the same name merge).
@@ -138,29 +154,12 @@ impl Mesh {
         }
         let base = self.positions.len() as u32;
         let remap: Vec<u32> = other.groups.iter().map(|g| self.group_index(g.clone())).collect();
-        // A part without normals keeps its flat faces beside one with them (zero normals).
-        match (&mut self.normals, &other.normals) {
-            (Some(a), Some(b)) => a.extend_from_slice(b),
-            (Some(a), None) => a.resize(a.len() + other.positions.len(), [0.0; 3]),
-            (None, Some(b)) => {
-                let mut a = vec![[0.0; 3]; self.positions.len()];
-                a.extend_from_slice(b);
-                self.normals = Some(a);
-            }
-            (None, None) => {}
-        }
-        // A part without texture coordinates beside one with them: NaN, none.
-        let none = [f32::NAN; 2];
-        match (&mut self.texcoords, &other.texcoords) {
-            (Some(a), Some(b)) => a.extend_from_slice(b),
-            (Some(a), None) => a.resize(a.len() + other.positions.len(), none),
-            (None, Some(b)) => {
-                let mut a = vec![none; self.positions.len()];
-                a.extend_from_slice(b);
-                self.texcoords = Some(a);
-            }
-            (None, None) => {}
-        }
+        let (len, more) = (self.positions.len(), other.positions.len());
+        // A part without normals keeps its flat faces beside one with them (zero normals); a
+        // part without texture coordinates or colours beside one with them: NaN, none.
+        extend_attribute(&mut self.normals, &other.normals, (len, more), [0.0; 3]);
+        extend_attribute(&mut self.texcoords, &other.texcoords, (len, more), [f32::NAN; 2]);
+        extend_attribute(&mut self.colours, &other.colours, (len, more), [f32::NAN; 3]);
         if other.anchor_m == self.anchor_m {
             self.positions.extend_from_slice(&other.positions);
         } else {
@@ -209,6 +208,26 @@ impl Mesh {
                 .of_triangle
                 .extend(other.levels.of_triangle.iter().map(|&p| remap[p as usize])),
         }
+    }
+}
+
+/// A per-vertex attribute of `len` vertices followed by `more` vertices' `other`, `none` for
+/// the vertices of the side without it; still `None` when neither side has it.
+fn extend_attribute<T: Copy>(
+    mine: &mut Option<Vec<T>>,
+    other: &Option<Vec<T>>,
+    (len, more): (usize, usize),
+    none: T,
+) {
+    match (mine.as_mut(), other) {
+        (Some(a), Some(b)) => a.extend_from_slice(b),
+        (Some(a), None) => a.resize(len + more, none),
+        (None, Some(b)) => {
+            let mut a = vec![none; len];
+            a.extend_from_slice(b);
+            *mine = Some(a);
+        }
+        (None, None) => {}
     }
 }
 

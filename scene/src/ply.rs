@@ -1,6 +1,8 @@
 //! Stanford PLY meshes, ASCII and binary: the `vertex` element's x, y, z (and nx, ny, nz) and
 //! the `face` element's `vertex_indices` (or `vertex_index`) lists. Polygons are split into
-//! fans. PLY has no materials, so the whole mesh is one part, named after the file.
+//! fans. PLY has no materials, so the whole mesh is one part, named after the file. A scan's
+//! vertex colours (`red`, `green`, `blue`) are read as sRGB codes, full scale the type's
+//! largest value (255 for `uchar`) or 1 for floating point, and decoded to linear.
 //!
 //! Binary files (what scanners export, and the big ones) are decoded straight into columns
 //! ([`crate::ply_binary`]); ASCII files are read with ply-rs, whose element maps cost several
@@ -22,6 +24,9 @@ pub(crate) struct Columns {
     pub(crate) positions: Vec<[f64; 3]>,
     /// Each vertex's nx, ny, nz, when the vertices have all three.
     pub(crate) normals: Option<Vec<[f64; 3]>>,
+    /// Each vertex's red, green, blue over their full scale (0..1 in a sound file), when the
+    /// vertices have all three.
+    pub(crate) colours: Option<Vec<[f64; 3]>>,
     /// Every face's vertex indices one after another, and where each face's start (one more
     /// entry than there are faces).
     pub(crate) indices: Vec<i64>,
@@ -97,14 +102,14 @@ pub fn parse_limited(bytes: &[u8], path: &Path, limits: &Limits) -> Result<Mesh>
         return Err(SceneError::invalid(path, place, problem));
     }
     let columns = match header.encoding {
-        Encoding::Ascii => ascii_columns(bytes, path)?,
+        Encoding::Ascii => ascii_columns(bytes, path, &header)?,
         Encoding::BigEndian | Encoding::LittleEndian => crate::ply_binary::decode(&header, bytes),
     };
     mesh_of(columns, path)
 }
 
 /// The columns of an ASCII file, read with ply-rs.
-fn ascii_columns(bytes: &[u8], path: &Path) -> Result<Columns> {
+fn ascii_columns(bytes: &[u8], path: &Path, header: &Header) -> Result<Columns> {
     let parser = Parser::<DefaultElement>::new();
     let mut reader = bytes;
     let ply = guard::catch(move || parser.read_ply(&mut reader))
@@ -126,15 +131,21 @@ fn ascii_columns(bytes: &[u8], path: &Path) -> Result<Columns> {
     let faces = ply.payload.get("face").unwrap_or(&empty);
     let mut c = Columns::default();
     let mut normals = Vec::with_capacity(vertices.len());
+    let colour = header.elements.iter().find(|e| e.name == "vertex").and_then(|e| e.colour());
+    let mut colours = Vec::with_capacity(if colour.is_some() { vertices.len() } else { 0 });
     for v in vertices {
         let get = |k: &str| v.get(k).and_then(number);
         // `missing` made sure every vertex has them.
         c.positions.push(["x", "y", "z"].map(|k| get(k).unwrap_or(f64::NAN)));
         normals.push(["nx", "ny", "nz"].map(get));
+        if let Some((_, names, full)) = colour {
+            colours.push(names.map(|k| get(k).unwrap_or(f64::NAN) / full));
+        }
     }
     if normals.iter().all(|n| n.iter().all(Option::is_some)) {
         c.normals = Some(normals.iter().map(|n| n.map(|x| x.unwrap_or(0.0))).collect());
     }
+    c.colours = colour.map(|_| colours);
     c.starts.push(0);
     for f in faces {
         let list = f.get("vertex_indices").or_else(|| f.get("vertex_index"));
@@ -154,6 +165,9 @@ fn mesh_of(c: Columns, path: &Path) -> Result<Mesh> {
     };
     for &p in &c.positions {
         mesh.push_position(p);
+    }
+    if let Some(colours) = &c.colours {
+        mesh.colours = Some(linear_colours(colours, path)?);
     }
     mesh.drop_flat_normals();
     // One part, named as an OBJ's part without groups: not after the file, whose name a
@@ -186,6 +200,25 @@ fn mesh_of(c: Columns, path: &Path) -> Result<Mesh> {
     }
     mesh.triangle_group = vec![group; mesh.triangles.len()];
     Ok(mesh)
+}
+
+/// The vertices' colours (over full scale) decoded from sRGB to linear; a colour outside its
+/// type's range (a float beyond 0..1, a negative or a NaN) is refused, by vertex.
+fn linear_colours(colours: &[[f64; 3]], path: &Path) -> Result<Vec<[f32; 3]>> {
+    use restauro_spectral::rgb_space::Transfer;
+    if let Some((i, rgb)) =
+        colours.iter().enumerate().find(|(_, rgb)| !rgb.iter().all(|c| (0.0..=1.0).contains(c)))
+    {
+        return Err(SceneError::invalid(
+            path,
+            format!("vertex {i}"),
+            format!(
+                "colour {rgb:?} over full scale is outside 0 to 1: vertex colours are 0 to 255 \
+                 (uchar), 0 to 65535 (ushort) or 0 to 1 (float); write them in one of these"
+            ),
+        ));
+    }
+    Ok(colours.iter().map(|rgb| rgb.map(|c| Transfer::Srgb.decode(c) as f32)).collect())
 }
 
 #[cfg(test)]
@@ -294,6 +327,55 @@ mod tests {
             assert_eq!(mesh.normals, twin.normals, "big-endian: {big}");
             assert_eq!(mesh.triangles, twin.triangles, "big-endian: {big}");
         }
+    }
+
+    /// A scan's vertex colours: 8-bit sRGB codes (ASCII, or binary in either type the
+    /// Stanford scans and MeshLab write) and floats over 0..1, decoded to linear with
+    /// IEC 61966-2-1's function (a code of 128 is 0.2158605 linear, 255 is 1, 0 is 0).
+    #[test]
+    fn vertex_colours_are_read_as_srgb() {
+        let header = |kind: &str, prefix: &str, format: &str| {
+            format!(
+                "ply\nformat {format} 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+                 property float z\nproperty {kind} {prefix}red\nproperty {kind} {prefix}green\n\
+                 property {kind} {prefix}blue\nelement face 1\n\
+                 property list uchar int vertex_indices\nend_header\n"
+            )
+        };
+        let expected = [[1.0, 0.0, 0.215_860_5], [0.0; 3], [0.215_860_5; 3]];
+        let close = |m: &Mesh| {
+            let c = m.colours.as_ref().expect("colours");
+            c.iter().flatten().zip(expected.iter().flatten()).all(|(a, b)| (a - b).abs() < 1e-6)
+        };
+        let ascii = header("uchar", "", "ascii")
+            + "0 0 0 255 0 128\n1 0 0 0 0 0\n0 1 0 128 128 128\n3 0 1 2\n";
+        assert!(close(&parse(ascii.as_bytes(), Path::new("c.ply")).unwrap()));
+        let floats = header("float", "diffuse_", "ascii")
+            + "0 0 0 1 0 0.50196078\n1 0 0 0 0 0\n0 1 0 0.50196078 0.50196078 0.50196078\n3 0 1 2\n";
+        assert!(close(&parse(floats.as_bytes(), Path::new("f.ply")).unwrap()));
+        let mut binary = header("uchar", "", "binary_little_endian").into_bytes();
+        for (p, c) in [
+            ([0.0f32, 0.0, 0.0], [255u8, 0, 128]),
+            ([1.0, 0.0, 0.0], [0; 3]),
+            ([0.0, 1.0, 0.0], [128; 3]),
+        ] {
+            p.iter().for_each(|v| binary.extend_from_slice(&v.to_le_bytes()));
+            binary.extend_from_slice(&c);
+        }
+        binary.push(3);
+        [0i32, 1, 2].iter().for_each(|i| binary.extend_from_slice(&i.to_le_bytes()));
+        assert!(close(&parse(&binary, Path::new("b.ply")).unwrap()));
+        // Two channels of three are no colour.
+        let partial = ascii
+            .replace("property uchar blue\n", "")
+            .replace(" 128\n1", "\n1")
+            .replace("0 0 0\n0 1", "0 0\n0 1")
+            .replace("128 128 128", "128 128");
+        assert_eq!(parse(partial.as_bytes(), Path::new("p.ply")).unwrap().colours, None);
+        let bright = floats.replace("0 0 0 1 0 0.50196078", "0 0 0 1.5 0 0.5");
+        let err = parse(bright.as_bytes(), Path::new("bright.ply")).unwrap_err().to_string();
+        assert!(err.starts_with("bright.ply: vertex 0: colour [1.5, 0.0, 0.5]"), "{err}");
+        assert!(err.contains("0 to 255 (uchar)"), "{err}");
     }
 
     #[test]

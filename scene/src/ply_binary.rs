@@ -13,6 +13,8 @@ struct Wanted {
     /// Property indices of x, y, z and of nx, ny, nz.
     position: [Option<usize>; 3],
     normal: [Option<usize>; 3],
+    /// Property indices of red, green, blue, and their full scale.
+    colour: Option<([usize; 3], f64)>,
     /// The property index of the face's vertex list.
     list: Option<usize>,
 }
@@ -22,6 +24,7 @@ fn wanted(e: &crate::ply_layout::Element) -> Wanted {
     if e.name == "vertex" {
         w.position = ["x", "y", "z"].map(|k| e.scalar(k));
         w.normal = ["nx", "ny", "nz"].map(|k| e.scalar(k));
+        w.colour = e.colour().map(|(at, _, full)| (at, full));
     }
     if e.name == "face" {
         w.list = e.face_list();
@@ -34,6 +37,7 @@ pub(crate) fn decode(header: &Header, bytes: &[u8]) -> Columns {
     let big = header.encoding == Encoding::BigEndian;
     let mut c = Columns { starts: vec![0], ..Columns::default() };
     let mut normals = Vec::new();
+    let mut colours = Vec::new();
     let mut at = header.body;
     let mut values: Vec<f64> = Vec::new();
     'body: for e in &header.elements {
@@ -73,6 +77,9 @@ pub(crate) fn decode(header: &Header, bytes: &[u8]) -> Columns {
                 if let ([Some(a), Some(b), Some(d)], true) = (w.normal, keep_normals) {
                     normals.push([values[a], values[b], values[d]]);
                 }
+                if let Some(([r, g, b], full)) = w.colour {
+                    colours.push([values[r] / full, values[g] / full, values[b] / full]);
+                }
             }
             if w.list.is_some() {
                 c.starts.push(c.indices.len());
@@ -81,6 +88,9 @@ pub(crate) fn decode(header: &Header, bytes: &[u8]) -> Columns {
     }
     if !normals.is_empty() && normals.len() == c.positions.len() {
         c.normals = Some(normals);
+    }
+    if !colours.is_empty() && colours.len() == c.positions.len() {
+        c.colours = Some(colours);
     }
     c
 }

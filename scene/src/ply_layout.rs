@@ -108,6 +108,20 @@ impl Scalar {
         }
     }
 
+    /// The value that stands for full intensity in a colour of this type: the type's largest
+    /// for whole numbers, 1 for floating point (as PLY writers use them).
+    pub(crate) fn full_scale(self) -> f64 {
+        match self {
+            Scalar::Char => 127.0,
+            Scalar::UChar => 255.0,
+            Scalar::Short => 32767.0,
+            Scalar::UShort => 65535.0,
+            Scalar::Int => f64::from(i32::MAX),
+            Scalar::UInt => f64::from(u32::MAX),
+            Scalar::Float | Scalar::Double => 1.0,
+        }
+    }
+
     /// Whether the type holds whole numbers (a list of vertex indices must).
     pub(crate) fn is_integer(self) -> bool {
         !matches!(self, Scalar::Float | Scalar::Double)
@@ -157,6 +171,21 @@ impl Element {
     /// The index of the scalar property `name`, if the element has one.
     pub(crate) fn scalar(&self, name: &str) -> Option<usize> {
         self.properties.iter().position(|p| p.name == name && matches!(p.kind, Kind::Scalar(_)))
+    }
+
+    /// A vertex's colour: the indices of its three channels and their names (`red`, `green`,
+    /// `blue`, or the older `diffuse_red`, … of the Stanford scans), and the value of full
+    /// intensity in their type; `None` unless all three are there, of one type.
+    pub(crate) fn colour(&self) -> Option<([usize; 3], [&'static str; 3], f64)> {
+        const NAMES: [[&str; 3]; 2] =
+            [["red", "green", "blue"], ["diffuse_red", "diffuse_green", "diffuse_blue"]];
+        NAMES.into_iter().find_map(|names| {
+            let [r, g, b] = names.map(|n| self.scalar(n));
+            let at = [r?, g?, b?];
+            let kinds = at.map(|i| self.properties[i].kind);
+            let Kind::Scalar(kind) = kinds[0] else { return None };
+            kinds.iter().all(|k| *k == kinds[0]).then_some((at, names, kind.full_scale()))
+        })
     }
 
     /// The index of a face's list of vertex indices (of a whole-number type), if it has one.

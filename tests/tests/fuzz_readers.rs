@@ -396,8 +396,8 @@ fn obj_seeds() -> Vec<(String, Vec<u8>)> {
 }
 
 fn ply_ascii_seeds() -> Vec<(String, Vec<u8>)> {
-    let quad = "ply\nformat ascii 1.0\ncomment a quad and a triangle\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n0 0 0 255\n2 0 0 0\n2 0 3 7\n0 0 3 9\n1 0 4 1\n4 0 1 2 3\n3 3 2 4\n";
-    let double = "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\nelement face 1\nproperty list ushort uint vertex_index\nelement extra 1\nproperty short s\nend_header\n0 0 0\n1.5e0 0 0\n0 0 1\n3 0 1 2\n-7\n";
+    let quad = "ply\nformat ascii 1.0\ncomment a quad and a triangle\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n0 0 0 255 0 9\n2 0 0 0 128 9\n2 0 3 7 7 7\n0 0 3 9 200 100\n1 0 4 1 2 3\n4 0 1 2 3\n3 3 2 4\n";
+    let double = "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\nproperty float diffuse_red\nproperty float diffuse_green\nproperty float diffuse_blue\nelement face 1\nproperty list ushort uint vertex_index\nelement extra 1\nproperty short s\nend_header\n0 0 0 0.5 0.25 1\n1.5e0 0 0 0 0 0\n0 0 1 1 1 1\n3 0 1 2\n-7\n";
     vec![("quad.ply".into(), quad.into()), ("double.ply".into(), double.into())]
 }
 

@@ -1,6 +1,6 @@
 //! The detail each material of a prepared scene takes over its measured reflectance: from a
-//! photo (the scene's `texture` for its state, or the part's own from its mesh file), or from
-//! the part's vertex colours; and the mean it is relative to, over the surfaces the material
+//! photo (the scene's `texture` for its state, or the part's own from its mesh file; balanced
+//! on its grey patch when the material gives one), or from the part's vertex colours; and the mean it is relative to, over the surfaces the material
 //! covers, weighted by area.
 //!
 //! A photo's mean samples each triangle at 16 points spread over it, on the level where it
@@ -100,11 +100,21 @@ impl MaterialDetails {
                 None => None,
             },
         };
+        // A photo balanced on a grey patch is another photo, keyed by its patch too.
+        let patch = m.white_patch_of(state);
         let source = photo.and_then(|(key, texture)| {
+            let key = match patch {
+                Some(p) => format!("{key} balanced on {},{} {}×{}", p.x, p.y, p.width, p.height),
+                None => key,
+            };
             let pyramid = match self.pyramids.entry((key, kind)) {
                 std::collections::btree_map::Entry::Occupied(e) => e.get().clone(),
                 std::collections::btree_map::Entry::Vacant(e) => {
-                    e.insert(Pyramid::new(&texture, kind)?).clone()
+                    let pyramid = match patch {
+                        Some(p) => Pyramid::new(&texture.white_balanced(p), kind),
+                        None => Pyramid::new(&texture, kind),
+                    };
+                    e.insert(pyramid?).clone()
                 }
             };
             Some(Source::Photo(pyramid))

@@ -288,3 +288,51 @@ fn a_textured_gltf_shows_its_own_photo_over_the_bound_spectrum() {
     let mut buffer = Spectrum::ZERO;
     assert_eq!(plain.reflectance(&hit, 0.0, &mut buffer).0, [0.3; 81]);
 }
+
+/// IEC 61966-2-1 §5.3: a linear value's 8-bit sRGB code.
+fn code(linear: f64) -> u8 {
+    let v =
+        if linear <= 0.003_130_8 { 12.92 * linear } else { 1.055 * linear.powf(1.0 / 2.4) - 0.055 };
+    (v * 255.0).round().clamp(0.0, 255.0) as u8
+}
+
+/// A photo taken under a warm cast and balanced on the grey card it shows (`white_patch`) gives
+/// the reflectances the photo without the cast gives, to within 8-bit rounding (chromatic
+/// detail); unbalanced, its
+/// stain's spectrum leans to the cast. The cast is a diagonal one that keeps grey's luminance,
+/// which balancing on a grey patch undoes exactly.
+#[test]
+fn a_photo_balanced_on_its_grey_card_loses_its_cast() {
+    // Grey card, stone, stone, rust stain (linear sRGB).
+    let scene_colours =
+        [[0.5, 0.5, 0.5], [0.45, 0.38, 0.28], [0.40, 0.35, 0.27], [0.35, 0.14, 0.09]];
+    let green = (1.0 - 0.2126 * 1.25 - 0.0722 * 0.7) / 0.7152;
+    let cast = [1.25, green, 0.7];
+    let photo = |cast: [f64; 3]| {
+        move |x: u32, _: u32| {
+            let c: [f64; 3] = scene_colours[x as usize];
+            [code(c[0] * cast[0]), code(c[1] * cast[1]), code(c[2] * cast[2])]
+        }
+    };
+    let patch = "white_patch = { x = 0, y = 0, width = 1, height = 1 }";
+    let stain_at = |dir: &Path, keys: &str| {
+        let prepared = prepare(&scene(dir, 2.0, 1.0, TRAVERTINE, ABOVE, keys));
+        // The stain's texel centre: u = 7/8.
+        reflectance_at(&prepared, 0.75, 0.0)
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let chromatic = format!("{CHROMATIC}\n{patch}");
+    png_rgb(&dir.path().join("photo.png"), 4, 1, photo([1.0; 3]));
+    let truth = stain_at(dir.path(), CHROMATIC);
+    png_rgb(&dir.path().join("photo.png"), 4, 1, photo(cast));
+    let balanced = stain_at(dir.path(), &chromatic);
+    let unbalanced = stain_at(dir.path(), CHROMATIC);
+    let worst = |rho: &Spectrum| {
+        rho.0.iter().zip(&truth.0).map(|(r, t)| (r / t - 1.0).abs()).fold(0.0f32, f32::max)
+    };
+    let (b, u) = (worst(&balanced), worst(&unbalanced));
+    // Neighbouring 8-bit codes of the stain's blue are 3 % apart in linear value, and the
+    // photo is rounded twice (cast, then balanced); the cast itself moves the stain by 25 %.
+    assert!(b < 0.04, "balanced, the stain is {b} off the uncast photo's");
+    assert!(u > 5.0 * b.max(0.01), "unbalanced {u}, balanced {b}: the cast should show");
+}

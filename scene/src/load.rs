@@ -1225,6 +1225,14 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
                 ));
             }
             let m = &file.materials[material];
+            if let (Some(photo), None, Some(patch)) = (&g.photo, &m.texture, m.white_patch) {
+                photo.check_patch(patch).map_err(|problem| {
+                    ctx.invalid(
+                        format!("materials.{material}.white_patch"),
+                        format!("in the photo of part `{}` of `{}`: {problem}", g.name, o.mesh),
+                    )
+                })?;
+            }
             let textured =
                 ["base", "degraded", "cleaned"].iter().any(|st| m.texture_of(st).is_some());
             let group = group_materials.len() as u32;
@@ -1692,24 +1700,37 @@ fn load_textures(
     ctx: &Ctx,
     limits: &Limits,
 ) -> Result<BTreeMap<String, std::sync::Arc<crate::texture::Texture>>> {
-    let mut out = BTreeMap::new();
+    let mut out: BTreeMap<String, std::sync::Arc<crate::texture::Texture>> = BTreeMap::new();
     for (name, m) in &ctx.file.materials {
-        let states = [("", m.texture.as_ref())].into_iter().chain(
-            [("degraded", &m.degraded), ("cleaned", &m.cleaned)]
-                .map(|(st, o)| (st, o.as_ref().and_then(|o| o.texture.as_ref()))),
+        let states = [("", m.texture.as_ref(), m.white_patch)].into_iter().chain(
+            [("degraded", &m.degraded), ("cleaned", &m.cleaned)].map(|(st, o)| {
+                let o = o.as_ref();
+                (st, o.and_then(|o| o.texture.as_ref()), o.and_then(|o| o.white_patch))
+            }),
         );
-        for (state, reference) in states {
-            let Some(reference) = reference else { continue };
-            let place = match state {
-                "" => format!("materials.{name}.texture"),
-                s => format!("materials.{name}.{s}.texture"),
+        for (state, reference, patch) in states {
+            let at = match state {
+                "" => format!("materials.{name}"),
+                s => format!("materials.{name}.{s}"),
             };
+            let Some(reference) = reference else {
+                if patch.is_some() && !state.is_empty() {
+                    return Err(ctx.invalid(
+                        format!("{at}.white_patch"),
+                        "the patch lies in the state's own photo, and it has none; give the \
+                         state a `texture`, or put `white_patch` on the material",
+                    ));
+                }
+                continue;
+            };
+            let place = format!("{at}.texture");
             if m.model == MaterialModel::Glass {
                 return Err(
                     ctx.invalid(place, "glass takes no texture; give it to the stone behind")
                 );
             }
-            if out.contains_key(reference) {
+            if let Some(texture) = out.get(reference) {
+                check_white_patch(ctx, &at, texture, patch)?;
                 continue;
             }
             let ext = extension(reference);
@@ -1722,10 +1743,22 @@ fn load_textures(
             let bytes = ctx.assets.read(reference, &place)?;
             let shown = ctx.assets.display_path(reference);
             let texture = crate::texture::decode(&bytes, &ext, &shown, limits.max_pixels)?;
+            check_white_patch(ctx, &at, &texture, patch)?;
             out.insert(reference.clone(), std::sync::Arc::new(texture));
         }
     }
     Ok(out)
+}
+
+/// A grey patch (`{at}.white_patch`) that white-balances `texture`, checked against it.
+fn check_white_patch(
+    ctx: &Ctx,
+    at: &str,
+    texture: &crate::texture::Texture,
+    patch: Option<scene_file::PixelRect>,
+) -> Result<()> {
+    let Some(patch) = patch else { return Ok(()) };
+    texture.check_patch(patch).map_err(|problem| ctx.invalid(format!("{at}.white_patch"), problem))
 }
 
 /// An illuminance (sun or sky): finite, ≥ 0 and at most [`MAX_ILLUMINANCE_LUX`].

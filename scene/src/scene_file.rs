@@ -485,6 +485,11 @@ pub struct Material {
     /// Not written when absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub detail: Option<Detail>,
+    /// Where a grey card (or a ColorChecker's neutral patch) lies in `texture`, or in the
+    /// parts' own photos when the material names none: the photo is white-balanced so that the
+    /// patch comes out neutral. Not written when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub white_patch: Option<PixelRect>,
     /// The surface as found (soiled, weathered).
     #[serde(default)]
     pub degraded: Option<SurfaceOverride>,
@@ -497,6 +502,15 @@ impl Material {
     /// The photo texture of `state`: the state's own, or the base one.
     pub fn texture_of(&self, state: &str) -> Option<&String> {
         self.state(state).and_then(|o| o.texture.as_ref()).or(self.texture.as_ref())
+    }
+
+    /// The grey patch of the photo `state` shows: beside the texture it lies in (a state with
+    /// its own photo gives its own patch, if any).
+    pub fn white_patch_of(&self, state: &str) -> Option<PixelRect> {
+        match self.state(state) {
+            Some(o) if o.texture.is_some() => o.white_patch,
+            _ => self.white_patch,
+        }
     }
 
     /// The fields that `state` changes: `None` for `base`, and for a state the material does
@@ -513,6 +527,16 @@ impl Material {
     pub fn has_state(&self, state: &str) -> bool {
         state == "base" || self.state(state).is_some()
     }
+}
+
+/// A rectangle of a photo's pixels, `x` from the left and `y` from the top edge.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PixelRect {
+    pub x: u32,
+    pub y: u32,
+    pub width: u32,
+    pub height: u32,
 }
 
 /// A state of a material: the fields it changes.
@@ -537,6 +561,10 @@ pub struct SurfaceOverride {
     /// one. Not written when absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub texture: Option<String>,
+    /// The grey patch in this state's own `texture` (see [`Material::white_patch`]). Not
+    /// written when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub white_patch: Option<PixelRect>,
     #[serde(default)]
     pub roughness: Option<f64>,
     #[serde(default)]

@@ -4,6 +4,7 @@
 
 use crate::error::{Result, SceneError};
 use crate::guard;
+use crate::scene_file::PixelRect;
 use restauro_spectral::rgb_space::Transfer;
 use std::path::Path;
 
@@ -25,6 +26,65 @@ impl Texture {
     pub fn linear_rgb(&self, x: u32, y: u32) -> [f32; 3] {
         let t = self.texels[(y * self.width + x) as usize];
         t.map(|c| Transfer::Srgb.decode(f64::from(c) / 65535.0) as f32)
+    }
+}
+
+impl Texture {
+    /// Why `patch` cannot white-balance this photo, in words: it reaches beyond the image, is
+    /// empty, or is black in a channel (no gain makes that grey).
+    pub fn check_patch(&self, patch: PixelRect) -> std::result::Result<(), String> {
+        let PixelRect { x, y, width, height } = patch;
+        let inside = u64::from(x) + u64::from(width) <= u64::from(self.width)
+            && u64::from(y) + u64::from(height) <= u64::from(self.height);
+        if width == 0 || height == 0 || !inside {
+            return Err(format!(
+                "the rectangle of {width} × {height} pixels at ({x}, {y}) is not inside the \
+                 photo's {} × {} pixels; give the grey patch's top-left pixel (x from the left, \
+                 y from the top) and its size",
+                self.width, self.height
+            ));
+        }
+        let mean = self.patch_mean(patch);
+        if let Some(k) = (0..3).find(|&k| mean[k] <= 1e-4) {
+            let channel = ["red", "green", "blue"][k];
+            return Err(format!(
+                "the patch is black in {channel}; choose a grey patch that the light reaches"
+            ));
+        }
+        Ok(())
+    }
+
+    /// The photo white-balanced on a grey patch (von Kries scaling in linear sRGB, as camera
+    /// raw converters balance on a grey card): each channel is scaled so that the patch's mean
+    /// becomes a neutral grey of the same luminance (BT.709 weights); a texel pushed beyond
+    /// full scale is held there. `patch` must pass [`Texture::check_patch`].
+    pub fn white_balanced(&self, patch: PixelRect) -> Texture {
+        let mean = self.patch_mean(patch);
+        let y = 0.2126 * mean[0] + 0.7152 * mean[1] + 0.0722 * mean[2];
+        let gains = mean.map(|c| y / c);
+        let texels = self
+            .texels
+            .iter()
+            .map(|t| {
+                std::array::from_fn(|k| {
+                    let linear = Transfer::Srgb.decode(f64::from(t[k]) / 65535.0) * gains[k];
+                    (Transfer::Srgb.encode(linear.min(1.0)) * 65535.0).round() as u16
+                })
+            })
+            .collect();
+        Texture { width: self.width, height: self.height, texels }
+    }
+
+    /// The patch's mean linear colour.
+    fn patch_mean(&self, patch: PixelRect) -> [f64; 3] {
+        let mut sum = [0.0f64; 3];
+        for row in patch.y..patch.y + patch.height {
+            for col in patch.x..patch.x + patch.width {
+                let c = self.linear_rgb(col, row);
+                (0..3).for_each(|k| sum[k] += f64::from(c[k]));
+            }
+        }
+        sum.map(|s| s / (f64::from(patch.width) * f64::from(patch.height)))
     }
 }
 

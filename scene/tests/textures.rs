@@ -193,3 +193,65 @@ fn a_gltf_photo_beside_the_model_travels_in_the_bundle() {
     let loaded = bundle.load(&Limits::default()).unwrap();
     assert_eq!(loaded.objects[0].mesh.groups[0].photo.as_deref(), Some(&**photo));
 }
+
+/// The scene of [`load_with`] with `keys` added to its material.
+fn load_with_keys(dir: &Path, keys: &str) -> Result<LoadedScene> {
+    load_with(dir, ("quad.obj", QUAD.as_bytes()), ("photo.png", &png_bytes())).unwrap();
+    let toml = std::fs::read_to_string(dir.join("scene.toml")).unwrap();
+    let toml =
+        toml.replace("texture = \"photo.png\"\n", &format!("texture = \"photo.png\"\n{keys}\n"));
+    std::fs::write(dir.join("scene.toml"), toml).unwrap();
+    load_scene(&dir.join("scene.toml"), &Limits::default())
+}
+
+/// A grey patch white-balances a photo: balanced on a patch of one colour, that patch comes out
+/// neutral with its luminance kept (BT.709), and every other texel is scaled by the same gains.
+#[test]
+fn a_photo_balanced_on_a_patch_makes_the_patch_grey() {
+    use restauro_scene::scene_file::PixelRect;
+    // A warm card in the top row, two other colours below (8-bit codes × 257).
+    let texels = vec![[200, 160, 120], [200, 160, 120], [90, 140, 60], [250, 250, 250]]
+        .into_iter()
+        .map(|c: [u16; 3]| c.map(|v| v * 257))
+        .collect();
+    let photo = Texture { width: 2, height: 2, texels };
+    let card = PixelRect { x: 0, y: 0, width: 2, height: 1 };
+    photo.check_patch(card).unwrap();
+    let balanced = photo.white_balanced(card);
+    let before = photo.linear_rgb(0, 0).map(f64::from);
+    let after = balanced.linear_rgb(0, 0).map(f64::from);
+    let y = |c: [f64; 3]| 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+    for k in 0..3 {
+        assert!(
+            (after[k] - y(before)).abs() < 1e-4,
+            "channel {k}: {after:?}, luminance {}",
+            y(before)
+        );
+        // The same gain on another texel (16-bit rounding aside).
+        let gain = y(before) / before[k];
+        let (b, a) =
+            (f64::from(photo.linear_rgb(0, 1)[k]), f64::from(balanced.linear_rgb(0, 1)[k]));
+        assert!((a - (b * gain).min(1.0)).abs() < 1e-4, "channel {k}: {a} against {}", b * gain);
+    }
+}
+
+#[test]
+fn a_white_patch_outside_the_photo_black_or_without_a_photo_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    load_with_keys(d, "white_patch = { x = 1, y = 1, width = 1, height = 1 }").unwrap();
+    let m = refusal(load_with_keys(d, "white_patch = { x = 1, y = 0, width = 2, height = 1 }"));
+    assert!(m.contains("materials.stone.white_patch"), "{m}");
+    assert!(m.contains("2 × 1 pixels at (1, 0) is not inside the photo's 2 × 2 pixels"), "{m}");
+    let m = refusal(load_with_keys(d, "white_patch = { x = 0, y = 0, width = 0, height = 1 }"));
+    assert!(m.contains("is not inside"), "{m}");
+    // The red texel has no green or blue: no gain makes it grey.
+    let m = refusal(load_with_keys(d, "white_patch = { x = 0, y = 0, width = 1, height = 1 }"));
+    assert!(m.contains("the patch is black in green; choose a grey patch"), "{m}");
+    let m = refusal(load_with_keys(
+        d,
+        "degraded = { reflectance = \"grey\", white_patch = { x = 1, y = 1, width = 1, height = 1 } }",
+    ));
+    assert!(m.contains("materials.stone.degraded.white_patch"), "{m}");
+    assert!(m.contains("give the state a `texture`, or put `white_patch` on the material"), "{m}");
+}

@@ -52,13 +52,14 @@ pub fn summary(path: &Path, scene: &LoadedScene) -> String {
 /// its material shows that: `facade→stone`, `scan→stone (vertex colours)`.
 fn parts(scene: &LoadedScene, mesh: &restauro_scene::mesh::Mesh, materials: &[String]) -> String {
     use restauro_scene::scene_file::Detail;
+    let coloured = mesh.coloured_groups();
     let part = |(k, (g, m)): (usize, (&restauro_scene::mesh::Group, &String))| {
         let material = &scene.file.materials[m];
         let own = if material.detail == Some(Detail::None) || material.texture.is_some() {
             ""
         } else if g.photo.is_some() {
             " (its photo)"
-        } else if mesh.group_has_colours(k as u32) {
+        } else if coloured[k] {
             " (vertex colours)"
         } else {
             ""

@@ -23,27 +23,25 @@ pub(crate) enum Own {
     VertexColours,
 }
 
-/// A part's own detail (its file's photo, else its vertex colours), by a key naming the part,
-/// when it shows: the scene's material gives no texture of its own for `state` and does not
-/// say `detail = "none"`.
+/// A part's own detail (its file's photo, else its vertex colours when `coloured`), by a key
+/// naming the part, when it shows: the scene's material gives no texture of its own for
+/// `state` and does not say `detail = "none"`.
 pub(crate) fn own_detail(
     scene: &LoadedScene,
     (material, state): (&str, &str),
     object: &str,
-    mesh: &Mesh,
-    group: u32,
+    group: &restauro_scene::mesh::Group,
+    coloured: bool,
 ) -> Option<(String, Own)> {
     let m = &scene.file.materials[material];
     let shows = m.texture_of(state).is_none() && m.detail != Some(DetailKind::None);
     if !shows {
         return None;
     }
-    let g = &mesh.groups[group as usize];
-    if let Some(photo) = &g.photo {
-        return Some((format!("{object}#{}", g.name), Own::Photo(photo.clone())));
+    if let Some(photo) = &group.photo {
+        return Some((format!("{object}#{}", group.name), Own::Photo(photo.clone())));
     }
-    let coloured = mesh.group_has_colours(group);
-    coloured.then(|| (format!("{object}#{} vertex colours", g.name), Own::VertexColours))
+    coloured.then(|| (format!("{object}#{} vertex colours", group.name), Own::VertexColours))
 }
 
 /// What gives a material its detail.

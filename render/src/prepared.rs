@@ -172,17 +172,18 @@ impl PreparedScene {
         let (mut textured, mut coloured) = (Vec::new(), Vec::new());
         for o in &scene.objects {
             let m = &o.mesh;
+            let coloured_groups = m.coloured_groups();
             let group_bsdf: Vec<u32> = m
                 .groups
                 .iter()
                 .zip(&o.group_materials)
-                .enumerate()
-                .map(|(k, (g, name))| {
+                .zip(&coloured_groups)
+                .map(|((g, name), &coloured)| {
                     let state = variant
                         .and_then(|v| scene.state_of(v, &o.name, &g.name))
                         .unwrap_or("base")
                         .to_owned();
-                    let own = own_detail(scene, (name, &state), &o.name, m, k as u32);
+                    let own = own_detail(scene, (name, &state), &o.name, g, coloured);
                     let key = (name.clone(), state.clone(), own.as_ref().map(|(k, _)| k.clone()));
                     *index.entry(key).or_insert_with(|| {
                         materials.push(bsdf(scene, name, &state));

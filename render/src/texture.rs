@@ -245,14 +245,14 @@ struct IndexLevel {
 
 /// The palette being gathered: colours by their 8-bit sRGB key.
 #[derive(Default)]
-pub(crate) struct Palette {
+struct Palette {
     keys: std::collections::HashMap<u32, u32>,
-    pub(crate) rgb: Vec<[f32; 3]>,
+    rgb: Vec<[f32; 3]>,
 }
 
 impl Palette {
     /// The index of the colour whose 8-bit sRGB encoding is `srgb8`.
-    pub(crate) fn index(&mut self, srgb8: [u8; 3]) -> u32 {
+    fn index(&mut self, srgb8: [u8; 3]) -> u32 {
         let key = u32::from(srgb8[0]) << 16 | u32::from(srgb8[1]) << 8 | u32::from(srgb8[2]);
         let next = self.rgb.len() as u32;
         *self.keys.entry(key).or_insert_with(|| {
@@ -263,7 +263,7 @@ impl Palette {
 }
 
 /// A linear value's 8-bit sRGB code (IEC 61966-2-1's encoding function).
-pub(crate) fn linear_to_srgb8(v: f32) -> u8 {
+fn linear_to_srgb8(v: f32) -> u8 {
     (Transfer::Srgb.encode(f64::from(v)) * 255.0).round() as u8
 }
 

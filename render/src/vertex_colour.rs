@@ -1,4 +1,4 @@
-//! A scan's vertex colours (PLY `red`, `green`, `blue`) as detail over a measured reflectance,
+//! A scan's vertex colours (PLY `red`, `green`, `blue`; glTF `COLOR_0`) as detail over a measured reflectance,
 //! the two ways a photo gives it ([`crate::texture`]): with `detail = "luminance"`,
 //! ρ(λ, x) = min(1, ρₘ(λ)·Y(x)/Ȳ), Y interpolated between the triangle's vertices; with
 //! `detail = "chromatic"`, ρ(λ, x) = min(1, ρₘ(λ)·S_x(λ)/S̄(λ)), S_x the vertices' smooth
@@ -10,9 +10,11 @@
 //! No filtering is needed: colours given per vertex vary no faster than the geometry, which a
 //! pixel's samples already filter.
 
-use crate::texture::{Palette, luminance};
+use crate::texture::luminance;
 use restauro_spectral::Spectrum;
+use restauro_spectral::rgb_space::Transfer;
 use restauro_spectral::rgb_upsampling::{SigmoidPolynomial, fit};
+use std::collections::HashMap;
 
 /// Where a ray met a coloured triangle: its corners' colours (indices in the
 /// [`VertexPalette`]) and the hit's barycentric weights for them.
@@ -29,29 +31,38 @@ pub struct VertexPalette {
     spectra: Vec<SigmoidPolynomial>,
 }
 
-/// The colours being gathered, by their 8-bit sRGB code (as a photo's texels are: finer than a
-/// scanner's colour noise, and exact for the 8-bit colours scans carry).
+/// The colours being gathered, each once by its 16-bit sRGB code: exact for the 8-bit colours
+/// most scans carry, and far finer than a scanner's colour noise for the rest (floats, and
+/// glTF's linear bytes).
 #[derive(Default)]
 pub struct PaletteBuilder {
-    palette: Palette,
+    keys: HashMap<u64, u32>,
+    rgb: Vec<[f32; 3]>,
 }
 
 impl PaletteBuilder {
     /// The index of linear colour `rgb` (0..1).
     pub fn index(&mut self, rgb: [f32; 3]) -> u32 {
-        self.palette.index(rgb.map(crate::texture::linear_to_srgb8))
+        let code = rgb.map(|c| {
+            (Transfer::Srgb.encode(f64::from(c).clamp(0.0, 1.0)) * 65535.0).round() as u64
+        });
+        let next = self.rgb.len() as u32;
+        *self.keys.entry(code[0] << 32 | code[1] << 16 | code[2]).or_insert_with(|| {
+            self.rgb.push(code.map(|c| Transfer::Srgb.decode(c as f64 / 65535.0) as f32));
+            next
+        })
     }
 
     /// The linear colour at `index`, as the palette holds it.
     pub fn colour(&self, index: u32) -> [f32; 3] {
-        self.palette.rgb[index as usize]
+        self.rgb[index as usize]
     }
 
     /// The palette, with each colour's spectrum fitted when `chromatic` (a fit per colour, in
     /// parallel; a colour no sigmoid reaches keeps the flat 0.5 and so leaves ρₘ as it is).
     pub fn finish(self, chromatic: bool) -> VertexPalette {
         use rayon::prelude::*;
-        let rgb = self.palette.rgb;
+        let rgb = self.rgb;
         let spectra = match chromatic {
             true => rgb.par_iter().map(|c| fit(c.map(f64::from)).unwrap_or_default()).collect(),
             false => Vec::new(),

@@ -165,3 +165,58 @@ fn detail_none_leaves_the_measured_spectrum() {
         assert_eq!(reflectance_at(&prepared, x, y).0, measured.0);
     }
 }
+
+/// A glTF scan's `COLOR_0` (linear by the glTF specification, here normalized bytes) gives the
+/// same detail: the luminances interpolated, relative to their mean.
+#[test]
+fn a_gltf_scans_color_0_gives_the_same_detail() {
+    use base64::Engine as _;
+    let dir = tempfile::tempdir().unwrap();
+    // Y up: file (x, y, z) is world (x, −z, y); dark on the left, light on the right.
+    let positions: [f32; 12] = [-1.0, 0.0, 1.0, 1.0, 0.0, 1.0, 1.0, 0.0, -1.0, -1.0, 0.0, -1.0];
+    let (dark, light) = ([40u8, 30, 20, 255], [200u8, 190, 180, 255]);
+    let colours = [dark, light, light, dark];
+    let indices: [u16; 6] = [0, 1, 2, 0, 2, 3];
+    let mut buffer: Vec<u8> = positions.iter().flat_map(|v| v.to_le_bytes()).collect();
+    buffer.extend(colours.iter().flatten());
+    buffer.extend(indices.iter().flat_map(|i| i.to_le_bytes()));
+    let data = base64::engine::general_purpose::STANDARD.encode(&buffer);
+    let gltf = format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
+        "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"COLOR_0":1}},"indices":2}}]}}],
+        "buffers":[{{"byteLength":76,"uri":"data:application/octet-stream;base64,{data}"}}],
+        "bufferViews":[{{"buffer":0,"byteLength":48}},{{"buffer":0,"byteOffset":48,"byteLength":16}},{{"buffer":0,"byteOffset":64,"byteLength":12}}],
+        "accessors":[{{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3","min":[-1,0,-1],"max":[1,0,1]}},
+                     {{"bufferView":1,"componentType":5121,"normalized":true,"count":4,"type":"VEC4"}},
+                     {{"bufferView":2,"componentType":5123,"count":6,"type":"SCALAR"}}]}}"#
+    );
+    std::fs::write(dir.path().join("scan.gltf"), gltf).unwrap();
+    let toml = "format = 1\n[camera]\nposition = [0.0, 0.0, 5.0]\ntarget = [0.0, 0.0, 0.0]\nup = [0, 1, 0]\nwidth = 16\nheight = 16\n\
+         [spectra]\nday = { illuminant = \"D65\" }\nstone = { constant = 0.3 }\n\
+         [materials.stone]\nmodel = \"lambert\"\nreflectance = \"stone\"\n\
+         [[objects]]\nname = \"scan\"\nmesh = \"scan.gltf\"\nmaterial = \"stone\"\n\
+         [[lights]]\nkind = \"sun\"\nilluminance_lux = 10000.0\nazimuth_deg = 180.0\nelevation_deg = 60.0\nspectrum = \"day\"\n";
+    std::fs::write(dir.path().join("scene.toml"), toml).unwrap();
+    let loaded = load_scene(&dir.path().join("scene.toml"), &Limits::default()).unwrap();
+    let settings = Settings {
+        integrator: Integrator::Whitted,
+        samples_per_pixel: 4,
+        max_depth: 1,
+        seed: 7,
+        grids: false,
+    };
+    let prepared = PreparedScene::new(&loaded, None, settings).unwrap();
+    // Linear values: a byte over 255, weighed by BT.709.
+    let y = |c: [u8; 4]| {
+        0.2126 * f64::from(c[0]) / 255.0
+            + 0.7152 * f64::from(c[1]) / 255.0
+            + 0.0722 * f64::from(c[2]) / 255.0
+    };
+    let mean = 0.5 * (y(dark) + y(light));
+    for (x, yy) in POINTS {
+        let share = f64::from(x + 1.0) / 2.0;
+        let want = 0.3 * (y(dark) + share * (y(light) - y(dark))) / mean;
+        let got = f64::from(reflectance_at(&prepared, x, yy).0[40]);
+        assert!((got / want - 1.0).abs() < 1e-4, "({x}, {yy}): {got} against {want}");
+    }
+}

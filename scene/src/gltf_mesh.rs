@@ -341,6 +341,26 @@ fn add_node(
                 )?,
                 None => false,
             };
+            // Vertex colours (glTF 2.0 §3.7.2.1: linear, multiplying the base colour), as a
+            // scanner's photogrammetry export carries them when it bakes no photo.
+            let has_colours = match prim.get(&gltf::Semantic::Colors(0)) {
+                Some(a) => check_accessor(
+                    &a,
+                    buffers,
+                    path,
+                    "COLOR_0",
+                    &[
+                        (DataType::F32, Dimensions::Vec3),
+                        (DataType::F32, Dimensions::Vec4),
+                        (DataType::U8, Dimensions::Vec3),
+                        (DataType::U8, Dimensions::Vec4),
+                        (DataType::U16, Dimensions::Vec3),
+                        (DataType::U16, Dimensions::Vec4),
+                    ],
+                    "VEC3 or VEC4 of float, or of normalized unsigned byte or short",
+                )?,
+                None => false,
+            };
             // Normals go through the inverse transpose, so a non-uniform scale keeps them normal.
             let normal_matrix = DMat3::from_mat4(world).inverse().transpose();
             let reader = prim.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
@@ -366,10 +386,14 @@ fn add_node(
                     reader.read_tex_coords(set).filter(|_| has_texcoords).map(|t| {
                         t.into_f32().map(|uv| transform.map_or(uv, |x| x.apply(uv))).collect()
                     });
-                (positions, indices, normals, texcoords)
+                let colours: Option<Vec<[f32; 3]>> = reader
+                    .read_colors(0)
+                    .filter(|_| has_colours)
+                    .map(|c| c.into_rgb_f32().collect());
+                (positions, indices, normals, texcoords, colours)
             })
             .map_err(|_| SceneError::invalid(path, place(), guard::gave_up("glTF")))?;
-            let (Some(positions), indices, normals, texcoords) = read else {
+            let (Some(positions), indices, normals, texcoords, colours) = read else {
                 return Err(SceneError::invalid(
                     path,
                     place(),
@@ -429,6 +453,23 @@ fn add_node(
             match texcoords {
                 Some(t) if t.len() == positions.len() => uv.extend(t),
                 _ => uv.resize(base as usize + positions.len(), [f32::NAN; 2]),
+            }
+            if let Some(bad) =
+                colours.iter().flatten().position(|c| !c.iter().all(|v| (0.0..=1.0).contains(v)))
+            {
+                return Err(SceneError::invalid(
+                    path,
+                    place(),
+                    format!(
+                        "COLOR_0 of vertex {bad} is outside 0 to 1; vertex colours are linear \
+                         values from 0 to 1"
+                    ),
+                ));
+            }
+            let vertex_colours = mesh.colours.get_or_insert_with(Vec::new);
+            match colours {
+                Some(c) if c.len() == positions.len() => vertex_colours.extend(c),
+                _ => vertex_colours.resize(base as usize + positions.len(), [f32::NAN; 3]),
             }
             for p in positions {
                 mesh.push_position(p);
@@ -698,6 +739,46 @@ mod tests {
             }
         }
         assert_eq!(&normals[3..], &[[0.0; 3]; 3]);
+    }
+
+    /// COLOR_0 (linear floats here) becomes the vertices' colours as they are; a primitive
+    /// without it has none (NaN); a colour beyond 1 is refused, naming the vertex.
+    #[test]
+    fn color_0_is_read_and_checked() {
+        let gltf = |red: f32| {
+            let mut bin = Vec::new();
+            let floats = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
+                .into_iter()
+                .chain([[0.25, 0.5, 0.75], [red, 0.0, 0.0], [1.0, 1.0, 1.0]]);
+            for c in floats.flatten() {
+                bin.extend_from_slice(&c.to_le_bytes());
+            }
+            for i in [0u16, 1, 2] {
+                bin.extend_from_slice(&i.to_le_bytes());
+            }
+            let data = base64::engine::general_purpose::STANDARD.encode(&bin);
+            format!(
+                r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0,1]}}],
+                "nodes":[{{"mesh":0}},{{"mesh":1}}],
+                "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"COLOR_0":2}},"indices":1}}]}},
+                          {{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1}}]}}],
+                "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+                             {{"bufferView":2,"componentType":5123,"count":3,"type":"SCALAR"}},
+                             {{"bufferView":1,"componentType":5126,"count":3,"type":"VEC3"}}],
+                "bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":36}},
+                               {{"buffer":0,"byteOffset":72,"byteLength":6}}],
+                "buffers":[{{"byteLength":78,"uri":"data:application/octet-stream;base64,{data}"}}]}}"#
+            )
+        };
+        let mesh = parse(gltf(0.5).as_bytes(), Path::new("c.gltf")).unwrap();
+        let colours = mesh.colours.expect("colours");
+        assert_eq!(&colours[..3], &[[0.25, 0.5, 0.75], [0.5, 0.0, 0.0], [1.0, 1.0, 1.0]]);
+        assert!(colours[3..].iter().flatten().all(|c| c.is_nan()));
+        let err = parse(gltf(1.5).as_bytes(), Path::new("c.gltf")).unwrap_err().to_string();
+        assert!(
+            err.contains("c.gltf: mesh 0 primitive 0: COLOR_0 of vertex 1 is outside 0 to 1"),
+            "{err}"
+        );
     }
 
     #[test]

@@ -133,10 +133,18 @@ impl Mesh {
         self.group_all(group, |i| uv[i as usize].iter().all(|c| c.is_finite()))
     }
 
-    /// Whether every vertex of every triangle of group `group` has a colour.
-    pub fn group_has_colours(&self, group: u32) -> bool {
-        let Some(colours) = &self.colours else { return false };
-        self.group_all(group, |i| colours[i as usize].iter().all(|c| c.is_finite()))
+    /// Per group, whether every vertex of every one of its triangles has a colour (in one pass
+    /// over the triangles, however many groups there are).
+    pub fn coloured_groups(&self) -> Vec<bool> {
+        let mut out = vec![self.colours.is_some(); self.groups.len()];
+        let Some(colours) = &self.colours else { return out };
+        let coloured = |i: &u32| colours[*i as usize].iter().all(|c| c.is_finite());
+        for (t, &g) in self.triangles.iter().zip(&self.triangle_group) {
+            if out[g as usize] && !t.iter().all(coloured) {
+                out[g as usize] = false;
+            }
+        }
+        out
     }
 
     fn group_all(&self, group: u32, vertex: impl Fn(u32) -> bool) -> bool {

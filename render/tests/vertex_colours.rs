@@ -50,15 +50,16 @@ fn prepare(left: [u8; 3], right: [u8; 3], rho: &str, detail: &str) -> (PreparedS
     );
     std::fs::write(dir.path().join("scene.toml"), toml).unwrap();
     let loaded = load_scene(&dir.path().join("scene.toml"), &Limits::default()).unwrap();
-    let settings = Settings {
-        integrator: Integrator::Whitted,
-        samples_per_pixel: 4,
-        max_depth: 1,
-        seed: 7,
-        grids: false,
-    };
-    (PreparedScene::new(&loaded, None, settings).unwrap(), loaded.spectra["stone"])
+    (PreparedScene::new(&loaded, None, SETTINGS).unwrap(), loaded.spectra["stone"])
 }
+
+const SETTINGS: Settings = Settings {
+    integrator: Integrator::Whitted,
+    samples_per_pixel: 4,
+    max_depth: 1,
+    seed: 7,
+    grids: false,
+};
 
 /// The reflectance the tracer uses where a ray straight down meets the ground at (x, y).
 fn reflectance_at(prepared: &PreparedScene, x: f32, y: f32) -> Spectrum {
@@ -198,14 +199,7 @@ fn a_gltf_scans_color_0_gives_the_same_detail() {
          [[lights]]\nkind = \"sun\"\nilluminance_lux = 10000.0\nazimuth_deg = 180.0\nelevation_deg = 60.0\nspectrum = \"day\"\n";
     std::fs::write(dir.path().join("scene.toml"), toml).unwrap();
     let loaded = load_scene(&dir.path().join("scene.toml"), &Limits::default()).unwrap();
-    let settings = Settings {
-        integrator: Integrator::Whitted,
-        samples_per_pixel: 4,
-        max_depth: 1,
-        seed: 7,
-        grids: false,
-    };
-    let prepared = PreparedScene::new(&loaded, None, settings).unwrap();
+    let prepared = PreparedScene::new(&loaded, None, SETTINGS).unwrap();
     // Linear values: a byte over 255, weighed by BT.709.
     let y = |c: [u8; 4]| {
         0.2126 * f64::from(c[0]) / 255.0

@@ -306,17 +306,16 @@ fn add_node(
                         .into(),
                 });
             }
-            let has_normals = match prim.get(&gltf::Semantic::Normals) {
-                Some(a) => check_accessor(
-                    &a,
-                    buffers,
-                    path,
-                    "NORMAL",
-                    &[(DataType::F32, Dimensions::Vec3)],
-                    "VEC3 of float (componentType 5126)",
-                )?,
-                None => false,
+            // Whether the primitive has a readable `semantic` accessor (checked).
+            let has = |semantic: gltf::Semantic, allowed: &[(DataType, Dimensions)], expected| {
+                let role = semantic.to_string();
+                prim.get(&semantic).map_or(Ok(false), |a| {
+                    check_accessor(&a, buffers, path, &role, allowed, expected)
+                })
             };
+            let vec3 = [(DataType::F32, Dimensions::Vec3)];
+            let has_normals =
+                has(gltf::Semantic::Normals, &vec3, "VEC3 of float (componentType 5126)")?;
             let material = prim.material();
             let photo = crate::gltf_texture::base_colour_photo(
                 &material,
@@ -326,41 +325,21 @@ fn add_node(
                 &mut totals.images,
             )?;
             let set = photo.as_ref().map_or(0, |p| p.set);
-            let has_texcoords = match prim.get(&gltf::Semantic::TexCoords(set)) {
-                Some(a) => check_accessor(
-                    &a,
-                    buffers,
-                    path,
-                    "TEXCOORD",
-                    &[
-                        (DataType::F32, Dimensions::Vec2),
-                        (DataType::U8, Dimensions::Vec2),
-                        (DataType::U16, Dimensions::Vec2),
-                    ],
-                    "VEC2 of float, or of normalized unsigned byte or short",
-                )?,
-                None => false,
-            };
+            let uv = [DataType::F32, DataType::U8, DataType::U16].map(|t| (t, Dimensions::Vec2));
+            let has_texcoords = has(
+                gltf::Semantic::TexCoords(set),
+                &uv,
+                "VEC2 of float, or of normalized unsigned byte or short",
+            )?;
             // Vertex colours (glTF 2.0 §3.7.2.1: linear, multiplying the base colour), as a
             // scanner's photogrammetry export carries them when it bakes no photo.
-            let has_colours = match prim.get(&gltf::Semantic::Colors(0)) {
-                Some(a) => check_accessor(
-                    &a,
-                    buffers,
-                    path,
-                    "COLOR_0",
-                    &[
-                        (DataType::F32, Dimensions::Vec3),
-                        (DataType::F32, Dimensions::Vec4),
-                        (DataType::U8, Dimensions::Vec3),
-                        (DataType::U8, Dimensions::Vec4),
-                        (DataType::U16, Dimensions::Vec3),
-                        (DataType::U16, Dimensions::Vec4),
-                    ],
-                    "VEC3 or VEC4 of float, or of normalized unsigned byte or short",
-                )?,
-                None => false,
-            };
+            let colour = [DataType::F32, DataType::U8, DataType::U16]
+                .map(|t| [(t, Dimensions::Vec3), (t, Dimensions::Vec4)]);
+            let has_colours = has(
+                gltf::Semantic::Colors(0),
+                colour.as_flattened(),
+                "VEC3 or VEC4 of float, or of normalized unsigned byte or short",
+            )?;
             // Normals go through the inverse transpose, so a non-uniform scale keeps them normal.
             let normal_matrix = DMat3::from_mat4(world).inverse().transpose();
             let reader = prim.reader(|b| buffers.get(b.index()).map(Vec::as_slice));

@@ -153,8 +153,9 @@ export class Viewer {
       o.castShadow = true;
       o.receiveShadow = true;
       if (lambert.has(o.material.name)) {
-        const { name, color, side } = o.material;
-        o.material = new THREE.MeshLambertMaterial({ name, color, side });
+        // A part's photo (map) or vertex colours stay with it: detail over its spectrum.
+        const { name, color, side, map, vertexColors } = o.material;
+        o.material = new THREE.MeshLambertMaterial({ name, color, side, map, vertexColors });
       } else {
         o.material = o.material.clone();
       }
@@ -201,7 +202,11 @@ export class Viewer {
       if (!m) return;
       const state = variant ? variant.parts[`${extras.object}/${extras.part}`] : 'base';
       const s = m.states.find((x) => x.state === state);
-      o.material.color.setRGB(...(s ? look(s).colour_linear_srgb : m.colour_linear_srgb));
+      const colour = s ? look(s).colour_linear_srgb : m.colour_linear_srgb;
+      // A part with a photo or vertex colours shows them relative to their mean, as a
+      // snapshot does: the spectrum's colour over the mean, times the photo.
+      const mean = extras.detail_mean;
+      o.material.color.setRGB(...(mean ? colour.map((c, k) => c / Math.max(mean[k], 1e-4)) : colour));
     });
     this.draw();
   }

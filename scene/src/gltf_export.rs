@@ -9,14 +9,30 @@
 //! `asset.extras.restauro` and in [`Preview`]. glTF is Y-up (§3.4): world (x, y, z), Z up, is
 //! written (x, z, −y).
 //!
+//! A part that shows detail over its spectrum (its photo, or its scan's vertex colours; see
+//! `restauro_render::texture`) carries it here as well, so that the view shows the lichen and
+//! the crust where the snapshot will: the base state's photo, at most [`PREVIEW_TEXELS`] on a
+//! side, as the primitive's `baseColorTexture`, or the colours as `COLOR_0`; in grey for
+//! `detail = "luminance"`. The primitive's `extras.detail_mean` is the linear mean of what it
+//! carries, by which the viewer divides the part's colour, so that the view too shows the
+//! detail relative to the measured spectrum.
+//!
 //! A model of more than twice [`vertex_clustering::TARGET_TRIANGLES`] triangles carries a
 //! coarser copy for drawing while the view moves: one more node per object, marked
 //! `extras.restauro_coarse`, whose primitives index the same vertices (see
 //! [`vertex_clustering`]).
 
 use crate::load::LoadedScene;
+use crate::scene_file::{Detail, Material};
+use crate::texture::Texture;
 use crate::vertex_clustering;
+use restauro_spectral::rgb_space::Transfer;
 use serde_json::{Value, json};
+use std::collections::BTreeMap;
+
+/// The most texels a photo has on a side in the preview: enough for a screen's view of a
+/// facade, small enough for the page to load quickly.
+pub const PREVIEW_TEXELS: u32 = 1024;
 
 /// The GLB and what the page needs to place it.
 pub struct Preview {
@@ -63,20 +79,39 @@ struct Writer {
     bin: Vec<u8>,
     views: Vec<Value>,
     accessors: Vec<Value>,
+    images: Vec<Value>,
 }
 
 impl Writer {
-    /// Appends `bytes` as a buffer view (4-byte aligned, §3.6.2.4); its index.
-    fn view(&mut self, bytes: &[u8], target: u32) -> usize {
+    /// Appends `bytes` as a buffer view (4-byte aligned, §3.6.2.4) for vertex data (`target`
+    /// 34962), indices (34963) or an image (none); its index.
+    fn view(&mut self, bytes: &[u8], target: Option<u32>) -> usize {
         while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
         let offset = self.bin.len();
         self.bin.extend_from_slice(bytes);
-        self.views.push(json!({
-            "buffer": 0, "byteOffset": offset, "byteLength": bytes.len(), "target": target
-        }));
+        let mut view = json!({ "buffer": 0, "byteOffset": offset, "byteLength": bytes.len() });
+        if let Some(target) = target {
+            view["target"] = json!(target);
+        }
+        self.views.push(view);
         self.views.len() - 1
+    }
+
+    /// Appends a PNG image; its index (which is also its texture's: one texture per image).
+    fn image(&mut self, png: &[u8]) -> usize {
+        let view = self.view(png, None);
+        self.images.push(json!({ "bufferView": view, "mimeType": "image/png" }));
+        self.images.len() - 1
+    }
+
+    fn vec2s(&mut self, data: &[[f32; 2]]) -> usize {
+        let bytes: Vec<u8> = data.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
+        let view = self.view(&bytes, Some(34962));
+        self.accessor(json!({
+            "bufferView": view, "componentType": 5126, "count": data.len(), "type": "VEC2"
+        }))
     }
 
     fn accessor(&mut self, value: Value) -> usize {
@@ -86,7 +121,7 @@ impl Writer {
 
     fn vec3s(&mut self, data: &[[f32; 3]], with_bounds: bool) -> usize {
         let bytes: Vec<u8> = data.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
-        let view = self.view(&bytes, 34962);
+        let view = self.view(&bytes, Some(34962));
         let mut a = json!({
             "bufferView": view, "componentType": 5126, "count": data.len(), "type": "VEC3"
         });
@@ -104,7 +139,7 @@ impl Writer {
 
     fn indices(&mut self, data: &[u32]) -> usize {
         let bytes: Vec<u8> = data.iter().flat_map(|v| v.to_le_bytes()).collect();
-        let view = self.view(&bytes, 34963);
+        let view = self.view(&bytes, Some(34963));
         self.accessor(json!({
             "bufferView": view, "componentType": 5125, "count": data.len(), "type": "SCALAR"
         }))
@@ -131,7 +166,9 @@ pub fn scene_glb(scene: &LoadedScene, colour: impl Fn(&str) -> [f32; 3]) -> Prev
             })
         })
         .collect();
+    let mut materials = materials;
     let mut w = Writer::default();
+    let mut details = Details::default();
     let (mut meshes, mut nodes, mut triangles) = (Vec::new(), Vec::new(), 0);
     let cell_m = vertex_clustering::cell_size_m(scene, vertex_clustering::TARGET_TRIANGLES);
     let (mut coarse_nodes, mut coarse_triangles) = (Vec::new(), 0);
@@ -148,6 +185,8 @@ pub fn scene_glb(scene: &LoadedScene, colour: impl Fn(&str) -> [f32; 3]) -> Prev
             });
         let representative =
             cell_m.map(|c| vertex_clustering::representatives(&o.mesh.positions, c));
+        let coloured = o.mesh.coloured_groups();
+        let mut carried = Carried::default();
         let (mut primitives, mut coarse) = (Vec::new(), Vec::new());
         // The levels of detail the scene's camera shows, as a render does.
         let shown = o.mesh.levels.shown(&scene.viewer());
@@ -169,13 +208,19 @@ pub fn scene_glb(scene: &LoadedScene, colour: impl Fn(&str) -> [f32; 3]) -> Prev
             }
             triangles += tris.len() / 3;
             let indices = w.indices(&tris);
-            let material = names.iter().position(|n| **n == o.group_materials[g]);
+            let mut material = names.iter().position(|n| **n == o.group_materials[g]);
             let mut attributes = json!({ "POSITION": position });
             if let Some(normal) = normal {
                 attributes["NORMAL"] = json!(normal);
             }
-            let extras =
+            let mut extras =
                 json!({ "object": o.name, "part": group.name, "material": o.group_materials[g] });
+            let m = &scene.file.materials[&o.group_materials[g]];
+            let part = Part { scene, object: &o.name, material: m, group, coloured: coloured[g] };
+            let ours = (&mut w, &mut materials, &mut details, &mut carried);
+            if let Some(mean) = part.carry(ours, &o.mesh, &tris, &mut attributes, &mut material) {
+                extras["detail_mean"] = json!(mean);
+            }
             if let Some(r) = &representative {
                 let fewer = vertex_clustering::coarse_indices(&tris, r);
                 if !fewer.is_empty() {
@@ -206,7 +251,7 @@ pub fn scene_glb(scene: &LoadedScene, colour: impl Fn(&str) -> [f32; 3]) -> Prev
     while !w.bin.len().is_multiple_of(4) {
         w.bin.push(0);
     }
-    let document = json!({
+    let mut document = json!({
         "asset": {
             "version": "2.0",
             "generator": concat!("restauro ", env!("CARGO_PKG_VERSION")),
@@ -221,7 +266,160 @@ pub fn scene_glb(scene: &LoadedScene, colour: impl Fn(&str) -> [f32; 3]) -> Prev
         "bufferViews": w.views,
         "buffers": [{ "byteLength": w.bin.len() }],
     });
+    // glTF's arrays, when present, hold at least one item (§5: `minItems` 1).
+    if !w.images.is_empty() {
+        let textures: Vec<Value> = (0..w.images.len()).map(|i| json!({ "source": i })).collect();
+        document["textures"] = json!(textures);
+        document["images"] = json!(w.images);
+    }
     Preview { glb: glb(&document, &w.bin), offset_m: offset, triangles, coarse_triangles }
+}
+
+/// The photos written so far, each once per key and grey or not: its texture and linear
+/// mean; and the materials made for parts with a photo, by scene material and texture.
+#[derive(Default)]
+struct Details {
+    photos: BTreeMap<(String, bool), (usize, [f32; 3])>,
+    materials: BTreeMap<(usize, usize), usize>,
+}
+
+/// What one object has written once for its parts: texture coordinates, and its vertex
+/// colours in colour and in grey.
+#[derive(Default)]
+struct Carried {
+    texcoords: Option<usize>,
+    colours: [Option<usize>; 2],
+}
+
+/// A part of an object, and what it shows over its spectrum.
+struct Part<'a> {
+    scene: &'a LoadedScene,
+    object: &'a str,
+    material: &'a Material,
+    group: &'a crate::mesh::Group,
+    /// Whether every vertex of the part has a colour.
+    coloured: bool,
+}
+
+impl Part<'_> {
+    /// Writes what the part shows over its spectrum (its base state's photo, else its vertex
+    /// colours) into its primitive's `attributes` and `material`; the linear mean of it, by
+    /// which the viewer divides the part's colour. `tris`: the part's vertex indices.
+    fn carry(
+        &self,
+        (w, materials, details, carried): (
+            &mut Writer,
+            &mut Vec<Value>,
+            &mut Details,
+            &mut Carried,
+        ),
+        mesh: &crate::mesh::Mesh,
+        tris: &[u32],
+        attributes: &mut Value,
+        material: &mut Option<usize>,
+    ) -> Option<[f32; 3]> {
+        let m = self.material;
+        let grey = match m.detail.unwrap_or_default() {
+            Detail::None => return None,
+            Detail::Luminance => true,
+            Detail::Chromatic => false,
+        };
+        let photo = match &m.texture {
+            Some(reference) => Some((reference.clone(), self.scene.textures.get(reference)?)),
+            None => self
+                .group
+                .photo
+                .as_ref()
+                .map(|p| (format!("{}#{}", self.object, self.group.name), p)),
+        };
+        if let Some((key, texture)) = photo {
+            let (image, mean) = *details.photos.entry((key, grey)).or_insert_with(|| {
+                let balanced = m.white_patch.map(|p| texture.white_balanced(p));
+                let (png, mean) = preview_png(balanced.as_ref().unwrap_or(texture), grey);
+                (w.image(&png), mean)
+            });
+            let uv = mesh.texcoords.as_ref()?;
+            let texcoords = *carried.texcoords.get_or_insert_with(|| {
+                w.vec2s(
+                    &uv.iter()
+                        .map(|t| t.map(|c| if c.is_finite() { c } else { 0.0 }))
+                        .collect::<Vec<_>>(),
+                )
+            });
+            attributes["TEXCOORD_0"] = json!(texcoords);
+            let base = (*material)?;
+            let made = *details.materials.entry((base, image)).or_insert_with(|| {
+                let mut textured = materials[base].clone();
+                textured["pbrMetallicRoughness"]["baseColorTexture"] = json!({ "index": image });
+                materials.push(textured);
+                materials.len() - 1
+            });
+            *material = Some(made);
+            return Some(mean);
+        }
+        let colours = mesh.colours.as_ref().filter(|_| self.coloured)?;
+        let shade = |c: [f32; 3]| if grey { [luminance(c); 3] } else { c };
+        let accessor = *carried.colours[usize::from(grey)].get_or_insert_with(|| {
+            let finite = |c: &[f32; 3]| if c[0].is_finite() { shade(*c) } else { [0.0; 3] };
+            w.vec3s(&colours.iter().map(finite).collect::<Vec<_>>(), false)
+        });
+        attributes["COLOR_0"] = json!(accessor);
+        let mut sum = [0.0f64; 3];
+        for &i in tris {
+            let c = shade(colours[i as usize]);
+            (0..3).for_each(|k| sum[k] += f64::from(c[k]));
+        }
+        Some(sum.map(|c| (c / tris.len() as f64) as f32))
+    }
+}
+
+/// Rec. ITU-R BT.709 luminance of linear sRGB.
+fn luminance(c: [f32; 3]) -> f32 {
+    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+}
+
+/// A photo as the preview's PNG (8-bit sRGB): box-filtered to at most [`PREVIEW_TEXELS`] on a
+/// side, in grey (its luminance) when `grey`; and its linear mean.
+fn preview_png(texture: &Texture, grey: bool) -> (Vec<u8>, [f32; 3]) {
+    // sRGB decoding by table: a big photo has tens of millions of texels.
+    let decode: Vec<f32> =
+        (0..=u16::MAX).map(|c| Transfer::Srgb.decode(f64::from(c) / 65535.0) as f32).collect();
+    let k = texture.width.max(texture.height).div_ceil(PREVIEW_TEXELS).max(1);
+    let (width, height) = (texture.width.div_ceil(k), texture.height.div_ceil(k));
+    let mut linear = Vec::with_capacity(width as usize * height as usize);
+    for row in 0..height {
+        for col in 0..width {
+            let (mut sum, mut n) = ([0.0f32; 3], 0.0f32);
+            for y in row * k..((row + 1) * k).min(texture.height) {
+                for x in col * k..((col + 1) * k).min(texture.width) {
+                    let t = texture.texels[(y * texture.width + x) as usize];
+                    (0..3).for_each(|c| sum[c] += decode[usize::from(t[c])]);
+                    n += 1.0;
+                }
+            }
+            let c = sum.map(|v| v / n);
+            linear.push(if grey { [luminance(c); 3] } else { c });
+        }
+    }
+    let mut mean = [0.0f64; 3];
+    linear.iter().for_each(|c| (0..3).for_each(|k| mean[k] += f64::from(c[k])));
+    let mean = mean.map(|v| (v / linear.len() as f64) as f32);
+    let bytes: Vec<u8> = linear
+        .iter()
+        .flatten()
+        .map(|&v| (Transfer::Srgb.encode(f64::from(v)) * 255.0).round().clamp(0.0, 255.0) as u8)
+        .collect();
+    let mut png = Vec::new();
+    {
+        let mut encoder = png::Encoder::new(&mut png, width, height);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        // Writing to memory cannot fail but for sizes the image's own checks keep out.
+        if let Ok(mut writer) = encoder.write_header() {
+            let _ = writer.write_image_data(&bytes);
+        }
+    }
+    (png, mean)
 }
 
 /// The GLB container (§4.4): a 12-byte header, the JSON chunk padded with spaces, the binary

@@ -1069,3 +1069,81 @@ fn a_general_sky_finds_its_sun_and_its_ground() {
     let d65 = restauro_spectral::Illuminant::D65.spd().unwrap();
     assert_eq!(scene.spectra[spectrum], d65, "{spectrum}");
 }
+
+/// What the preview carries of a part's detail: a laser scan's vertex colours as COLOR_0 (in
+/// colour for chromatic detail), a photogrammetry export's photo as its baseColorTexture (in
+/// grey for luminance detail, the default), each with the linear mean the viewer divides the
+/// part's colour by; nothing for `detail = "none"`.
+#[test]
+fn the_preview_carries_photos_and_vertex_colours_as_detail() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/scans");
+    for file in ["weathered-patch.ply", "weathered-patch.glb"] {
+        std::fs::copy(data.join(file), dir.path().join(file)).unwrap();
+    }
+    let toml = "format = 1\n[camera]\nposition = [0.0, -3.0, 0.0]\ntarget = [0.0, 0.0, 0.0]\nwidth = 8\nheight = 8\n\
+        [spectra]\nday = { illuminant = \"D65\" }\ngrey = { constant = 0.4 }\n\
+        [materials.coloured]\nmodel = \"lambert\"\nreflectance = \"grey\"\ndetail = \"chromatic\"\n\
+        [materials.photo]\nmodel = \"lambert\"\nreflectance = \"grey\"\n\
+        [materials.plain]\nmodel = \"lambert\"\nreflectance = \"grey\"\ndetail = \"none\"\n\
+        [[objects]]\nname = \"scan\"\nmesh = \"weathered-patch.ply\"\nup_axis = \"y\"\nmaterial = \"coloured\"\n\
+        [[objects]]\nname = \"photo\"\nmesh = \"weathered-patch.glb\"\nmaterial = \"photo\"\ntransform = { translate = [1.0, 0.0, 0.0] }\n\
+        [[objects]]\nname = \"plain\"\nmesh = \"weathered-patch.ply\"\nup_axis = \"y\"\nmaterial = \"plain\"\ntransform = { translate = [-1.0, 0.0, 0.0] }\n\
+        [[lights]]\nkind = \"sun\"\nilluminance_lux = 1000.0\nazimuth_deg = 180.0\nelevation_deg = 30.0\nspectrum = \"day\"\n";
+    std::fs::write(dir.path().join("scene.toml"), toml).unwrap();
+    let scene = load_scene(&dir.path().join("scene.toml"), &Limits::default()).unwrap();
+    let preview = restauro_scene::gltf_export::scene_glb(&scene, |_| [0.5; 3]);
+    // The document, from the GLB's JSON chunk (§4.4).
+    let length = u32::from_le_bytes(preview.glb[12..16].try_into().unwrap()) as usize;
+    let document: serde_json::Value =
+        serde_json::from_slice(&preview.glb[20..20 + length]).unwrap();
+    let primitive = |object: &str| {
+        let mesh =
+            document["meshes"].as_array().unwrap().iter().find(|m| m["name"] == object).unwrap();
+        mesh["primitives"][0].clone()
+    };
+    let (scan, photo, plain) = (primitive("scan"), primitive("photo"), primitive("plain"));
+    assert!(
+        scan["attributes"]["COLOR_0"].is_u64() && scan["attributes"]["TEXCOORD_0"].is_null(),
+        "{scan}"
+    );
+    assert!(
+        photo["attributes"]["TEXCOORD_0"].is_u64() && photo["attributes"]["COLOR_0"].is_null(),
+        "{photo}"
+    );
+    assert!(
+        plain["attributes"]["COLOR_0"].is_null() && plain["extras"]["detail_mean"].is_null(),
+        "{plain}"
+    );
+    let textured = &document["materials"][photo["material"].as_u64().unwrap() as usize];
+    assert_eq!(textured["name"], "photo");
+    assert!(textured["pbrMetallicRoughness"]["baseColorTexture"]["index"].is_u64(), "{textured}");
+
+    // Read back by restauro's own reader: the scan's colours as the PLY has them, the photo
+    // in grey at its own size (256 texels, under the preview's bound).
+    let none = |uri: &str| -> restauro_scene::Result<Vec<u8>> { panic!("no external file {uri}") };
+    let (back, _) = restauro_scene::gltf_mesh::parse_with_cameras(
+        &preview.glb,
+        Path::new("preview.glb"),
+        &Limits::default(),
+        &none,
+    )
+    .unwrap();
+    let source = scene.objects[0].mesh.colours.as_ref().unwrap();
+    let colours = back.colours.as_ref().expect("COLOR_0 read back");
+    // The scan's vertices come first (its node first); the same linear colours.
+    for (got, want) in colours.iter().zip(source) {
+        for k in 0..3 {
+            assert!((got[k] - want[k]).abs() < 1e-6, "{got:?} against {want:?}");
+        }
+    }
+    let mean = scan["extras"]["detail_mean"].as_array().unwrap();
+    let mean: Vec<f64> = mean.iter().map(|v| v.as_f64().unwrap()).collect();
+    assert!(mean.iter().all(|m| *m > 0.05 && *m < 1.0) && mean[0] > mean[2], "{mean:?}");
+    let group = back.groups.iter().find(|g| g.name == "photo").unwrap();
+    let image = group.photo.as_ref().expect("the photo read back");
+    assert_eq!((image.width, image.height), (256, 256));
+    assert!(image.texels.iter().all(|t| t[0] == t[1] && t[1] == t[2]), "in grey");
+    let photo_mean = photo["extras"]["detail_mean"].as_array().unwrap();
+    assert_eq!(photo_mean[0], photo_mean[2]);
+}

@@ -500,12 +500,17 @@ fn a_scene_folder_is_opened_from_the_page() {
 
 /// The view's canvas, drawn now, shrunk to 64 × 36 pixels (RGB).
 fn view_pixels(b: &mut Browser) -> Vec<[u8; 3]> {
-    let read = b.eval(
-        "(() => { const v = window.studioViewer; v.draw(); \
-         const t = document.createElement('canvas'); t.width = 64; t.height = 36; \
-         const g = t.getContext('2d'); g.drawImage(v.canvas, 0, 0, 64, 36); \
-         return Array.from(g.getImageData(0, 0, 64, 36).data); })()",
-    );
+    view_pixels_at(b, 64, 36)
+}
+
+/// The view's canvas, drawn now, shrunk to `width × height` pixels (RGB), rows from the top.
+fn view_pixels_at(b: &mut Browser, width: u32, height: u32) -> Vec<[u8; 3]> {
+    let read = b.eval(&format!(
+        "(() => {{ const v = window.studioViewer; v.draw(); \
+         const t = document.createElement('canvas'); t.width = {width}; t.height = {height}; \
+         const g = t.getContext('2d'); g.drawImage(v.canvas, 0, 0, {width}, {height}); \
+         return Array.from(g.getImageData(0, 0, {width}, {height}).data); }})()"
+    ));
     let bytes: Vec<u8> = serde_json::from_value(read).unwrap();
     bytes.chunks_exact(4).map(|p| [p[0], p[1], p[2]]).collect()
 }
@@ -563,4 +568,78 @@ fn a_big_model_is_drawn_coarse_while_the_view_moves() {
     // A click still finds the surface under it.
     b.click("#view");
     b.wait_for("the surface clicked", "!document.getElementById('material').hidden");
+}
+
+/// The spread of the hue of the view's pixels (`width` to a row) in columns `columns`, away
+/// from the background (the pixel and its eight neighbours are the model's) and from the
+/// darkest: the standard deviation of green over red, over its mean. Shading scales all three
+/// alike and leaves it; lichen and rust move it.
+fn hue_spread_in(pixels: &[[u8; 3]], width: usize, columns: std::ops::Range<usize>) -> f64 {
+    let at = |x: usize, y: usize| pixels.get(y * width + x).copied().unwrap_or([0x9f, 0xb4, 0xc8]);
+    let inside = |x: usize, y: usize| {
+        (x.saturating_sub(1)..=x + 1)
+            .all(|a| (y.saturating_sub(1)..=y + 1).all(|b| !is_background(at(a, b))))
+    };
+    let hue: Vec<f64> = (0..pixels.len())
+        .map(|i| (i % width, i / width))
+        .filter(|&(x, y)| {
+            columns.contains(&x) && x > 0 && y > 0 && inside(x, y) && at(x, y)[0] > 60
+        })
+        .map(|(x, y)| f64::from(at(x, y)[1]) / f64::from(at(x, y)[0]))
+        .collect();
+    assert!(hue.len() > 200, "{} pixels of the patch in columns {columns:?}", hue.len());
+    let mean = hue.iter().sum::<f64>() / hue.len() as f64;
+    (hue.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / hue.len() as f64).sqrt() / mean
+}
+
+/// A laser scan's vertex colours and a photogrammetry export's photo show in the studio's view
+/// as they will in a snapshot: the patch as a coloured PLY on the left and as a textured glb in
+/// the middle, both with chromatic detail, and the PLY again on the right with
+/// `detail = "none"`; the first two show the lichen and the rust, the third one hue, shaded.
+#[test]
+fn a_scans_photo_and_vertex_colours_show_in_the_view() {
+    if !available("studio_browser") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let folder = d.join("scan");
+    std::fs::create_dir_all(&folder).unwrap();
+    let data = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/scans");
+    std::fs::copy(data.join("weathered-patch.ply"), folder.join("patch.ply")).unwrap();
+    std::fs::copy(data.join("weathered-patch.glb"), folder.join("patch.glb")).unwrap();
+    let toml = "format = 1\n[camera]\nposition = [0.0, -1.6, 0.0]\ntarget = [0.0, 0.0, 0.0]\nvertical_fov_deg = 30.0\nwidth = 160\nheight = 90\n\
+        [spectra]\nday = { illuminant = \"D65\" }\ntravertine = \"travertine_tufa_solid__eco_ward73\"\n\
+        [materials.coloured]\nmodel = \"lambert\"\nreflectance = \"travertine\"\ndetail = \"chromatic\"\n\
+        [materials.plain]\nmodel = \"lambert\"\nreflectance = \"travertine\"\ndetail = \"none\"\n\
+        [[objects]]\nname = \"coloured\"\nmesh = \"patch.ply\"\nup_axis = \"y\"\nmaterial = \"coloured\"\ntransform = { translate = [-0.6, 0.0, 0.0] }\n\
+        [[objects]]\nname = \"photo\"\nmesh = \"patch.glb\"\nmaterial = \"coloured\"\n\
+        [[objects]]\nname = \"plain\"\nmesh = \"patch.ply\"\nup_axis = \"y\"\nmaterial = \"plain\"\ntransform = { translate = [0.6, 0.0, 0.0] }\n\
+        [[lights]]\nkind = \"sun\"\nilluminance_lux = 50000.0\nazimuth_deg = 190.0\nelevation_deg = 35.0\nspectrum = \"day\"\n";
+    std::fs::write(folder.join("scene.toml"), toml).unwrap();
+    let (c, page) = Coordinator::with_studio(d);
+    let _worker = Worker::start(d, &c.url, "local-1", &[]);
+    let scene = folder.join("scene.toml");
+    submit(scene.to_str().unwrap(), &["--spp", "1"], &c.url, &d.join("client.token"));
+    let mut b = Browser::launch(1280, 720);
+    b.goto(&format!("{page}#token={CLIENT_TOKEN}"));
+    b.wait_for("the model", "document.getElementById('view').dataset.revision === '0'");
+    b.eval("document.getElementById('view').scrollIntoView({ block: 'center' })");
+    let pixels = view_pixels_at(&mut b, 256, 144);
+    b.screenshot(&shots().join("45-vertex-colours.png"));
+    // What each part carries: the photo as its map, the colours as vertex colours.
+    let carried = b.eval(
+        "(() => { const out = {}; window.studioViewer.model.traverse((o) => { if (o.isMesh) \
+         out[o.name] = [o.material.map ? o.material.map.image.width : 0, o.material.vertexColors]; }); \
+         return out; })()",
+    );
+    assert_eq!(
+        carried,
+        serde_json::json!({ "coloured": [0, true], "photo": [256, false], "plain": [0, false] })
+    );
+    let spread = |columns| hue_spread_in(&pixels, 256, columns);
+    let (coloured, photo, plain) = (spread(0..96), spread(96..160), spread(160..256));
+    eprintln!("hue spread: {coloured:.3} (colours), {photo:.3} (photo), {plain:.3} (neither)");
+    assert!(coloured > 3.0 * plain, "hue spread {coloured} with the colours, {plain} without");
+    assert!(photo > 3.0 * plain, "hue spread {photo} with the photo, {plain} without");
 }

@@ -44,9 +44,10 @@ const FILES: &[(&str, &str, &str)] = &[
 
 const INDEX: &str = include_str!("../../studio/index.html");
 
-/// Only the page's own files run, and no other site may frame it.
+/// Only the page's own files run, and no other site may frame it. `blob:` in `connect-src`:
+/// three.js's glTF loader fetches a model's embedded photos from blob URLs it makes itself.
 const POLICY: &str = "default-src 'self'; img-src 'self' blob: data:; style-src 'self'; \
-                      script-src 'self'; connect-src 'self'; frame-ancestors 'none'; \
+                      script-src 'self'; connect-src 'self' blob:; frame-ancestors 'none'; \
                       base-uri 'none'; form-action 'self'";
 
 fn page(kind: &'static str, text: &'static str) -> Response {

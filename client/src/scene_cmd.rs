@@ -51,11 +51,9 @@ pub fn summary(path: &Path, scene: &LoadedScene) -> String {
 /// An object's parts and their materials, each with what its file lays on it as detail when
 /// its material shows that: `facade→stone`, `scan→stone (vertex colours)`.
 fn parts(scene: &LoadedScene, mesh: &restauro_scene::mesh::Mesh, materials: &[String]) -> String {
-    use restauro_scene::scene_file::Detail;
     let coloured = mesh.coloured_groups();
     let part = |(k, (g, m)): (usize, (&restauro_scene::mesh::Group, &String))| {
-        let material = &scene.file.materials[m];
-        let own = if material.detail == Some(Detail::None) || material.texture.is_some() {
+        let own = if !scene.file.materials[m].shows_file_detail("base") {
             ""
         } else if g.photo.is_some() {
             " (its photo)"

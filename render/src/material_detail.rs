@@ -1,7 +1,7 @@
 //! The detail each material of a prepared scene takes over its measured reflectance: from a
 //! photo (the scene's `texture` for its state, or the part's own from its mesh file; balanced
-//! on its grey patch when the material gives one), or from the part's vertex colours; and the mean it is relative to, over the surfaces the material
-//! covers, weighted by area.
+//! on its grey patch when the material gives one), or from the part's vertex colours; and the
+//! mean it is relative to, over the surfaces the material covers, weighted by area.
 //!
 //! A photo's mean samples each triangle at 16 points spread over it, on the level where it
 //! spans about 4 × 4 texels; vertex colours vary linearly over a triangle, so the mean of its
@@ -24,8 +24,7 @@ pub(crate) enum Own {
 }
 
 /// A part's own detail (its file's photo, else its vertex colours when `coloured`), by a key
-/// naming the part, when it shows: the scene's material gives no texture of its own for
-/// `state` and does not say `detail = "none"`.
+/// naming the part, when it shows ([`restauro_scene::scene_file::Material::shows_file_detail`]).
 pub(crate) fn own_detail(
     scene: &LoadedScene,
     (material, state): (&str, &str),
@@ -33,9 +32,7 @@ pub(crate) fn own_detail(
     group: &restauro_scene::mesh::Group,
     coloured: bool,
 ) -> Option<(String, Own)> {
-    let m = &scene.file.materials[material];
-    let shows = m.texture_of(state).is_none() && m.detail != Some(DetailKind::None);
-    if !shows {
+    if !scene.file.materials[material].shows_file_detail(state) {
         return None;
     }
     if let Some(photo) = &group.photo {

@@ -59,7 +59,6 @@ impl Detail {
     /// ρ(λ) at `at` (ρₘ in, ρ out), a photo filtered over `footprint_m`.
     #[inline]
     pub fn apply(&self, at: DetailPoint, footprint_m: f32, rho: &mut Spectrum) {
-        let mut smooth = Spectrum::ZERO;
         match (self, at) {
             (Detail::Luminance { pyramid, inverse_mean }, DetailPoint::Photo(at)) => {
                 let lod = level_of_detail(footprint_m, at.texel_m);
@@ -67,6 +66,7 @@ impl Detail {
             }
             (Detail::Chromatic { pyramid, inverse_mean }, DetailPoint::Photo(at)) => {
                 let lod = level_of_detail(footprint_m, at.texel_m);
+                let mut smooth = Spectrum::ZERO;
                 pyramid.sample(at.uv, lod, &mut smooth);
                 modulate(rho, &smooth, inverse_mean);
             }
@@ -74,6 +74,7 @@ impl Detail {
                 scale(rho, palette.luminance(&at) * inverse_mean);
             }
             (Detail::VertexChromatic { palette, inverse_mean }, DetailPoint::Vertices(at)) => {
+                let mut smooth = Spectrum::ZERO;
                 palette.spectrum(&at, &mut smooth);
                 modulate(rho, &smooth, inverse_mean);
             }
@@ -174,10 +175,7 @@ pub struct LuminancePyramid {
     levels: Vec<Level>,
 }
 
-/// Rec. ITU-R BT.709 luminance of linear sRGB (the primaries sRGB shares).
-pub(crate) fn luminance(rgb: [f32; 3]) -> f32 {
-    0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]
-}
+pub(crate) use restauro_scene::texture::luminance;
 
 impl LuminancePyramid {
     pub fn new(texture: &Texture) -> Self {

@@ -1,5 +1,6 @@
-//! A scan's vertex colours (PLY `red`, `green`, `blue`; glTF `COLOR_0`) as detail over a measured reflectance,
-//! the two ways a photo gives it ([`crate::texture`]): with `detail = "luminance"`,
+//! A scan's vertex colours (PLY `red`, `green`, `blue`; glTF `COLOR_0`) as detail over a
+//! measured reflectance, the two ways a photo gives it ([`crate::texture`]): with
+//! `detail = "luminance"`,
 //! ρ(λ, x) = min(1, ρₘ(λ)·Y(x)/Ȳ), Y interpolated between the triangle's vertices; with
 //! `detail = "chromatic"`, ρ(λ, x) = min(1, ρₘ(λ)·S_x(λ)/S̄(λ)), S_x the vertices' smooth
 //! spectra (Jakob & Hanika 2019, fitted once per colour) interpolated after evaluation, not

@@ -24,7 +24,7 @@
 
 use crate::load::LoadedScene;
 use crate::scene_file::{Detail, Material};
-use crate::texture::Texture;
+use crate::texture::{Texture, luminance};
 use crate::vertex_clustering;
 use restauro_spectral::rgb_space::Transfer;
 use serde_json::{Value, json};
@@ -371,11 +371,6 @@ impl Part<'_> {
         }
         Some(sum.map(|c| (c / tris.len() as f64) as f32))
     }
-}
-
-/// Rec. ITU-R BT.709 luminance of linear sRGB.
-fn luminance(c: [f32; 3]) -> f32 {
-    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
 }
 
 /// A photo as the preview's PNG (8-bit sRGB): box-filtered to at most [`PREVIEW_TEXELS`] on a

@@ -676,30 +676,23 @@ mod tests {
         )
     }
 
-    /// NORMAL goes through the inverse transpose of the node's transform (a non-uniform scale
-    /// tilts it) and is scaled to unit length; a primitive without NORMAL is flat (zeros).
-    #[test]
-    fn normals_are_read_and_carried_through_the_transform() {
+    /// A glTF of one triangle drawn twice: by `node` (a node of mesh 0, whose primitive has
+    /// vertex attribute `attribute`, VEC3 of float, of `values`), and by a node of mesh 1,
+    /// whose primitive has none.
+    fn triangle_with(attribute: &str, values: [[f32; 3]; 3], node: &str) -> String {
         let mut bin = Vec::new();
-        let h = std::f32::consts::FRAC_1_SQRT_2;
-        let floats = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]].into_iter().chain([
-            [0.0, 0.0, 1.0],
-            [0.0, h, h],
-            [1.0, 0.0, 0.0],
-        ]);
-        for v in floats {
-            for c in v {
-                bin.extend_from_slice(&c.to_le_bytes());
-            }
+        let positions = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+        for c in positions.iter().chain(&values).flatten() {
+            bin.extend_from_slice(&c.to_le_bytes());
         }
         for i in [0u16, 1, 2] {
             bin.extend_from_slice(&i.to_le_bytes());
         }
         let data = base64::engine::general_purpose::STANDARD.encode(&bin);
-        let gltf = format!(
+        format!(
             r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0,1]}}],
-            "nodes":[{{"mesh":0,"scale":[1,2,1]}},{{"mesh":1}}],
-            "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"NORMAL":2}},"indices":1}}]}},
+            "nodes":[{node},{{"mesh":1}}],
+            "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"{attribute}":2}},"indices":1}}]}},
                       {{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1}}]}}],
             "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
                          {{"bufferView":2,"componentType":5123,"count":3,"type":"SCALAR"}},
@@ -707,7 +700,16 @@ mod tests {
             "bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":36}},
                            {{"buffer":0,"byteOffset":72,"byteLength":6}}],
             "buffers":[{{"byteLength":78,"uri":"data:application/octet-stream;base64,{data}"}}]}}"#
-        );
+        )
+    }
+
+    /// NORMAL goes through the inverse transpose of the node's transform (a non-uniform scale
+    /// tilts it) and is scaled to unit length; a primitive without NORMAL is flat (zeros).
+    #[test]
+    fn normals_are_read_and_carried_through_the_transform() {
+        let h = std::f32::consts::FRAC_1_SQRT_2;
+        let normals = [[0.0, 0.0, 1.0], [0.0, h, h], [1.0, 0.0, 0.0]];
+        let gltf = triangle_with("NORMAL", normals, r#"{"mesh":0,"scale":[1,2,1]}"#);
         let mesh = parse(gltf.as_bytes(), Path::new("n.gltf")).unwrap();
         let normals = mesh.normals.expect("normals");
         // (0, ½√2, ½√2) through diag(1, ½, 1): (0, 1, 2)/√5.
@@ -725,29 +727,8 @@ mod tests {
     #[test]
     fn color_0_is_read_and_checked() {
         let gltf = |red: f32| {
-            let mut bin = Vec::new();
-            let floats = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
-                .into_iter()
-                .chain([[0.25, 0.5, 0.75], [red, 0.0, 0.0], [1.0, 1.0, 1.0]]);
-            for c in floats.flatten() {
-                bin.extend_from_slice(&c.to_le_bytes());
-            }
-            for i in [0u16, 1, 2] {
-                bin.extend_from_slice(&i.to_le_bytes());
-            }
-            let data = base64::engine::general_purpose::STANDARD.encode(&bin);
-            format!(
-                r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0,1]}}],
-                "nodes":[{{"mesh":0}},{{"mesh":1}}],
-                "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"COLOR_0":2}},"indices":1}}]}},
-                          {{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1}}]}}],
-                "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
-                             {{"bufferView":2,"componentType":5123,"count":3,"type":"SCALAR"}},
-                             {{"bufferView":1,"componentType":5126,"count":3,"type":"VEC3"}}],
-                "bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":36}},
-                               {{"buffer":0,"byteOffset":72,"byteLength":6}}],
-                "buffers":[{{"byteLength":78,"uri":"data:application/octet-stream;base64,{data}"}}]}}"#
-            )
+            let colours = [[0.25, 0.5, 0.75], [red, 0.0, 0.0], [1.0, 1.0, 1.0]];
+            triangle_with("COLOR_0", colours, r#"{"mesh":0}"#)
         };
         let mesh = parse(gltf(0.5).as_bytes(), Path::new("c.gltf")).unwrap();
         let colours = mesh.colours.expect("colours");

@@ -44,9 +44,9 @@ pub struct Mesh {
     /// in glTF's convention: (0, 0) the image's top-left corner, v downwards (OBJ's v, which
     /// counts from the bottom, is turned over as it is read). NaN at a vertex that has none.
     pub texcoords: Option<Vec<[f32; 2]>>,
-    /// Per-vertex colours when the file gives them (PLY `red`, `green`, `blue`), linear sRGB
-    /// 0..1 (the file's sRGB codes decoded, IEC 61966-2-1). Like a photo, detail over the
-    /// spectrum the scene binds the part to, never an albedo. NaN at a vertex that has none.
+    /// Per-vertex colours when the file gives them (PLY `red`, `green`, `blue`, its sRGB codes
+    /// decoded by IEC 61966-2-1; glTF `COLOR_0`), linear sRGB 0..1. Like a photo, detail over
+    /// the spectrum the scene binds the part to, never an albedo. NaN at a vertex that has none.
     pub colours: Option<Vec<[f32; 3]>>,
     pub triangles: Vec<[u32; 3]>,
     /// For each triangle, its index in `groups`.
@@ -130,7 +130,12 @@ impl Mesh {
     /// Whether every vertex of every triangle of group `group` has texture coordinates.
     pub fn group_has_texcoords(&self, group: u32) -> bool {
         let Some(uv) = &self.texcoords else { return false };
-        self.group_all(group, |i| uv[i as usize].iter().all(|c| c.is_finite()))
+        let finite = |i: u32| uv[i as usize].iter().all(|c| c.is_finite());
+        self.triangles
+            .iter()
+            .zip(&self.triangle_group)
+            .filter(|(_, g)| **g == group)
+            .all(|(t, _)| t.iter().all(|&i| finite(i)))
     }
 
     /// Per group, whether every vertex of every one of its triangles has a colour (in one pass
@@ -145,14 +150,6 @@ impl Mesh {
             }
         }
         out
-    }
-
-    fn group_all(&self, group: u32, vertex: impl Fn(u32) -> bool) -> bool {
-        self.triangles
-            .iter()
-            .zip(&self.triangle_group)
-            .filter(|(_, g)| **g == group)
-            .all(|(t, _)| t.iter().all(|&i| vertex(i)))
     }
 
     /// Append another mesh, keeping group names unique (parts with the same name merge).

@@ -504,6 +504,13 @@ impl Material {
         self.state(state).and_then(|o| o.texture.as_ref()).or(self.texture.as_ref())
     }
 
+    /// Whether a part bound to this material in `state` shows what its mesh file lays on it
+    /// (its photo, else its vertex colours): the material gives no texture of its own for the
+    /// state and does not say `detail = "none"`.
+    pub fn shows_file_detail(&self, state: &str) -> bool {
+        self.texture_of(state).is_none() && self.detail != Some(Detail::None)
+    }
+
     /// The grey patch of the photo `state` shows: beside the texture it lies in (a state with
     /// its own photo gives its own patch, if any).
     pub fn white_patch_of(&self, state: &str) -> Option<PixelRect> {

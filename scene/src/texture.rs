@@ -27,9 +27,7 @@ impl Texture {
         let t = self.texels[(y * self.width + x) as usize];
         t.map(|c| Transfer::Srgb.decode(f64::from(c) / 65535.0) as f32)
     }
-}
 
-impl Texture {
     /// Why `patch` cannot white-balance this photo, in words: it reaches beyond the image, is
     /// empty, or is black in a channel (no gain makes that grey).
     pub fn check_patch(&self, patch: PixelRect) -> std::result::Result<(), String> {
@@ -60,7 +58,7 @@ impl Texture {
     /// full scale is held there. `patch` must pass [`Texture::check_patch`].
     pub fn white_balanced(&self, patch: PixelRect) -> Texture {
         let mean = self.patch_mean(patch);
-        let y = 0.2126 * mean[0] + 0.7152 * mean[1] + 0.0722 * mean[2];
+        let y = f64::from(luminance(mean.map(|c| c as f32)));
         let gains = mean.map(|c| y / c);
         let texels = self
             .texels
@@ -86,6 +84,11 @@ impl Texture {
         }
         sum.map(|s| s / (f64::from(patch.width) * f64::from(patch.height)))
     }
+}
+
+/// Rec. ITU-R BT.709 relative luminance of linear sRGB (the primaries sRGB shares).
+pub fn luminance(rgb: [f32; 3]) -> f32 {
+    0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]
 }
 
 /// Decode a texture file by its extension, refusing one of more than `max_pixels` texels

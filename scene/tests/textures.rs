@@ -255,3 +255,31 @@ fn a_white_patch_outside_the_photo_black_or_without_a_photo_is_refused() {
     assert!(m.contains("materials.stone.degraded.white_patch"), "{m}");
     assert!(m.contains("give the state a `texture`, or put `white_patch` on the material"), "{m}");
 }
+
+/// A material without a photo of its own balances its parts' own photos on its `white_patch`,
+/// so the patch is checked against each of them: outside the scan's 256 × 256 photo, it is
+/// refused naming the material, the part and the file.
+#[test]
+fn a_white_patch_outside_a_parts_own_photo_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let scan = Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/scans/weathered-patch.glb");
+    std::fs::copy(scan, dir.path().join("scan.glb")).unwrap();
+    let load = |patch: &str| {
+        let toml = format!(
+            "format = 1\n[camera]\nposition = [0.0, -3.0, 0.0]\ntarget = [0.0, 0.0, 0.0]\nwidth = 8\nheight = 8\n\
+             [spectra]\nday = {{ illuminant = \"D65\" }}\ngrey = {{ constant = 0.5 }}\n\
+             [materials.stone]\nmodel = \"lambert\"\nreflectance = \"grey\"\nwhite_patch = {patch}\n\
+             [[objects]]\nname = \"scan\"\nmesh = \"scan.glb\"\nmaterial = \"stone\"\n\
+             [[lights]]\nkind = \"sun\"\nilluminance_lux = 1000.0\nazimuth_deg = 0.0\nelevation_deg = 60.0\nspectrum = \"day\"\n"
+        );
+        std::fs::write(dir.path().join("scene.toml"), toml).unwrap();
+        load_scene(&dir.path().join("scene.toml"), &Limits::default())
+    };
+    load("{ x = 240, y = 0, width = 16, height = 16 }").unwrap();
+    let m = refusal(load("{ x = 250, y = 0, width = 16, height = 16 }"));
+    assert!(
+        m.contains("materials.stone.white_patch: in the photo of part `travertine` of `scan.glb`: \
+                    the rectangle of 16 × 16 pixels at (250, 0) is not inside the photo's 256 × 256 pixels"),
+        "{m}"
+    );
+}

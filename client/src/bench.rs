@@ -3,14 +3,19 @@
 
 use crate::cli::{BenchArgs, BenchTarget};
 use anyhow::Result;
+use restauro_spectral::appearance::ChannelSpace;
 use restauro_spectral::keyed_random::KeyedRng;
-use restauro_spectral::retinex::{PhaseSeconds, RetinexParams, retinex};
+use restauro_spectral::retinex::{PhaseSeconds, RetinexParams, RetinexStats};
+use restauro_spectral::seen::{Adaptation, SeenParams, seen_image};
 use serde::Serialize;
 use std::time::Instant;
 
 #[derive(Serialize)]
 struct RetinexBench {
     benchmark: &'static str,
+    /// What the seen image adapts to: `light` (the farm's seen image: the known light, the
+    /// paths for lightness) or `retinex` (the paths alone, in CAT02 cones).
+    adaptation: String,
     width: usize,
     height: usize,
     threads: usize,
@@ -32,6 +37,19 @@ struct RetinexBench {
     best_phase_seconds: PhaseSeconds,
 }
 
+/// The smooth illumination over [`mondrian`]'s pixel `i`: 0.4 to 1.
+fn shade(i: usize, width: usize, height: usize) -> f32 {
+    let (x, y) = ((i % width) as f32 / width as f32, (i / width) as f32 / height as f32);
+    0.4 + 0.6 * (1.0 - 0.5 * (x * x + y))
+}
+
+/// The light on [`mondrian`]'s pixel `i`, as a render's adapting white: a D65 white of
+/// 100 cd/m² times the card's shading (scotopic: D65's S/P ratio, 2.47).
+fn lit(i: usize, width: usize, height: usize) -> [f32; 4] {
+    let y = 100.0 * shade(i, width, height);
+    [0.9504 * y, y, 1.0888 * y, 2.47 * y]
+}
+
 /// A deterministic test card: rectangles of random colours over a smooth illumination gradient,
 /// like the Mondrians Land used.
 pub fn mondrian(width: usize, height: usize, seed: u64) -> Vec<[f32; 3]> {
@@ -50,8 +68,7 @@ pub fn mondrian(width: usize, height: usize, seed: u64) -> Vec<[f32; 3]> {
         }
     }
     for (i, px) in img.iter_mut().enumerate() {
-        let (x, y) = ((i % width) as f32 / width as f32, (i / width) as f32 / height as f32);
-        let shade = 0.4 + 0.6 * (1.0 - 0.5 * (x * x + y));
+        let shade = shade(i, width, height);
         for v in px.iter_mut() {
             *v = (*v).max(0.02) * shade * 100.0;
         }
@@ -66,43 +83,59 @@ pub fn run(args: &BenchArgs) -> Result<String> {
         BenchTarget::Scheduler => crate::bench_scheduler::bench(args),
         BenchTarget::Mesh => crate::bench_mesh::bench(args),
         BenchTarget::Retinex => {
-            let (w, h) = (args.width, args.height);
-            let img = mondrian(w, h, 1);
-            let params = RetinexParams { paths: args.paths, ..Default::default() };
-            let mut seconds = Vec::new();
-            let mut stats: Option<restauro_spectral::retinex::RetinexStats> = None;
-            for _ in 0..args.repeats.max(1) {
-                let t = Instant::now();
-                let (_, s) = retinex(&img, w, h, &params, &|_, _| {})?;
-                let run = t.elapsed().as_secs_f64();
-                if seconds.iter().all(|&best| run < best) {
-                    stats = Some(s);
-                }
-                seconds.push(run);
+            let mut out = String::new();
+            for adaptation in [Adaptation::Light, Adaptation::Retinex(ChannelSpace::default())] {
+                out += &serde_json::to_string_pretty(&seen_bench(args, adaptation)?)?;
+                out += "\n";
             }
-            let stats = stats.expect("at least one run");
-            let best = seconds.iter().copied().fold(f64::INFINITY, f64::min);
-            let steps = stats.steps;
-            let report = RetinexBench {
-                benchmark: "retinex",
-                width: w,
-                height: h,
-                threads: rayon::current_num_threads(),
-                paths: params.paths,
-                length: stats.length,
-                threshold: params.threshold,
-                repeats: args.repeats.max(1),
-                best_seconds: best,
-                megapixels_per_second: (w * h) as f64 / best / 1e6,
-                million_steps_per_second: steps as f64 / best / 1e6,
-                seconds,
-                shared_paths: stats.shared_paths,
-                top_up_paths: stats.top_up_paths,
-                min_samples: stats.min_samples,
-                max_samples: stats.max_samples,
-                best_phase_seconds: stats.seconds,
-            };
-            Ok(serde_json::to_string_pretty(&report)? + "\n")
+            Ok(out)
         }
     }
+}
+
+/// Times the seen image of a test card by `adaptation` (`restauro bench retinex`).
+fn seen_bench(args: &BenchArgs, adaptation: Adaptation) -> Result<RetinexBench> {
+    let (w, h) = (args.width, args.height);
+    let img = mondrian(w, h, 1);
+    let white: Vec<[f32; 4]> = (0..w * h).map(|i| lit(i, w, h)).collect();
+    let params = SeenParams {
+        retinex: RetinexParams { paths: args.paths, ..Default::default() },
+        ..Default::default()
+    };
+    let mut seconds = Vec::new();
+    let mut stats: Option<RetinexStats> = None;
+    for _ in 0..args.repeats.max(1) {
+        let t = Instant::now();
+        let (_, report) = seen_image(&img, Some(&white), (w, h), &params, adaptation, &|_, _| {})?;
+        let run = t.elapsed().as_secs_f64();
+        if seconds.iter().all(|&best| run < best) {
+            stats = Some(report.retinex);
+        }
+        seconds.push(run);
+    }
+    let stats = stats.expect("at least one run");
+    let best = seconds.iter().copied().fold(f64::INFINITY, f64::min);
+    Ok(RetinexBench {
+        benchmark: "retinex",
+        adaptation: match adaptation {
+            Adaptation::Light => "light".into(),
+            Adaptation::Retinex(_) => "retinex".into(),
+        },
+        width: w,
+        height: h,
+        threads: rayon::current_num_threads(),
+        paths: params.retinex.paths,
+        length: stats.length,
+        threshold: params.retinex.threshold,
+        repeats: args.repeats.max(1),
+        best_seconds: best,
+        megapixels_per_second: (w * h) as f64 / best / 1e6,
+        million_steps_per_second: stats.steps as f64 / best / 1e6,
+        seconds,
+        shared_paths: stats.shared_paths,
+        top_up_paths: stats.top_up_paths,
+        min_samples: stats.min_samples,
+        max_samples: stats.max_samples,
+        best_phase_seconds: stats.seconds,
+    })
 }

@@ -66,6 +66,7 @@ pub fn bench(args: &BenchArgs) -> Result<String> {
         spectral: false,
         sky: lights.iter().any(is_sky),
         lit: lights.iter().any(|l| !is_sky(l)),
+        white: true,
     };
     let cluster = LocalCluster::start_with(0, None, &["--no-retinex"])?;
     let runtime = cluster::runtime()?;

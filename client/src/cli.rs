@@ -324,12 +324,24 @@ pub struct RetinexArgs {
     /// The PNG to write.
     #[arg(long)]
     pub out: PathBuf,
+    /// What the eye adapts to: light (the light the renderer measured at each surface, from
+    /// the file's white.X/Y/Z/scotopic channels, which restauro's renders write; colour by
+    /// CAT16 towards it with CAM16's degree of adaptation and a blue bias, lightness by the
+    /// paths from the known white), retinex (the paths alone, channel by channel in --space:
+    /// each channel's white is the brightest area they find, as the paper and restauro before
+    /// it), or auto (default: light when the file has the channels, retinex otherwise).
+    #[arg(long, default_value = "auto", value_parser = ["auto", "light", "retinex"])]
+    pub adaptation: String,
+    /// With the light: do not model mesopic vision (the colour the rods weaken below 5 cd/m²
+    /// of adapting luminance, CIE 191).
+    #[arg(long)]
+    pub no_mesopic: bool,
     /// N: the least number of path samples per pixel.
     #[arg(long, default_value_t = 20)]
     pub paths: u32,
     /// How far the paths reach, as the RMS distance (in image diagonals) from where a path
     /// starts to where it samples: 3 (the default) adapts to the whole image; below about 0.5
-    /// the adaptation is local (and a uniformly lit scene takes casts: prefer frameworks).
+    /// the adaptation is local.
     #[arg(long, default_value_t = restauro_spectral::retinex::DEFAULT_REACH)]
     pub reach: f64,
     /// L: steps per path (default: the length that gives the reach).
@@ -341,9 +353,10 @@ pub struct RetinexArgs {
     /// The seed of the random paths; the same seed gives the same image.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// The channels: lms-cat02 (default: the CAT02 cone space, which predicts Breneman's
-    /// corresponding colours best), lms (= lms-hpe: Hunt–Pointer–Estévez cones, the paper's
-    /// l, m, s), lms-bradford, rgb (linear sRGB), rgb-p3 or rgb-rec2020.
+    /// With --adaptation retinex, the channels: lms-cat02 (default: the CAT02 cone space,
+    /// which predicts Breneman's corresponding colours best of these), lms (= lms-hpe:
+    /// Hunt–Pointer–Estévez cones, the paper's l, m, s), lms-cat16, lms-bradford, rgb (linear
+    /// sRGB), rgb-p3 or rgb-rec2020.
     #[arg(long, default_value = "lms-cat02")]
     pub space: restauro_spectral::appearance::ChannelSpace,
     /// What may be the white: area (default: a bright area of at least a 2×2 block or most of
@@ -361,11 +374,16 @@ pub struct RetinexArgs {
     /// own light; a file without the channel is one framework) or none (one white for all).
     #[arg(long, default_value = "lights")]
     pub frameworks: String,
-    /// The weight (0–1) of a surface's own framework in its lightness; the rest is the whole
-    /// image's white. 1: a shadow is as light as the sun; 0: as dark as it is against the sun's
-    /// white. Colours are adapted to their own framework's light whatever the weight.
+    /// The weight (0–1) of a surface's own light in its lightness; the rest is the image's
+    /// white. 1: a shadow is as light as the sun; 0: as dark as it is against the sun's white.
+    /// Colours are adapted to their own light whatever the weight.
     #[arg(long, default_value_t = restauro_spectral::retinex::DEFAULT_FRAMEWORK_WEIGHT)]
     pub framework_weight: f32,
+    /// With the light: the weight (0–1) of the light on a surface's own plane against its
+    /// framework's. 1: a wall turned from the light is seen as light as one facing it; 0: as
+    /// dark as its light is against the framework's most lit faces.
+    #[arg(long, default_value_t = restauro_spectral::seen::DEFAULT_PLANE_WEIGHT)]
+    pub plane_weight: f32,
     /// Also write the result as OpenEXR (XYZ relative to a D65 white, Y = 1).
     #[arg(long)]
     pub exr: Option<PathBuf>,

@@ -3,26 +3,26 @@
 //!
 //! 1. the south facade of the Roman theatre of Aosta as found and cleaned, under the sun of a
 //!    summer afternoon at the site (with its clear sky), under the CIE overcast sky of
-//!    10 000 lux and under the same sun with the CIE standard clear sky, each with and without
-//!    the Retinex;
+//!    10 000 lux and under the same sun with the CIE standard clear sky, each as rendered and
+//!    as seen (adapted to its light, `restauro_spectral::seen`);
 //! 2. the paper's stone experiment (Rossi, Marini & Rizzi 2004, Fig. 12): travertine and pudding
 //!    stone, as found and cleaned, beside a white tile under CIE illuminants A, B, C and D65,
-//!    with and without the Retinex;
+//!    as rendered and as seen;
 //! 3. the facade floodlit at night, and the illuminance over one bay on its calculation grid,
 //!    written as `restauro illuminance` writes it (a false-colour map, a table, a document);
 //!
 //! and writes labelled contact sheets, a CIEDE2000 map between the two hypotheses, and a report
 //! (Markdown and JSON) of every image, its scene, light, parameters and render time, and the
-//! mean colour of each stone under each light before and after the Retinex.
+//! mean colour of each stone under each light as rendered and as seen.
 //!
 //! **How colours are compared.** A stone's colour in a render is the mean absolute XYZ over the
 //! inner 60 % of its square, made relative to the white tile of the same render (Y = 1 for the
 //! tile) and expressed in CIELAB with the D65 display white: what a camera balanced for daylight
-//! and exposed for the white card shows. The Retinex output is already relative XYZ with a D65
+//! and exposed for the white card shows. The seen image is already relative XYZ with a D65
 //! white. The reference is the D65 render; the paper's claim is that, under another light, the
-//! Retinex output comes closer to it than the unfiltered render does. The Retinex output is also
-//! compared with the D65 render's own Retinex output: what an observer sees under the light
-//! against what they see in daylight.
+//! seen image comes closer to it than the unfiltered render does. The seen image is also
+//! compared with the D65 render's own seen image: what an observer sees under the light
+//! against what they see in daylight (under A, a warmth people keep).
 //!
 //! The facade's CIEDE2000 map compares the as-found and cleaned renders pixel by pixel in CIELAB
 //! relative to the luminance of a perfect white horizontal surface under the same light (E_h/π)
@@ -182,7 +182,7 @@ struct Image {
 
 #[derive(Clone, Serialize)]
 struct Measured {
-    /// Mean XYZ over the square: absolute (cd/m²) before the Retinex, relative to a D65 white
+    /// Mean XYZ over the square: absolute (cd/m²) as rendered, relative to a D65 white
     /// of Y = 1 after it.
     xyz: [f64; 3],
     /// CIELAB as described in the module documentation.
@@ -191,7 +191,7 @@ struct Measured {
     srgb_hex: String,
     /// ΔE00 to the same square of the D65 render as rendered (unfiltered).
     delta_e00_to_d65: f64,
-    /// After the Retinex only: ΔE00 to the same square of the D65 render as seen (its Retinex
+    /// As seen only: ΔE00 to the same square of the D65 render as seen (its seen image
     /// output) — how far what an observer sees under this light is from what they see under
     /// daylight.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -323,8 +323,8 @@ pub fn run(args: &DemoArgs) -> Result<String> {
         if stone.illuminant == "A" && stone.stone != "white reference" {
             let _ = writeln!(
                 s,
-                "  under CIE A, {} {}: ΔE00 to the D65 render {:.1} unfiltered, {:.1} after the \
-                 Retinex ({:.1} to the D65 render as seen)",
+                "  under CIE A, {} {}: ΔE00 to the D65 render {:.1} unfiltered, {:.1} as seen \
+                 ({:.1} to the D65 render as seen)",
                 stone.stone,
                 stone.state,
                 stone.before_retinex.delta_e00_to_d65,
@@ -515,10 +515,13 @@ async fn render_all(
                 samples_per_pixel: job.spp,
                 max_depth: render.max_depth,
                 retinex: format!(
-                    "Brownian paths, 20 per pixel, CAT02 cone space (lms-cat02), the white an \
-                     area, the sky passed over, sunlit and shadowed surfaces adapted as \
-                     frameworks of their own (weight {}), seed 0",
-                    restauro_spectral::retinex::DEFAULT_FRAMEWORK_WEIGHT
+                    "adapted to the light each render measured: CAT16 with CAM16's degree of \
+                     adaptation and a blue bias, mesopic below 5 cd/m², sunlit and shadowed \
+                     surfaces adapted apart (framework weight {}, plane weight {}); lightness by \
+                     Brownian paths from the known white, 20 per pixel, the white an area, the \
+                     sky passed over, seed 0",
+                    restauro_spectral::retinex::DEFAULT_FRAMEWORK_WEIGHT,
+                    restauro_spectral::seen::DEFAULT_PLANE_WEIGHT,
                 ),
                 render_s,
                 files: files.iter().map(|f| relative(out, f)).collect(),
@@ -683,7 +686,7 @@ fn floodlighting(
     })
 }
 
-/// The two images of a render: as rendered (absolute XYZ) and after the Retinex (relative).
+/// The two images of a render: as rendered (absolute XYZ) and as seen (relative).
 struct Pair {
     rendered: XyzImage,
     seen: XyzImage,
@@ -730,9 +733,9 @@ fn analyse(
                 "the floodlit bay's grid: illuminance (Y in lux), row 0 direct, row 1 indirect, \
                  OpenEXR"
             } else if file.ends_with("-retinex.exr") {
-                "after the Retinex: XYZ relative to a D65 white (Y = 1), OpenEXR"
+                "as seen, adapted to its light: XYZ relative to a D65 white (Y = 1), OpenEXR"
             } else if file.ends_with("-retinex.png") {
-                "after the Retinex, sRGB"
+                "as seen, adapted to its light, sRGB"
             } else if file.ends_with(".exr") {
                 "as rendered: absolute XYZ (Y in cd/m²), OpenEXR"
             } else {
@@ -781,7 +784,7 @@ fn analyse(
             Some(picture(&found.seen, Exposure::Relative).resized_to_width(size.sheet_cell)),
             Some(picture(&cleaned.seen, Exposure::Relative).resized_to_width(size.sheet_cell)),
         ]);
-        row_labels.push(format!("{}, as seen (Retinex)", light.title()));
+        row_labels.push(format!("{}, as seen", light.title()));
     }
     let (w, h) = size.facade;
     let sheet = Grid {
@@ -800,7 +803,7 @@ fn analyse(
             "Overcast: the CIE standard overcast sky, 10 000 lux. Each light's two renders share one exposure.".into(),
             "CIE clear sky: the same sun under the CIE standard clear sky (general sky type 12), 15 000 lux, over a ground of reflectance 0.2.".into(),
             "As found = a soot proxy where no sky or driving rain washes the stone, up to 70 % (derived, not measured).".into(),
-            "As seen: Marini-Rizzi Brownian-path Retinex on CAT02 l, m, s cone responses; the paths pass over the sky; sun and shadow adapted apart.".into(),
+            "As seen: adapted to the light measured at each surface (CAT16, CAM16's degree of adaptation, a blue bias); sun and shadow apart; lightness by Marini-Rizzi paths.".into(),
         ],
     }
     .render();
@@ -931,7 +934,7 @@ fn analyse(
             };
             let before_m = measured(before_xyz, before, None);
             let after_m = measured(after_xyz, after, Some(reference_seen));
-            // The squares as shown: the render exposed for the white tile, and the Retinex output.
+            // The squares as shown: the render exposed for the white tile, and the seen image.
             let r = samples::pixel_rect(s, sw, sh, 0.9);
             let exposure = Exposure::Absolute { white_cd_m2: white_y.max(1e-12) };
             cells[row].push(Some(crop_picture(&pair.rendered, r, exposure).resized_to_width(crop)));
@@ -957,7 +960,7 @@ fn analyse(
         cell_width: crop,
         footer: vec![
             "Each light gives the board 1000 lux from above. Rendered: the white tile is the reference".into(),
-            "white (70 % of the display's), on a D65 display without adaptation. Seen: after the Retinex.".into(),
+            "white (70 % of the display's), on a D65 display without adaptation. Seen: adapted to the light, as a person there sees it.".into(),
             "dE: CIEDE2000 to the same sample in the D65 render (Lab relative to the white tile, D65 white).".into(),
             "As found = stone + 30 % soot-proxy mixture (derived, not measured).".into(),
         ],
@@ -981,7 +984,7 @@ fn analyse(
     }
     let grid = Grid {
         title: "The sample board under each illuminant: rendered and seen",
-        column_labels: vec!["rendered".into(), "seen (Retinex)".into()],
+        column_labels: vec!["rendered".into(), "seen".into()],
         row_labels: ILLUMINANTS.iter().map(|i| format!("CIE {i}")).collect(),
         cells: boards.chunks(2).map(<[Option<Rgb8>]>::to_vec).collect(),
         captions: Vec::new(),
@@ -1012,7 +1015,7 @@ fn photo_block_sheet(out: &Path, size: &Size, block: &Pair) -> Result<Image> {
     let sheet = Grid {
         title: "Pudding stone: a photograph as detail over the measured spectrum",
         column_labels: vec![labels.join(" | ")],
-        row_labels: vec!["as rendered".into(), "as seen (Retinex)".into()],
+        row_labels: vec!["as rendered".into(), "as seen".into()],
         cells: vec![
             vec![Some(picture(&block.rendered, exposure).resized_to_width(width))],
             vec![Some(picture(&block.seen, Exposure::Relative).resized_to_width(width))],
@@ -1049,6 +1052,7 @@ fn crop_picture(image: &XyzImage, r: PixelRect, exposure: Exposure) -> Rgb8 {
         pixels,
         emitter: None,
         lit_by: None,
+        white: None,
     };
     picture(&cropped, exposure)
 }
@@ -1103,21 +1107,22 @@ fn markdown(r: &Report) -> String {
             x.render_s
         );
     }
-    let _ = writeln!(s, "\nRetinex: {}.\n", r.renders.first().map_or("", |x| x.retinex.as_str()));
+    let _ = writeln!(s, "\nSeen: {}.\n", r.renders.first().map_or("", |x| x.retinex.as_str()));
     let _ = writeln!(s, "## Images\n");
     let _ = writeln!(s, "| file | what |");
     let _ = writeln!(s, "|---|---|");
     for i in &r.images {
         let _ = writeln!(s, "| [`{}`]({}) | {} |", i.file, i.file, i.what);
     }
-    let _ = writeln!(s, "\n## The stones under each light, before and after the Retinex\n");
+    let _ = writeln!(s, "\n## The stones under each light, as rendered and as seen\n");
     let _ = writeln!(
         s,
         "Mean over the inner {:.0} % of each square. *Before*: CIELAB of the render relative to \
          its white tile ({:.0} % reflectance), D65 white — what a camera balanced for daylight \
-         shows. *After*: CIELAB of the Retinex output (D65 white). ΔE00 to the same square in the \
-         D65 render as rendered (before and after) and, after the Retinex, also as seen (the D65 \
-         render's Retinex output: what an observer sees in daylight). *As found* is derived: \
+         shows. *After*: CIELAB of the seen image (adapted to the light; D65 white). ΔE00 to the \
+         same square in the D65 render as rendered (before and after) and, after, also as seen \
+         (the D65 render's seen image: what an observer sees in daylight; under A people keep \
+         some of the light's warmth). *As found* is derived: \
          {:.0} % of the surface covered by a soot proxy.\n",
         INNER_FRACTION * 100.0,
         r.white_reflectance * 100.0,

@@ -205,12 +205,17 @@ fn run_in_process(args: &RenderArgs) -> Result<String> {
         Some(plan.tile_count().into()),
         "render {bar:40} {pos}/{len} tiles, {elapsed} elapsed, eta {eta}",
     )?;
-    let mut frame = Framebuffer::new(plan.width, plan.height, TileLayout::from(&plan));
+    let layout = TileLayout::from(&plan);
+    let mut frame = Framebuffer::new(plan.width, plan.height, layout);
     let render_started = Instant::now();
     for (index, rect) in plan.tiles().enumerate() {
         let tile = render_tile(&prepared, rect, plan.spectral);
         // The same bytes a worker sends: the in-process image is the cluster's, bit for bit.
-        let extras = TileExtras { sky: tile.sky.as_deref(), lit_by: tile.lit_by.as_deref() };
+        let extras = TileExtras {
+            sky: tile.sky.as_deref(),
+            lit_by: tile.lit_by.as_deref(),
+            white: tile.white.as_deref().filter(|_| layout.white),
+        };
         let data = encode_tile(
             &tile.xyz,
             extras,

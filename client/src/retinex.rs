@@ -7,9 +7,10 @@ use anyhow::{Context, Result, bail};
 use restauro_image::image_files::{
     MAX_PIXELS, PngPixels, XyzImage, read_exr, write_png, write_xyz_exr,
 };
-use restauro_spectral::appearance::retinex_xyz;
+use restauro_spectral::appearance::ChannelSpace;
 use restauro_spectral::display::{DisplayParams, Exposure, encode, to_u8, to_u16};
 use restauro_spectral::retinex::{RetinexParams, WhiteReference};
+use restauro_spectral::seen::{Adaptation, SeenParams, seen_image};
 use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
@@ -67,31 +68,49 @@ fn write_display_png(
     Ok(())
 }
 
+/// `--adaptation auto | light | retinex` for `image`: auto is light when the file carries its
+/// adapting white.
+pub fn parse_adaptation(text: &str, space: ChannelSpace, image: &XyzImage) -> Result<Adaptation> {
+    match text.to_ascii_lowercase().as_str() {
+        "light" => Ok(Adaptation::Light),
+        "retinex" => Ok(Adaptation::Retinex(space)),
+        "auto" if image.white.is_some() => Ok(Adaptation::Light),
+        "auto" => Ok(Adaptation::Retinex(space)),
+        _ => bail!("--adaptation `{text}`: use auto (the default), light or retinex"),
+    }
+}
+
 pub fn run(args: &RetinexArgs) -> Result<String> {
     let image = read_exr(&args.input, MAX_PIXELS)?;
-    let params = RetinexParams {
-        paths: args.paths,
-        reach: args.reach,
-        length: args.length,
-        threshold: args.threshold,
-        seed: args.seed,
-        white: parse_white(&args.white)?,
-        emitters: parse_light_sources(&args.light_sources, &image)?,
-        frameworks: parse_frameworks(&args.frameworks, &image)?,
-        framework_weight: args.framework_weight,
+    let params = SeenParams {
+        retinex: RetinexParams {
+            paths: args.paths,
+            reach: args.reach,
+            length: args.length,
+            threshold: args.threshold,
+            seed: args.seed,
+            white: parse_white(&args.white)?,
+            emitters: parse_light_sources(&args.light_sources, &image)?,
+            frameworks: parse_frameworks(&args.frameworks, &image)?,
+            framework_weight: args.framework_weight,
+            ..RetinexParams::default()
+        },
+        plane_weight: args.plane_weight,
+        mesopic: !args.no_mesopic,
     };
+    let adaptation = parse_adaptation(&args.adaptation, args.space, &image)?;
     let bar = if image.pixels.len() >= PROGRESS_FROM_PIXELS {
         Progress::new("retinex", "paths", Some(0), "retinex {bar:40} {percent}% paths, eta {eta}")?
     } else {
         Progress::hidden()
     };
     let started = Instant::now();
-    let (out, stats) = retinex_xyz(
+    let (out, report) = seen_image(
         &image.pixels,
-        image.width,
-        image.height,
+        image.white.as_deref(),
+        (image.width, image.height),
         &params,
-        args.space,
+        adaptation,
         &|done, total| {
             bar.set_length(total);
             bar.set_position(done);
@@ -110,41 +129,55 @@ pub fn run(args: &RetinexArgs) -> Result<String> {
         Exposure::Relative,
     )?;
     let mut text = String::new();
+    let stats = &report.retinex;
     let _ = writeln!(
         text,
-        "retinex of {} ({}×{}) in {seconds:.2} s: {} samples per pixel at least ({} at most), \
-         paths of {} steps, channels {}, {} framework{} of illumination",
+        "seen image of {} ({}×{}) in {seconds:.2} s, adapted to the {}: {} samples per pixel at \
+         least ({} at most), paths of {} steps, {} framework{} of illumination",
         args.input.display(),
         image.width,
         image.height,
+        match adaptation {
+            Adaptation::Light => "light the render measured".to_owned(),
+            Adaptation::Retinex(space) => format!("Retinex's whites in {space}"),
+        },
         stats.min_samples,
         stats.max_samples,
         stats.length,
-        args.space,
         stats.frameworks,
         if stats.frameworks == 1 { "" } else { "s" },
     );
+    if let Some(light) = &report.light {
+        let _ = writeln!(
+            text,
+            "white level {:.4} cd/m² at x, y = {:.4}, {:.4}; degree of adaptation {:.2}–{:.2}; \
+             mesopic coefficient {:.2}–{:.2}",
+            light.white_level_cd_m2,
+            light.white_xy.0,
+            light.white_xy.1,
+            light.degree[0],
+            light.degree[2],
+            light.mesopic[0],
+            light.mesopic[2],
+        );
+    } else if args.adaptation == "auto" {
+        let _ = writeln!(
+            text,
+            "note: {} carries no adapting white (a render from restauro does): adapted by the \
+             Retinex alone",
+            args.input.display()
+        );
+    }
     let _ = writeln!(text, "wrote {}", args.out.display());
     if let Some(exr) = &args.exr {
-        let settings = format!(
-            "paths={} reach={} length={} threshold={} seed={} space={} white={} frameworks={} \
-             framework-weight={}",
-            params.paths,
-            params.reach,
-            stats.length,
-            params.threshold,
-            params.seed,
-            args.space,
-            args.white,
-            stats.frameworks,
-            params.framework_weight,
-        );
+        let settings = report.settings(&params);
         let result = XyzImage {
             width: image.width,
             height: image.height,
             pixels: out,
             emitter: image.emitter,
             lit_by: image.lit_by,
+            white: None,
         };
         write_xyz_exr(
             exr,

@@ -24,7 +24,7 @@ fn card(dir: &Path) -> PathBuf {
     let path = dir.join("card.exr");
     write_xyz_exr(
         &path,
-        &XyzImage { width: w, height: h, pixels, emitter: None, lit_by: None },
+        &XyzImage { width: w, height: h, pixels, emitter: None, lit_by: None, white: None },
         &[],
     )
     .unwrap();
@@ -111,6 +111,7 @@ fn the_light_mask_of_a_render_makes_frameworks() {
         pixels: Vec::with_capacity(w * h),
         emitter: None,
         lit_by: Some(Vec::with_capacity(w * h)),
+        white: None,
     };
     for p in 0..w * h {
         let (x, y) = (p % w, p / w);
@@ -170,6 +171,7 @@ fn an_rgb_exr_with_emitters_and_the_white_options() {
         pixels: vec![[50.0; 3]; w * h],
         emitter: Some(vec![false; w * h]),
         lit_by: None,
+        white: None,
     };
     for y in 0..6 {
         for x in 0..6 {

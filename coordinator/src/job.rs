@@ -215,6 +215,7 @@ impl JobRecord {
             spectral: false,
             sky: false,
             lit: false,
+            white: false,
             tile: 1,
             grids: false,
         };
@@ -271,6 +272,7 @@ mod tests {
             spectral: false,
             sky: false,
             lit: false,
+            white: false,
             tile: 8,
             grids: false,
         };

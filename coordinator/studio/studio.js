@@ -268,7 +268,7 @@ function show(job, seen) {
   const img = $('result-image');
   const adjusted = file === name ? exposure.url(job) : null;
   img.src = adjusted ?? api.resultUrl(job.id, file);
-  img.alt = `${job.name}, ${file === retinex ? 'as seen after the Retinex' : 'as rendered'}`;
+  img.alt = `${job.name}, ${file === retinex ? 'as seen, adapted to its light' : 'as rendered'}`;
   const how = adjusted ? (adjusted.includes('luminance.png') ? 'false colour by luminance' : `at ${$('exposure-shown').textContent}`) : file;
   $('result-caption').textContent = `${how} — ${job.width} × ${job.height} px`;
   const downloads = $('result-downloads');

@@ -3,9 +3,11 @@
 //! A tile travels and is stored as little-endian words: first X, Y, Z of every pixel (f32,
 //! row-major within the tile), then, when the scene has a sky, each pixel's sky coverage (f32,
 //! the fraction of its camera samples that saw the sky), then, when it has point or distant
-//! lights, each pixel's mask of the lights that light it (u32, [`LIT_BITS`] bits), then, when the
-//! job keeps spectra, the 81 bands of every pixel (f32). All but the last make the tile's image
-//! part, the last its spectral part.
+//! lights, each pixel's mask of the lights that light it (u32, [`LIT_BITS`] bits), then, for an
+//! image (not a calculation grid), each pixel's adapting white — X, Y, Z and the scotopic
+//! luminance of a perfect white diffuser at its surface (4 × f32) —, then, when the job keeps
+//! spectra, the 81 bands of every pixel (f32). All but the last make the tile's image part, the
+//! last its spectral part.
 //!
 //! Every value must be one a tracer can produce: radiometric quantities (X, Y, Z and spectral
 //! radiance) finite and not negative, a coverage between 0 and 1, a mask within its bits.
@@ -33,18 +35,23 @@ pub struct TileLayout {
     pub sky: bool,
     /// Each pixel's mask of the lights that light it.
     pub lit: bool,
+    /// Each pixel's adapting white ([`WHITE_WORDS`] values).
+    pub white: bool,
 }
+
+/// The values of a pixel's adapting white: X, Y, Z (Y in cd/m²) and the scotopic luminance.
+pub const WHITE_WORDS: usize = 4;
 
 impl From<&Plan> for TileLayout {
     fn from(plan: &Plan) -> Self {
-        TileLayout { spectral: plan.spectral, sky: plan.sky, lit: plan.lit }
+        TileLayout { spectral: plan.spectral, sky: plan.sky, lit: plan.lit, white: plan.white }
     }
 }
 
 impl TileLayout {
     /// The 4-byte words per pixel of the image part.
     fn image_words(self) -> usize {
-        3 + usize::from(self.sky) + usize::from(self.lit)
+        3 + usize::from(self.sky) + usize::from(self.lit) + WHITE_WORDS * usize::from(self.white)
     }
 }
 
@@ -59,6 +66,7 @@ pub fn tile_sizes(rect: &Rect, layout: TileLayout) -> (usize, usize) {
 struct Parts {
     sky: usize,
     lit: usize,
+    white: usize,
     spectral: usize,
 }
 
@@ -67,8 +75,9 @@ impl Parts {
         let pixels = rect.width as usize * rect.height as usize;
         let sky = pixels * 12;
         let lit = sky + if layout.sky { pixels * 4 } else { 0 };
-        let spectral = lit + if layout.lit { pixels * 4 } else { 0 };
-        Parts { sky, lit, spectral }
+        let white = lit + if layout.lit { pixels * 4 } else { 0 };
+        let spectral = white + if layout.white { pixels * 4 * WHITE_WORDS } else { 0 };
+        Parts { sky, lit, white, spectral }
     }
 
     /// The part a byte offset lies in, the pixel, and whether its value is in range.
@@ -78,9 +87,10 @@ impl Parts {
         match at {
             a if a < self.sky => ("XYZ", a / 12, radiometric),
             a if a < self.lit => ("sky coverage", (a - self.sky) / 4, (0.0..=1.0).contains(&v)),
-            a if a < self.spectral => {
+            a if a < self.white => {
                 ("light mask", (a - self.lit) / 4, u32::from_le_bytes(word) >> LIT_BITS == 0)
             }
+            a if a < self.spectral => ("adapting white", (a - self.white) / 16, radiometric),
             a => ("spectral radiance", (a - self.spectral) / (BANDS * 4), radiometric),
         }
     }
@@ -138,6 +148,8 @@ pub struct Framebuffer {
     pub sky: Option<Vec<f32>>,
     /// Which lights light each pixel, when the scene has point or distant lights.
     pub lit_by: Option<Vec<u32>>,
+    /// Each pixel's adapting white (X, Y, Z, scotopic luminance), for an image.
+    pub white: Option<Vec<[f32; 4]>>,
 }
 
 impl Framebuffer {
@@ -150,6 +162,7 @@ impl Framebuffer {
             spectral: layout.spectral.then(|| vec![vec![0.0; n]; BANDS]),
             sky: layout.sky.then(|| vec![0.0; n]),
             lit_by: layout.lit.then(|| vec![0; n]),
+            white: layout.white.then(|| vec![[0.0; 4]; n]),
         }
     }
 
@@ -158,6 +171,7 @@ impl Framebuffer {
             spectral: self.spectral.is_some(),
             sky: self.sky.is_some(),
             lit: self.lit_by.is_some(),
+            white: self.white.is_some(),
         }
     }
 
@@ -191,8 +205,14 @@ impl Framebuffer {
             }
         }
         if let Some(lit) = &mut self.lit_by {
-            for (i, word) in words(&data[parts.lit..parts.spectral]).into_iter().enumerate() {
+            for (i, word) in words(&data[parts.lit..parts.white]).into_iter().enumerate() {
                 lit[at(self.width, rect, i, w)] = u32::from_le_bytes(word);
+            }
+        }
+        if let Some(white) = &mut self.white {
+            let values = floats(&data[parts.white..parts.spectral]);
+            for (i, v) in values.chunks_exact(WHITE_WORDS).enumerate() {
+                white[at(self.width, rect, i, w)] = [v[0], v[1], v[2], v[3]];
             }
         }
         if let Some(planes) = &mut self.spectral {
@@ -217,10 +237,11 @@ fn at(image_width: u32, rect: &Rect, i: usize, w: usize) -> usize {
 pub struct TileExtras<'a> {
     pub sky: Option<&'a [f32]>,
     pub lit_by: Option<&'a [u32]>,
+    pub white: Option<&'a [[f32; 4]]>,
 }
 
-/// The wire bytes of a tile: XYZ, the sky coverage and light masks when given, then the
-/// spectra when given (each pixel's 81 bands).
+/// The wire bytes of a tile: XYZ, the sky coverage, light masks and adapting whites when given,
+/// then the spectra when given (each pixel's 81 bands).
 pub fn encode_tile<'a>(
     xyz: &[[f32; 3]],
     extras: TileExtras<'_>,
@@ -231,6 +252,9 @@ pub fn encode_tile<'a>(
         out.extend_from_slice(&v.to_le_bytes());
     }
     for v in extras.lit_by.into_iter().flatten() {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
+    for v in extras.white.into_iter().flatten().flatten() {
         out.extend_from_slice(&v.to_le_bytes());
     }
     if let Some(pixels) = spectral {
@@ -247,7 +271,7 @@ pub fn encode_tile<'a>(
 mod tests {
     use super::*;
 
-    const ALL: TileLayout = TileLayout { spectral: true, sky: true, lit: true };
+    const ALL: TileLayout = TileLayout { spectral: true, sky: true, lit: true, white: true };
 
     #[test]
     fn tiles_land_where_their_rectangle_says() {
@@ -256,8 +280,9 @@ mod tests {
         let xyz: Vec<[f32; 3]> = (0..6).map(|i| [i as f32, 10.0 + i as f32, 20.0]).collect();
         let sky: Vec<f32> = (0..6).map(|i| i as f32 / 8.0).collect();
         let lit: Vec<u32> = (0..6).map(|i| i % 3).collect();
+        let white: Vec<[f32; 4]> = (0..6).map(|i| [i as f32, 1.0, 2.0, 3.0]).collect();
         let spectra: Vec<Vec<f32>> = (0..6).map(|i| vec![i as f32 * 0.5; BANDS]).collect();
-        let extras = TileExtras { sky: Some(&sky), lit_by: Some(&lit) };
+        let extras = TileExtras { sky: Some(&sky), lit_by: Some(&lit), white: Some(&white) };
         let data = encode_tile(&xyz, extras, Some(spectra.iter().map(Vec::as_slice)));
         fb.place(7, &rect, &data).unwrap();
         // Pixel 3 of the 2-wide tile is its second row, second column: image (4, 2).
@@ -265,6 +290,7 @@ mod tests {
         assert_eq!(fb.sky.as_ref().unwrap()[2 * 5 + 4], 3.0 / 8.0);
         assert_eq!(fb.lit_by.as_ref().unwrap()[2 * 5 + 4], 0);
         assert_eq!(fb.lit_by.as_ref().unwrap()[2 * 5 + 3], 2);
+        assert_eq!(fb.white.as_ref().unwrap()[2 * 5 + 4], [3.0, 1.0, 2.0, 3.0]);
         assert_eq!(fb.spectral.as_ref().unwrap()[40][2 * 5 + 4], 1.5);
         assert_eq!(fb.xyz[0], [0.0; 3]);
         let err = fb.place(7, &rect, &data[..data.len() - 4]).unwrap_err();
@@ -281,17 +307,20 @@ mod tests {
         let xyz = vec![[1.0f32, 2.0, 3.0]; 4];
         let sky = vec![0.5f32; 4];
         let lit = vec![1u32 << 23; 4];
+        let white = vec![[2.0f32, 2.1, 2.2, 4.0]; 4];
         let spectra = vec![vec![0.25f32; BANDS]; 4];
-        let extras = TileExtras { sky: Some(&sky), lit_by: Some(&lit) };
+        let extras = TileExtras { sky: Some(&sky), lit_by: Some(&lit), white: Some(&white) };
         let good = encode_tile(&xyz, extras, Some(spectra.iter().map(Vec::as_slice)));
         check_tile(0, &rect, ALL, &good).unwrap();
-        let image_bytes = 4 * 20;
+        let image_bytes = 4 * 36;
         for (at, bad, what) in [
             (4, f32::NAN.to_le_bytes(), "XYZ"),
             (40, f32::INFINITY.to_le_bytes(), "XYZ"),
             (0, (-1.0f32).to_le_bytes(), "XYZ"),
             (48 + 4, 1.5f32.to_le_bytes(), "sky coverage"),
             (64 + 8, (1u32 << 24).to_le_bytes(), "light mask"),
+            (80 + 16 + 12, f32::NAN.to_le_bytes(), "pixel 1 has adapting white"),
+            (80 + 4, (-1.0f32).to_le_bytes(), "pixel 0 has adapting white"),
             (image_bytes + 81 * 4 * 3 + 8, f32::NAN.to_le_bytes(), "spectral radiance"),
             (image_bytes, (-0.5f32).to_le_bytes(), "spectral radiance"),
         ] {
@@ -306,7 +335,7 @@ mod tests {
         let no_sky = TileLayout { sky: false, ..ALL };
         let data = encode_tile(
             &xyz,
-            TileExtras { sky: None, lit_by: Some(&lit) },
+            TileExtras { sky: None, lit_by: Some(&lit), white: Some(&white) },
             Some(spectra.iter().map(Vec::as_slice)),
         );
         check_tile(0, &rect, no_sky, &data).unwrap();

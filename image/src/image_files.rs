@@ -93,12 +93,20 @@ pub struct XyzImage {
     /// the sky not counted, as an integer below 2²⁴ so that f32 holds it exactly). Pixels with
     /// the same mask are the Retinex's frameworks of illumination.
     pub lit_by: Option<Vec<u32>>,
+    /// Each pixel's adapting white, as restauro's renders record it (channels `white.X`,
+    /// `white.Y`, `white.Z` and `white.scotopic`): X, Y, Z (Y in cd/m²) and the scotopic
+    /// luminance of a perfect white diffuser at the pixel's surface, zero where the pixel
+    /// shows no surface. What the seen image adapts to.
+    pub white: Option<Vec<[f32; 4]>>,
 }
+
+/// The EXR channels of the adapting white, in the order of [`XyzImage::white`]'s values.
+pub const WHITE_CHANNELS: [&str; 4] = ["white.X", "white.Y", "white.Z", "white.scotopic"];
 
 impl XyzImage {
     /// An image without light-source or light masks.
     pub fn new(width: usize, height: usize, pixels: Vec<[f32; 3]>) -> Self {
-        XyzImage { width, height, pixels, emitter: None, lit_by: None }
+        XyzImage { width, height, pixels, emitter: None, lit_by: None, white: None }
     }
 }
 
@@ -225,7 +233,14 @@ pub fn read_exr(path: &Path, max_pixels: usize) -> Result<XyzImage> {
         };
         channels[i].sample_data.values_as_f32().map(mask).collect()
     });
-    Ok(XyzImage { width, height, pixels, emitter, lit_by })
+    let white = match WHITE_CHANNELS.map(find) {
+        [Some(x), Some(y), Some(z), Some(s)] => {
+            let planes = [values(x)?, values(y)?, values(z)?, values(s)?];
+            Some((0..width * height).map(|i| planes.each_ref().map(|p| p[i])).collect())
+        }
+        _ => None,
+    };
+    Ok(XyzImage { width, height, pixels, emitter, lit_by, white })
 }
 
 /// The RGB → XYZ matrix (rows) of arbitrary primaries and white, as restauro's display spaces
@@ -332,8 +347,8 @@ fn sort_header_attributes(bytes: &mut [u8]) {
 }
 
 /// Write an XYZ image as OpenEXR: channels X, Y, Z and linear sRGB-primaries R, G, B preview
-/// channels (so ordinary viewers show it), plus the `emitter` and `lit_by` masks when there are
-/// any.
+/// channels (so ordinary viewers show it), plus the `emitter` and `lit_by` masks and the
+/// adapting white when there are any.
 pub fn write_xyz_exr(path: &Path, image: &XyzImage, attributes: &[(&str, &str)]) -> Result<()> {
     write_xyz_exr_with(path, image, Vec::new(), attributes)
 }
@@ -367,6 +382,11 @@ fn write_xyz_exr_with(
     if let Some(masks) = &image.lit_by {
         // Exact: a mask has at most 24 bits.
         channels.push(("lit_by".to_owned(), masks.iter().map(|&m| m as f32).collect()));
+    }
+    if let Some(white) = &image.white {
+        for (i, name) in WHITE_CHANNELS.iter().enumerate() {
+            channels.push(((*name).to_owned(), white.iter().map(|w| w[i]).collect()));
+        }
     }
     channels.extend(extra);
     write_exr(path, image.width, image.height, channels, attributes)
@@ -497,6 +517,7 @@ mod tests {
             emitter: Some(vec![false, false, false, true, false, false]),
             // The largest mask is exact in f32.
             lit_by: Some(vec![0, 1, 3, 0, (1 << 24) - 1, 1 << 23]),
+            white: Some((0..6).map(|i| [i as f32, 2.0 * i as f32, 0.5, 4.0]).collect()),
         };
         let path = dir.join("a.exr");
         write_xyz_exr(&path, &image, &[("restauroNote", "test")]).unwrap();
@@ -515,6 +536,7 @@ mod tests {
             pixels: vec![[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]],
             emitter: Some(vec![false, true]),
             lit_by: None,
+            white: None,
         };
         let attributes: Vec<(String, String)> =
             (0..8).map(|i| (format!("restauroNote{i}"), format!("value {i}"))).collect();

@@ -1,17 +1,19 @@
 //! A finished render's files: the absolute XYZ image (OpenEXR, with the spectral layers when
-//! kept) and its display PNG, and the same after the global Retinex (paper §2.5) — the image as
-//! an adapted observer sees it — as a relative-XYZ EXR and a PNG. Every file is written under a
+//! kept) and its display PNG, and the seen image — the image as an adapted observer sees it,
+//! adapted to the light the render measured with the paper's Retinex paths for lightness
+//! (`restauro_spectral::seen`; paper §2.5) — as a relative-XYZ EXR and a PNG. Every file is written under a
 //! temporary name and renamed, so a reader never sees half of one.
 
 use crate::framebuffer::Framebuffer;
 use crate::image_files::{
     ImageFileError, PngPixels, XyzImage, write_png, write_spectral_exr, write_xyz_exr,
 };
-use restauro_spectral::appearance::{ChannelSpace, retinex_xyz};
+use restauro_spectral::appearance::ChannelSpace;
 use restauro_spectral::display::{DisplayParams, Exposure, encode, to_u8};
 use restauro_spectral::grid::wavelength_nm;
-use restauro_spectral::retinex::{RetinexParams, WhiteReference};
+use restauro_spectral::retinex::RetinexParams;
 use restauro_spectral::rgb_space::RgbSpace;
+use restauro_spectral::seen::{Adaptation, SeenParams, seen_image};
 use std::path::Path;
 use std::time::Instant;
 
@@ -70,6 +72,7 @@ pub fn write_grid_results(
         pixels: frame.xyz,
         emitter: None,
         lit_by: None,
+        white: None,
     };
     let attrs = [("restauroRender", info), ("restauroXyzUnits", GRID_UNITS)];
     let file = format!("{name}.exr");
@@ -111,6 +114,7 @@ pub fn write_results(
         pixels: frame.xyz,
         emitter: emitter.clone(),
         lit_by: lit_by.clone(),
+        white: frame.white,
     };
     let attrs = [
         ("restauroRender", options.info),
@@ -130,35 +134,31 @@ pub fn write_results(
     let mut retinex_s = 0.0;
     if let Some(params) = &options.retinex {
         let started = Instant::now();
-        let mut params = params.clone();
-        if params.emitters.is_none() {
-            params.emitters = retinex_emitters.clone();
+        let mut params = SeenParams { retinex: params.clone(), ..SeenParams::default() };
+        if params.retinex.emitters.is_none() {
+            params.retinex.emitters = retinex_emitters.clone();
         }
-        if params.frameworks.is_none() {
-            params.frameworks = lit_by.clone();
+        if params.retinex.frameworks.is_none() {
+            params.retinex.frameworks = lit_by.clone();
         }
-        let (perceived, stats) =
-            retinex_xyz(&image.pixels, width, height, &params, ChannelSpace::default(), &|_, _| {})
-                .map_err(|e| ResultsError::Retinex(e.to_string()))?;
-        retinex_s = started.elapsed().as_secs_f64();
-        let white = match params.white {
-            WhiteReference::Area => "area",
-            WhiteReference::Paper => "paper",
+        // A render carries its adapting white: the seen image adapts to the light it measured.
+        // (A job stored before the white existed is seen by the Retinex alone.)
+        let adaptation = match &image.white {
+            Some(_) => Adaptation::Light,
+            None => Adaptation::Retinex(ChannelSpace::default()),
         };
-        let sky = if params.emitters.is_some() { "passed-over" } else { "none" };
-        let settings = format!(
-            "paths={} reach={} length={} threshold={} seed={} space={} white={white} \
-             light-sources={sky} frameworks={} framework-weight={}",
-            params.paths,
-            params.reach,
-            stats.length,
-            params.threshold,
-            params.seed,
-            ChannelSpace::default(),
-            stats.frameworks,
-            params.framework_weight,
-        );
-        let perceived = XyzImage { width, height, pixels: perceived, emitter, lit_by };
+        let (perceived, report) = seen_image(
+            &image.pixels,
+            image.white.as_deref(),
+            (width, height),
+            &params,
+            adaptation,
+            &|_, _| {},
+        )
+        .map_err(|e| ResultsError::Retinex(e.to_string()))?;
+        retinex_s = started.elapsed().as_secs_f64();
+        let settings = report.settings(&params);
+        let perceived = XyzImage { width, height, pixels: perceived, emitter, lit_by, white: None };
         let exr = format!("{name}-retinex.exr");
         let png = format!("{name}-retinex.png");
         write_xyz_exr(

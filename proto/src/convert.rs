@@ -179,6 +179,7 @@ impl From<&Plan> for pb::Plan {
             spectral: p.spectral,
             sky: p.sky,
             lit: p.lit,
+            white: p.white,
             tile: p.tile,
             grids: p.grids,
         }
@@ -203,6 +204,7 @@ impl TryFrom<pb::Plan> for Plan {
             spectral: p.spectral,
             sky: p.sky,
             lit: p.lit,
+            white: p.white,
             tile: p.tile,
             grids: p.grids,
         })
@@ -316,6 +318,7 @@ mod tests {
             spectral: false,
             sky: true,
             lit: true,
+            white: true,
             tile: 16,
             grids: true,
         };

@@ -17,6 +17,16 @@
 //! was already counted at the vertex it left, through any glass on the way (Whitted's mirror
 //! rays therefore do not reflect the sky). Shadow rays pass through glass by its transmittance.
 //!
+//! **The adapting white.** A camera ray also measures, at the first surface it meets, what a
+//! perfect white diffuser there would send back: E(λ)/π, with E the spectral irradiance from
+//! every source (the same shadow rays and sky samples as the surface's own direct light, whatever
+//! the surface's BSDF) and, under `path`, from the other surfaces — the path's continuation from
+//! that first vertex is the incoming radiance L_i along the sampled direction, and a white
+//! diffuser turns it into L_i · cos θ / (π · pdf). The seen image adapts to this white, the light
+//! that falls where the person looks, instead of guessing it from the stones
+//! (`restauro_spectral::seen`). Light arriving through glass on the way in is weighted as the
+//! surface's own is, so a tinted pane tints both alike.
+//!
 //! Surfaces shade by their hit's shading normal (the mesh's vertex normals interpolated, or the
 //! triangle's own); the geometric normal decides which side rays leave from ([`below_surface`]).
 //!
@@ -29,6 +39,7 @@ use crate::sampler::PixelSampler;
 use glam::Vec3A;
 use restauro_scene::scene_file::Integrator;
 use restauro_spectral::Spectrum;
+use std::f32::consts::PI;
 
 pub use restauro_scene::plan::LIT_BITS;
 /// A light lights a point when it gives at least this share of the direct illuminance there
@@ -47,6 +58,9 @@ pub struct Seen {
     /// same lights share their illumination: the Retinex's frameworks (Gilchrist et al., "An
     /// anchoring theory of lightness perception", Psychological Review 106, 1999).
     pub lit_by: u32,
+    /// The camera ray met a surface (not the sky, a luminaire or nothing): the white it
+    /// measured is that surface's.
+    pub surface: bool,
 }
 
 /// The direct illuminance (lux) each light gives the first hit, by bit of [`Seen::lit_by`].
@@ -186,8 +200,10 @@ impl Weight<'_> {
 /// sources, times `weight`. With f = ρ(λ)·a + b and E⊥ = s·S(λ), each source adds
 /// S(λ)·(ρ(λ)·a·s·cos + b·s·cos) in one pass over the bands, with no temporary spectrum. The
 /// sky, when there is one, adds one sample of its reflected radiance. At the camera's hit,
-/// `lit` collects each light's illuminance.
+/// `lit` collects each light's illuminance, and at its first surface `white` the white
+/// diffuser's radiance, E/π (every light that reaches the point, whatever its BSDF makes of it).
 #[inline]
+#[allow(clippy::too_many_arguments)] // a vertex's context and its three accumulators
 fn add_direct(
     scene: &PreparedScene,
     v: &Vertex<'_>,
@@ -196,11 +212,12 @@ fn add_direct(
     rays: &mut u64,
     out: &mut Spectrum,
     mut lit: Option<&mut LitLux>,
+    mut white: Option<&mut Spectrum>,
 ) {
     let hit = v.hit;
     let origin = lift(hit);
     let bsdf = &scene.materials[hit.material as usize];
-    add_sky(scene, v, origin, weight, sampler, rays, out);
+    add_sky(scene, v, origin, weight, sampler, rays, out, white.as_deref_mut());
     for (i, light) in scene.lights.iter().enumerate() {
         let Some(inc) = light.sampled_incident(hit.point, || sampler.next2()) else { continue };
         let cos = inc.direction.dot(hit.shading);
@@ -208,7 +225,8 @@ fn add_direct(
             continue;
         }
         let (a, b) = bsdf.parts(v.wo, v.frame.to_local(inc.direction));
-        if a <= 0.0 && b <= 0.0 {
+        let reflects = a > 0.0 || b > 0.0;
+        if !reflects && white.is_none() {
             continue;
         }
         *rays += 1;
@@ -217,7 +235,12 @@ fn add_direct(
             continue;
         }
         let k = inc.scale * cos;
-        weight.add_through(&through, out, inc.spectrum, v.rho, (a * k, b * k));
+        if reflects {
+            weight.add_through(&through, out, inc.spectrum, v.rho, (a * k, b * k));
+        }
+        if let Some(w) = white.as_deref_mut() {
+            weight.add_through(&through, w, inc.spectrum, &NO_LIGHT, (0.0, k / PI));
+        }
         if let Some(lux) = lit.as_deref_mut() {
             lux[i.min(LIT_BITS - 1)] += inc.illuminance_lux * cos * through.mean();
         }
@@ -227,7 +250,9 @@ fn add_direct(
 /// The sky's light reflected at a vertex (nothing when the scene has no sky): a direction drawn
 /// with pdf cos θ/π about the normal, and for a sky sampled by its luminance a second direction
 /// drawn from it, each with a shadow ray to infinity ([`crate::sky`] gives each its weight).
+/// With `white`, the same samples give the white diffuser's radiance, L · weight / π.
 #[inline]
+#[allow(clippy::too_many_arguments)] // the vertex's context, as add_direct has it
 fn add_sky(
     scene: &PreparedScene,
     v: &Vertex<'_>,
@@ -236,6 +261,7 @@ fn add_sky(
     sampler: &mut PixelSampler,
     rays: &mut u64,
     out: &mut Spectrum,
+    mut white: Option<&mut Spectrum>,
 ) {
     let Some(sky) = &scene.sky else { return };
     let (u1, u2) = sampler.next2();
@@ -246,7 +272,8 @@ fn add_sky(
             continue;
         }
         let (a, b) = bsdf.parts(v.wo, v.frame.to_local(sample.direction));
-        if a <= 0.0 && b <= 0.0 {
+        let reflects = a > 0.0 || b > 0.0;
+        if !reflects && white.is_none() {
             continue;
         }
         *rays += 1;
@@ -255,7 +282,12 @@ fn add_sky(
             continue;
         }
         let k = sample.luminance_cd_m2 * sample.weight;
-        weight.add_through(&through, out, &sky.per_nit, v.rho, (a * k, b * k));
+        if reflects {
+            weight.add_through(&through, out, &sky.per_nit, v.rho, (a * k, b * k));
+        }
+        if let Some(w) = white.as_deref_mut() {
+            weight.add_through(&through, w, &sky.per_nit, &NO_LIGHT, (0.0, k / PI));
+        }
     }
 }
 
@@ -274,13 +306,14 @@ pub fn radiance(
     sampler: &mut PixelSampler,
     rays: &mut u64,
 ) -> Spectrum {
-    let mut out = Spectrum::ZERO;
-    add_radiance(scene, origin, direction, sampler, rays, &mut out);
+    let (mut out, mut white) = (Spectrum::ZERO, Spectrum::ZERO);
+    add_radiance(scene, origin, direction, sampler, rays, &mut out, &mut white);
     out
 }
 
-/// [`radiance`], added to `out`: a pixel sums its samples in place. Returns what the camera
-/// ray saw besides: the sky, or the lights of its first hit.
+/// [`radiance`], added to `out`: a pixel sums its samples in place; and the radiance a perfect
+/// white diffuser at the ray's first surface would send back, added to `white` (see the module
+/// comment). Returns what the camera ray saw besides: the sky, or the lights of its first hit.
 pub fn add_radiance(
     scene: &PreparedScene,
     origin: Vec3A,
@@ -288,8 +321,10 @@ pub fn add_radiance(
     sampler: &mut PixelSampler,
     rays: &mut u64,
     out: &mut Spectrum,
+    white: &mut Spectrum,
 ) -> Seen {
-    trace(scene, (origin, direction), Escape::SeesSky, sampler, rays, out)
+    let path = Path { from_depth: 0, escape: Escape::SeesSky, camera: Some(white), roulette: 1.0 };
+    walk(scene, (origin, direction), path, sampler, rays, out)
 }
 
 /// What a ray that meets no surface adds.
@@ -306,8 +341,32 @@ pub enum Escape {
 /// `escape` saying whether a ray that meets nothing sees the sky.
 pub fn trace(
     scene: &PreparedScene,
-    (origin, direction): (Vec3A, Vec3A),
+    ray: (Vec3A, Vec3A),
     escape: Escape,
+    sampler: &mut PixelSampler,
+    rays: &mut u64,
+    out: &mut Spectrum,
+) -> Seen {
+    let path = Path { from_depth: 0, escape, camera: None, roulette: 1.0 };
+    walk(scene, ray, path, sampler, rays, out)
+}
+
+/// Where a walk starts and what it records.
+struct Path<'a> {
+    /// The surfaces met before it (the depth cap and the roulette count them).
+    from_depth: u32,
+    escape: Escape,
+    /// A camera ray's white diffuser, measured at its first surface; `None` for other rays.
+    camera: Option<&'a mut Spectrum>,
+    /// The largest band of the throughput before the walk, for the roulette's odds.
+    roulette: f32,
+}
+
+/// The light arriving along the ray, added to `out`: the loop of both integrators.
+fn walk(
+    scene: &PreparedScene,
+    (origin, direction): (Vec3A, Vec3A),
+    mut path: Path<'_>,
     sampler: &mut PixelSampler,
     rays: &mut u64,
     out: &mut Spectrum,
@@ -326,15 +385,16 @@ pub fn trace(
     // ray, and after a reflection in glass; not after a surface, whose direct light sampled the
     // sky and the luminaires already (through any glass on the way). `view`: every surface so
     // far was glass, so what the ray meets is what the camera sees.
-    let mut counts = escape == Escape::SeesSky;
-    let mut view = true;
+    let mut counts = path.escape == Escape::SeesSky;
+    let mut view = path.from_depth == 0;
+    let mut surface = false;
     // The width of the ray's cone (a pixel's, widening with the distance travelled), for the
     // filtering of photo textures; and where a textured surface's reflectance is put.
     let spread = scene.camera.pixel_spread();
     let mut travelled_m = 0.0f32;
     let mut textured_rho = Spectrum::ZERO;
     let mut soiled_rho = Spectrum::ZERO;
-    for depth in 0..max_depth {
+    for depth in path.from_depth..max_depth {
         *rays += 1;
         let hit = scene.intersect(origin, direction, f32::INFINITY);
         let reach = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
@@ -348,13 +408,13 @@ pub fn trace(
             if counts && front {
                 through.add(out, &panel.per_nit, &NO_LIGHT, 0.0, panel.luminance_cd_m2);
             }
-            return Seen { sky: view && front, lit_by: lit_mask(&lux) };
+            return Seen { sky: view && front, lit_by: lit_mask(&lux), surface };
         }
         let Some(hit) = hit else {
             if let Some(sky) = scene.sky.as_ref().filter(|_| counts) {
                 through.add(out, &sky.per_nit, &NO_LIGHT, 0.0, sky.luminance_cd_m2(direction));
             }
-            return Seen { sky: view, lit_by: lit_mask(&lux) };
+            return Seen { sky: view, lit_by: lit_mask(&lux), surface };
         };
         travelled_m += hit.t;
         let bsdf = &scene.materials[hit.material as usize];
@@ -387,9 +447,14 @@ pub fn trace(
             soiling.mix(rho, share, &mut soiled_rho);
             rho = &soiled_rho;
         }
+        // The camera's first surface measures its white diffuser, seen through the same glass
+        // (`before`, the weight the path arrived with).
+        let mut white = if view { path.camera.take() } else { None };
+        surface |= white.is_some();
+        let before = white.as_ref().map(|_| (spectral, neutral));
         let lit = view.then_some(&mut lux);
         let vertex = Vertex { hit: &hit, frame, wo, rho };
-        add_direct(scene, &vertex, through, sampler, rays, out, lit);
+        add_direct(scene, &vertex, through, sampler, rays, out, lit, white.as_deref_mut());
         (counts, view) = (false, false);
         if depth + 1 == max_depth {
             break;
@@ -421,8 +486,28 @@ pub fn trace(
                 if below_surface(&hit, direction) {
                     break;
                 }
+                if let (Some(white), Some((spectral_before, neutral_before))) = (white, before) {
+                    // The rest of the path is the radiance L_i arriving along wi, walked on its
+                    // own: this surface reflects throughput · L_i of it, and the white
+                    // diffuser L_i · cos θ / (π · pdf), both behind any glass on the way in.
+                    let rest = Path {
+                        from_depth: depth + 1,
+                        escape: Escape::Nothing,
+                        camera: None,
+                        roulette: throughput.max_value(),
+                    };
+                    let mut incoming = Spectrum::ZERO;
+                    walk(scene, (lift(&hit), direction), rest, sampler, rays, &mut incoming);
+                    *out += *throughput * incoming;
+                    let arrived = match &spectral_before {
+                        Some(t) => Weight::Spectral(t),
+                        None => Weight::Neutral(neutral_before),
+                    };
+                    arrived.add(white, &incoming, &NO_LIGHT, 0.0, wi.z / (PI * pdf));
+                    return Seen { sky: false, lit_by: lit_mask(&lux), surface };
+                }
                 if depth >= 2 {
-                    let survive = throughput.max_value().min(0.95);
+                    let survive = (throughput.max_value() * path.roulette).min(0.95);
                     if sampler.next_1d() >= survive {
                         break;
                     }
@@ -432,7 +517,7 @@ pub fn trace(
         }
         origin = lift(&hit);
     }
-    Seen { sky: false, lit_by: lit_mask(&lux) }
+    Seen { sky: false, lit_by: lit_mask(&lux), surface }
 }
 
 /// A path meets a pane: it goes through or reflects off, chosen by their shares (mean over the

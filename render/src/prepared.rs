@@ -50,6 +50,20 @@ pub struct Settings {
     pub grids: bool,
 }
 
+/// A scene's own `[render]` table, for its camera's image: what tests and benchmarks render a
+/// scene file with.
+impl From<&restauro_scene::scene_file::Render> for Settings {
+    fn from(render: &restauro_scene::scene_file::Render) -> Self {
+        Self {
+            integrator: render.integrator,
+            samples_per_pixel: render.samples_per_pixel,
+            max_depth: render.max_depth,
+            seed: render.seed,
+            grids: false,
+        }
+    }
+}
+
 impl From<&Plan> for Settings {
     fn from(plan: &Plan) -> Self {
         Self {

@@ -10,6 +10,7 @@ use crate::sensor::{self, Component};
 use glam::Vec3A;
 use rayon::prelude::*;
 use restauro_spectral::Spectrum;
+use restauro_spectral::cie::scotopic_efficacy_lm_per_w;
 use restauro_spectral::colorimetry::{K_M_LM_PER_W, Observer};
 use restauro_spectral::grid::STEP_NM;
 use std::sync::LazyLock;
@@ -18,12 +19,24 @@ use std::sync::LazyLock;
 /// each (X = K_m Σ L_e(λ) x̄(λ) Δλ, paper §2.2).
 static FILM_WEIGHTS: LazyLock<[Spectrum; 3]> =
     LazyLock::new(|| Observer::Cie1931TwoDegree.cmf().map(|c| c * (K_M_LM_PER_W * STEP_NM) as f32));
+/// K′_m · Δλ · V′(λ): the scotopic luminance (scotopic cd/m²) of a spectral radiance (CIE 191).
+static SCOTOPIC_WEIGHTS: LazyLock<Spectrum> = LazyLock::new(|| {
+    *restauro_spectral::cie::scotopic_v() * (scotopic_efficacy_lm_per_w() * STEP_NM) as f32
+});
 
 /// Absolute XYZ (Y in cd/m²) of a spectral radiance.
 #[inline]
 pub fn film_xyz(radiance: &Spectrum) -> [f32; 3] {
     let w = &*FILM_WEIGHTS;
     [radiance.dot_f32(&w[0]), radiance.dot_f32(&w[1]), radiance.dot_f32(&w[2])]
+}
+
+/// The adapting white of a pixel: X, Y, Z (Y in cd/m²) and the scotopic luminance (scotopic
+/// cd/m²) of what a perfect white diffuser at its surface would send back.
+#[inline]
+pub fn white_of(radiance: &Spectrum) -> [f32; 4] {
+    let [x, y, z] = film_xyz(radiance);
+    [x, y, z, radiance.dot_f32(&SCOTOPIC_WEIGHTS)]
 }
 
 pub use restauro_scene::plan::Rect;
@@ -39,6 +52,9 @@ pub struct TileResult {
     /// When the scene has point or distant lights: which light each pixel's first hits, for
     /// most of its samples (a bit per light, as [`crate::integrator::Seen::lit_by`]).
     pub lit_by: Option<Vec<u32>>,
+    /// For an image (not a grid): each pixel's adapting white ([`white_of`]), the mean over
+    /// its camera samples that met a surface; zero where none did.
+    pub white: Option<Vec<[f32; 4]>>,
     /// The rays traced for the tile.
     pub rays: u64,
 }
@@ -69,24 +85,38 @@ fn keyed_camera_ray(
     (scene.camera.direction(x as f32 + dx, y as f32 + dy), sampler)
 }
 
-/// The sum of the spectral radiance of pixel (x, y)'s samples, how many saw the sky, and the
-/// lights that light the first hits of more than half of them.
+/// What a pixel's samples add up to.
+struct PixelSum {
+    radiance: Spectrum,
+    /// The samples that saw the sky.
+    sky: u32,
+    /// The lights that light the first hits of more than half of the samples.
+    lit_by: u32,
+    /// The mean white diffuser's radiance of the samples that met a surface.
+    white: Spectrum,
+}
+
+/// The sum of the spectral radiance of pixel (x, y)'s samples, how many saw the sky, the
+/// lights that light the first hits of more than half of them, and their white.
 #[inline]
-fn pixel_sum(scene: &PreparedScene, x: u32, y: u32, rays: &mut u64) -> (Spectrum, u32, u32) {
+fn pixel_sum(scene: &PreparedScene, x: u32, y: u32, rays: &mut u64) -> PixelSum {
     if scene.settings.grids {
         // Sensor x's direct (row 0) or indirect (row 1) irradiance.
-        return (sensor::irradiance_sum(scene, x, Component::of_row(y), rays), 0, 0);
+        let radiance = sensor::irradiance_sum(scene, x, Component::of_row(y), rays);
+        return PixelSum { radiance, sky: 0, lit_by: 0, white: Spectrum::ZERO };
     }
     let key = PixelKey::new(scene.settings.seed, x, y);
     let mut sum = Spectrum::ZERO;
-    let mut sky = 0;
+    let mut white = Spectrum::ZERO;
+    let (mut sky, mut surfaces) = (0, 0u32);
     let mut lit = [0u32; LIT_BITS];
     let samples = scene.settings.samples_per_pixel.max(1);
     for s in 0..samples {
         let (direction, mut sampler) = keyed_camera_ray(scene, key, x, y, s);
-        let seen =
-            add_radiance(scene, scene.camera.origin, direction, &mut sampler, rays, &mut sum);
+        let origin = scene.camera.origin;
+        let seen = add_radiance(scene, origin, direction, &mut sampler, rays, &mut sum, &mut white);
         sky += u32::from(seen.sky);
+        surfaces += u32::from(seen.surface);
         let mut bits = seen.lit_by;
         while bits != 0 {
             lit[bits.trailing_zeros() as usize] += 1;
@@ -94,84 +124,125 @@ fn pixel_sum(scene: &PreparedScene, x: u32, y: u32, rays: &mut u64) -> (Spectrum
         }
     }
     let lit_by = (0..LIT_BITS).filter(|&k| 2 * lit[k] > samples).fold(0, |m, k| m | 1 << k);
-    (sum, sky, lit_by)
+    if surfaces > 0 {
+        white *= 1.0 / surfaces as f32;
+    }
+    PixelSum { radiance: sum, sky, lit_by, white }
 }
 
 /// [`pixel`], counting the rays traced.
 pub fn pixel_counted(scene: &PreparedScene, x: u32, y: u32, rays: &mut u64) -> Spectrum {
-    pixel_sum(scene, x, y, rays).0 * (1.0 / scene.settings.samples_per_pixel.max(1) as f32)
+    pixel_sum(scene, x, y, rays).radiance * (1.0 / scene.settings.samples_per_pixel.max(1) as f32)
+}
+
+/// The pixels of one row of a tile, or of a whole tile once the rows are joined.
+#[derive(Default)]
+struct Pixels {
+    xyz: Vec<[f32; 3]>,
+    spectra: Option<Vec<Spectrum>>,
+    sky: Option<Vec<f32>>,
+    lit_by: Option<Vec<u32>>,
+    white: Option<Vec<[f32; 4]>>,
+    rays: u64,
+}
+
+impl Pixels {
+    /// Room for `n` pixels, with the layers asked for.
+    fn with_capacity(n: usize, spectral: bool, sky: bool, lit: bool, white: bool) -> Self {
+        fn layer<T>(on: bool, n: usize) -> Option<Vec<T>> {
+            on.then(|| Vec::with_capacity(n))
+        }
+        Pixels {
+            xyz: Vec::with_capacity(n),
+            spectra: layer(spectral, n),
+            sky: layer(sky, n),
+            lit_by: layer(lit, n),
+            white: layer(white, n),
+            rays: 0,
+        }
+    }
+
+    /// A pixel from its samples' sum (`mean` = 1 / samples).
+    fn push(&mut self, sum: &PixelSum, mean: f32) {
+        // The film is linear: the XYZ of the sum, scaled, is the XYZ of the mean.
+        self.xyz.push(film_xyz(&sum.radiance).map(|v| v * mean));
+        if let Some(s) = &mut self.spectra {
+            s.push(sum.radiance * mean);
+        }
+        if let Some(s) = &mut self.sky {
+            s.push(sum.sky as f32 * mean);
+        }
+        if let Some(l) = &mut self.lit_by {
+            l.push(sum.lit_by);
+        }
+        if let Some(w) = &mut self.white {
+            w.push(white_of(&sum.white));
+        }
+    }
+
+    /// `row` appended.
+    fn extend(&mut self, row: Pixels) {
+        fn join<T>(all: &mut Option<Vec<T>>, row: Option<Vec<T>>) {
+            if let (Some(all), Some(row)) = (all, row) {
+                all.extend(row);
+            }
+        }
+        self.xyz.extend(row.xyz);
+        join(&mut self.spectra, row.spectra);
+        join(&mut self.sky, row.sky);
+        join(&mut self.lit_by, row.lit_by);
+        join(&mut self.white, row.white);
+        self.rays += row.rays;
+    }
 }
 
 /// Renders `rect`: absolute XYZ per pixel, and the spectral radiance too when `spectral` is set
 /// (kept only then: a row of spectra is 81 times the size of its XYZ).
 pub fn render_tile(scene: &PreparedScene, rect: Rect, spectral: bool) -> TileResult {
-    type Row = (Vec<[f32; 3]>, Option<Vec<Spectrum>>, Option<Vec<f32>>, Option<Vec<u32>>, u64);
-    // A grid's sensors see no sky and have no frameworks of illumination (`Plan::new`).
-    let has_sky = scene.has_visible_sources() && !scene.settings.grids;
-    let has_lights = !scene.lights.is_empty() && !scene.settings.grids;
-    let rows: Vec<Row> = (rect.y..rect.y + rect.height)
+    // A grid's sensors see no sky, have no frameworks of illumination and no white (`Plan::new`).
+    let image = !scene.settings.grids;
+    let has_sky = scene.has_visible_sources() && image;
+    let has_lights = !scene.lights.is_empty() && image;
+    let layers = |n| Pixels::with_capacity(n, spectral, has_sky, has_lights, image);
+    let mean = 1.0 / scene.settings.samples_per_pixel.max(1) as f32;
+    let rows: Vec<Pixels> = (rect.y..rect.y + rect.height)
         .into_par_iter()
         .map(|y| {
-            let mut rays = 0;
-            let width = rect.width as usize;
-            let mut xyz = Vec::with_capacity(width);
-            let mut spectra = spectral.then(|| Vec::with_capacity(width));
-            let mut sky = has_sky.then(|| Vec::with_capacity(width));
-            let mut lit = has_lights.then(|| Vec::with_capacity(width));
-            let mean = 1.0 / scene.settings.samples_per_pixel.max(1) as f32;
-            // A grid's tile is two rows of sensors, each costly: its sensors run in parallel.
-            let sums: Vec<(Spectrum, u32, u32, u64)> = if scene.settings.grids {
-                (rect.x..rect.x + rect.width)
+            let mut row = layers(rect.width as usize);
+            let xs = rect.x..rect.x + rect.width;
+            if scene.settings.grids {
+                // A grid's tile is two rows of sensors, each costly: its sensors run in parallel.
+                let sums: Vec<(PixelSum, u64)> = xs
                     .into_par_iter()
                     .map(|x| {
                         let mut rays = 0;
-                        let (sum, sky, lit) = pixel_sum(scene, x, y, &mut rays);
-                        (sum, sky, lit, rays)
+                        (pixel_sum(scene, x, y, &mut rays), rays)
                     })
-                    .collect()
+                    .collect();
+                for (sum, rays) in &sums {
+                    row.rays += rays;
+                    row.push(sum, mean);
+                }
             } else {
-                Vec::new()
-            };
-            for x in rect.x..rect.x + rect.width {
-                // The film is linear: the XYZ of the sum, scaled, is the XYZ of the mean.
-                let (sum, saw_sky, lit_by) = match sums.get((x - rect.x) as usize) {
-                    Some(&(sum, sky, lit, sensor_rays)) => {
-                        rays += sensor_rays;
-                        (sum, sky, lit)
-                    }
-                    None => pixel_sum(scene, x, y, &mut rays),
-                };
-                xyz.push(film_xyz(&sum).map(|v| v * mean));
-                if let Some(s) = &mut spectra {
-                    s.push(sum * mean);
-                }
-                if let Some(s) = &mut sky {
-                    s.push(saw_sky as f32 * mean);
-                }
-                if let Some(l) = &mut lit {
-                    l.push(lit_by);
+                for x in xs {
+                    let sum = pixel_sum(scene, x, y, &mut row.rays);
+                    row.push(&sum, mean);
                 }
             }
-            (xyz, spectra, sky, lit, rays)
+            row
         })
         .collect();
-    let rays = rows.iter().map(|r| r.4).sum();
-    let pixels = rect.width as usize * rect.height as usize;
-    let mut xyz = Vec::with_capacity(pixels);
-    let mut spectra = spectral.then(|| Vec::with_capacity(pixels));
-    let mut sky = has_sky.then(|| Vec::with_capacity(pixels));
-    let mut lit_by = has_lights.then(|| Vec::with_capacity(pixels));
-    for (row_xyz, row_spectra, row_sky, row_lit, _) in rows {
-        xyz.extend(row_xyz);
-        if let (Some(all), Some(row)) = (&mut spectra, row_spectra) {
-            all.extend(row);
-        }
-        if let (Some(all), Some(row)) = (&mut sky, row_sky) {
-            all.extend(row);
-        }
-        if let (Some(all), Some(row)) = (&mut lit_by, row_lit) {
-            all.extend(row);
-        }
+    let mut all = layers(rect.width as usize * rect.height as usize);
+    for row in rows {
+        all.extend(row);
     }
-    TileResult { rect, xyz, spectral: spectra, sky, lit_by, rays }
+    TileResult {
+        rect,
+        xyz: all.xyz,
+        spectral: all.spectra,
+        sky: all.sky,
+        lit_by: all.lit_by,
+        white: all.white,
+        rays: all.rays,
+    }
 }

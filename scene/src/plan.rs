@@ -65,6 +65,12 @@ pub struct Plan {
     /// before it existed: their images are adapted as one framework.
     #[serde(default)]
     pub lit: bool,
+    /// Whether the tiles carry each pixel's adapting white: what a perfect white diffuser at
+    /// its surface would send back under all the scene's light (X, Y, Z and the scotopic
+    /// luminance), the light the seen image adapts to. Every image has it; a grid has none.
+    /// Absent in plans stored before it existed: their images are seen by the Retinex alone.
+    #[serde(default)]
+    pub white: bool,
     /// The tile edge in pixels; the tiles follow from it and the image size ([`Plan::tile`]).
     pub tile: u32,
     /// The "image" is the scene's calculation grids: one column per sensor point (all the
@@ -185,6 +191,7 @@ impl Plan {
                     .lights
                     .iter()
                     .any(|l| !matches!(l, crate::load::ResolvedLight::Sky { .. })),
+            white: !options.grids,
             tile: options.tile.unwrap_or_else(|| match options.grids {
                 // A strip two sensors high: about 48 tiles along it.
                 true => width.div_ceil(48).next_multiple_of(16).clamp(16, 4096),

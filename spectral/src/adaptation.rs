@@ -22,6 +22,9 @@ pub enum ConeSpace {
     Bradford,
     /// CAT02, the transform of CIECAM02 (CIE 159:2004).
     Cat02,
+    /// CAT16, the transform of CAM16 (Li et al., "Comprehensive color solutions: CAM16, CAT16,
+    /// and CAM16-UCS", Color Research & Application 42(6), 2017).
+    Cat16,
 }
 
 impl ConeSpace {
@@ -37,6 +40,11 @@ impl ConeSpace {
             ConeSpace::Cat02 => {
                 [[0.7328, 0.4296, -0.1624], [-0.7036, 1.6975, 0.0061], [0.0030, 0.0136, 0.9834]]
             }
+            ConeSpace::Cat16 => [
+                [0.401288, 0.650173, -0.051461],
+                [-0.250268, 1.204414, 0.045854],
+                [-0.002079, 0.048952, 0.953127],
+            ],
         };
         DMat3::from_cols_array_2d(&rows).transpose()
     }
@@ -48,6 +56,7 @@ impl fmt::Display for ConeSpace {
             ConeSpace::VonKries => "von-kries",
             ConeSpace::Bradford => "bradford",
             ConeSpace::Cat02 => "cat02",
+            ConeSpace::Cat16 => "cat16",
         })
     }
 }
@@ -59,9 +68,10 @@ impl FromStr for ConeSpace {
             "von-kries" | "vonkries" | "hpe" => Ok(ConeSpace::VonKries),
             "bradford" => Ok(ConeSpace::Bradford),
             "cat02" => Ok(ConeSpace::Cat02),
-            _ => {
-                Err(format!("unknown chromatic adaptation `{s}`; use von-kries, bradford or cat02"))
-            }
+            "cat16" => Ok(ConeSpace::Cat16),
+            _ => Err(format!(
+                "unknown chromatic adaptation `{s}`; use von-kries, bradford, cat02 or cat16"
+            )),
         }
     }
 }
@@ -97,7 +107,8 @@ mod tests {
 
     #[test]
     fn white_goes_to_white() {
-        for space in [ConeSpace::VonKries, ConeSpace::Bradford, ConeSpace::Cat02] {
+        for space in [ConeSpace::VonKries, ConeSpace::Bradford, ConeSpace::Cat02, ConeSpace::Cat16]
+        {
             let w = adapt(D65, D65, D50, space);
             assert!(
                 (w.x - D50.x).abs() < 1e-12

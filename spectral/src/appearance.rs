@@ -45,6 +45,7 @@ impl fmt::Display for ChannelSpace {
             ChannelSpace::Lms(ConeSpace::VonKries) => f.write_str("lms-hpe"),
             ChannelSpace::Lms(ConeSpace::Cat02) => f.write_str("lms-cat02"),
             ChannelSpace::Lms(ConeSpace::Bradford) => f.write_str("lms-bradford"),
+            ChannelSpace::Lms(ConeSpace::Cat16) => f.write_str("lms-cat16"),
             ChannelSpace::Rgb(space) => write!(f, "rgb-{space}"),
         }
     }
@@ -57,12 +58,13 @@ impl FromStr for ChannelSpace {
             "lms" | "lms-hpe" => Ok(ChannelSpace::Lms(ConeSpace::VonKries)),
             "lms-cat02" => Ok(ChannelSpace::Lms(ConeSpace::Cat02)),
             "lms-bradford" => Ok(ChannelSpace::Lms(ConeSpace::Bradford)),
+            "lms-cat16" => Ok(ChannelSpace::Lms(ConeSpace::Cat16)),
             "rgb" | "rgb-srgb" => Ok(ChannelSpace::Rgb(RgbSpace::Srgb)),
             "rgb-p3" => Ok(ChannelSpace::Rgb(RgbSpace::DisplayP3)),
             "rgb-rec2020" => Ok(ChannelSpace::Rgb(RgbSpace::Rec2020)),
             _ => Err(format!(
                 "unknown Retinex channel space `{s}`; use lms (= lms-hpe), lms-cat02, \
-                 lms-bradford, rgb (= rgb-srgb), rgb-p3 or rgb-rec2020"
+                 lms-cat16, lms-bradford, rgb (= rgb-srgb), rgb-p3 or rgb-rec2020"
             )),
         }
     }

@@ -15,6 +15,7 @@ use std::sync::LazyLock;
 const CMF_1931: &str = include_str!("../../data/cie/cie1931_2deg_xyz_cmf_5nm_380-780.csv");
 const CMF_1964: &str = include_str!("../../data/cie/cie1964_10deg_xyz_cmf_5nm_380-780.csv");
 const PHOTOPIC_V: &str = include_str!("../../data/cie/cie1924_photopic_V_5nm_380-780.csv");
+const SCOTOPIC_V: &str = include_str!("../../data/cie/cie1951_scotopic_Vprime_5nm_380-780.csv");
 const ILLUMINANTS: &str =
     include_str!("../../data/cie/cie_illuminants_A_B_C_D50_D55_D65_D75_E_5nm_380-780.csv");
 const FLUORESCENT: &str = include_str!("../../data/cie/cie_fluorescent_FL1-FL12_5nm_380-780.csv");
@@ -87,6 +88,7 @@ pub(crate) struct Tables {
     pub d65: Spectrum,
     pub d75: Spectrum,
     pub e: Spectrum,
+    pub scotopic_v: Spectrum,
     pub f: [Spectrum; 12],
     pub s0: Spectrum,
     pub s1: Spectrum,
@@ -109,6 +111,7 @@ pub(crate) static TABLES: LazyLock<Tables> = LazyLock::new(|| {
         cmf_1931: cmf("CIE 1931 2°", CMF_1931),
         cmf_1964: cmf("CIE 1964 10°", CMF_1964),
         photopic_v: Table::parse("V(λ)", PHOTOPIC_V).column("photopic_V"),
+        scotopic_v: Table::parse("V′(λ)", SCOTOPIC_V).column("scotopic_Vprime"),
         a: illuminant("A"),
         b: illuminant("B"),
         c: illuminant("C"),
@@ -130,10 +133,32 @@ pub fn photopic_v() -> &'static Spectrum {
     &TABLES.photopic_v
 }
 
+/// The CIE 1951 scotopic luminous efficiency function V′(λ) (CIE 15:2004 Table T.2), the
+/// rods' spectral sensitivity.
+pub fn scotopic_v() -> &'static Spectrum {
+    &TABLES.scotopic_v
+}
+
+/// K′_m, the maximum scotopic luminous efficacy (lm/W): 683 / V′(555 nm), so that 1 W at
+/// 555 nm is 683 lm photopic and scotopic alike (the convention of CIE 191:2010, whose
+/// V′(λ₀) = 683/1699; the table's V′(555 nm) = 0.402 gives 1699).
+pub fn scotopic_efficacy_lm_per_w() -> f64 {
+    let at_555 = TABLES.scotopic_v.at_nm(555.0).expect("555 nm is on the grid");
+    crate::colorimetry::K_M_LM_PER_W / at_555
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::grid::wavelength_nm;
+
+    #[test]
+    fn scotopic_v_peaks_at_507_nm_and_gives_k_m_prime_1699() {
+        let v = scotopic_v();
+        let peak = (0..crate::grid::BANDS).max_by(|&a, &b| v[a].total_cmp(&v[b])).unwrap();
+        assert_eq!(wavelength_nm(peak), 505.0, "the 5 nm sample nearest the 507 nm peak");
+        assert!((scotopic_efficacy_lm_per_w() - 1699.0).abs() < 1.0);
+    }
 
     #[test]
     fn tables_load_with_known_values() {

@@ -22,6 +22,7 @@
 //! | [`keyed_random`] | random numbers that are pure functions of a key |
 //! | [`retinex`] | the Marini–Rizzi Brownian-path Retinex |
 //! | [`appearance`] | the Retinex in cone (LMS) or RGB space, from XYZ to what an observer sees |
+//! | [`seen`] | what a person sees: the render adapted to the light the renderer measured there |
 //! | [`display`] | XYZ to display code values: exposure, tone curve, gamut mapping, encoding |
 //! | [`tone`] | the display's tone curve: the reference white at 0.7, a linear part, a shoulder |
 
@@ -43,6 +44,7 @@ pub mod planck;
 pub mod retinex;
 pub mod rgb_space;
 pub mod rgb_upsampling;
+pub mod seen;
 pub mod spectrum;
 pub mod tabulated;
 pub mod tone;

@@ -1,9 +1,11 @@
-//! The Retinex adds nothing of its own: a flat noisy field stays flat (no pattern of the paths,
-//! no loss of lightness), and a rotated image gives the rotated result.
+//! The Retinex, and the seen image that adapts to the known light, add nothing of their own: a
+//! flat noisy field stays flat (no pattern of the paths, no loss of lightness), and a rotated
+//! image gives the rotated result.
 
 use restauro_spectral::appearance::{ChannelSpace, d65_white, retinex_xyz};
 use restauro_spectral::keyed_random::KeyedRng;
 use restauro_spectral::retinex::RetinexParams;
+use restauro_spectral::seen::{SeenParams, seen};
 
 /// A standard normal draw (the sum of twelve uniforms, minus six).
 fn normal(rng: &mut KeyedRng) -> f32 {
@@ -157,4 +159,46 @@ fn a_rotated_image_gives_the_rotated_result() {
     let rotation = mean_log_difference(&turned_after, &turned_before);
     eprintln!("mean |Δ log| between seeds {noise:.4}, between rotated runs {rotation:.4}");
     assert!(rotation < 1.3 * noise, "rotation {rotation} against noise {noise}");
+}
+
+/// The seen image of `img` under a uniform D65 light whose white is 100 cd/m².
+fn seen_under_d65(img: &[[f32; 3]], n: usize, seed: u64, paths: u32) -> Vec<[f32; 3]> {
+    let w = d65_white();
+    let white = [w.x as f32 * 100.0, 100.0, w.z as f32 * 100.0, 250.0];
+    let params = SeenParams {
+        retinex: RetinexParams { seed, paths, ..Default::default() },
+        ..Default::default()
+    };
+    seen(img, &vec![white; img.len()], (n, n), &params, &|_, _| {}).unwrap().0
+}
+
+/// Adapted to the known light, a flat grey field of 40 % with 3 % noise is seen at its own
+/// lightness (0.4 of white, within 1 %) — not white, as the Retinex alone sees it — with no
+/// pattern of the paths.
+#[test]
+fn a_flat_noisy_field_is_seen_at_its_own_lightness() {
+    let n = 128;
+    let input = noisy_grey(n, n, 0.03, 1);
+    let out = seen_under_d65(&input, n, 3, 20);
+    let y_in: Vec<f64> = input.iter().map(|p| f64::from(p[1])).collect();
+    let y_out: Vec<f64> = out.iter().map(|p| f64::from(p[1])).collect();
+    let mean = y_out.iter().sum::<f64>() / y_out.len() as f64;
+    eprintln!("mean seen lightness of a 40 % field with 3 % noise: {mean:.4}");
+    assert!((mean / 0.4 - 1.0).abs() < 0.01, "mean lightness {mean}");
+    let (before, after) = (peak_to_median(&y_in, n), peak_to_median(&y_out, n));
+    eprintln!("peak / median of the 4×4-block periodogram: input {before:.2}, output {after:.2}");
+    assert!(after < 1.5 * before.max(1.8), "input {before:.2}, output {after:.2}");
+}
+
+#[test]
+fn the_seen_image_of_a_rotated_image_is_the_rotated_seen_image() {
+    let n = 96;
+    let img = mondrian(n, 9);
+    let turned_after = rotate(&seen_under_d65(&img, n, 1, 40), n);
+    let turned_before = seen_under_d65(&rotate(&img, n), n, 1, 40);
+    let noise =
+        mean_log_difference(&seen_under_d65(&img, n, 1, 40), &seen_under_d65(&img, n, 2, 40));
+    let rotation = mean_log_difference(&turned_after, &turned_before);
+    eprintln!("seen: mean |Δ log| between seeds {noise:.4}, between rotated runs {rotation:.4}");
+    assert!(rotation < 1.3 * noise.max(1e-4), "rotation {rotation} against noise {noise}");
 }

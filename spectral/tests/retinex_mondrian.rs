@@ -1,4 +1,5 @@
-//! What the paper claims for its Retinex, measured on a spectral Mondrian rendered for the test:
+//! What the paper claims for its Retinex, and the seen image that adapts to the known light,
+//! measured on a spectral Mondrian rendered for the test:
 //! patches of the 24 published ColorChecker reflectances (Ohta) and of 16 shipped stone
 //! spectra, under a smooth, uneven illumination, rendered with CIE A, B and D65.
 //!
@@ -11,6 +12,7 @@ use restauro_spectral::appearance::{ChannelSpace, d65_white, retinex_xyz, white_
 use restauro_spectral::ciede2000::ciede2000;
 use restauro_spectral::colorimetry::{Observer, relative_xyz};
 use restauro_spectral::retinex::RetinexParams;
+use restauro_spectral::seen::{SeenParams, seen};
 use restauro_spectral::{Illuminant, Lab, Spectrum, Xyz, library};
 
 const W: usize = 240;
@@ -196,4 +198,84 @@ fn the_white_patch_stays_white_and_threads_do_not_matter() {
         assert!((f64::from(p[0]) - white.x).abs() < 1e-4, "pixel {i}: {p:?}");
         assert!((f64::from(p[2]) - white.z).abs() < 1e-4, "pixel {i}: {p:?}");
     }
+}
+
+/// The Mondrian at a white of `level_cd_m2`, with its adapting white (the light on each
+/// pixel: the illuminant's white times the uneven illumination), as a render carries it.
+fn lit_at(
+    illuminant: &str,
+    patches: &[Spectrum],
+    uneven: bool,
+    level_cd_m2: f32,
+) -> (Vec<[f32; 3]>, Vec<[f32; 4]>) {
+    let spd = illuminant.parse::<Illuminant>().unwrap().spd().unwrap();
+    let white = relative_xyz(&Spectrum::ONE, &spd, Observer::Cie1931TwoDegree).scale(0.01);
+    let (_, light) = layout();
+    let img = render_lit(illuminant, patches, uneven)
+        .into_iter()
+        .map(|p| p.map(|v| v * level_cd_m2))
+        .collect();
+    let whites = light
+        .iter()
+        .map(|&g| {
+            let g = if uneven { g } else { 1.0 } * level_cd_m2;
+            // The scotopic part only matters below 5 cd/m².
+            [white.x as f32 * g, white.y as f32 * g, white.z as f32 * g, 2.0 * g]
+        })
+        .collect();
+    (img, whites)
+}
+
+fn seen_of(img: &[[f32; 3]], white: &[[f32; 4]], seed: u64) -> Vec<[f32; 3]> {
+    let params =
+        SeenParams { retinex: RetinexParams { seed, ..Default::default() }, ..Default::default() };
+    seen(img, white, (W, H), &params, &|_, _| {}).unwrap().0
+}
+
+/// Adapted to the known light, the Mondrian under B is seen as under D65 (a fifth of the
+/// camera's difference at most, as the Retinex), and under A with the warmth a person keeps
+/// under a tungsten light in a bright room (the blue bias: D ≈ 0.78 at 1000 cd/m²) — a third
+/// of the camera's difference at most, and warmer (b*) than under D65.
+#[test]
+fn the_seen_image_makes_the_mondrian_nearly_illuminant_invariant() {
+    let patches = all_patches();
+    let level = 1000.0;
+    let (d65, d65_white) = lit_at("D65", &patches, true, level);
+    let seen_d65 = seen_of(&d65, &d65_white, 2004);
+    let d65_relative = render("D65", &patches);
+    for (light, bound) in [("B", 0.2), ("A", 0.35)] {
+        let (img, white) = lit_at(light, &patches, true, level);
+        let uncorrected = mean_delta_e(&render(light, &patches), &d65_relative, false);
+        let seen_img = seen_of(&img, &white, 2004);
+        let adapted = mean_delta_e(&seen_img, &seen_d65, false);
+        let mean_b =
+            |img: &[[f32; 3]]| img.iter().map(|&p| lab(p, 1.0).b).sum::<f64>() / img.len() as f64;
+        eprintln!(
+            "{light} against D65, mean ΔE00: uncorrected {uncorrected:.2}, seen {adapted:.2} \
+             ({:.0} % lower); mean b* {:.2} against {:.2} under D65",
+            100.0 * (1.0 - adapted / uncorrected),
+            mean_b(&seen_img),
+            mean_b(&seen_d65),
+        );
+        assert!(adapted <= bound * uncorrected, "{light}: {adapted:.2} vs {uncorrected:.2}");
+        if light == "A" {
+            assert!(mean_b(&seen_img) > mean_b(&seen_d65) + 1.0, "a tungsten light stays warm");
+        }
+    }
+}
+
+/// Under D65 the seen image is the image, relative to its white: chroma within ΔE00 1 (what
+/// differs is lightness, where the uneven light is partly discounted, and CIELAB's chroma
+/// follows lightness), and the same whatever the number of threads.
+#[test]
+fn the_seen_image_leaves_a_d65_scene_unchanged_and_threads_do_not_matter() {
+    let patches = all_patches();
+    let (d65, white) = lit_at("D65", &patches, true, 1000.0);
+    let pool = |t| rayon::ThreadPoolBuilder::new().num_threads(t).build().unwrap();
+    let one = pool(1).install(|| seen_of(&d65, &white, 7));
+    let two = pool(2).install(|| seen_of(&d65, &white, 7));
+    assert!(one == two, "the output depends on the number of threads");
+    let chroma = mean_delta_e(&one, &d65, true);
+    eprintln!("D65: the seen image against the D65 image, chroma only, mean ΔE00 {chroma:.3}");
+    assert!(chroma < 1.0, "{chroma}");
 }

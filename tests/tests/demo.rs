@@ -166,14 +166,14 @@ fn the_quick_demo_writes_what_it_lists_and_the_retinex_adapts() {
         let (before, after) = (ciede2000(reference, unfiltered), ciede2000(reference, retinex));
         assert!(
             after < before,
-            "{} under CIE A: ΔE00 to the D65 render {after:.2} after the Retinex, {before:.2} without",
+            "{} under CIE A: ΔE00 to the D65 render {after:.2} as seen, {before:.2} as rendered",
             s["label"]
         );
         checked += 1;
     }
     assert_eq!(checked, 4);
 
-    // "After" is measured against the D65 render as rendered and as seen (its Retinex output),
+    // "After" is measured against the D65 render as rendered and as seen (its seen image),
     // in both forms of the report. Under D65 the seen square is compared with itself: 0.
     assert!(markdown.contains("| after: ΔE00 to D65 rendered |"), "{markdown}");
     assert!(markdown.contains("| after: ΔE00 to D65 seen |"), "{markdown}");

@@ -582,6 +582,7 @@ fn exr_image(width: usize, height: usize) -> XyzImage {
         pixels,
         emitter: Some((0..width * height).map(|i| i % 5 == 0).collect()),
         lit_by: None,
+        white: None,
     }
 }
 

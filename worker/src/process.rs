@@ -423,6 +423,7 @@ impl Worker {
         let extras = TileExtras {
             sky: tile.sky.as_deref().filter(|_| layout.sky),
             lit_by: tile.lit_by.as_deref().filter(|_| layout.lit),
+            white: tile.white.as_deref().filter(|_| layout.white),
         };
         let data = encode_tile(
             &tile.xyz,

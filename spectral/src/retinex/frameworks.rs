@@ -40,21 +40,27 @@ pub const MIN_SHARE: f64 = 0.02;
 const PAIR_DISTANCE_PX: usize = 3;
 
 /// The frameworks of an image.
-pub(super) struct Frameworks {
-    /// Each pixel's framework, 0..count (0 is the largest); light sources and black pixels
-    /// are given 0.
+pub(crate) struct Frameworks {
+    /// Each pixel's framework, 0..count (0 is the largest); light sources, black pixels and
+    /// pixels outside every framework's area (a line of shadow) are given 0.
     pub labels: Vec<u8>,
+    /// Whether each pixel lies in its framework's area (`labels` is its framework, not a
+    /// default). With one framework, every surface pixel that is not black.
+    pub solid: Vec<bool>,
     pub count: usize,
-    /// Per framework and channel, the natural log of (the light of the framework with the most
-    /// light / its own): 0 for that one, and for those that touch no other.
-    pub light_ratio: Vec<[f64; 3]>,
 }
 
 impl Frameworks {
-    /// `n` pixels in one framework.
-    pub(super) fn one(n: usize) -> Self {
-        Frameworks { labels: vec![0; n], count: 1, light_ratio: vec![[0.0; 3]] }
+    /// One framework: every pixel that `counted` marks lies in it.
+    pub(crate) fn one(counted: Vec<bool>) -> Self {
+        Frameworks { labels: vec![0; counted.len()], solid: counted, count: 1 }
     }
+}
+
+/// The pixels that can belong to a framework: surfaces (not light sources) that are not black
+/// (a camera ray that met nothing, with no sky to see, is lit by nothing, but no framework).
+pub(crate) fn counted(emitters: &[bool], pixels: &[[f32; 3]]) -> Vec<bool> {
+    emitters.iter().zip(pixels).map(|(&e, p)| !e && *p != [0.0; 3]).collect()
 }
 
 /// The half-width of the square that a framework's area must hold: 2 px, and more for large
@@ -98,18 +104,14 @@ fn solid(keys: &[u32], counted: &[bool], width: usize, height: usize, r: usize) 
         .collect()
 }
 
-/// The frameworks of an image of `pixels` (`width` × `height`) with `keys` per pixel.
-pub(super) fn frameworks(
+/// The frameworks of an image (`width` × `height`) with `keys` per pixel, among the pixels
+/// `counted` marks (see [`counted`]).
+pub(crate) fn frameworks(
     keys: &[u32],
-    emitters: &[bool],
-    pixels: &[[f32; 3]],
+    counted: Vec<bool>,
     (width, height): (usize, usize),
 ) -> Frameworks {
     let n = keys.len();
-    let one = || Frameworks::one(n);
-    // Black pixels (a camera ray that met nothing, with no sky to see) are lit by nothing,
-    // but they are no framework.
-    let counted: Vec<bool> = (0..n).map(|p| !emitters[p] && pixels[p] != [0.0; 3]).collect();
     let solid = solid(keys, &counted, width, height, solid_radius(width, height));
     let mut sizes: HashMap<u32, usize> = HashMap::new();
     for p in (0..n).filter(|&p| solid[p]) {
@@ -128,7 +130,7 @@ pub(super) fn frameworks(
         .map(|(_, &(key, _))| key)
         .collect();
     if kept.len() <= 1 {
-        return one();
+        return Frameworks::one(counted);
     }
     // The kept are in order of size, so the first of the nearest is the largest.
     let nearest = |key: u32| -> u8 {
@@ -141,19 +143,23 @@ pub(super) fn frameworks(
     };
     let of_key: HashMap<u32, u8> = by_size.iter().map(|&(key, _)| (key, nearest(key))).collect();
     let labels: Vec<u8> = (0..n).map(|p| if solid[p] { of_key[&keys[p]] } else { 0 }).collect();
-    let light_ratio = light_ratios(pixels, &labels, &solid, kept.len(), width);
-    Frameworks { labels, count: kept.len(), light_ratio }
+    Frameworks { labels, solid, count: kept.len() }
 }
 
-/// Per framework, the log ratio of the brightest framework's light to its own (see the module
-/// comment), from the pairs of pixels across the edges between frameworks.
-fn light_ratios(
+/// Per framework and channel, the natural log of (the light of the framework with the most
+/// light / its own): 0 for that one, and for those that touch no other. From the pairs of
+/// pixels across the edges between frameworks (see the module comment): for an image whose
+/// lights are not known.
+pub(crate) fn light_ratios(
     pixels: &[[f32; 3]],
-    labels: &[u8],
-    solid: &[bool],
-    count: usize,
+    frameworks: &Frameworks,
     width: usize,
 ) -> Vec<[f64; 3]> {
+    let Frameworks { labels, solid, count, .. } = frameworks;
+    let count = *count;
+    if count == 1 {
+        return vec![[0.0; 3]];
+    }
     let n = pixels.len();
     let ln = |p: usize| pixels[p].map(|v| f64::from(v).ln());
     // Per ordered pair of frameworks (f, g), the log ratios image(f-side) / image(g-side).
@@ -222,7 +228,7 @@ mod tests {
     #[test]
     fn one_key_is_one_framework() {
         let (keys, pixels) = grey(20, 10, |_, _| 5);
-        let f = frameworks(&keys, &[false; 200], &pixels, (20, 10));
+        let f = frameworks(&keys, counted(&[false; 200], &pixels), (20, 10));
         assert_eq!((f.count, f.labels.iter().all(|&l| l == 0)), (1, true));
     }
 
@@ -232,7 +238,7 @@ mod tests {
         let (keys, pixels) = grey(40, 30, |x, y| {
             u32::from(!(x == 5 || x == 6 || ((20..30).contains(&x) && (10..20).contains(&y))))
         });
-        let f = frameworks(&keys, &[false; 1200], &pixels, (40, 30));
+        let f = frameworks(&keys, counted(&[false; 1200], &pixels), (40, 30));
         assert_eq!(f.count, 2);
         let at = |x: usize, y: usize| f.labels[y * 40 + x];
         assert_eq!(at(5, 3), at(0, 0), "the joint is seen within the sunlit framework");
@@ -251,7 +257,7 @@ mod tests {
             (x, _) if x < 60 => 0b11,
             _ => 0b10,
         });
-        let f = frameworks(&keys, &vec![false; w * h], &pixels, (w, h));
+        let f = frameworks(&keys, counted(&vec![false; w * h], &pixels), (w, h));
         assert_eq!(f.count, 2);
         let at = |x: usize, y: usize| f.labels[y * w + x];
         // 0b01 differs from 0b11 in one light and from 0b10 in two; 0b00 from 0b10 in one.
@@ -271,7 +277,7 @@ mod tests {
                 *pixel = [0.0; 3];
             }
         }
-        let f = frameworks(&keys, &emitters, &pixels, (w, h));
+        let f = frameworks(&keys, counted(&emitters, &pixels), (w, h));
         assert_eq!(f.count, 2);
         assert_ne!(f.labels[20 * w + 5], f.labels[20 * w + 22]);
         assert_eq!(f.labels[20 * w + 35], 0, "the void belongs to none: 0");
@@ -280,7 +286,7 @@ mod tests {
     #[test]
     fn at_most_eight_frameworks() {
         let (keys, pixels) = grey(120, 100, |x, _| (x / 10) as u32);
-        let f = frameworks(&keys, &vec![false; 12_000], &pixels, (120, 100));
+        let f = frameworks(&keys, counted(&vec![false; 12_000], &pixels), (120, 100));
         assert_eq!(f.count, MAX_FRAMEWORKS);
         assert!(f.labels.iter().all(|&l| usize::from(l) < MAX_FRAMEWORKS));
     }
@@ -307,10 +313,11 @@ mod tests {
                 })
             })
             .collect();
-        let f = frameworks(&keys, &vec![false; w * h], &pixels, (w, h));
+        let f = frameworks(&keys, counted(&vec![false; w * h], &pixels), (w, h));
         assert_eq!(f.count, 2);
-        let shadowed = f.light_ratio[usize::from(f.labels[30 * w + 50])];
-        let lit = f.light_ratio[usize::from(f.labels[30 * w + 5])];
+        let ratios = light_ratios(&pixels, &f, w);
+        let shadowed = ratios[usize::from(f.labels[30 * w + 50])];
+        let lit = ratios[usize::from(f.labels[30 * w + 5])];
         for c in 0..3 {
             // log(E₀/E_shadow) − log(E₀/E_sun) = log(E_sun/E_shadow).
             let expect = -shadow[c].ln();

@@ -59,6 +59,7 @@ mod tiling;
 mod walk;
 mod white;
 
+pub(crate) use frameworks::{Frameworks, counted, frameworks as frameworks_of};
 pub use frameworks::{MAX_FRAMEWORKS, MIN_SHARE as MIN_FRAMEWORK_SHARE};
 
 use crate::error::{Error, Result};
@@ -66,6 +67,22 @@ use paths::{Walker, count};
 use rayon::prelude::*;
 use walk::{Turning, mean_square_distance};
 use white::{LOG_SCALE, white_image};
+
+/// Where a path's chain of ratios starts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Anchor {
+    /// The paper's: a path takes the pixel it starts from as white until it crosses something
+    /// brighter, so each pixel's white is the brightest area its paths found.
+    #[default]
+    Brightest,
+    /// The image is already relative to a known white (1 is white; the seen image divides the
+    /// render by the light that falls there, `crate::seen`): a path starts with its start's own
+    /// value as its lightness, s₀ = min(0, log I_start), and only an area brighter than white
+    /// resets it. Without thresholds or resets a pixel's lightness is then its value; the paths
+    /// still discount smooth gradients (below the threshold) and make an area above white the
+    /// white of what they cross after it.
+    Known,
+}
 
 /// What may be the white.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -93,6 +110,7 @@ pub struct RetinexParams {
     pub threshold: f32,
     pub seed: u64,
     pub white: WhiteReference,
+    pub anchor: Anchor,
     /// Pixels that show a light source (the sky, an emitter), `true`; the paths pass over them.
     pub emitters: Option<Vec<bool>>,
     /// Per pixel, a key of its framework of illumination: pixels with the same key are lit
@@ -135,6 +153,7 @@ impl Default for RetinexParams {
             threshold: 0.01,
             seed: 0,
             white: WhiteReference::Area,
+            anchor: Anchor::Brightest,
             emitters: None,
             frameworks: None,
             framework_weight: DEFAULT_FRAMEWORK_WEIGHT,
@@ -216,7 +235,12 @@ fn out_of_range(quantity: &'static str, value: f64, expected: &'static str) -> E
 }
 
 /// Validate the image and parameters.
-fn check(pixels: &[[f32; 3]], width: usize, height: usize, params: &RetinexParams) -> Result<()> {
+pub(crate) fn check(
+    pixels: &[[f32; 3]],
+    width: usize,
+    height: usize,
+    params: &RetinexParams,
+) -> Result<()> {
     let len = pixels.len();
     if width == 0 || height == 0 || width.checked_mul(height) != Some(len) {
         return Err(Error::Image {
@@ -323,9 +347,8 @@ fn lightness(
 /// framework's light to its own split into its mean over the channels r̄ and the rest, the
 /// rest applied whole (the colour of a framework's light is discounted) and r̄ with the weight
 /// w (its level counts half for a shadow at w = ½: log ℓ = log ℓ_image + (r − r̄) + w·r̄).
-fn framework_adaptation(frameworks: &frameworks::Frameworks, weight: f32) -> Vec<[f64; 3]> {
-    frameworks
-        .light_ratio
+fn framework_adaptation(light_ratio: &[[f64; 3]], weight: f32) -> Vec<[f64; 3]> {
+    light_ratio
         .iter()
         .map(|r| {
             let mean = (r[0] + r[1] + r[2]) / 3.0;
@@ -346,13 +369,6 @@ pub fn retinex(
 ) -> Result<(Vec<[f32; 3]>, RetinexStats)> {
     check(pixels, width, height, params)?;
     let clock = std::time::Instant::now();
-    let lap = |since: &mut f64| {
-        let now = clock.elapsed().as_secs_f64();
-        let lap = now - *since;
-        *since = now;
-        lap
-    };
-    let mut since = 0.0;
     let n = pixels.len();
     let no_emitters;
     let emitters = match &params.emitters {
@@ -362,15 +378,47 @@ pub fn retinex(
             &no_emitters
         }
     };
+    let counted = frameworks::counted(emitters, pixels);
     let frameworks = match &params.frameworks {
-        Some(keys) => frameworks::frameworks(keys, emitters, pixels, (width, height)),
-        None => frameworks::Frameworks::one(n),
+        Some(keys) => frameworks::frameworks(keys, counted, (width, height)),
+        None => Frameworks::one(counted),
     };
+    let framing = clock.elapsed().as_secs_f64();
+    let (out, mut stats) = run(pixels, (width, height), params, emitters, &frameworks, progress)?;
+    stats.seconds.cleaning += framing;
+    Ok((out, stats))
+}
+
+/// [`retinex`] of a checked image whose frameworks are found.
+pub(crate) fn run(
+    pixels: &[[f32; 3]],
+    (width, height): (usize, usize),
+    params: &RetinexParams,
+    emitters: &[bool],
+    frameworks: &Frameworks,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> Result<(Vec<[f32; 3]>, RetinexStats)> {
+    let clock = std::time::Instant::now();
+    let lap = |since: &mut f64| {
+        let now = clock.elapsed().as_secs_f64();
+        let lap = now - *since;
+        *since = now;
+        lap
+    };
+    let mut since = 0.0;
+    let n = pixels.len();
     let area = params.white == WhiteReference::Area;
     let white =
         white_image(pixels, emitters, (&frameworks.labels, frameworks.count), width, height, area);
+    let adaptation = match params.anchor {
+        Anchor::Brightest => framework_adaptation(
+            &frameworks::light_ratios(pixels, frameworks, width),
+            params.framework_weight,
+        ),
+        // The known white already holds each framework's light.
+        Anchor::Known => vec![[0.0; 3]; frameworks.count],
+    };
     let cleaning = lap(&mut since);
-    let adaptation = framework_adaptation(&frameworks, params.framework_weight);
     let (persistence, reach_length) = walk_for_reach(params.reach * diagonal(width, height));
     let length = params.length.unwrap_or(reach_length);
     let steps = length - 1;
@@ -384,6 +432,10 @@ pub fn retinex(
         height,
         turning: Turning::with_persistence(persistence),
         threshold: (params.threshold * LOG_SCALE).round() as i32,
+        // The logs are relative to the brightest cleaned value; a known start needs them
+        // absolute.
+        prior: (params.anchor == Anchor::Known)
+            .then(|| white.zero.map(|z| (z * f64::from(LOG_SCALE)).round() as i32)),
     };
     let samples_per_path = u64::from(steps - burn_in + 1);
     let shared_paths = (2 * u64::from(params.paths) * n as u64).div_ceil(samples_per_path);

@@ -57,6 +57,10 @@ pub(super) struct Walker<'a> {
     pub turning: Turning,
     /// The threshold in fixed point.
     pub threshold: i32,
+    /// With a known white (`Anchor::Known`): the fixed-point log that makes the logs absolute
+    /// (the logs are relative to the brightest cleaned value), per channel. A path then starts
+    /// with s = min(0, its first surface's absolute log): its start's own lightness.
+    pub prior: Option<[i32; 3]>,
 }
 
 /// The state of a path: per channel the running s, and the logs of the last surface crossed.
@@ -72,9 +76,9 @@ impl State {
         State { s: [0; 4], last: [0; 4], on_surface: false }
     }
 
-    /// One step onto a pixel with logs `to`.
+    /// One step onto a pixel with logs `to`; `prior` is the walker's (a known white's).
     #[inline]
-    fn step(&mut self, to: [i16; 4], threshold: i32) {
+    fn step(&mut self, to: [i16; 4], threshold: i32, prior: Option<[i32; 3]>) {
         if to[3] == EMITTER {
             return;
         }
@@ -87,6 +91,10 @@ impl State {
                 // A select, not a branch: whether a step crosses an edge is unpredictable.
                 let delta = if r.abs() > threshold { r } else { 0 };
                 self.s[c] = (self.s[c] + delta).min(0);
+            }
+        } else if let Some(prior) = prior {
+            for c in 0..3 {
+                self.s[c] = (i32::from(to[c]) + prior[c]).min(0);
             }
         }
         self.last = to;
@@ -147,7 +155,7 @@ impl Walker<'_> {
         };
         let mut states = [State::new(); K];
         for (state, &start) in states.iter_mut().zip(&starts) {
-            state.step(self.logs[self.tiling.index_of(start)], self.threshold);
+            state.step(self.logs[self.tiling.index_of(start)], self.threshold, self.prior);
         }
         let mut places = [[0usize; K]; BATCH as usize];
         let mut logs = [[[0i16; 4]; K]; BATCH as usize];
@@ -171,7 +179,7 @@ impl Walker<'_> {
             std::hint::black_box(touched);
             for (step, l) in places[..batch].iter().zip(&logs) {
                 for ((state, &place), &l) in states.iter_mut().zip(step).zip(l) {
-                    state.step(l, self.threshold);
+                    state.step(l, self.threshold, self.prior);
                     if k >= from && state.on_surface {
                         add(&mut sums[place], state.white());
                     }
@@ -281,7 +289,7 @@ impl Walker<'_> {
                         }
                         let mut state = State::new();
                         for &logs in trail.iter().rev() {
-                            state.step(logs, self.threshold);
+                            state.step(logs, self.threshold, self.prior);
                         }
                         if state.on_surface {
                             add(&mut total, state.white());

@@ -182,6 +182,7 @@ async fn register(url: &str, token: &str, index: usize) -> Result<(Worker, pb::W
             name: format!("simulated-{index}"),
             capacity: 1,
             build: "restauro bench scheduler".into(),
+            identity: (index as u64).to_le_bytes().repeat(4),
         })
         .await
         .map_err(|s| anyhow!("registering a simulated worker: {}", s.message()))?;

@@ -214,17 +214,7 @@ pub async fn fetch(client: &Client, status: &pb::JobStatus, out: &Path) -> Resul
         let (mut client, name, path) = (client.clone(), name.clone(), out.join(name));
         let job_id = status.job_id.clone();
         downloads.spawn(async move {
-            let mut stream = client
-                .fetch_result(pb::FetchResultRequest { job_id, name: name.clone() })
-                .await
-                .map_err(|s| refused(&format!("fetching {name}"), s))?
-                .into_inner();
-            let mut data = Vec::new();
-            while let Some(chunk) =
-                stream.message().await.map_err(|s| refused(&format!("fetching {name}"), s))?
-            {
-                data.extend_from_slice(&chunk.data);
-            }
+            let data = fetch_file(&mut client, &job_id, &name).await?;
             let written = path.clone();
             tokio::task::spawn_blocking(move || atomic_file::write(&path, &data))
                 .await?
@@ -238,6 +228,39 @@ pub async fn fetch(client: &Client, status: &pb::JobStatus, out: &Path) -> Resul
     }
     written.sort();
     Ok(written.into_iter().map(|(_, path)| path).collect())
+}
+
+/// One result file of a job, whole: a coordinator sending as many files as it sends at once
+/// (`--max-downloads`) is asked again, after a pause that doubles, for up to a minute; a file
+/// that ends short of the size it announced is refused.
+async fn fetch_file(client: &mut Client, job_id: &str, name: &str) -> Result<Vec<u8>> {
+    let what = format!("fetching {name}");
+    let mut pause = std::time::Duration::from_millis(250);
+    let mut waited = std::time::Duration::ZERO;
+    let mut stream = loop {
+        let request = pb::FetchResultRequest { job_id: job_id.to_owned(), name: name.to_owned() };
+        match client.fetch_result(request).await {
+            Ok(reply) => break reply.into_inner(),
+            Err(s)
+                if s.code() == tonic::Code::ResourceExhausted
+                    && waited < std::time::Duration::from_secs(60) =>
+            {
+                tokio::time::sleep(pause).await;
+                waited += pause;
+                pause = (pause * 2).min(std::time::Duration::from_secs(5));
+            }
+            Err(s) => return Err(refused(&what, s)),
+        }
+    };
+    let (mut data, mut announced) = (Vec::new(), 0);
+    while let Some(chunk) = stream.message().await.map_err(|s| refused(&what, s))? {
+        announced = chunk.total_bytes;
+        data.extend_from_slice(&chunk.data);
+    }
+    if data.len() as u64 != announced {
+        bail!("{what}: the coordinator sent {} of the {announced} bytes it announced", data.len());
+    }
+    Ok(data)
 }
 
 /// A coordinator and workers started as child processes of this executable, on loopback. They

@@ -65,6 +65,10 @@ pub enum CoordinatorError {
     )]
     TooManyJobs { open: usize },
 
+    /// A caller that stopped sending or reading: what it held is given back.
+    #[error("{what} stalled: nothing moved for {seconds} s ({flag}); {fix}")]
+    Stalled { what: String, seconds: u64, flag: &'static str, fix: &'static str },
+
     /// A worker's session the coordinator does not know: it restarted, or dropped the worker.
     #[error("worker session {worker} is not known to this coordinator: register again")]
     UnknownSession { worker: u64 },
@@ -151,6 +155,7 @@ impl CoordinatorError {
             E::TileData { .. } => Code::InvalidArgument,
             E::NoSuchJob(_) | E::NoSuchResult { .. } => Code::NotFound,
             E::Limit { .. } | E::TooManyJobs { .. } => Code::ResourceExhausted,
+            E::Stalled { .. } => Code::DeadlineExceeded,
             E::Store(_) => Code::Unavailable,
             E::Io { .. } | E::Internal(_) => Code::Internal,
             E::NotSignedIn => Code::Unauthenticated,
@@ -175,6 +180,7 @@ impl CoordinatorError {
             Code::NotFound => S::NOT_FOUND,
             Code::ResourceExhausted => S::TOO_MANY_REQUESTS,
             Code::Unavailable => S::SERVICE_UNAVAILABLE,
+            Code::DeadlineExceeded => S::REQUEST_TIMEOUT,
             _ => S::INTERNAL_SERVER_ERROR,
         }
     }

@@ -57,6 +57,8 @@ pub struct Config {
     pub retinex: bool,
     /// Fault injection for tests: every store commit waits this long first (a slow disk).
     pub commit_delay: Duration,
+    /// What one caller can hold (connections, streams, files sent, silence).
+    pub callers: crate::callers::CallerLimits,
 }
 
 pub struct Farm {
@@ -78,6 +80,8 @@ pub struct Farm {
     timer_wakes: Mutex<Option<Instant>>,
     /// Bumped on every change of a job, for watchers.
     changed: watch::Sender<u64>,
+    /// The files being sent (results, assets), within `--max-downloads`.
+    pub(crate) downloads: crate::callers::Downloads,
     pub metrics: Metrics,
 }
 
@@ -94,6 +98,8 @@ struct FarmState {
 struct WorkerEntry {
     key: SessionKey,
     build: String,
+    /// The digest of the identity it registered with: its leases are bound to it.
+    identity: [u8; 32],
 }
 
 /// A registered worker, as `restauro workers` shows it.
@@ -180,6 +186,7 @@ impl Farm {
             assets,
             commits,
             signer: LeaseSigner::new(secret, epoch),
+            downloads: crate::callers::Downloads::new(config.callers),
             state: Mutex::new(FarmState {
                 scheduler: Scheduler::new(config.scheduler.clone()),
                 jobs: BTreeMap::new(),
@@ -550,14 +557,27 @@ impl Farm {
     // ------------------------------------------------------------------ workers
 
     /// Registers a worker: its session, and how often it should heartbeat.
-    pub fn register(&self, name: &str, capacity: u32, build: &str) -> Result<(Session, Duration)> {
+    pub fn register(
+        &self,
+        name: &str,
+        capacity: u32,
+        build: &str,
+        identity: &[u8],
+    ) -> Result<(Session, Duration)> {
         check_label("name", name, 128).map_err(pb::convert::WireError::from)?;
         check_label("build", build, 256).map_err(pb::convert::WireError::from)?;
+        let identity = <[u8; 32]>::try_from(identity).map_err(|_| {
+            pb::convert::WireError::new(
+                "identity",
+                "a worker registers with 32 random bytes it keeps for its whole life",
+            )
+        })?;
         let key = SessionKey::random();
         let worker = {
             let mut st = self.lock();
             let id = st.scheduler.register_worker(name, capacity.clamp(1, 1024), Instant::now());
-            st.workers.insert(id, WorkerEntry { key, build: build.to_owned() });
+            let identity = crate::lease::identity_digest(&identity);
+            st.workers.insert(id, WorkerEntry { key, build: build.to_owned(), identity });
             id
         };
         self.deadline_added();
@@ -615,6 +635,7 @@ impl Farm {
         max: u32,
     ) -> Vec<pb::Lease> {
         let leases = st.scheduler.lease(worker, max.clamp(1, 64), Instant::now());
+        let Some(identity) = st.workers.get(&worker).map(|w| w.identity) else { return Vec::new() };
         let mut out = Vec::with_capacity(leases.len());
         let mut started = Vec::new();
         for l in leases {
@@ -623,7 +644,7 @@ impl Farm {
                 started.push(l.job.clone());
             }
             let Some(rect) = record.plan.tile_rect(l.tile) else { continue };
-            out.push(self.signer.grant(&l, rect));
+            out.push(self.signer.grant(&l, rect, &identity));
         }
         drop(st);
         self.deadline_added();
@@ -636,23 +657,28 @@ impl Farm {
         out
     }
 
-    /// Checks that `claim` is a lease this store granted, and in this run to `session`'s
-    /// worker. A lease of an earlier run cannot be tied to a worker (ids are per run): its
-    /// ticket is the proof that the coordinator gave it out.
-    fn check_claim(&self, session: &Session, claim: &LeaseClaim) -> Result<()> {
+    /// Checks that `claim` is a lease this store granted to `session`'s worker: its ticket
+    /// verifies with the identity the session registered with (so an earlier run's lease is
+    /// deliverable by its own worker, registered again, and by nobody else), and in this run it
+    /// names the session's worker id.
+    fn check_claim(&self, st: &FarmState, session: &Session, claim: &LeaseClaim) -> Result<()> {
         let foreign = |problem| CoordinatorError::ForeignLease {
             job: claim.job.to_string(),
             tile: claim.tile,
             problem,
         };
-        if !self.signer.verify(claim) {
-            return Err(foreign("its ticket is not one this coordinator gave out"));
-        }
         if claim.epoch > self.signer.epoch() {
             return Err(foreign("it names a run of the coordinator that has not happened"));
         }
         if claim.epoch == self.signer.epoch() && claim.holder != session.worker {
             return Err(foreign("it was granted to another worker"));
+        }
+        let identity = st.workers.get(&session.worker).map_or([0; 32], |w| w.identity);
+        if !self.signer.verify(claim, &identity) {
+            return Err(foreign(
+                "its ticket is not one this coordinator gave out to this worker (a lease is bound \
+                 to the identity of the worker it was granted to)",
+            ));
         }
         Ok(())
     }
@@ -663,7 +689,7 @@ impl Farm {
         if !Self::known(&mut st, session) {
             return Ok(Expected::UnknownSession);
         }
-        self.check_claim(session, claim)?;
+        self.check_claim(&st, session, claim)?;
         let Some(r) = st.jobs.get(&claim.job) else { return Ok(Expected::Stale) };
         if !matches!(r.state(), JobState::Queued | JobState::Running) {
             return Ok(Expected::Stale);
@@ -794,7 +820,7 @@ impl Farm {
             if !Self::known(&mut st, session) {
                 return Ok(None);
             }
-            self.check_claim(session, claim)?;
+            self.check_claim(&st, session, claim)?;
             if claim.epoch != self.signer.epoch() {
                 return Ok(Some(false));
             }
@@ -846,7 +872,7 @@ impl Farm {
             }
             let mut any = false;
             for claim in claims {
-                self.check_claim(session, claim)?;
+                self.check_claim(&st, session, claim)?;
                 if claim.epoch == self.signer.epoch() {
                     any |= st.scheduler.give_back(&self.signer.lease(claim), Instant::now());
                 }
@@ -997,6 +1023,7 @@ mod tests {
             scheduler: scheduler::Config::default(),
             retinex: false,
             commit_delay: Duration::ZERO,
+            callers: Default::default(),
         })
         .unwrap()
     }
@@ -1007,8 +1034,9 @@ mod tests {
     fn seventy_thousand_registrations_are_seventy_thousand_workers() {
         let dir = tempfile::tempdir().unwrap();
         let farm = farm(dir.path());
-        let sessions: Vec<Session> =
-            (0..70_000).map(|i| farm.register(&format!("w{i}"), 1, "b").unwrap().0).collect();
+        let sessions: Vec<Session> = (0..70_000)
+            .map(|i| farm.register(&format!("w{i}"), 1, "b", &[0; 32]).unwrap().0)
+            .collect();
         let ids: std::collections::HashSet<WorkerId> = sessions.iter().map(|s| s.worker).collect();
         assert_eq!(ids.len(), 70_000);
         assert!(farm.heartbeat(&sessions[0]) && farm.heartbeat(&sessions[69_999]));
@@ -1024,9 +1052,9 @@ mod tests {
     fn a_worker_named_with_control_characters_is_refused() {
         let dir = tempfile::tempdir().unwrap();
         let farm = farm(dir.path());
-        let e = farm.register("w\u{1b}[2J", 1, "b").unwrap_err();
+        let e = farm.register("w\u{1b}[2J", 1, "b", &[0; 32]).unwrap_err();
         assert!(e.to_string().contains("name: character"), "{e}");
-        assert!(farm.register("w", 1, &"b".repeat(300)).is_err());
+        assert!(farm.register("w", 1, &"b".repeat(300), &[0; 32]).is_err());
     }
 
     /// A store written by protocol 1: its job is listed as failed with the reason, and its tiles

@@ -2,19 +2,18 @@
 //! converts its request to domain types (refusing what they cannot hold), calls the [`Farm`],
 //! and converts the answer back. No decision is made here.
 
+use crate::callers::next_within;
 use crate::error::{CoordinatorError, Result};
 use crate::farm::{Expected, Farm, Reported, WorkerStatus};
 use crate::ids::{JobId, Session};
 use crate::job::{JobState, JobStatus};
 use crate::lease::LeaseClaim;
 use restauro_proto::convert::WireError;
-use restauro_proto::{self as pb, CHUNK_BYTES, PROTOCOL_VERSION};
+use restauro_proto::{self as pb, PROTOCOL_VERSION};
 use restauro_scene::job::JobSpec;
-use std::path::PathBuf;
 use std::pin::Pin;
 use std::sync::Arc;
 use std::time::Duration;
-use tokio::io::AsyncReadExt;
 use tokio_stream::wrappers::ReceiverStream;
 use tokio_stream::{Stream, StreamExt};
 use tonic::{Request, Response, Status, Streaming};
@@ -97,48 +96,6 @@ fn claim(lease: Option<&pb::Lease>) -> Result<LeaseClaim> {
     Ok(LeaseClaim::try_from(lease.ok_or_else(|| WireError::missing("lease"))?)?)
 }
 
-/// A file sent in chunks, read as it is sent.
-fn file_stream(
-    name: String,
-    path: PathBuf,
-    on_bytes: impl Fn(u64) + Send + 'static,
-) -> ReplyStream<pb::Chunk> {
-    let (tx, rx) = tokio::sync::mpsc::channel(4);
-    tokio::spawn(async move {
-        let send = async |r: Result<pb::Chunk, Status>| tx.send(r).await.is_ok();
-        let mut file = match tokio::fs::File::open(&path).await {
-            Ok(f) => f,
-            Err(e) => {
-                send(Err(CoordinatorError::io(&path, e).into())).await;
-                return;
-            }
-        };
-        let total = file.metadata().await.map_or(0, |m| m.len());
-        let mut first = true;
-        loop {
-            let mut data = vec![0u8; CHUNK_BYTES];
-            let n = match file.read(&mut data).await {
-                Ok(n) => n,
-                Err(e) => {
-                    send(Err(CoordinatorError::io(&path, e).into())).await;
-                    return;
-                }
-            };
-            if n == 0 && !first {
-                return;
-            }
-            data.truncate(n);
-            on_bytes(n as u64);
-            let name = if first { name.clone() } else { String::new() };
-            first = false;
-            if !send(Ok(pb::Chunk { name, total_bytes: total, data })).await || n == 0 {
-                return;
-            }
-        }
-    });
-    Box::pin(ReceiverStream::new(rx))
-}
-
 #[tonic::async_trait]
 impl pb::render_server::Render for RenderService {
     async fn missing_assets(
@@ -160,7 +117,9 @@ impl pb::render_server::Render for RenderService {
         let reference = first.name.clone();
         let mut upload = self.0.begin_upload(&reference, first.total_bytes).await?;
         upload.write(&first.data).await?;
-        while let Some(chunk) = stream.message().await? {
+        let idle = self.0.config.callers.idle();
+        let what = || format!("the upload of {reference}");
+        while let Some(chunk) = next_within(&mut stream, idle, what).await? {
             upload.write(&chunk.data).await?;
         }
         let bytes = upload.finish().await?;
@@ -203,7 +162,7 @@ impl pb::render_server::Render for RenderService {
         let sent = move |n| {
             farm.metrics.result_bytes_sent.inc_by(n);
         };
-        Ok(Response::new(file_stream(req.name, path, sent)))
+        Ok(Response::new(self.0.downloads.send(req.name, path, sent)?))
     }
 
     async fn cancel_job(
@@ -243,7 +202,8 @@ impl pb::work_server::Work for WorkService {
     ) -> Result<Response<pb::RegisterReply>, Status> {
         let req = request.into_inner();
         check_version(req.protocol_version, "worker")?;
-        let (session, heartbeat) = self.0.register(&req.name, req.capacity, &req.build)?;
+        let (session, heartbeat) =
+            self.0.register(&req.name, req.capacity, &req.build, &req.identity)?;
         Ok(Response::new(pb::RegisterReply {
             session: Some(session.into()),
             heartbeat_ms: u32::try_from(heartbeat.as_millis()).unwrap_or(u32::MAX),
@@ -314,8 +274,10 @@ impl pb::work_server::Work for WorkService {
         }
         let expected = image_bytes + spectral_bytes;
         let mut data = Vec::with_capacity(expected);
-        while let Some(chunk) = stream.next().await {
-            match chunk?.part {
+        let idle = self.0.config.callers.idle();
+        let what = || format!("the report of tile {} of job {}", claim.tile, claim.job);
+        while let Some(chunk) = next_within(&mut stream, idle, what).await? {
+            match chunk.part {
                 Some(pb::tile_chunk::Part::Data(d)) if data.len() + d.len() <= expected => {
                     data.extend_from_slice(&d);
                 }
@@ -395,6 +357,6 @@ impl pb::work_server::Work for WorkService {
         let sent = move |n| {
             farm.metrics.asset_bytes_sent.inc_by(n);
         };
-        Ok(Response::new(file_stream(req.reference, path, sent)))
+        Ok(Response::new(self.0.downloads.send(req.reference, path, sent)?))
     }
 }

@@ -7,6 +7,7 @@
 pub mod assembly;
 pub mod asset_store;
 pub mod auth;
+pub mod callers;
 pub mod error;
 pub mod farm;
 pub mod group_commit;

@@ -2,10 +2,12 @@
 //! asked to stop.
 
 use crate::auth::{Role, Tokens};
+use crate::callers::CallerLimits;
 use crate::farm::{Config, Farm};
 use crate::grpc::{RenderService, WorkService};
 use crate::scheduler;
 use anyhow::{Context, Result, bail};
+use restauro_ops::connections::{ConnectionLimits, GuardedListener, GuardedStream};
 use restauro_ops::signal::stop_signal;
 use restauro_ops::token::read_token;
 use restauro_proto::pb::render_server::RenderServer;
@@ -16,7 +18,6 @@ use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 use tokio::net::TcpListener;
-use tokio_stream::wrappers::TcpListenerStream;
 use tonic::service::interceptor::InterceptedService;
 use tracing::info;
 
@@ -53,6 +54,24 @@ pub struct CoordinatorArgs {
     /// What a job's scene and render may ask (sent to the workers with each job).
     #[command(flatten)]
     pub limits: LimitArgs,
+    /// Connections open at once on each listener (gRPC, studio, metrics); a connection beyond
+    /// it is closed as it comes.
+    #[arg(long, default_value_t = 512)]
+    pub max_connections: usize,
+    /// Seconds a new connection has to send the start of its first request.
+    #[arg(long, default_value_t = 10.0)]
+    pub first_request_timeout_s: f64,
+    /// Seconds a connection, a download's reader or an upload may stay silent before it is
+    /// cut (and an upload's share of the budget given back).
+    #[arg(long, default_value_t = 120.0)]
+    pub idle_timeout_s: f64,
+    /// Requests (HTTP/2 streams) open at once on one gRPC connection.
+    #[arg(long, default_value_t = 64)]
+    pub max_streams_per_connection: u32,
+    /// Files (results to clients, assets to workers) sent at once; a request beyond it is
+    /// refused, to be tried again.
+    #[arg(long, default_value_t = 32)]
+    pub max_downloads: usize,
     /// Skip the Retinex stage (and its files).
     #[arg(long)]
     pub no_retinex: bool,
@@ -104,6 +123,30 @@ fn tls_identity(args: &CoordinatorArgs) -> Result<Option<crate::studio::TlsPem>>
     Ok(Some(crate::studio::TlsPem { cert, key }))
 }
 
+/// The caller limits of the flags.
+fn caller_limits(args: &CoordinatorArgs) -> Result<CallerLimits> {
+    if args.max_connections == 0 || args.max_streams_per_connection == 0 || args.max_downloads == 0
+    {
+        bail!(
+            "--max-connections, --max-streams-per-connection and --max-downloads must be at \
+             least 1"
+        );
+    }
+    Ok(CallerLimits {
+        connections: ConnectionLimits {
+            max_connections: args.max_connections,
+            first_bytes: ConnectionLimits::default().first_bytes,
+            first_bytes_timeout: seconds(
+                args.first_request_timeout_s,
+                "--first-request-timeout-s",
+            )?,
+            idle_timeout: seconds(args.idle_timeout_s, "--idle-timeout-s")?,
+        },
+        max_streams_per_connection: args.max_streams_per_connection,
+        max_downloads: args.max_downloads,
+    })
+}
+
 fn seconds(value: f64, flag: &str) -> Result<Duration> {
     if !(value.is_finite() && value > 0.0 && value < 1e6) {
         bail!("{flag} {value}: use a number of seconds above 0");
@@ -143,6 +186,7 @@ pub fn run(args: &CoordinatorArgs) -> Result<()> {
         },
         retinex: !args.no_retinex,
         commit_delay: Duration::from_millis(args.fault_commit_delay_ms),
+        callers: caller_limits(args)?,
     };
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
@@ -188,17 +232,25 @@ pub async fn serve(
         let _ = stop_tx.send(true);
     });
     let has_tls = tls.is_some();
+    let callers = config.callers;
     // Every call in a span named by its method, so a log line says which call it belongs to;
-    // calls about one tile record its job, tile and worker in the span.
-    let mut server = tonic::transport::Server::builder().trace_fn(|request| {
-        tracing::info_span!(
-            "grpc",
-            method = %request.uri().path(),
-            job = tracing::field::Empty,
-            tile = tracing::field::Empty,
-            worker = tracing::field::Empty,
-        )
-    });
+    // calls about one tile record its job, tile and worker in the span. HTTP/2 pings a quiet
+    // connection, so that one whose peer has gone (or will not answer) is closed, and an honest
+    // one is never silent long enough for the idle timeout.
+    let ping = callers.idle().min(Duration::from_secs(30)) / 2;
+    let mut server = tonic::transport::Server::builder()
+        .max_concurrent_streams(callers.max_streams_per_connection)
+        .http2_keepalive_interval(Some(ping))
+        .http2_keepalive_timeout(Some(ping))
+        .trace_fn(|request| {
+            tracing::info_span!(
+                "grpc",
+                method = %request.uri().path(),
+                job = tracing::field::Empty,
+                tile = tracing::field::Empty,
+                worker = tracing::field::Empty,
+            )
+        });
     if let Some(pem) = &tls {
         let identity = tonic::transport::Identity::from_pem(&pem.cert, &pem.key);
         server = server
@@ -215,7 +267,8 @@ pub async fn serve(
     let metrics = match endpoints.metrics {
         Some(at) => {
             let probe: std::sync::Arc<dyn restauro_ops::endpoint::Probe> = farm.clone();
-            Some(restauro_ops::endpoint::serve(at, probe, stopped(stop_rx.clone())).await?)
+            let limits = callers.connections;
+            Some(restauro_ops::endpoint::serve(at, probe, limits, stopped(stop_rx.clone())).await?)
         }
         None => None,
     };
@@ -223,7 +276,8 @@ pub async fn serve(
         Some(at) => {
             let tokens = tokens.clone();
             let stop = stop_rx.clone();
-            Some(crate::studio::serve(at, farm.clone(), tokens, stop, tls.clone()).await?)
+            let (limits, tls) = (callers.connections, tls.clone());
+            Some(crate::studio::serve(at, farm.clone(), tokens, stop, tls, limits).await?)
         }
         None => None,
     };
@@ -240,6 +294,8 @@ pub async fn serve(
         }
         out.flush()?;
     }
+    let listener = GuardedListener::new(listener, callers.connections);
+    let incoming = restauro_ops::connections::incoming(listener, Connection);
     let timer = tokio::spawn(farm.clone().run_timer());
     let render = InterceptedService::new(
         RenderServer::new(RenderService(farm.clone())).max_decoding_message_size(MAX_MESSAGE_BYTES),
@@ -269,7 +325,7 @@ pub async fn serve(
         .add_service(reflection_v1alpha)
         .add_service(render)
         .add_service(work)
-        .serve_with_incoming_shutdown(TcpListenerStream::new(listener), stopped(stop_rx))
+        .serve_with_incoming_shutdown(incoming, stopped(stop_rx))
         .await?;
     timer.abort();
     for (_, task) in metrics.into_iter().chain(studio) {
@@ -277,4 +333,49 @@ pub async fn serve(
     }
     info!("coordinator stopped");
     Ok(())
+}
+
+/// An accepted gRPC connection, within the caller limits, as tonic takes it.
+struct Connection(GuardedStream);
+
+impl tonic::transport::server::Connected for Connection {
+    type ConnectInfo = tonic::transport::server::TcpConnectInfo;
+
+    fn connect_info(&self) -> Self::ConnectInfo {
+        self.0.tcp().connect_info()
+    }
+}
+
+impl tokio::io::AsyncRead for Connection {
+    fn poll_read(
+        mut self: std::pin::Pin<&mut Self>,
+        cx: &mut std::task::Context<'_>,
+        buf: &mut tokio::io::ReadBuf<'_>,
+    ) -> std::task::Poll<std::io::Result<()>> {
+        std::pin::Pin::new(&mut self.0).poll_read(cx, buf)
+    }
+}
+
+impl tokio::io::AsyncWrite for Connection {
+    fn poll_write(
+        mut self: std::pin::Pin<&mut Self>,
+        cx: &mut std::task::Context<'_>,
+        data: &[u8],
+    ) -> std::task::Poll<std::io::Result<usize>> {
+        std::pin::Pin::new(&mut self.0).poll_write(cx, data)
+    }
+
+    fn poll_flush(
+        mut self: std::pin::Pin<&mut Self>,
+        cx: &mut std::task::Context<'_>,
+    ) -> std::task::Poll<std::io::Result<()>> {
+        std::pin::Pin::new(&mut self.0).poll_flush(cx)
+    }
+
+    fn poll_shutdown(
+        mut self: std::pin::Pin<&mut Self>,
+        cx: &mut std::task::Context<'_>,
+    ) -> std::task::Poll<std::io::Result<()>> {
+        std::pin::Pin::new(&mut self.0).poll_shutdown(cx)
+    }
 }

@@ -3,6 +3,7 @@
 //! `GET /readyz` (it can do its work: readiness — a worker that has registered with its
 //! coordinator, a coordinator whose store is open).
 
+use crate::connections::{ConnectionLimits, GuardedListener};
 use anyhow::{Context, Result};
 use axum::Router;
 use axum::extract::State;
@@ -54,17 +55,19 @@ async fn readyz(State(probe): State<Arc<dyn Probe>>) -> (StatusCode, String) {
     }
 }
 
-/// Binds `listen` (port 0 picks a free port) and serves until `stop` resolves. Returns the
-/// bound address and the serving task.
+/// Binds `listen` (port 0 picks a free port) and serves until `stop` resolves, each connection
+/// within `limits`. Returns the bound address and the serving task.
 pub async fn serve(
     listen: SocketAddr,
     probe: Arc<dyn Probe>,
+    limits: ConnectionLimits,
     stop: impl Future<Output = ()> + Send + 'static,
 ) -> Result<(SocketAddr, JoinHandle<()>)> {
     let listener = TcpListener::bind(listen)
         .await
         .with_context(|| format!("listening for metrics on {listen}"))?;
     let addr = listener.local_addr()?;
+    let listener = GuardedListener::new(listener, limits);
     let app = Router::new()
         .route("/metrics", get(metrics))
         .route("/healthz", get(healthz))
@@ -102,7 +105,8 @@ mod tests {
         let at = taken.local_addr().unwrap();
         let runtime = tokio::runtime::Builder::new_current_thread().enable_all().build().unwrap();
         let probe: Arc<dyn Probe> = Arc::new(Nothing(Registry::default()));
-        let error = runtime.block_on(serve(at, probe, std::future::pending())).unwrap_err();
+        let limits = ConnectionLimits::default();
+        let error = runtime.block_on(serve(at, probe, limits, std::future::pending())).unwrap_err();
         let message = format!("{error:#}");
         assert!(message.starts_with(&format!("listening for metrics on {at}:")), "{message}");
     }

@@ -4,7 +4,8 @@
 //! the edge, and only domain types travel further.
 
 /// The protocol version spoken by this build. A worker or client of another version is refused.
-pub const PROTOCOL_VERSION: u32 = 2;
+/// 3: a worker registers with its identity, to which its leases are bound.
+pub const PROTOCOL_VERSION: u32 = 3;
 
 /// The metadata key that carries the caller's protocol version on every call.
 pub const PROTOCOL_HEADER: &str = "x-restauro-protocol";

@@ -6,6 +6,7 @@
 
 pub mod browser;
 pub mod http;
+pub mod raw;
 pub mod relief;
 pub mod web;
 pub mod wire;

@@ -35,25 +35,33 @@ pub async fn work_client(url: &str) -> Work {
     WorkClient::with_interceptor(channel(url).await, credentials)
 }
 
+/// `data` uploaded as `reference`, in the protocol's chunks.
+pub async fn upload_bytes(
+    client: &mut Render,
+    reference: &str,
+    data: &[u8],
+) -> Result<pb::AssetList, tonic::Status> {
+    let mut chunks: Vec<pb::Chunk> = data
+        .chunks(CHUNK_BYTES)
+        .map(|c| pb::Chunk {
+            name: String::new(),
+            total_bytes: data.len() as u64,
+            data: c.to_vec(),
+        })
+        .collect();
+    if chunks.is_empty() {
+        chunks.push(pb::Chunk::default());
+    }
+    chunks[0].name = reference.to_owned();
+    client.upload_asset(tokio_stream::iter(chunks)).await.map(tonic::Response::into_inner)
+}
+
 /// The scene's bundle, every asset uploaded.
 pub async fn upload(client: &mut Render, scene: &Path) -> Bundle {
     let bundle = bundle_scene(scene, &Limits::default()).unwrap();
     for reference in bundle.references() {
         let hash = reference.strip_prefix("blake3:").unwrap().split_once('.').unwrap().0;
-        let data = &bundle.files[hash];
-        let mut chunks: Vec<pb::Chunk> = data
-            .chunks(CHUNK_BYTES)
-            .map(|c| pb::Chunk {
-                name: String::new(),
-                total_bytes: data.len() as u64,
-                data: c.to_vec(),
-            })
-            .collect();
-        if chunks.is_empty() {
-            chunks.push(pb::Chunk::default());
-        }
-        chunks[0].name = reference.clone();
-        client.upload_asset(tokio_stream::iter(chunks)).await.unwrap();
+        upload_bytes(client, &reference, &bundle.files[hash]).await.unwrap();
     }
     bundle
 }
@@ -97,14 +105,21 @@ pub async fn submit(
     client.submit_job(request).await.map(tonic::Response::into_inner)
 }
 
-/// A registered worker's session.
+/// A registered worker's session, its identity drawn from its name.
 pub async fn register(work: &mut Work, name: &str) -> pb::WorkerSession {
+    register_as(work, name, *blake3::hash(name.as_bytes()).as_bytes()).await
+}
+
+/// A registered worker's session, with the identity given (the same worker registering again
+/// after a coordinator restart gives the same).
+pub async fn register_as(work: &mut Work, name: &str, identity: [u8; 32]) -> pb::WorkerSession {
     let reply = work
         .register(pb::RegisterRequest {
             protocol_version: PROTOCOL_VERSION,
             name: name.to_owned(),
             capacity: 1,
             build: "restauro-tests".into(),
+            identity: identity.to_vec(),
         })
         .await
         .unwrap()

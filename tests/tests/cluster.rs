@@ -73,11 +73,13 @@ fn two_workers_render_what_one_process_renders_and_survive_a_killed_worker() {
 
     // A worker killed mid-job (SIGKILL): its tiles go back to the queue, the job completes and
     // the image is the same.
+    // 64 samples a pixel: a tile takes long enough to be killed in the middle of (at 8, under
+    // a loaded machine, the worker sometimes delivered it between the log line and the kill).
     let job = restauro(&[
         "submit",
         &scene,
         "--spp",
-        "8",
+        "64",
         "--tile",
         "16",
         "--coordinator",
@@ -124,7 +126,7 @@ fn two_workers_render_what_one_process_renders_and_survive_a_killed_worker() {
         &scene,
         "--in-process",
         "--spp",
-        "8",
+        "64",
         "--tile",
         "16",
         "--out",

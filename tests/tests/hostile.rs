@@ -84,6 +84,37 @@ async fn a_worker_cannot_write_a_tile_it_was_not_leased_nor_act_as_another() {
     assert!(identical(&result(&data, &job.job_id), &reference(d, 1, 16)));
 }
 
+/// Issue 35, finding 4: after a coordinator restart, a lease of the earlier run may be delivered
+/// by the worker it was granted to, registered again with its identity, and by no other. Before,
+/// any session holding the ticket could deliver it: worker R delivered worker P's lease and was
+/// accepted, and P's own report of the tile was dropped.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn after_a_restart_only_its_own_worker_delivers_an_earlier_lease() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (coordinator, mut client, bundle) = wire::farm(d, 64, 32, &[]).await;
+    let data = d.join("data");
+    wire::submit(&mut client, &bundle, &spec("aosta", 16, 1)).await.unwrap();
+    let (p_identity, r_identity) = ([1u8; 32], [2u8; 32]);
+    let mut p = wire::work_client(&coordinator.url).await;
+    let p_session = wire::register_as(&mut p, "p", p_identity).await;
+    let lease = wire::lease(&mut p, &p_session, 1).await.remove(0);
+    let pixels = wire::tile_data(&rect(&lease), wire::AOSTA_TILES, 1.0);
+    // The coordinator restarts on its store; both workers register again, each as itself.
+    drop(client);
+    drop(coordinator);
+    let coordinator = Coordinator::start(d, &data, "127.0.0.1:0", &[]);
+    let mut r = wire::work_client(&coordinator.url).await;
+    let r_session = wire::register_as(&mut r, "r", r_identity).await;
+    let e = wire::report(&mut r, &r_session, &lease, pixels.clone()).await.unwrap_err();
+    assert_eq!(e.code(), Code::PermissionDenied, "{e:?}");
+    assert!(e.message().contains("bound to the identity"), "{}", e.message());
+    let mut p = wire::work_client(&coordinator.url).await;
+    let p_again = wire::register_as(&mut p, "p", p_identity).await;
+    let reply = wire::report(&mut p, &p_again, &lease, pixels).await.unwrap();
+    assert!(reply.known && reply.accepted, "its own worker delivers it: {reply:?}");
+}
+
 /// Defect 3: NaN, ∞ and negative radiance are refused at the edge and count as the sending
 /// worker's failure of the tile; the image stays finite and the honest render's.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

@@ -129,8 +129,13 @@ pub fn run(args: &WorkerArgs) -> Result<()> {
         let endpoint = match args.metrics_listen {
             Some(at) => {
                 let probe: Arc<dyn restauro_ops::endpoint::Probe> = metrics.clone();
-                let (addr, task) =
-                    restauro_ops::endpoint::serve(at, probe, std::future::pending()).await?;
+                let (addr, task) = restauro_ops::endpoint::serve(
+                    at,
+                    probe,
+                    Default::default(),
+                    std::future::pending(),
+                )
+                .await?;
                 let mut out = std::io::stdout().lock();
                 writeln!(out, "metrics on {addr}")?;
                 out.flush()?;
@@ -233,6 +238,9 @@ impl Worker {
     /// background, across registrations, each kept until acknowledged.
     async fn serve(&mut self, capacity: u32) -> Result<()> {
         let name = self.args.name.clone().unwrap_or_else(hostname);
+        // Its identity for its whole life: its leases are bound to it, so after a coordinator
+        // restart it (and only it) may deliver what it rendered under the earlier run.
+        let identity = identity();
         let mut reports = tokio::task::JoinSet::new();
         'connection: loop {
             if self.stopping() {
@@ -248,6 +256,7 @@ impl Worker {
                     name: name.clone(),
                     capacity,
                     build: format!("restauro-worker {}", env!("CARGO_PKG_VERSION")),
+                    identity: identity.to_vec(),
                 })
                 .await
             {
@@ -585,6 +594,14 @@ impl Worker {
         }
         Ok((hash, bytes))
     }
+}
+
+/// 32 bytes from the operating system's random source (two UUID v4 draw them).
+fn identity() -> [u8; 32] {
+    let mut bytes = [0u8; 32];
+    bytes[..16].copy_from_slice(uuid::Uuid::new_v4().as_bytes());
+    bytes[16..].copy_from_slice(uuid::Uuid::new_v4().as_bytes());
+    bytes
 }
 
 /// Heartbeats until the coordinator no longer knows the session (or the task is aborted).

@@ -29,6 +29,7 @@ use axum::http::{HeaderValue, header};
 use axum::middleware::{self, Next};
 use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post};
+use restauro_ops::connections::{ConnectionLimits, GuardedListener};
 use std::net::SocketAddr;
 use std::sync::Arc;
 use tokio::net::TcpListener;
@@ -146,12 +147,14 @@ pub async fn serve(
     tokens: Tokens,
     stop: watch::Receiver<bool>,
     tls: Option<TlsPem>,
+    limits: ConnectionLimits,
 ) -> Result<(SocketAddr, JoinHandle<()>)> {
     let acceptor = tls.as_ref().map(acceptor).transpose()?;
     let listener = TcpListener::bind(listen)
         .await
         .with_context(|| format!("listening for the studio on {listen}"))?;
     let addr = listener.local_addr()?;
+    let listener = GuardedListener::new(listener, limits);
     let events = events::Events::new();
     let studio = Arc::new(Studio {
         farm: farm.clone(),
@@ -184,7 +187,7 @@ pub async fn serve(
 /// handshake that fails (a client that does not trust the certificate) closes that connection
 /// only.
 async fn serve_tls(
-    listener: TcpListener,
+    listener: GuardedListener,
     acceptor: tokio_rustls::TlsAcceptor,
     app: Router,
     stop: watch::Receiver<bool>,
@@ -194,14 +197,7 @@ async fn serve_tls(
     loop {
         let (tcp, peer) = tokio::select! {
             () = &mut ended => return,
-            accepted = listener.accept() => match accepted {
-                Ok(a) => a,
-                Err(e) => {
-                    warn!(error = %e, "accepting a studio connection");
-                    tokio::time::sleep(std::time::Duration::from_millis(50)).await;
-                    continue;
-                }
-            },
+            accepted = listener.accept() => accepted,
         };
         let (acceptor, app) = (acceptor.clone(), app.clone());
         tokio::spawn(async move {

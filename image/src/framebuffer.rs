@@ -9,11 +9,14 @@
 //! spectra, the 81 bands of every pixel (f32). All but the last make the tile's image part, the
 //! last its spectral part.
 //!
-//! Every value must be one a tracer can produce: radiometric quantities (X, Y, Z and spectral
-//! radiance) finite and not negative, a coverage between 0 and 1, a mask within its bits.
+//! Every value must be one a tracer can produce: radiometric quantities (X, Y, Z, the adapting
+//! white and spectral radiance) finite, not negative and within
+//! [`MAX_RADIOMETRIC`](crate::radiometric_bound::MAX_RADIOMETRIC) (why that bound: its module), a
+//! coverage between 0 and 1, a mask within its bits.
 //! [`check_tile`] refuses anything else, so a broken or hostile worker cannot put NaN or ∞ into
 //! an image.
 
+use crate::radiometric_bound::{MAX_RADIOMETRIC, is_radiometric};
 use restauro_scene::plan::{LIT_BITS, Plan, Rect};
 use restauro_spectral::grid::BANDS;
 
@@ -83,7 +86,7 @@ impl Parts {
     /// The part a byte offset lies in, the pixel, and whether its value is in range.
     fn check(&self, at: usize, word: [u8; 4]) -> (&'static str, usize, bool) {
         let v = f32::from_le_bytes(word);
-        let radiometric = v.is_finite() && v >= 0.0;
+        let radiometric = is_radiometric(v);
         match at {
             a if a < self.sky => ("XYZ", a / 12, radiometric),
             a if a < self.lit => ("sky coverage", (a - self.sky) / 4, (0.0..=1.0).contains(&v)),
@@ -123,11 +126,15 @@ pub fn check_tile(
         let (what, pixel, in_range) = parts.check(4 * i, word);
         if !in_range {
             let (value, expected) = match what {
-                "sky coverage" => (f32::from_le_bytes(word).to_string(), "0 to 1"),
-                "light mask" => {
-                    (format!("{:#x}", u32::from_le_bytes(word)), "a mask of at most 24 lights")
-                }
-                _ => (f32::from_le_bytes(word).to_string(), "finite and ≥ 0"),
+                "sky coverage" => (f32::from_le_bytes(word).to_string(), "0 to 1".to_owned()),
+                "light mask" => (
+                    format!("{:#x}", u32::from_le_bytes(word)),
+                    "a mask of at most 24 lights".to_owned(),
+                ),
+                _ => (
+                    f32::from_le_bytes(word).to_string(),
+                    format!("finite, ≥ 0 and at most {MAX_RADIOMETRIC:e}"),
+                ),
             };
             return Err(refuse(format!(
                 "pixel {pixel} has {what} {value}, which must be {expected}"
@@ -299,8 +306,8 @@ mod tests {
         assert!(fb.place(8, &outside, &data).is_err());
     }
 
-    /// NaN, ∞ and negative radiance, a coverage outside 0–1 and a mask of lights the renderer
-    /// cannot name are refused wherever they sit.
+    /// NaN, ∞, negative radiance and radiance above the bound, a coverage outside 0–1 and a
+    /// mask of lights the renderer cannot name are refused wherever they sit.
     #[test]
     fn values_a_tracer_cannot_produce_are_refused() {
         let rect = Rect { x: 0, y: 0, width: 2, height: 2 };
@@ -317,6 +324,13 @@ mod tests {
             (4, f32::NAN.to_le_bytes(), "XYZ"),
             (40, f32::INFINITY.to_le_bytes(), "XYZ"),
             (0, (-1.0f32).to_le_bytes(), "XYZ"),
+            (
+                8,
+                3.4e38f32.to_le_bytes(),
+                "pixel 0 has XYZ 340000000000000000000000000000000000000, which must be finite, ≥ 0 and at most 1e30",
+            ),
+            (80 + 4, 2e30f32.to_le_bytes(), "pixel 0 has adapting white"),
+            (image_bytes + 4, 1.1e30f32.to_le_bytes(), "spectral radiance"),
             (48 + 4, 1.5f32.to_le_bytes(), "sky coverage"),
             (64 + 8, (1u32 << 24).to_le_bytes(), "light mask"),
             (80 + 16 + 12, f32::NAN.to_le_bytes(), "pixel 1 has adapting white"),
@@ -329,6 +343,12 @@ mod tests {
             let e = check_tile(3, &rect, ALL, &data).unwrap_err().to_string();
             assert!(e.contains(what) && e.starts_with("tile 3"), "{e}");
         }
+        // At the bound itself, everywhere: accepted.
+        let mut at_bound = good.clone();
+        for word in (0..12).chain(20..36).chain(36..36 + 4 * BANDS) {
+            at_bound[4 * word..4 * word + 4].copy_from_slice(&MAX_RADIOMETRIC.to_le_bytes());
+        }
+        check_tile(0, &rect, ALL, &at_bound).unwrap();
         let e = check_tile(3, &rect, ALL, &good[..good.len() - 4]).unwrap_err();
         assert!(e.to_string().contains("expected"), "{e}");
         // Without a sky the masks follow XYZ directly.

@@ -3,6 +3,7 @@
 //! file is written whole or not at all ([`crate::atomic_file`]).
 
 use crate::atomic_file;
+use crate::radiometric_bound::is_colour_value;
 use exr::prelude::*;
 use restauro_spectral::colorimetry::Chromaticity;
 use restauro_spectral::rgb_space::RgbSpace;
@@ -50,10 +51,12 @@ pub enum ImageFileError {
     )]
     TooManySamples { path: PathBuf, width: usize, height: usize, channels: usize, max: usize },
     #[error(
-        "{}: channel {channel} at pixel ({x}, {y}) is {value}; colour values must be finite",
-        path.display()
+        "{}: channel {channel} at pixel ({x}, {y}) is {value:e}; colour values must be finite \
+         and within ±{bound:e} (cd/m² for absolute XYZ); scale the image into that range",
+        path.display(),
+        bound = crate::radiometric_bound::MAX_RADIOMETRIC
     )]
-    NotFinite { path: PathBuf, channel: String, x: usize, y: usize, value: f32 },
+    OutOfRange { path: PathBuf, channel: String, x: usize, y: usize, value: f32 },
     #[error("{}: cannot write the PNG: {error}", path.display())]
     Png { path: PathBuf, error: png::EncodingError },
 }
@@ -183,8 +186,8 @@ pub fn read_exr(path: &Path, max_pixels: usize) -> Result<XyzImage> {
     let find = |name: &str| names.iter().position(|n| n == name);
     let values = |i: usize| -> Result<Vec<f32>> {
         let v: Vec<f32> = channels[i].sample_data.values_as_f32().collect();
-        if let Some(bad) = v.iter().position(|x| !x.is_finite()) {
-            return Err(ImageFileError::NotFinite {
+        if let Some(bad) = v.iter().position(|&x| !is_colour_value(x)) {
+            return Err(ImageFileError::OutOfRange {
                 path: path.to_owned(),
                 channel: names[i].clone(),
                 x: bad % width,
@@ -651,6 +654,18 @@ mod tests {
         .unwrap();
         let err = read_exr(&nan, MAX_PIXELS).unwrap_err().to_string();
         assert!(err.contains("channel Y at pixel (1, 1) is NaN"), "{err}");
+        // Finite but beyond the bound: 3.4e38 would overflow the first matrix applied to it.
+        let huge = dir.join("huge.exr");
+        let channels = ["R", "G", "B"].map(|c| (c.to_owned(), vec![1.0f32, 3.4e38, 1.0, 1.0]));
+        write_exr(&huge, 2, 2, channels.to_vec(), &[]).unwrap();
+        let err = read_exr(&huge, MAX_PIXELS).unwrap_err().to_string();
+        assert!(
+            err.contains(
+                "channel R at pixel (1, 0) is 3.4e38; colour values must be finite and \
+                          within ±1e30 (cd/m² for absolute XYZ); scale the image"
+            ),
+            "{err}"
+        );
 
         let big = dir.join("big.exr");
         write_exr(&big, 4, 3, vec![("Y".into(), vec![1.0; 12])], &[]).unwrap();

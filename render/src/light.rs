@@ -24,6 +24,12 @@ use glam::Vec3A;
 use restauro_scene::photometric::Photometry;
 use restauro_spectral::Spectrum;
 
+/// The nearest distance at which a point light's inverse-square law is applied. A real
+/// luminaire's far-field photometry holds only beyond about five times its size (the
+/// photometric five-times rule); at 1 mm a light of the largest intensity a scene may give (10⁹ cd) gives 10¹⁵ lx, which keeps
+/// every radiance the tracer makes far inside `restauro_image::radiometric_bound`.
+pub const MIN_LIGHT_DISTANCE_M: f32 = 1e-3;
+
 /// How a luminaire's intensity varies with direction.
 #[derive(Clone, Debug)]
 pub enum Distribution {
@@ -255,13 +261,16 @@ impl Light {
                 let r = r2.sqrt();
                 let direction = d / r;
                 let intensity = intensity_cd * distribution.factor(-direction);
-                // `per_cd` is normalised to one lumen per steradian, so E_v = I_v / r².
-                (intensity > 0.0).then(|| Incident {
+                // `per_cd` is normalised to one lumen per steradian, so E_v = I_v / r²; nearer
+                // than MIN_LIGHT_DISTANCE_M the law no longer holds, and the irradiance is kept
+                // at its value there (finite: the bound on tile data rests on it).
+                let e = intensity / r2.max(MIN_LIGHT_DISTANCE_M * MIN_LIGHT_DISTANCE_M);
+                (intensity > 0.0).then_some(Incident {
                     direction,
                     distance: r,
-                    scale: intensity / r2,
+                    scale: e,
                     spectrum: per_cd,
-                    illuminance_lux: intensity / r2,
+                    illuminance_lux: e,
                 })
             }
             Light::Distant { direction, irradiance, illuminance_lux } => Some(Incident {
@@ -273,6 +282,30 @@ impl Light {
             }),
             // Extended: sampled by [`Light::sampled_incident`].
             Light::Area(_) => None,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// E = I/r² down to 1 mm, and the value at 1 mm nearer: a surface touching the largest
+    /// light a scene may give gets a finite irradiance.
+    #[test]
+    fn a_point_light_lights_by_the_inverse_square_law_down_to_a_millimetre() {
+        let light = Light::Point {
+            position: Vec3A::ZERO,
+            intensity_cd: 1e9,
+            per_cd: Spectrum::splat(1.0),
+            distribution: Distribution::Isotropic,
+        };
+        let lux = |r: f32| light.incident(Vec3A::new(0.0, 0.0, r)).unwrap().illuminance_lux;
+        assert_eq!(lux(2.0), 1e9 / 4.0);
+        let at_mm = lux(1e-3);
+        assert!((at_mm / 1e15 - 1.0).abs() < 1e-4, "{at_mm}");
+        for r in [5e-4, 1e-6, 1e-20] {
+            assert_eq!(lux(r), at_mm, "at {r} m");
         }
     }
 }

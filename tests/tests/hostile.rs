@@ -147,6 +147,53 @@ async fn non_finite_or_negative_pixels_are_refused_and_count_against_the_worker(
     assert!(identical(&image, &reference(d, 1, 16)));
 }
 
+/// Finding 3 of "trust under load": finite radiance beyond any scene (3.4·10³⁸, which once gave
+/// +∞ in 64 pixels of the result's RGB) is refused naming the bound; the same tile at the bound
+/// itself (10³⁰ in every XYZ and white value) is accepted, and every file of the result — the
+/// EXR with its RGB, the seen image's EXR, both PNGs — is written without an ∞ or a NaN.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_tile_at_the_bound_gives_finite_result_files() {
+    use restauro_image::radiometric_bound::MAX_RADIOMETRIC;
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (coordinator, mut client, bundle) = wire::farm(d, 64, 32, &[]).await;
+    let job = wire::submit(&mut client, &bundle, &spec("aosta", 16, 1)).await.unwrap();
+    let mut work = wire::work_client(&coordinator.url).await;
+    let session = wire::register(&mut work, "beyond").await;
+    let lease = wire::lease(&mut work, &session, 1).await.remove(0);
+    let data = wire::tile_data(&rect(&lease), wire::AOSTA_TILES, 3.4e38);
+    let e = wire::report(&mut work, &session, &lease, data).await.unwrap_err();
+    assert_eq!(e.code(), Code::InvalidArgument, "{e:?}");
+    let bound =
+        "XYZ 340000000000000000000000000000000000000, which must be finite, ≥ 0 and at most 1e30";
+    assert!(e.message().contains(bound), "{}", e.message());
+    let session = wire::register(&mut work, "bright").await;
+    let lease = wire::lease(&mut work, &session, 1).await.remove(0);
+    let data = wire::tile_data(&rect(&lease), wire::AOSTA_TILES, MAX_RADIOMETRIC);
+    let reply = wire::report(&mut work, &session, &lease, data).await.unwrap();
+    assert!(reply.accepted, "{reply:?}");
+    let _worker = Worker::start(d, &coordinator.url, "honest", &[]);
+    let end = wire::wait_end(&mut client, &job.job_id, Duration::from_secs(120)).await;
+    assert_eq!(end.state, pb::JobState::Done as i32, "{end:?}");
+    let folder = d.join("data").join("jobs").join(&job.job_id);
+    for name in ["aosta.exr", "aosta-retinex.exr"] {
+        let image = exr::prelude::read_all_flat_layers_from_file(folder.join(name)).unwrap();
+        for layer in image.layer_data {
+            for c in layer.channel_data.list {
+                let bad = c.sample_data.values_as_f32().position(|v| !v.is_finite());
+                assert!(bad.is_none(), "{name}: channel {} at {bad:?}", c.name);
+            }
+        }
+    }
+    let bright =
+        result(&d.join("data"), &job.job_id).iter().filter(|p| p[1] == MAX_RADIOMETRIC).count();
+    let r = rect(&lease);
+    assert_eq!(bright, (r.width * r.height) as usize, "the tile at the bound is in the image");
+    for name in ["aosta.png", "aosta-retinex.png"] {
+        assert!(std::fs::metadata(folder.join(name)).unwrap().len() > 0, "{name}");
+    }
+}
+
 /// Defect 2: a job that would need gigabytes of tiles is refused naming the limit, and the
 /// coordinator stays up and small.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

@@ -81,11 +81,9 @@ pub struct CoordinatorArgs {
     /// The private key of --tls-cert (PEM; else RESTAURO_TLS_KEY).
     #[arg(long, env = "RESTAURO_TLS_KEY", requires = "tls_cert")]
     pub tls_key: Option<PathBuf>,
-    /// Serve Prometheus metrics (/metrics) and health (/healthz, /readyz) over HTTP on this
-    /// address (else RESTAURO_METRICS_LISTEN; off when neither is given). Port 0 picks a free
-    /// port, printed as `metrics on ADDR`.
-    #[arg(long, env = "RESTAURO_METRICS_LISTEN")]
-    pub metrics_listen: Option<SocketAddr>,
+    /// The operations endpoint: where /metrics and health are served, and who may read them.
+    #[command(flatten)]
+    pub metrics: restauro_ops::metrics_access::MetricsArgs,
     /// Serve the studio, the restorer's web page, over HTTP on this address (else
     /// RESTAURO_STUDIO_LISTEN; off when neither is given). Port 0 picks a free port, printed as
     /// `studio on http://ADDR/`.
@@ -195,8 +193,8 @@ pub fn run(args: &CoordinatorArgs) -> Result<()> {
         .context("starting the async runtime")?;
     let tls = tls_identity(args)?;
     let exit_with_stdin = args.exit_with_stdin;
-    let endpoints =
-        Endpoints { grpc: args.listen, metrics: args.metrics_listen, studio: args.studio_listen };
+    let metrics = args.metrics.endpoint()?;
+    let endpoints = Endpoints { grpc: args.listen, metrics, studio: args.studio_listen };
     runtime.block_on(serve(config, endpoints, tls, stop_signal(exit_with_stdin)))
 }
 
@@ -205,8 +203,8 @@ pub fn run(args: &CoordinatorArgs) -> Result<()> {
 pub struct Endpoints {
     /// Both gRPC services, gRPC health and reflection.
     pub grpc: SocketAddr,
-    /// Prometheus metrics and HTTP health, when given.
-    pub metrics: Option<SocketAddr>,
+    /// Prometheus metrics and HTTP health, when given, and who may read the metrics.
+    pub metrics: Option<(SocketAddr, restauro_ops::metrics_access::Access)>,
     /// The studio, when given.
     pub studio: Option<SocketAddr>,
 }
@@ -265,10 +263,10 @@ pub async fn serve(
     let addr = listener.local_addr()?;
     info!(%addr, data = %data.display(), tls = has_tls, "coordinator listening");
     let metrics = match endpoints.metrics {
-        Some(at) => {
+        Some((at, access)) => {
             let probe: std::sync::Arc<dyn restauro_ops::endpoint::Probe> = farm.clone();
-            let limits = callers.connections;
-            Some(restauro_ops::endpoint::serve(at, probe, limits, stopped(stop_rx.clone())).await?)
+            let (limits, stop) = (callers.connections, stopped(stop_rx.clone()));
+            Some(restauro_ops::endpoint::serve(at, probe, access, limits, stop).await?)
         }
         None => None,
     };

@@ -4,10 +4,11 @@
 //! coordinator, a coordinator whose store is open).
 
 use crate::connections::{ConnectionLimits, GuardedListener};
+use crate::metrics_access::Access;
 use anyhow::{Context, Result};
 use axum::Router;
 use axum::extract::State;
-use axum::http::{StatusCode, header};
+use axum::http::{HeaderMap, StatusCode, header};
 use axum::response::IntoResponse;
 use axum::routing::get;
 use prometheus_client::encoding::text::encode;
@@ -36,30 +37,47 @@ pub fn encode_registry(registry: &Registry) -> String {
     text
 }
 
-async fn metrics(State(probe): State<Arc<dyn Probe>>) -> impl IntoResponse {
-    probe.refresh();
+/// What the endpoint's handlers share.
+#[derive(Clone)]
+struct Served {
+    probe: Arc<dyn Probe>,
+    access: Access,
+}
+
+async fn metrics(State(served): State<Served>, headers: HeaderMap) -> axum::response::Response {
+    let authorization = headers.get(header::AUTHORIZATION).and_then(|v| v.to_str().ok());
+    if !served.access.admits(authorization) {
+        let challenge = [(header::WWW_AUTHENTICATE, "Bearer realm=\"restauro metrics\"")];
+        let why = "the metrics need `Authorization: Bearer <token>`, the token of the process's \
+                   --metrics-token-file\n";
+        return (StatusCode::UNAUTHORIZED, challenge, why).into_response();
+    }
+    served.probe.refresh();
     (
         [(header::CONTENT_TYPE, "application/openmetrics-text; version=1.0.0; charset=utf-8")],
-        encode_registry(probe.registry()),
+        encode_registry(served.probe.registry()),
     )
+        .into_response()
 }
 
 async fn healthz() -> &'static str {
     "ok\n"
 }
 
-async fn readyz(State(probe): State<Arc<dyn Probe>>) -> (StatusCode, String) {
-    match probe.ready() {
+async fn readyz(State(served): State<Served>) -> (StatusCode, String) {
+    match served.probe.ready() {
         Ok(()) => (StatusCode::OK, "ready\n".into()),
         Err(why) => (StatusCode::SERVICE_UNAVAILABLE, format!("not ready: {why}\n")),
     }
 }
 
-/// Binds `listen` (port 0 picks a free port) and serves until `stop` resolves, each connection
-/// within `limits`. Returns the bound address and the serving task.
+/// Binds `listen` (port 0 picks a free port) and serves until `stop` resolves, `/metrics` to
+/// those `access` admits, each connection within `limits`. Returns the bound address and the
+/// serving task.
 pub async fn serve(
     listen: SocketAddr,
     probe: Arc<dyn Probe>,
+    access: Access,
     limits: ConnectionLimits,
     stop: impl Future<Output = ()> + Send + 'static,
 ) -> Result<(SocketAddr, JoinHandle<()>)> {
@@ -72,8 +90,9 @@ pub async fn serve(
         .route("/metrics", get(metrics))
         .route("/healthz", get(healthz))
         .route("/readyz", get(readyz))
-        .with_state(probe);
-    info!(%addr, "metrics and health on http://{addr}/metrics");
+        .with_state(Served { probe, access });
+    let guarded = matches!(access, Access::Bearer(_));
+    info!(%addr, token = guarded, "metrics and health on http://{addr}/metrics");
     let task = tokio::spawn(async move {
         if let Err(e) = axum::serve(listener, app).with_graceful_shutdown(stop).await {
             warn!(error = %e, "the metrics endpoint stopped");
@@ -106,7 +125,8 @@ mod tests {
         let runtime = tokio::runtime::Builder::new_current_thread().enable_all().build().unwrap();
         let probe: Arc<dyn Probe> = Arc::new(Nothing(Registry::default()));
         let limits = ConnectionLimits::default();
-        let error = runtime.block_on(serve(at, probe, limits, std::future::pending())).unwrap_err();
+        let serving = serve(at, probe, Access::Open, limits, std::future::pending());
+        let error = runtime.block_on(serving).unwrap_err();
         let message = format!("{error:#}");
         assert!(message.starts_with(&format!("listening for metrics on {at}:")), "{message}");
     }

@@ -240,3 +240,73 @@ fn a_worker_stopped_while_its_coordinator_is_away_exits_cleanly() {
     assert!(status.success(), "the worker exited with {status}:\n{text}");
     assert!(text.contains("stopped before reaching the coordinator"), "{text}");
 }
+
+/// Finding 6 of "trust under load": /metrics was open to anyone who reached the port. Now a
+/// coordinator and a worker refuse to serve it open on an address other machines reach, and with
+/// a token file answer only a scraper that sends the token; health stays open for the probes.
+#[test]
+fn metrics_beyond_loopback_need_a_token_and_health_stays_open() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (client_token, worker_token) = token_files(d);
+    let (data, cache) = (d.join("refused-data"), d.join("refused-cache"));
+    let coordinator_args = vec![
+        "--listen".as_ref(),
+        "127.0.0.1:0".as_ref(),
+        "--data".as_ref(),
+        data.as_os_str(),
+        "--client-token-file".as_ref(),
+        client_token.as_os_str(),
+        "--worker-token-file".as_ref(),
+        worker_token.as_os_str(),
+    ];
+    let worker_args = vec![
+        "--coordinator".as_ref(),
+        "http://127.0.0.1:9".as_ref(),
+        "--token-file".as_ref(),
+        worker_token.as_os_str(),
+        "--cache".as_ref(),
+        cache.as_os_str(),
+    ];
+    for (binary, args) in
+        [("restauro-coordinator", coordinator_args), ("restauro-worker", worker_args)]
+    {
+        let mut command = std::process::Command::new(restauro_tests::binary(binary));
+        command.args::<_, &std::ffi::OsStr>(args);
+        command.args(["--metrics-listen", "0.0.0.0:0"]).env_remove("RESTAURO_METRICS_TOKEN");
+        let o = restauro_tests::output_within(&mut command, Duration::from_secs(60));
+        assert!(!o.status.success(), "{binary} served open metrics on 0.0.0.0");
+        let said = text(&o);
+        assert!(
+            said.contains("--metrics-listen 0.0.0.0:0 can be reached from other machines"),
+            "{said}"
+        );
+        assert!(said.contains("give --metrics-token-file FILE"), "{said}");
+    }
+
+    let token = d.join("metrics.token");
+    std::fs::write(&token, "scrape-only\n").unwrap();
+    let token = token.to_str().unwrap();
+    let guarded = ["--metrics-listen", "127.0.0.1:0", "--metrics-token-file", token];
+    let coordinator = Coordinator::start(d, &d.join("data"), "127.0.0.1:0", &guarded);
+    let (_worker, w) = Worker::start_with_metrics(d, &coordinator.url, "w1", &guarded[2..]);
+    let c = coordinator.metrics.clone().unwrap();
+    let get_with = |addr: &str, path: &str, authorization: Option<&str>| {
+        let headers: Vec<(&str, &str)> =
+            authorization.map(|a| ("authorization", a)).into_iter().collect();
+        restauro_tests::http::request(addr, "GET", path, &headers, b"")
+    };
+    for addr in [&c, &w] {
+        for wrong in [None, Some("Bearer scrape"), Some("Basic c2NyYXBlLW9ubHk=")] {
+            let answer = get_with(addr, "/metrics", wrong);
+            assert_eq!(answer.status, 401, "{wrong:?}: {}", answer.text());
+            assert!(answer.header("www-authenticate").is_some_and(|h| h.starts_with("Bearer")));
+            assert!(!answer.text().contains("restauro_"), "{}", answer.text());
+        }
+        let answer = get_with(addr, "/metrics", Some("Bearer scrape-only"));
+        assert_eq!(answer.status, 200, "{}", answer.text());
+        assert!(answer.text().contains("restauro_"), "{}", answer.text());
+        assert_eq!(get_with(addr, "/healthz", None).status, 200);
+    }
+    assert_eq!(get_with(&c, "/readyz", None).status, 200);
+}

@@ -68,11 +68,10 @@ pub struct WorkerArgs {
     /// Append `job tile attempt` for every tile rendered to this file (for tests).
     #[arg(long, hide = true)]
     pub tile_log: Option<PathBuf>,
-    /// Serve Prometheus metrics (/metrics) and health (/healthz; /readyz once registered) over
-    /// HTTP on this address (else RESTAURO_METRICS_LISTEN; off when neither is given). Port 0
-    /// picks a free port, printed as `metrics on ADDR`.
-    #[arg(long, env = "RESTAURO_METRICS_LISTEN")]
-    pub metrics_listen: Option<std::net::SocketAddr>,
+    /// The operations endpoint: /metrics and health (/healthz; /readyz once registered), and
+    /// who may read the metrics.
+    #[command(flatten)]
+    pub metrics: restauro_ops::metrics_access::MetricsArgs,
     /// Exit when standard input closes (an embedded cluster's processes end with their parent).
     #[arg(long, hide = true)]
     pub exit_with_stdin: bool,
@@ -101,6 +100,7 @@ struct Worker {
 
 pub fn run(args: &WorkerArgs) -> Result<()> {
     let token = read_token(args.token_file.as_deref(), "RESTAURO_WORKER_TOKEN", "--token-file")?;
+    let metrics_endpoint = args.metrics.endpoint()?;
     let threads = if args.threads == 0 { num_threads() } else { args.threads };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
@@ -126,12 +126,13 @@ pub fn run(args: &WorkerArgs) -> Result<()> {
         });
         let metrics = Arc::new(WorkerMetrics::new());
         // The endpoint outlives the drain, so a probe sees the worker until it exits.
-        let endpoint = match args.metrics_listen {
-            Some(at) => {
+        let endpoint = match metrics_endpoint {
+            Some((at, access)) => {
                 let probe: Arc<dyn restauro_ops::endpoint::Probe> = metrics.clone();
                 let (addr, task) = restauro_ops::endpoint::serve(
                     at,
                     probe,
+                    access,
                     Default::default(),
                     std::future::pending(),
                 )

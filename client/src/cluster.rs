@@ -231,36 +231,53 @@ pub async fn fetch(client: &Client, status: &pb::JobStatus, out: &Path) -> Resul
 }
 
 /// One result file of a job, whole: a coordinator sending as many files as it sends at once
-/// (`--max-downloads`) is asked again, after a pause that doubles, for up to a minute; a file
-/// that ends short of the size it announced is refused.
+/// (`--max-downloads`) is asked again, after a pause that doubles, for up to a minute; a
+/// coordinator that restarts (or whose connection breaks) mid-file is waited for as a watch
+/// waits, and the file fetched again from its start; a file that ends short of the size it
+/// announced is refused.
 async fn fetch_file(client: &mut Client, job_id: &str, name: &str) -> Result<Vec<u8>> {
     let what = format!("fetching {name}");
     let mut pause = std::time::Duration::from_millis(250);
-    let mut waited = std::time::Duration::ZERO;
-    let mut stream = loop {
-        let request = pb::FetchResultRequest { job_id: job_id.to_owned(), name: name.to_owned() };
-        match client.fetch_result(request).await {
-            Ok(reply) => break reply.into_inner(),
-            Err(s)
-                if s.code() == tonic::Code::ResourceExhausted
-                    && waited < std::time::Duration::from_secs(60) =>
-            {
-                tokio::time::sleep(pause).await;
-                waited += pause;
-                pause = (pause * 2).min(std::time::Duration::from_secs(5));
-            }
-            Err(s) => return Err(refused(&what, s)),
+    let (mut busy, mut away) = (Duration::ZERO, Duration::ZERO);
+    loop {
+        let status = match fetch_once(client, job_id, name).await {
+            Ok((data, announced)) if data.len() as u64 == announced => return Ok(data),
+            Ok((data, announced)) => bail!(
+                "{what}: the coordinator sent {} of the {announced} bytes it announced",
+                data.len()
+            ),
+            Err(status) => status,
+        };
+        let (waited, patience) = if status.code() == tonic::Code::ResourceExhausted {
+            (&mut busy, Duration::from_secs(60))
+        } else if transient(&status) {
+            (&mut away, WATCH_PATIENCE)
+        } else {
+            return Err(refused(&what, status));
+        };
+        if *waited >= patience {
+            return Err(refused(&what, status));
         }
-    };
+        tokio::time::sleep(pause).await;
+        *waited += pause;
+        pause = (pause * 2).min(Duration::from_secs(5));
+    }
+}
+
+/// One attempt at a result file: its bytes and the size the coordinator announced.
+async fn fetch_once(
+    client: &mut Client,
+    job_id: &str,
+    name: &str,
+) -> Result<(Vec<u8>, u64), tonic::Status> {
+    let request = pb::FetchResultRequest { job_id: job_id.to_owned(), name: name.to_owned() };
+    let mut stream = client.fetch_result(request).await?.into_inner();
     let (mut data, mut announced) = (Vec::new(), 0);
-    while let Some(chunk) = stream.message().await.map_err(|s| refused(&what, s))? {
+    while let Some(chunk) = stream.message().await? {
         announced = chunk.total_bytes;
         data.extend_from_slice(&chunk.data);
     }
-    if data.len() as u64 != announced {
-        bail!("{what}: the coordinator sent {} of the {announced} bytes it announced", data.len());
-    }
-    Ok(data)
+    Ok((data, announced))
 }
 
 /// A coordinator and workers started as child processes of this executable, on loopback. They

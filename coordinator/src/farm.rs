@@ -27,7 +27,7 @@ use restauro_proto as pb;
 use restauro_scene::bundle::Bundle;
 use restauro_scene::job::{JobSpec, check_label, printable};
 use restauro_scene::limits::Limits;
-use restauro_scene::plan::{Plan, Rect};
+use restauro_scene::plan::{Plan, Rect, RenderOptions};
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex, MutexGuard};
@@ -52,6 +52,9 @@ pub struct Config {
     pub max_jobs: usize,
     /// Bytes of uploads in progress at once.
     pub max_upload_bytes: u64,
+    /// Scenes loaded at once (to check a submission, to build a studio preview): each holds
+    /// its whole scene in memory while it loads; more wait their turn.
+    pub max_scene_loads: usize,
     pub scheduler: scheduler::Config,
     /// Run the Retinex stage and write its files.
     pub retinex: bool,
@@ -59,6 +62,21 @@ pub struct Config {
     pub commit_delay: Duration,
     /// What one caller can hold (connections, streams, files sent, silence).
     pub callers: crate::callers::CallerLimits,
+}
+
+/// The plans [`Farm::submit`] keeps for submissions to come.
+const KEPT_PLANS: usize = 16;
+
+/// What a plan is made from: the scene (its manifest names every file by hash) and the
+/// options of the render. (The limits are the coordinator's, the same for every plan.)
+fn plan_key(manifest_json: &str, render: &RenderOptions) -> blake3::Hash {
+    let mut hasher = blake3::Hasher::new();
+    let options = format!("{render:?}");
+    for part in [manifest_json.as_bytes(), options.as_bytes()] {
+        hasher.update(&(part.len() as u64).to_le_bytes());
+        hasher.update(part);
+    }
+    hasher.finalize()
 }
 
 pub struct Farm {
@@ -82,6 +100,13 @@ pub struct Farm {
     changed: watch::Sender<u64>,
     /// The files being sent (results, assets), within `--max-downloads`.
     pub(crate) downloads: crate::callers::Downloads,
+    /// Within `--max-scene-loads`.
+    scene_loads: tokio::sync::Semaphore,
+    /// The plans of the latest submissions, by what they were made from: the same scene with
+    /// the same options (fifty clients submitting one scene, a restorer's snapshots of one
+    /// view) is planned once, not loaded again for each. Assets are never removed, so a plan's
+    /// scene stays whole.
+    plans: Mutex<Vec<(blake3::Hash, Plan)>>,
     pub metrics: Metrics,
 }
 
@@ -187,6 +212,8 @@ impl Farm {
             commits,
             signer: LeaseSigner::new(secret, epoch),
             downloads: crate::callers::Downloads::new(config.callers),
+            scene_loads: tokio::sync::Semaphore::new(config.max_scene_loads.max(1)),
+            plans: Mutex::new(Vec::new()),
             state: Mutex::new(FarmState {
                 scheduler: Scheduler::new(config.scheduler.clone()),
                 jobs: BTreeMap::new(),
@@ -420,6 +447,25 @@ impl Farm {
         Ok(Admission { farm: self, armed: true })
     }
 
+    fn plans_lock(&self) -> std::sync::MutexGuard<'_, Vec<(blake3::Hash, Plan)>> {
+        self.plans.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// Runs `load`, which loads a whole scene, on the blocking threads once one of the
+    /// `--max-scene-loads` places is free: 200 snapshots at once would otherwise hold 200
+    /// scenes in memory together.
+    pub(crate) async fn loading_scene<T: Send + 'static>(
+        &self,
+        load: impl FnOnce() -> Result<T> + Send + 'static,
+    ) -> Result<T> {
+        let _place = self
+            .scene_loads
+            .acquire()
+            .await
+            .map_err(|e| CoordinatorError::Internal(format!("the scene loads: {e}")))?;
+        tokio::task::spawn_blocking(load).await?
+    }
+
     /// Takes a job: its scene (every asset uploaded) loaded and planned within the limits,
     /// its record stored, its tiles queued.
     pub async fn submit(
@@ -430,14 +476,29 @@ impl Farm {
         let mut admission = self.admit()?;
         let farm = self.clone();
         let (render, name, manifest) = (spec.render.clone(), spec.name.to_string(), manifest_json);
-        let (plan, manifest) = tokio::task::spawn_blocking(move || -> Result<(Plan, String)> {
-            let bundle = farm.bundle(&manifest)?;
-            let limits = farm.config.limits;
-            let scene = bundle.load(&limits)?;
-            let plan = Plan::new(&scene, &render, &limits, Path::new(&format!("scene {name}")))?;
-            Ok((plan, manifest))
-        })
-        .await??;
+        let key = plan_key(&manifest, &render);
+        let known = self.plans_lock().iter().find(|(k, _)| *k == key).map(|(_, p)| p.clone());
+        let (plan, manifest) = match known {
+            Some(plan) => (plan, manifest),
+            None => {
+                let (plan, manifest) = self
+                    .loading_scene(move || -> Result<(Plan, String)> {
+                        let bundle = farm.bundle(&manifest)?;
+                        let limits = farm.config.limits;
+                        let scene = bundle.load(&limits)?;
+                        let label = format!("scene {name}");
+                        let plan = Plan::new(&scene, &render, &limits, Path::new(&label))?;
+                        Ok((plan, manifest))
+                    })
+                    .await?;
+                let mut plans = self.plans_lock();
+                if plans.len() == KEPT_PLANS {
+                    plans.remove(0);
+                }
+                plans.push((key, plan.clone()));
+                (plan, manifest)
+            }
+        };
         let id = JobId::random();
         let tiles = plan.tile_count();
         let record = JobRecord::new(id.clone(), spec, manifest, plan, now_unix_ms());
@@ -1020,6 +1081,7 @@ mod tests {
             limits: Limits::default(),
             max_jobs: 4,
             max_upload_bytes: 1 << 20,
+            max_scene_loads: 2,
             scheduler: scheduler::Config::default(),
             retinex: false,
             commit_delay: Duration::ZERO,

@@ -51,6 +51,10 @@ pub struct CoordinatorArgs {
     /// minute without.
     #[arg(long, default_value_t = 1024)]
     pub max_upload_mb: u64,
+    /// Scenes loaded at once — to check a submission, to build the studio's view of a scene —
+    /// each holding its whole scene in memory; more wait their turn.
+    #[arg(long, default_value_t = 2)]
+    pub max_scene_loads: usize,
     /// What a job's scene and render may ask (sent to the workers with each job).
     #[command(flatten)]
     pub limits: LimitArgs,
@@ -123,11 +127,16 @@ fn tls_identity(args: &CoordinatorArgs) -> Result<Option<crate::studio::TlsPem>>
 
 /// The caller limits of the flags.
 fn caller_limits(args: &CoordinatorArgs) -> Result<CallerLimits> {
-    if args.max_connections == 0 || args.max_streams_per_connection == 0 || args.max_downloads == 0
-    {
+    let counts = [
+        args.max_connections,
+        args.max_streams_per_connection as usize,
+        args.max_downloads,
+        args.max_scene_loads,
+    ];
+    if counts.contains(&0) {
         bail!(
-            "--max-connections, --max-streams-per-connection and --max-downloads must be at \
-             least 1"
+            "--max-connections, --max-streams-per-connection, --max-downloads and \
+             --max-scene-loads must be at least 1"
         );
     }
     Ok(CallerLimits {
@@ -177,6 +186,7 @@ pub fn run(args: &CoordinatorArgs) -> Result<()> {
         limits: Limits::from(&args.limits),
         max_jobs: args.max_jobs.max(1),
         max_upload_bytes: args.max_upload_mb.max(1).saturating_mul(1 << 20),
+        max_scene_loads: args.max_scene_loads,
         scheduler: scheduler::Config {
             lease_timeout: seconds(args.lease_timeout_s, "--lease-timeout-s")?,
             heartbeat_timeout: seconds(args.heartbeat_timeout_s, "--heartbeat-timeout-s")?,

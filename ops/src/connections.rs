@@ -12,9 +12,10 @@
 //!   says nothing (a slow loris's first move) is closed then, before any protocol state is kept
 //!   for it.
 //! * **An idle timeout.** A connection on which nothing is read or written for `idle_timeout` is
-//!   closed. An honest connection is never that quiet: gRPC clients answer the server's HTTP/2
-//!   pings, the studio's event stream sends a comment every 15 s, and a request in progress
-//!   moves bytes.
+//!   closed — unless the server is at work on one of its requests ([`Busy`]: a studio snapshot
+//!   waiting for its scene to load is silent, and not idle). An honest connection is never
+//!   that quiet otherwise: gRPC clients answer the server's HTTP/2 pings, the studio's event
+//!   stream sends a comment every 15 s, and a request in progress moves bytes.
 //!
 //! What a connection holds once it talks (streams, downloads, uploads) is bounded by the server
 //! above this layer.
@@ -23,7 +24,7 @@ use std::io;
 use std::net::SocketAddr;
 use std::pin::Pin;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::task::{Context, Poll};
 use std::time::Duration;
 use tokio::io::{AsyncRead, AsyncWrite, ReadBuf};
@@ -130,6 +131,33 @@ pub struct GuardedStream {
     idle_timeout: Duration,
     /// Fires at the first-bytes deadline, then at each idle deadline.
     timer: Pin<Box<Sleep>>,
+    busy: Busy,
+}
+
+/// The requests of one connection the server is at work on: while there is one, the connection's
+/// silence is the server's, and the idle timeout waits.
+#[derive(Clone, Debug, Default)]
+pub struct Busy(Arc<AtomicUsize>);
+
+impl Busy {
+    /// Marks a request in progress until the guard is dropped.
+    pub fn working(&self) -> Working {
+        self.0.fetch_add(1, Ordering::Relaxed);
+        Working(self.0.clone())
+    }
+
+    fn is_busy(&self) -> bool {
+        self.0.load(Ordering::Relaxed) > 0
+    }
+}
+
+/// A request in progress on its connection (see [`Busy::working`]).
+pub struct Working(Arc<AtomicUsize>);
+
+impl Drop for Working {
+    fn drop(&mut self) {
+        self.0.fetch_sub(1, Ordering::Relaxed);
+    }
 }
 
 impl GuardedStream {
@@ -144,7 +172,14 @@ impl GuardedStream {
             timer: Box::pin(tokio::time::sleep_until(
                 first_bytes_by.min(Instant::now() + limits.idle_timeout),
             )),
+            busy: Busy::default(),
         }
+    }
+
+    /// The handle through which the server says it is at work on one of this connection's
+    /// requests.
+    pub fn busy(&self) -> Busy {
+        self.busy.clone()
     }
 
     /// The underlying socket (its peer address, for a server that wants it).
@@ -164,7 +199,13 @@ impl GuardedStream {
 
     /// An error once a deadline has passed; registers the waker for it otherwise.
     fn check(&mut self, cx: &mut Context<'_>) -> io::Result<()> {
-        if self.timer.as_mut().poll(cx).is_ready() {
+        while self.timer.as_mut().poll(cx).is_ready() {
+            if self.first_bytes_due == 0 && self.busy.is_busy() {
+                // The server's silence, not the client's: look again an idle period later.
+                let next = Instant::now() + self.idle_timeout;
+                self.timer.as_mut().reset(next);
+                continue;
+            }
             let why = if self.first_bytes_due > 0 {
                 "the connection sent no request in time"
             } else {
@@ -304,6 +345,35 @@ mod tests {
         let (end, got, after) = outcomes[1];
         assert_eq!((end, got), ("timed out", 16));
         assert!(after >= Duration::from_millis(590), "{after:?}");
+    }
+
+    /// A connection whose request the server is at work on is not cut for its silence (the
+    /// silence is the server's); once the work is done, the idle timeout runs again.
+    #[tokio::test]
+    async fn a_connection_waiting_for_its_answer_is_not_idle() {
+        let (guarded, addr) = listener(limits(8, 5_000, 300)).await;
+        let server = tokio::spawn(async move {
+            let (mut s, _) = guarded.accept().await;
+            let mut buf = [0u8; 16];
+            assert_eq!(s.read(&mut buf).await.unwrap(), 16);
+            let working = s.busy().working();
+            // Three idle periods at work, polling the connection as a server does meanwhile.
+            let read = tokio::time::timeout(Duration::from_millis(900), s.read(&mut buf)).await;
+            assert!(read.is_err(), "the connection was cut while its answer was being made");
+            drop(working);
+            s.write_all(b"answer").await.unwrap();
+            let started = Instant::now();
+            let end = s.read(&mut buf).await;
+            (end.map_err(|e| e.kind()), started.elapsed())
+        });
+        let mut client = TcpStream::connect(addr).await.unwrap();
+        client.write_all(b"GET / HTTP/1.1\r\n").await.unwrap();
+        let (end, after) = server.await.unwrap();
+        assert_eq!(end, Err(io::ErrorKind::TimedOut));
+        assert!(
+            after >= Duration::from_millis(290) && after < Duration::from_millis(800),
+            "{after:?}"
+        );
     }
 
     /// Beyond the limit, connections are closed as they come; a closed one frees its place.

@@ -2,7 +2,7 @@
 //! a reader of Server-Sent Events. Hand-written, as the other wire helpers here are, so that a
 //! test sees exactly the bytes the server sends.
 
-use std::io::{BufRead, BufReader, Read, Write};
+use std::io::{self, BufRead, BufReader, Read, Write};
 use std::net::TcpStream;
 use std::time::Duration;
 
@@ -29,11 +29,21 @@ impl Response {
     }
 }
 
-fn send(addr: &str, method: &str, path: &str, headers: &[(&str, &str)], body: &[u8]) -> TcpStream {
-    let mut stream = TcpStream::connect(addr).unwrap();
-    stream.set_read_timeout(Some(Duration::from_secs(30))).unwrap();
-    write_request(&mut stream, addr, method, path, headers, body);
-    stream
+/// How long a request waits for the server's next bytes, unless told otherwise.
+const PATIENCE: Duration = Duration::from_secs(30);
+
+fn send(
+    addr: &str,
+    method: &str,
+    path: &str,
+    headers: &[(&str, &str)],
+    body: &[u8],
+    patience: Duration,
+) -> io::Result<TcpStream> {
+    let mut stream = TcpStream::connect(addr)?;
+    stream.set_read_timeout(Some(patience))?;
+    write_request(&mut stream, addr, method, path, headers, body)?;
+    Ok(stream)
 }
 
 fn write_request(
@@ -43,27 +53,31 @@ fn write_request(
     path: &str,
     headers: &[(&str, &str)],
     body: &[u8],
-) {
+) -> io::Result<()> {
     let mut head = format!("{method} {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n");
     for (k, v) in headers {
         head += &format!("{k}: {v}\r\n");
     }
     head += &format!("Content-Length: {}\r\n\r\n", body.len());
-    stream.write_all(head.as_bytes()).unwrap();
-    stream.write_all(body).unwrap();
+    stream.write_all(head.as_bytes())?;
+    stream.write_all(body)
 }
 
-fn read_head(reader: &mut impl BufRead) -> (u16, Vec<(String, String)>) {
+fn read_head(reader: &mut impl BufRead) -> io::Result<(u16, Vec<(String, String)>)> {
     let mut line = String::new();
-    reader.read_line(&mut line).unwrap();
+    if reader.read_line(&mut line)? == 0 {
+        return Err(io::Error::new(io::ErrorKind::UnexpectedEof, "closed before an answer"));
+    }
     let status = line.split(' ').nth(1).and_then(|s| s.parse().ok()).unwrap_or(0);
     let mut headers = Vec::new();
     loop {
         let mut line = String::new();
-        reader.read_line(&mut line).unwrap();
+        if reader.read_line(&mut line)? == 0 {
+            return Err(io::Error::new(io::ErrorKind::UnexpectedEof, "closed within the head"));
+        }
         let line = line.trim_end();
         if line.is_empty() {
-            return (status, headers);
+            return Ok((status, headers));
         }
         if let Some((k, v)) = line.split_once(':') {
             headers.push((k.trim().to_ascii_lowercase(), v.trim().to_owned()));
@@ -72,14 +86,14 @@ fn read_head(reader: &mut impl BufRead) -> (u16, Vec<(String, String)>) {
 }
 
 /// One chunk of a `Transfer-Encoding: chunked` body; empty at its end.
-fn read_chunk(reader: &mut impl BufRead) -> Vec<u8> {
+fn read_chunk(reader: &mut impl BufRead) -> io::Result<Vec<u8>> {
     let mut size = String::new();
-    reader.read_line(&mut size).unwrap();
+    reader.read_line(&mut size)?;
     let size = usize::from_str_radix(size.trim().split(';').next().unwrap_or(""), 16).unwrap_or(0);
     let mut data = vec![0u8; size + 2];
-    reader.read_exact(&mut data).unwrap();
+    reader.read_exact(&mut data)?;
     data.truncate(size);
-    data
+    Ok(data)
 }
 
 /// `method path` with `headers` and `body`; the whole answer.
@@ -90,7 +104,31 @@ pub fn request(
     headers: &[(&str, &str)],
     body: &[u8],
 ) -> Response {
-    read_response(BufReader::new(send(addr, method, path, headers, body)))
+    try_request(addr, method, path, headers, body)
+        .unwrap_or_else(|e| panic!("{method} {path} on {addr}: {e}"))
+}
+
+/// As [`request`], with what went wrong on the way instead of a panic.
+pub fn try_request(
+    addr: &str,
+    method: &str,
+    path: &str,
+    headers: &[(&str, &str)],
+    body: &[u8],
+) -> io::Result<Response> {
+    try_request_within(addr, method, path, headers, body, PATIENCE)
+}
+
+/// As [`try_request`], waiting up to `patience` for each of the server's bytes.
+pub fn try_request_within(
+    addr: &str,
+    method: &str,
+    path: &str,
+    headers: &[(&str, &str)],
+    body: &[u8],
+    patience: Duration,
+) -> io::Result<Response> {
+    read_response(BufReader::new(send(addr, method, path, headers, body, patience)?))
 }
 
 /// As [`request`], over TLS to `host:port` (`addr`), trusting only the authority in the PEM
@@ -121,26 +159,26 @@ pub fn request_tls(
     let tcp = TcpStream::connect(addr).unwrap();
     tcp.set_read_timeout(Some(Duration::from_secs(30))).unwrap();
     let mut stream = rustls::StreamOwned::new(connection, tcp);
-    write_request(&mut stream, addr, method, path, headers, body);
-    read_response(BufReader::new(stream))
+    write_request(&mut stream, addr, method, path, headers, body).unwrap();
+    read_response(BufReader::new(stream)).unwrap()
 }
 
-fn read_response(mut reader: BufReader<impl Read>) -> Response {
-    let (status, headers) = read_head(&mut reader);
+fn read_response(mut reader: BufReader<impl Read>) -> io::Result<Response> {
+    let (status, headers) = read_head(&mut reader)?;
     let chunked = headers.iter().any(|(k, v)| k == "transfer-encoding" && v.contains("chunked"));
     let mut body = Vec::new();
     if chunked {
         loop {
-            let chunk = read_chunk(&mut reader);
+            let chunk = read_chunk(&mut reader)?;
             if chunk.is_empty() {
                 break;
             }
             body.extend(chunk);
         }
     } else {
-        reader.read_to_end(&mut body).unwrap();
+        reader.read_to_end(&mut body)?;
     }
-    Response { status, headers, body }
+    Ok(Response { status, headers, body })
 }
 
 #[derive(Clone, Debug)]
@@ -166,13 +204,23 @@ pub struct Events {
 
 impl Events {
     pub fn open(addr: &str, path: &str, headers: &[(&str, &str)]) -> Events {
-        let mut reader = BufReader::new(send(addr, "GET", path, headers, b""));
-        let (status, _) = read_head(&mut reader);
-        Events { reader, pending: String::new(), status }
+        Self::try_open(addr, path, headers).unwrap_or_else(|e| panic!("{path} on {addr}: {e}"))
     }
 
-    /// The next event; panics after 60 s without one.
+    /// As [`Events::open`], with what went wrong instead of a panic.
+    pub fn try_open(addr: &str, path: &str, headers: &[(&str, &str)]) -> io::Result<Events> {
+        let mut reader = BufReader::new(send(addr, "GET", path, headers, b"", PATIENCE)?);
+        let (status, _) = read_head(&mut reader)?;
+        Ok(Events { reader, pending: String::new(), status })
+    }
+
+    /// The next event; panics when the stream ends or after 30 s of silence.
     pub fn next_event(&mut self) -> Event {
+        self.try_next_event().unwrap_or_else(|e| panic!("the event stream: {e}"))
+    }
+
+    /// The next event, or why there is none (the stream ended, 30 s of silence).
+    pub fn try_next_event(&mut self) -> io::Result<Event> {
         loop {
             if let Some(end) = self.pending.find("\n\n") {
                 let block: String = self.pending.drain(..end + 2).collect();
@@ -188,12 +236,14 @@ impl Events {
                     }
                 }
                 if !data.is_empty() {
-                    return Event { kind, id, data: data.join("\n") };
+                    return Ok(Event { kind, id, data: data.join("\n") });
                 }
                 continue;
             }
-            let chunk = read_chunk(&mut self.reader);
-            assert!(!chunk.is_empty(), "the event stream ended");
+            let chunk = read_chunk(&mut self.reader)?;
+            if chunk.is_empty() {
+                return Err(io::Error::new(io::ErrorKind::UnexpectedEof, "the event stream ended"));
+            }
             self.pending += &String::from_utf8_lossy(&chunk);
         }
     }

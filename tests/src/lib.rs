@@ -6,6 +6,7 @@
 
 pub mod browser;
 pub mod http;
+pub mod load;
 pub mod raw;
 pub mod relief;
 pub mod web;
@@ -19,8 +20,12 @@ use std::time::{Duration, Instant};
 /// The path of one of restauro's binaries, built by `cargo test --workspace`.
 pub fn binary(name: &str) -> PathBuf {
     let exe = std::env::current_exe().expect("the test's own path");
-    // target/<profile>/deps/<test> → target/<profile>/<name>
-    let dir = exe.parent().and_then(Path::parent).expect("a target folder");
+    // target/<profile>/deps/<test> → target/<profile>/<name>; the load benchmark runs from
+    // target/<profile>/ itself.
+    let mut dir = exe.parent().expect("a target folder");
+    if dir.ends_with("deps") {
+        dir = dir.parent().expect("a target folder");
+    }
     let path = dir.join(name);
     assert!(
         path.exists(),

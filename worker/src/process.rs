@@ -77,6 +77,18 @@ pub struct WorkerArgs {
     pub exit_with_stdin: bool,
 }
 
+/// What a job's prepared scene is made from: its scene (the manifest names every file by its
+/// hash), its plan and its limits, hashed. Jobs with the same key share one prepared scene.
+fn content_key(manifest_json: &str, plan: &pb::Plan, limits: &pb::SceneLimits) -> String {
+    use prost::Message;
+    let mut hasher = blake3::Hasher::new();
+    for part in [manifest_json.as_bytes(), &plan.encode_to_vec(), &limits.encode_to_vec()] {
+        hasher.update(&(part.len() as u64).to_le_bytes());
+        hasher.update(part);
+    }
+    hasher.finalize().to_hex().to_string()
+}
+
 /// A job ready to render.
 struct ReadyJob {
     scene: PreparedScene,
@@ -501,9 +513,17 @@ impl Worker {
             .map_err(fetch(format!("job {job_id}")))?
             .into_inner();
         let scene_error = |e: &dyn std::fmt::Display| JobError::Scene(format!("job {job_id}: {e}"));
-        let plan = Plan::try_from(spec.plan.ok_or_else(|| scene_error(&"no plan"))?)
-            .map_err(|e| scene_error(&e))?;
-        let limits = Limits::from(spec.limits.ok_or_else(|| scene_error(&"no limits"))?);
+        let (wire_plan, wire_limits) = (
+            spec.plan.ok_or_else(|| scene_error(&"no plan"))?,
+            spec.limits.ok_or_else(|| scene_error(&"no limits"))?,
+        );
+        let content = content_key(&spec.manifest_json, &wire_plan, &wire_limits);
+        if let Some((ready, bytes)) = self.scenes.get_by_content(&content) {
+            self.scenes.insert(job_id, &content, ready.clone(), bytes);
+            return Ok(ready);
+        }
+        let plan = Plan::try_from(wire_plan).map_err(|e| scene_error(&e))?;
+        let limits = Limits::from(wire_limits);
         let label = PathBuf::from(format!("job {job_id}"));
         plan.check(&limits, &label).map_err(|e| scene_error(&e))?;
         let skeleton = Bundle {
@@ -534,7 +554,7 @@ impl Worker {
         .map_err(|e| JobError::Local(format!("preparing job {job_id}: {e}")))??;
         let bytes = ready.scene.memory_bytes();
         let ready = Arc::new(ready);
-        for evicted in self.scenes.insert(job_id, ready.clone(), bytes) {
+        for evicted in self.scenes.insert(job_id, &content, ready.clone(), bytes) {
             info!(job = %evicted, "scene dropped from the cache (least recently used)");
         }
         Ok(ready)

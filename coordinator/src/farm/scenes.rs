@@ -204,10 +204,11 @@ impl Farm {
     ) -> Result<(u32, LoadedScene)> {
         let (number, manifest) = self.scene_revision(id, number)?;
         let farm = self.clone();
-        let scene = tokio::task::spawn_blocking(move || -> Result<LoadedScene> {
-            Ok(farm.bundle(&manifest)?.load(&farm.config.limits)?)
-        })
-        .await??;
+        let scene = self
+            .loading_scene(move || -> Result<LoadedScene> {
+                Ok(farm.bundle(&manifest)?.load(&farm.config.limits)?)
+            })
+            .await?;
         Ok((number, scene))
     }
 

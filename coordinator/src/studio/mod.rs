@@ -24,12 +24,13 @@ use crate::farm::Farm;
 use crate::server::stopped;
 use anyhow::{Context, Result};
 use axum::Router;
+use axum::extract::connect_info::{ConnectInfo, Connected};
 use axum::extract::{Request, State};
 use axum::http::{HeaderValue, header};
 use axum::middleware::{self, Next};
 use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post};
-use restauro_ops::connections::{ConnectionLimits, GuardedListener};
+use restauro_ops::connections::{Busy, ConnectionLimits, GuardedListener};
 use std::net::SocketAddr;
 use std::sync::Arc;
 use tokio::net::TcpListener;
@@ -59,6 +60,27 @@ async fn signed_in(State(studio): State<Arc<Studio>>, request: Request, next: Ne
         .entry(header::CACHE_CONTROL)
         .or_insert(HeaderValue::from_static("no-store"));
     response
+}
+
+/// A connection's [`Busy`]: each request marks itself as work in progress, so that a request
+/// the coordinator takes long over (a snapshot waiting for its scene to load) is not cut as an
+/// idle connection.
+#[derive(Clone)]
+struct ConnectionBusy(Busy);
+
+impl Connected<axum::serve::IncomingStream<'_, GuardedListener>> for ConnectionBusy {
+    fn connect_info(stream: axum::serve::IncomingStream<'_, GuardedListener>) -> Self {
+        ConnectionBusy(stream.io().busy())
+    }
+}
+
+async fn working(
+    ConnectInfo(busy): ConnectInfo<ConnectionBusy>,
+    request: Request,
+    next: Next,
+) -> Response {
+    let _working = busy.0.working();
+    next.run(request).await
 }
 
 async fn no_such_route(request: Request) -> CoordinatorError {
@@ -164,11 +186,12 @@ pub async fn serve(
         stop: stop.clone(),
     });
     tokio::spawn(events.pump(farm, stopped(stop.clone())));
-    let app = router(studio);
+    let app = router(studio).layer(middleware::from_fn(working));
     let task = match acceptor {
         None => {
             info!(%addr, "studio on http://{addr}/");
             tokio::spawn(async move {
+                let app = app.into_make_service_with_connect_info::<ConnectionBusy>();
                 let serving = axum::serve(listener, app).with_graceful_shutdown(stopped(stop));
                 if let Err(e) = serving.await {
                     warn!(error = %e, "the studio stopped");
@@ -199,7 +222,8 @@ async fn serve_tls(
             () = &mut ended => return,
             accepted = listener.accept() => accepted,
         };
-        let (acceptor, app) = (acceptor.clone(), app.clone());
+        let busy = ConnectInfo(ConnectionBusy(tcp.busy()));
+        let (acceptor, app) = (acceptor.clone(), app.clone().layer(axum::Extension(busy)));
         tokio::spawn(async move {
             let tls = match acceptor.accept(tcp).await {
                 Ok(tls) => tls,

@@ -106,7 +106,7 @@ pub struct Farm {
     /// the same options (fifty clients submitting one scene, a restorer's snapshots of one
     /// view) is planned once, not loaded again for each. Assets are never removed, so a plan's
     /// scene stays whole.
-    plans: Mutex<Vec<(blake3::Hash, Plan)>>,
+    plans: crate::recent::Recent<blake3::Hash, Plan>,
     pub metrics: Metrics,
 }
 
@@ -213,7 +213,7 @@ impl Farm {
             signer: LeaseSigner::new(secret, epoch),
             downloads: crate::callers::Downloads::new(config.callers),
             scene_loads: tokio::sync::Semaphore::new(config.max_scene_loads.max(1)),
-            plans: Mutex::new(Vec::new()),
+            plans: crate::recent::Recent::new(KEPT_PLANS),
             state: Mutex::new(FarmState {
                 scheduler: Scheduler::new(config.scheduler.clone()),
                 jobs: BTreeMap::new(),
@@ -447,10 +447,6 @@ impl Farm {
         Ok(Admission { farm: self, armed: true })
     }
 
-    fn plans_lock(&self) -> std::sync::MutexGuard<'_, Vec<(blake3::Hash, Plan)>> {
-        self.plans.lock().unwrap_or_else(|p| p.into_inner())
-    }
-
     /// Runs `load`, which loads a whole scene, on the blocking threads once one of the
     /// `--max-scene-loads` places is free: 200 snapshots at once would otherwise hold 200
     /// scenes in memory together.
@@ -477,8 +473,7 @@ impl Farm {
         let farm = self.clone();
         let (render, name, manifest) = (spec.render.clone(), spec.name.to_string(), manifest_json);
         let key = plan_key(&manifest, &render);
-        let known = self.plans_lock().iter().find(|(k, _)| *k == key).map(|(_, p)| p.clone());
-        let (plan, manifest) = match known {
+        let (plan, manifest) = match self.plans.get(&key) {
             Some(plan) => (plan, manifest),
             None => {
                 let (plan, manifest) = self
@@ -491,11 +486,7 @@ impl Farm {
                         Ok((plan, manifest))
                     })
                     .await?;
-                let mut plans = self.plans_lock();
-                if plans.len() == KEPT_PLANS {
-                    plans.remove(0);
-                }
-                plans.push((key, plan.clone()));
+                self.plans.keep(key, plan.clone());
                 (plan, manifest)
             }
         };

@@ -16,6 +16,7 @@ pub mod ids;
 pub mod job;
 pub mod lease;
 pub mod metrics;
+pub mod recent;
 pub mod scheduler;
 pub mod server;
 pub mod store;

@@ -8,7 +8,7 @@ use crate::farm::Farm;
 use restauro_scene::gltf_export::{self, Preview};
 use restauro_scene::load::LoadedScene;
 use serde::Serialize;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
 /// Previews kept at once.
 const KEPT: usize = 4;
@@ -475,9 +475,14 @@ fn build(id: &str, revision: u32, scene: &LoadedScene) -> ScenePreview {
 }
 
 /// The last few previews.
-#[derive(Default)]
 pub struct Previews {
-    kept: Mutex<Vec<(String, Arc<ScenePreview>)>>,
+    kept: crate::recent::Recent<String, Arc<ScenePreview>>,
+}
+
+impl Default for Previews {
+    fn default() -> Self {
+        Previews { kept: crate::recent::Recent::new(KEPT) }
+    }
 }
 
 impl Previews {
@@ -493,24 +498,15 @@ impl Previews {
             None => farm.scene_revision(id, None)?.0,
         };
         let key = format!("{id}@{number}");
-        if let Some(p) = self.lock().iter().find(|(k, _)| *k == key) {
-            return Ok(p.1.clone());
+        if let Some(p) = self.kept.get(&key) {
+            return Ok(p);
         }
         let (number, scene) = farm.load_scene(id, Some(number)).await?;
         let id = id.to_owned();
         let preview = tokio::task::spawn_blocking(move || Arc::new(build(&id, number, &scene)))
             .await
             .map_err(|e| crate::error::CoordinatorError::Internal(e.to_string()))?;
-        let mut kept = self.lock();
-        kept.retain(|(k, _)| *k != key);
-        if kept.len() == KEPT {
-            kept.remove(0);
-        }
-        kept.push((key, preview.clone()));
+        self.kept.keep(key, preview.clone());
         Ok(preview)
-    }
-
-    fn lock(&self) -> std::sync::MutexGuard<'_, Vec<(String, Arc<ScenePreview>)>> {
-        self.kept.lock().unwrap_or_else(|p| p.into_inner())
     }
 }

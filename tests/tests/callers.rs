@@ -185,3 +185,31 @@ async fn connections_that_say_nothing_are_closed() {
     assert_eq!(all_closed, 400, "connections left open");
     client.list_jobs(pb::ListJobsRequest {}).await.expect("and served still");
 }
+
+/// A limit of nothing is no limit anyone meant: each count flag refuses 0, naming itself.
+#[test]
+fn a_count_limit_of_zero_is_refused_naming_the_flag() {
+    let dir = tempfile::tempdir().unwrap();
+    let (client, worker) = restauro_tests::token_files(dir.path());
+    for flag in [
+        "--max-connections",
+        "--max-streams-per-connection",
+        "--max-downloads",
+        "--max-scene-loads",
+    ] {
+        let mut command =
+            std::process::Command::new(restauro_tests::binary("restauro-coordinator"));
+        command
+            .args(["--listen", "127.0.0.1:0", "--data"])
+            .arg(dir.path().join("data"))
+            .arg("--client-token-file")
+            .arg(&client)
+            .arg("--worker-token-file")
+            .arg(&worker)
+            .args([flag, "0"]);
+        let o = restauro_tests::output_within(&mut command, Duration::from_secs(60));
+        assert!(!o.status.success(), "{flag} 0 was accepted");
+        let said = restauro_tests::text(&o);
+        assert!(said.contains(flag) && said.contains("must be at least 1"), "{flag}: {said}");
+    }
+}

@@ -100,15 +100,36 @@ mod tests {
 
     #[test]
     fn values_depend_only_on_their_key() {
-        let a: Vec<f32> = {
-            let mut s = PixelSampler::new(1, 2, 3, 4);
-            (0..6).map(|_| s.next_1d()).collect()
+        // The stream of one key, drawn first on its own.
+        let draw = |seed, x, y, sample| -> Vec<f32> {
+            let mut s = PixelSampler::new(seed, x, y, sample);
+            (0..8).map(|_| s.next_1d()).collect()
         };
-        let _other = PixelSampler::new(1, 2, 3, 5).next_1d();
-        let mut s = PixelSampler::new(1, 2, 3, 4);
-        let b: Vec<f32> = (0..6).map(|_| s.next_1d()).collect();
-        assert_eq!(a, b);
-        assert_ne!(PixelSampler::new(1, 3, 2, 4).next_1d(), a[0]);
+        let alone = draw(1, 2, 3, 4);
+        // Then drawn again after other keys, on other threads, interleaved with them and through
+        // a shared per-pixel key: any state outside the key (a counter, a thread-local) shows.
+        let interleaved = std::thread::scope(|scope| {
+            let noise = scope.spawn(|| (0..1000).map(|i| draw(i, i as u32, 7, 0)[0]).sum::<f32>());
+            let mut mine = PixelKey::new(1, 2, 3).sampler(4);
+            let mut other = PixelKey::new(1, 2, 3).sampler(5);
+            let values: Vec<f32> = (0..8)
+                .map(|_| {
+                    other.next_1d();
+                    mine.next_1d()
+                })
+                .collect();
+            std::hint::black_box(noise.join().expect("the other thread finishes"));
+            values
+        });
+        let elsewhere = std::thread::spawn(move || draw(1, 2, 3, 4)).join().expect("joins");
+        assert_eq!(alone, interleaved);
+        assert_eq!(alone, elsewhere);
+        // And every part of the key matters, the pixel's x and y apart.
+        for (seed, x, y, sample) in [(2, 2, 3, 4), (1, 3, 2, 4), (1, 2, 4, 4), (1, 2, 3, 5)] {
+            assert_ne!(draw(seed, x, y, sample), alone, "key ({seed}, {x}, {y}, {sample})");
+        }
+        // The dimensions of one stream are not one repeated value.
+        assert!(alone.windows(2).all(|w| w[0] != w[1]), "{alone:?}");
     }
 
     #[test]

@@ -204,8 +204,10 @@ fn fit_is_deterministic() {
 }
 
 /// Time per fit, printed (`cargo test --release -p restauro-spectral --test rgb_upsampling --
-/// --nocapture fit_timing`); nothing is asserted, since a shared machine's clock proves nothing.
+/// --ignored --nocapture fit_timing`). A benchmark, not a test: nothing is asserted, since a shared
+/// machine's clock proves nothing, so it runs only when asked for.
 #[test]
+#[ignore = "a benchmark: run it with --ignored --nocapture"]
 fn fit_timing() {
     let colours: Vec<[f64; 3]> = references().iter().map(|r| r.rgb).chain(cube()).collect();
     let repeats = 20;

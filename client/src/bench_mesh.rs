@@ -8,9 +8,10 @@
 use crate::bench_tracer::timed;
 use crate::cli::BenchArgs;
 use anyhow::{Context, Result};
+use restauro_assets::load_scene;
 use restauro_render::prepared::{PreparedScene, Settings};
 use restauro_render::tile::{Rect, render_tile};
-use restauro_scene::load::{Limits, load_scene};
+use restauro_scene::load::Limits;
 use restauro_scene::scene_file::Integrator;
 use serde::Serialize;
 use std::io::Write;

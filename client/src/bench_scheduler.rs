@@ -13,10 +13,10 @@ use crate::bench_tracer::process_cpu_seconds;
 use crate::cli::BenchArgs;
 use crate::cluster::{self, LocalCluster};
 use anyhow::{Context, Result, anyhow, bail};
+use restauro_assets::bundle_scene;
 use restauro_image::framebuffer::TileLayout;
 use restauro_proto::pb::work_client::WorkClient;
 use restauro_proto::{self as pb, Credentials, PROTOCOL_VERSION};
-use restauro_scene::bundle::bundle_scene;
 use restauro_scene::load::Limits;
 use serde::Serialize;
 use std::sync::Arc;
@@ -58,7 +58,7 @@ pub fn bench(args: &BenchArgs) -> Result<String> {
     let bundle = bundle_scene(&scene, &Limits::default())?;
     // The tiles' layout: with a sky, each pixel carries its sky coverage too, and with a sun
     // its mask of lights.
-    let lights = restauro_scene::load::load_scene(&scene, &Limits::default())?.lights;
+    let lights = restauro_assets::load_scene(&scene, &Limits::default())?.lights;
     let is_sky = |l: &restauro_scene::load::ResolvedLight| {
         matches!(l, restauro_scene::load::ResolvedLight::Sky { .. })
     };

@@ -8,10 +8,11 @@
 
 use crate::cli::{BenchArgs, BenchScene};
 use anyhow::{Context, Result};
+use restauro_assets::load_scene;
 use restauro_render::integrator::lift;
 use restauro_render::prepared::{PreparedScene, Settings};
 use restauro_render::tile::{Rect, camera_ray, render_tile};
-use restauro_scene::load::{Limits, LoadedScene, load_scene};
+use restauro_scene::load::{Limits, LoadedScene};
 use restauro_scene::scene_file::Integrator;
 use serde::Serialize;
 use std::fmt::Write as _;

@@ -12,12 +12,13 @@
 
 use crate::cli::{IlluminanceArgs, RenderArgs};
 use anyhow::{Context, Result, bail};
+use restauro_assets::load_scene;
 use restauro_image::atomic_file;
 use restauro_image::false_colour::{
     FalseColour, LEGEND_PX, Range, Scale, Unit, nice_above, picture,
 };
 use restauro_image::image_files::{MAX_PIXELS, PngPixels, XyzImage, read_exr, write_png};
-use restauro_scene::load::{Limits, LoadedScene, load_scene};
+use restauro_scene::load::{Limits, LoadedScene};
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};

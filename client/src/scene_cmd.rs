@@ -2,9 +2,10 @@
 
 use crate::cli::SceneCommand;
 use anyhow::{Context, Result};
+use restauro_assets::bundle_scene;
+use restauro_assets::load_scene;
 use restauro_image::atomic_file;
-use restauro_scene::bundle::bundle_scene;
-use restauro_scene::load::{Limits, LoadedScene, load_scene};
+use restauro_scene::load::{Limits, LoadedScene};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -139,13 +140,13 @@ pub fn run(command: &SceneCommand) -> Result<String> {
                 let _ = writeln!(s, "  {hash}  {} bytes", bytes.len());
             }
             if let Some(out) = out {
-                if !restauro_scene::archive::is_archive(out) {
+                if !restauro_assets::archive::is_archive(out) {
                     anyhow::bail!(
                         "--out {}: a bundle archive is a .tar file; name it e.g. scene.tar",
                         out.display()
                     );
                 }
-                restauro_scene::archive::write_archive(&bundle, out)?;
+                restauro_assets::archive::write_archive(&bundle, out)?;
                 let bytes = std::fs::metadata(out).map_or(0, |m| m.len());
                 let _ = writeln!(
                     s,

@@ -8,7 +8,8 @@
 
 use crate::cli::SceneNewArgs;
 use anyhow::{Context, Result, bail};
-use restauro_scene::load::{Limits, load_scene};
+use restauro_assets::load_scene;
+use restauro_scene::load::Limits;
 use std::fmt::Write as _;
 use std::path::{Component, Path, PathBuf};
 

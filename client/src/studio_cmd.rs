@@ -6,7 +6,7 @@
 use crate::cli::StudioArgs;
 use crate::cluster::{self, LocalCluster, runtime};
 use anyhow::{Context, Result};
-use restauro_scene::bundle::bundle_scene;
+use restauro_assets::bundle_scene;
 use restauro_scene::job::{JobName, JobSpec};
 use restauro_scene::limits::Limits;
 use restauro_scene::plan::RenderOptions;

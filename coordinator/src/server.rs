@@ -176,7 +176,7 @@ pub fn run(args: &CoordinatorArgs) -> Result<()> {
         bail!("the client and worker tokens are the same; give each role its own token");
     }
     // Files that scenes sent to the studio name by URL: fetched into the data folder.
-    restauro_scene::remote::set_policy(restauro_scene::remote::Policy {
+    restauro_assets::remote::set_policy(restauro_assets::remote::Policy {
         public_only: !args.fetch_private_urls,
         cache_dir: Some(args.data.join("downloads")),
     });

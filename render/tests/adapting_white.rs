@@ -4,7 +4,7 @@
 
 use restauro_render::prepared::{PreparedScene, Settings};
 use restauro_render::tile::{Rect, TileResult, render_tile};
-use restauro_scene::load::{Limits, load_scene};
+use restauro_scene::load::{Limits, load_folder};
 use restauro_spectral::colorimetry::{Observer, white_point};
 use std::path::Path;
 
@@ -19,7 +19,7 @@ fn render(dir: &Path, toml: &str, (w, h): (u32, u32)) -> TileResult {
     std::fs::write(dir.join("wall.obj"), "v -6 4 0\nv 6 4 0\nv 6 4 5\nv -6 4 5\nf 1 2 3 4\n")
         .unwrap();
     std::fs::write(dir.join("scene.toml"), toml).unwrap();
-    let loaded = load_scene(&dir.join("scene.toml"), &Limits::default()).unwrap();
+    let loaded = load_folder(&dir.join("scene.toml"), &Limits::default()).unwrap();
     let prepared = PreparedScene::new(&loaded, None, Settings::from(&loaded.file.render)).unwrap();
     render_tile(&prepared, Rect { x: 0, y: 0, width: w, height: h }, false)
 }

@@ -5,7 +5,7 @@
 
 use glam::Vec3A;
 use restauro_render::prepared::{PreparedScene, Settings};
-use restauro_scene::load::{Limits, LoadedScene, load_scene};
+use restauro_scene::load::{Limits, LoadedScene, load_folder};
 use restauro_scene::scene_file::Integrator;
 use restauro_spectral::Spectrum;
 use std::path::Path;
@@ -69,7 +69,7 @@ state = "degraded"
 state = "cleaned"
 "#;
     std::fs::write(dir.join("scene.toml"), toml).unwrap();
-    load_scene(&dir.join("scene.toml"), &Limits::default()).unwrap()
+    load_folder(&dir.join("scene.toml"), &Limits::default()).unwrap()
 }
 
 /// The reflectance the tracer uses at x along the wall, half-way up, under `variant`.
@@ -119,11 +119,13 @@ fn a_map_naming_an_unknown_class_or_a_jpeg_is_refused() {
     let text = std::fs::read_to_string(dir.path().join("scene.toml")).unwrap();
     let bad = text.replace("classes = [\"biological\"]", "classes = [\"biologic\"]");
     std::fs::write(dir.path().join("scene.toml"), bad).unwrap();
-    let e = load_scene(&dir.path().join("scene.toml"), &Limits::default()).unwrap_err().to_string();
+    let e =
+        load_folder(&dir.path().join("scene.toml"), &Limits::default()).unwrap_err().to_string();
     assert!(e.contains("materials.stone.cleaned.classes") && e.contains("biological"), "{e}");
     let jpeg = text.replace("image = \"survey.png\"", "image = \"survey.jpg\"");
     std::fs::write(dir.path().join("survey.jpg"), b"\xff\xd8\xff").unwrap();
     std::fs::write(dir.path().join("scene.toml"), jpeg).unwrap();
-    let e = load_scene(&dir.path().join("scene.toml"), &Limits::default()).unwrap_err().to_string();
+    let e =
+        load_folder(&dir.path().join("scene.toml"), &Limits::default()).unwrap_err().to_string();
     assert!(e.contains("maps[0] (survey).image") && e.contains("PNG"), "{e}");
 }

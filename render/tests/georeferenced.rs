@@ -5,7 +5,7 @@
 
 use restauro_render::prepared::{PreparedScene, Settings};
 use restauro_render::tile::{Rect, render_tile};
-use restauro_scene::load::{Limits, load_scene};
+use restauro_scene::load::{Limits, load_folder};
 use restauro_scene::scene_file::Integrator;
 
 const EAST_M: f64 = 5_000_000.3;
@@ -42,7 +42,7 @@ fn a_shadow_edge_in_survey_coordinates_is_placed_to_the_millimetre() {
         points.join(", ")
     );
     std::fs::write(dir.path().join("scene.toml"), toml).unwrap();
-    let scene = load_scene(&dir.path().join("scene.toml"), &Limits::default()).unwrap();
+    let scene = load_folder(&dir.path().join("scene.toml"), &Limits::default()).unwrap();
     assert_eq!(scene.origin_m, [5_000_000.0, 4_000_000.0, 0.0]);
     let settings = Settings {
         integrator: Integrator::Path,

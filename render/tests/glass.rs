@@ -7,7 +7,7 @@
 
 use restauro_render::prepared::{PreparedScene, Settings};
 use restauro_render::tile::{Rect, film_xyz, pixel, render_tile};
-use restauro_scene::load::{Limits, LoadedScene, load_scene};
+use restauro_scene::load::{Limits, LoadedScene, load_folder};
 use restauro_scene::scene_file::Integrator;
 use restauro_spectral::Spectrum;
 
@@ -43,7 +43,7 @@ fn load_mesh(
     );
     std::fs::write(dir.join("green.csv"), green_csv()).unwrap();
     std::fs::write(dir.join("scene.toml"), toml).unwrap();
-    load_scene(&dir.join("scene.toml"), &Limits::default()).unwrap()
+    load_folder(&dir.join("scene.toml"), &Limits::default()).unwrap()
 }
 
 fn settings(scene: &LoadedScene, grids: bool) -> Settings {
@@ -237,7 +237,7 @@ fn glass_keys_are_refused_where_they_do_not_belong() {
              [[objects]]\nname = \"p\"\nmesh = \"mesh.obj\"\nmaterial = \"pane\"\n{sun}\n"
         );
         std::fs::write(dir.path().join("scene.toml"), toml).unwrap();
-        let e = load_scene(&dir.path().join("scene.toml"), &Limits::default()).unwrap_err();
+        let e = load_folder(&dir.path().join("scene.toml"), &Limits::default()).unwrap_err();
         assert!(e.to_string().contains(expected), "{glass}: {e}");
     }
 }

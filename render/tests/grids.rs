@@ -4,7 +4,7 @@
 
 use restauro_render::prepared::{PreparedScene, Settings};
 use restauro_render::tile::{Rect, render_tile};
-use restauro_scene::load::{Limits, LoadedScene, load_scene};
+use restauro_scene::load::{Limits, LoadedScene, load_folder};
 use restauro_scene::scene_file::Integrator;
 use restauro_spectral::Spectrum;
 use restauro_spectral::grid::BANDS;
@@ -21,7 +21,7 @@ fn load(dir: &Path, mesh: &str, body: &str) -> LoadedScene {
          [[objects]]\nname = \"mesh\"\nmesh = \"mesh.obj\"\nmaterial = \"brick\"\n{body}"
     );
     std::fs::write(dir.join("scene.toml"), toml).unwrap();
-    load_scene(&dir.join("scene.toml"), &Limits::default()).unwrap()
+    load_folder(&dir.join("scene.toml"), &Limits::default()).unwrap()
 }
 
 /// Every sensor's mean direct and indirect spectral irradiance, in the grids' order.

@@ -5,7 +5,7 @@
 
 use glam::Vec3A;
 use restauro_render::prepared::{PreparedScene, Settings};
-use restauro_scene::load::{Limits, load_scene};
+use restauro_scene::load::{Limits, load_folder};
 use restauro_scene::scene_file::Integrator;
 
 /// The LOD (scaled by 2 by its Transform, so its ranges are in half-metres) holds a light box
@@ -33,7 +33,7 @@ fn seen(distance_m: f64, height_px: u32) -> f32 {
          [[lights]]\nkind = \"sun\"\nilluminance_lux = 1000.0\nazimuth_deg = 0.0\nelevation_deg = 45.0\nspectrum = \"day\"\n"
     );
     std::fs::write(dir.path().join("scene.toml"), toml).unwrap();
-    let scene = load_scene(&dir.path().join("scene.toml"), &Limits::default()).unwrap();
+    let scene = load_folder(&dir.path().join("scene.toml"), &Limits::default()).unwrap();
     assert_eq!(scene.objects[0].mesh.triangles.len(), 24, "both levels are kept");
     let settings = Settings {
         integrator: Integrator::Whitted,

@@ -3,7 +3,7 @@
 use glam::Vec3A;
 use restauro_render::prepared::{PreparedScene, Settings};
 use restauro_render::tile::{Rect, camera_ray, pixel, render_tile};
-use restauro_scene::load::{Limits, LoadedScene, load_scene};
+use restauro_scene::load::{Limits, LoadedScene, load_folder};
 use restauro_scene::scene_file::Integrator;
 use restauro_spectral::colorimetry::{Observer, absolute_xyz};
 use restauro_spectral::keyed_random::KeyedRng;
@@ -51,7 +51,7 @@ material = "grey"
 "#
     );
     std::fs::write(dir.join("scene.toml"), toml).unwrap();
-    load_scene(&dir.join("scene.toml"), &Limits::default()).unwrap()
+    load_folder(&dir.join("scene.toml"), &Limits::default()).unwrap()
 }
 
 const PLANE: &str = "v -50 -50 0\nv 50 -50 0\nv 50 50 0\nv -50 50 0\nf 1 2 3 4\n";
@@ -221,7 +221,7 @@ fn bvh_hits_match_brute_force() {
     std::fs::create_dir_all(dir.path().join("meshes")).unwrap();
     std::fs::write(dir.path().join("meshes/facade.obj"), &generated.facade_obj).unwrap();
     std::fs::write(dir.path().join("aosta.toml"), &generated.scene_toml).unwrap();
-    let loaded = load_scene(&dir.path().join("aosta.toml"), &Limits::default()).unwrap();
+    let loaded = load_folder(&dir.path().join("aosta.toml"), &Limits::default()).unwrap();
     let prepared = PreparedScene::new(&loaded, Some("as-found"), settings(&loaded)).unwrap();
     let mut r = KeyedRng::new(9);
     let mut hits = 0;

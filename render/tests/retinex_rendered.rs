@@ -3,7 +3,7 @@
 
 use restauro_render::prepared::{PreparedScene, Settings};
 use restauro_render::tile::{Rect, render_tile};
-use restauro_scene::load::{Limits, load_scene};
+use restauro_scene::load::{Limits, load_folder};
 use restauro_spectral::appearance::{ChannelSpace, retinex_xyz};
 use restauro_spectral::retinex::RetinexParams;
 use restauro_spectral::seen::{SeenParams, seen};
@@ -15,7 +15,7 @@ const H: u32 = 64;
 /// render settings.
 fn prepare(dir: &std::path::Path, toml: &str) -> PreparedScene {
     std::fs::write(dir.join("scene.toml"), toml).unwrap();
-    let loaded = load_scene(&dir.join("scene.toml"), &Limits::default()).unwrap();
+    let loaded = load_folder(&dir.join("scene.toml"), &Limits::default()).unwrap();
     PreparedScene::new(&loaded, None, Settings::from(&loaded.file.render)).unwrap()
 }
 

@@ -9,7 +9,7 @@
 
 use restauro_render::prepared::{PreparedScene, Settings};
 use restauro_render::tile::{Rect, TileResult, render_tile};
-use restauro_scene::load::{Limits, load_scene};
+use restauro_scene::load::{Limits, load_folder};
 use restauro_spectral::appearance::d65_white;
 use restauro_spectral::colorimetry::relative_xyz;
 use restauro_spectral::retinex::RetinexParams;
@@ -135,7 +135,7 @@ material = "stone"
 {card}{lights}"#
     );
     std::fs::write(d.join("scene.toml"), toml).unwrap();
-    let loaded = load_scene(&d.join("scene.toml"), &Limits::default()).unwrap();
+    let loaded = load_folder(&d.join("scene.toml"), &Limits::default()).unwrap();
     let prepared = PreparedScene::new(&loaded, None, Settings::from(&loaded.file.render)).unwrap();
     let tile = render_tile(&prepared, Rect { x: 0, y: 0, width: W, height: H }, false);
     // The wall's right half, 0.5 m in from its edges, by where each pixel's centre ray meets

@@ -9,7 +9,7 @@
 use glam::Vec3A;
 use restauro_render::prepared::{PreparedScene, Settings};
 use restauro_render::tile::{camera_ray, film_xyz, pixel};
-use restauro_scene::load::{Limits, LoadedScene, load_scene};
+use restauro_scene::load::{Limits, LoadedScene, load_folder};
 use restauro_scene::scene_file::Integrator;
 use restauro_scene::sun::{SunPosition, direction_to_sun};
 
@@ -62,7 +62,7 @@ fn load(dir: &std::path::Path, obj: &str) -> LoadedScene {
         SUN.azimuth_deg, SUN.elevation_deg
     );
     std::fs::write(dir.join("scene.toml"), toml).unwrap();
-    load_scene(&dir.join("scene.toml"), &Limits::default()).unwrap()
+    load_folder(&dir.join("scene.toml"), &Limits::default()).unwrap()
 }
 
 fn prepare(scene: &LoadedScene) -> PreparedScene {

@@ -5,7 +5,7 @@
 use restauro_render::prepared::{PreparedScene, Settings};
 use restauro_render::tile::{Rect, render_tile};
 use restauro_scene::cie_sky::GeneralSky;
-use restauro_scene::load::{Limits, LoadedScene, load_scene};
+use restauro_scene::load::{Limits, LoadedScene, load_folder};
 use restauro_scene::scene_file::Integrator;
 use restauro_scene::sun::{SunPosition, direction_to_sun};
 use std::f64::consts::PI;
@@ -107,7 +107,7 @@ fn load(dir: &std::path::Path, sky: &str, grids: &str) -> LoadedScene {
          [[lights]]\nkind = \"sky\"\nspectrum = \"day\"\n{sky}\n{grids}"
     );
     std::fs::write(dir.join("scene.toml"), toml).unwrap();
-    load_scene(&dir.join("scene.toml"), &Limits::default()).unwrap()
+    load_folder(&dir.join("scene.toml"), &Limits::default()).unwrap()
 }
 
 /// The direct illuminance (lux) at every grid point, at `samples` a point.

@@ -6,7 +6,7 @@ use glam::Vec3A;
 use restauro_render::integrator::lift;
 use restauro_render::prepared::{PreparedScene, Settings};
 use restauro_render::sampler::PixelSampler;
-use restauro_scene::load::{Limits, load_scene};
+use restauro_scene::load::{Limits, load_folder};
 use restauro_scene::scene_file::Integrator;
 
 /// The deposit's mean share where a ray from `origin` along +Y meets the facade, over `n`
@@ -31,7 +31,7 @@ fn the_band_under_the_cornice_is_darker_than_the_rain_washed_buttresses() {
     std::fs::create_dir_all(dir.path().join("meshes")).unwrap();
     std::fs::write(dir.path().join("meshes/facade.obj"), &generated.facade_obj).unwrap();
     std::fs::write(dir.path().join("aosta.toml"), &generated.scene_toml).unwrap();
-    let loaded = load_scene(&dir.path().join("aosta.toml"), &Limits::default()).unwrap();
+    let loaded = load_folder(&dir.path().join("aosta.toml"), &Limits::default()).unwrap();
     let settings = Settings {
         integrator: Integrator::Path,
         samples_per_pixel: 1,

@@ -11,7 +11,7 @@
 use glam::Vec3A;
 use restauro_render::prepared::{PreparedScene, Settings};
 use restauro_render::tile::{Rect, render_tile};
-use restauro_scene::load::{Limits, LoadedScene, load_scene};
+use restauro_scene::load::{Limits, LoadedScene, load_folder};
 use restauro_scene::scene_file::Integrator;
 use restauro_spectral::Spectrum;
 use std::path::Path;
@@ -40,7 +40,7 @@ fn scene_of(dir: &Path, mesh: &str, detail: &str) -> LoadedScene {
          [[lights]]\nkind = \"sun\"\nilluminance_lux = 10000.0\nazimuth_deg = 180.0\nelevation_deg = 30.0\nspectrum = \"day\"\n"
     );
     std::fs::write(dir.join("scene.toml"), toml).unwrap();
-    load_scene(&dir.join("scene.toml"), &Limits::default()).unwrap()
+    load_folder(&dir.join("scene.toml"), &Limits::default()).unwrap()
 }
 
 fn prepare(scene: &LoadedScene) -> PreparedScene {

@@ -7,7 +7,7 @@
 use glam::Vec3A;
 use restauro_render::prepared::{PreparedScene, Settings};
 use restauro_render::tile::{Rect, render_tile};
-use restauro_scene::load::{Limits, LoadedScene, load_scene};
+use restauro_scene::load::{Limits, LoadedScene, load_folder};
 use restauro_scene::scene_file::Integrator;
 use restauro_spectral::Spectrum;
 use std::path::Path;
@@ -65,7 +65,7 @@ fn scene(
          [[lights]]\nkind = \"sun\"\nilluminance_lux = 10000.0\nazimuth_deg = 180.0\nelevation_deg = 60.0\nspectrum = \"day\"\n"
     );
     std::fs::write(dir.join("scene.toml"), toml).unwrap();
-    load_scene(&dir.join("scene.toml"), &Limits::default()).unwrap()
+    load_folder(&dir.join("scene.toml"), &Limits::default()).unwrap()
 }
 
 const ABOVE: &str = "[camera]\nposition = [0.0, 0.0, 5.0]\ntarget = [0.0, 0.0, 0.0]\nup = [0, 1, 0]\n\
@@ -275,7 +275,7 @@ fn a_textured_gltf_shows_its_own_photo_over_the_bound_spectrum() {
              [[lights]]\nkind = \"sun\"\nilluminance_lux = 10000.0\nazimuth_deg = 180.0\nelevation_deg = 60.0\nspectrum = \"day\"\n"
         );
         std::fs::write(dir.path().join("scene.toml"), toml).unwrap();
-        prepare(&load_scene(&dir.path().join("scene.toml"), &Limits::default()).unwrap())
+        prepare(&load_folder(&dir.path().join("scene.toml"), &Limits::default()).unwrap())
     };
     let prepared = load("");
     let (left, right) = (reflectance_at(&prepared, -0.5, 0.0), reflectance_at(&prepared, 0.5, 0.0));

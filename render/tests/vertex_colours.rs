@@ -7,7 +7,7 @@
 
 use glam::Vec3A;
 use restauro_render::prepared::{PreparedScene, Settings};
-use restauro_scene::load::{Limits, load_scene};
+use restauro_scene::load::{Limits, load_folder};
 use restauro_scene::scene_file::Integrator;
 use restauro_spectral::Spectrum;
 use std::path::Path;
@@ -49,7 +49,7 @@ fn prepare(left: [u8; 3], right: [u8; 3], rho: &str, detail: &str) -> (PreparedS
          [[lights]]\nkind = \"sun\"\nilluminance_lux = 10000.0\nazimuth_deg = 180.0\nelevation_deg = 60.0\nspectrum = \"day\"\n"
     );
     std::fs::write(dir.path().join("scene.toml"), toml).unwrap();
-    let loaded = load_scene(&dir.path().join("scene.toml"), &Limits::default()).unwrap();
+    let loaded = load_folder(&dir.path().join("scene.toml"), &Limits::default()).unwrap();
     (PreparedScene::new(&loaded, None, SETTINGS).unwrap(), loaded.spectra["stone"])
 }
 
@@ -198,7 +198,7 @@ fn a_gltf_scans_color_0_gives_the_same_detail() {
          [[objects]]\nname = \"scan\"\nmesh = \"scan.gltf\"\nmaterial = \"stone\"\n\
          [[lights]]\nkind = \"sun\"\nilluminance_lux = 10000.0\nazimuth_deg = 180.0\nelevation_deg = 60.0\nspectrum = \"day\"\n";
     std::fs::write(dir.path().join("scene.toml"), toml).unwrap();
-    let loaded = load_scene(&dir.path().join("scene.toml"), &Limits::default()).unwrap();
+    let loaded = load_folder(&dir.path().join("scene.toml"), &Limits::default()).unwrap();
     let prepared = PreparedScene::new(&loaded, None, SETTINGS).unwrap();
     // Linear values: a byte over 255, weighed by BT.709.
     let y = |c: [u8; 4]| {

@@ -25,11 +25,11 @@ pub trait Assets: Sync {
 /// (a glTF's buffer `model.bin` beside `meshes/model.gltf` is `meshes/model.bin`; beside
 /// `https://x.org/scan/model.gltf` it is `https://x.org/scan/model.bin`).
 pub fn sibling(reference: &str, relative: &str) -> Result<String, String> {
-    if crate::remote::is_url(relative) {
+    if crate::web_url::is_url(relative) {
         return Ok(relative.to_owned());
     }
-    if crate::remote::is_url(reference) {
-        let base = crate::remote::WebUrl::parse(reference)?;
+    if crate::web_url::is_url(reference) {
+        let base = crate::web_url::WebUrl::parse(reference)?;
         return base.join(relative).map(|url| url.to_string());
     }
     let joined = match Path::new(reference).parent().filter(|p| !p.as_os_str().is_empty()) {
@@ -142,14 +142,21 @@ pub fn utf8_text(bytes: Vec<u8>, path: &Path) -> Result<String> {
     })
 }
 
+/// Fetches the files a scene names by URL: restauro-assets's `Remote` (over the network, into
+/// a cache, each checked against its pin). The scene model reads through it and knows no network.
+pub trait Fetch: Sync {
+    /// The bytes at `url`, at most `max_bytes`; `place` says where the scene names it.
+    fn fetch(&self, url: &str, place: &str, max_bytes: u64) -> Result<Vec<u8>>;
+}
+
 /// The files of a scene folder. References are relative to the scene file and may not leave
 /// its folder (symbolic links are followed before the check), nor name the scene file itself.
-/// A reference may also be a URL pinned in the scene's `[pins]` (see [`crate::remote`]).
+/// A reference may also be a URL, read through the folder's [`Fetch`] if it has one.
 pub struct FolderAssets {
     scene_file: PathBuf,
     dir: PathBuf,
     max_file_bytes: u64,
-    remote: crate::remote::Remote,
+    fetch: Option<Box<dyn Fetch>>,
 }
 
 impl FolderAssets {
@@ -157,24 +164,12 @@ impl FolderAssets {
         let scene_file =
             scene_file.canonicalize().map_err(|error| SceneError::io(scene_file, error))?;
         let dir = scene_file.parent().map(Path::to_owned).unwrap_or_else(|| PathBuf::from("/"));
-        let remote = crate::remote::Remote::new(&scene_file, &BTreeMap::new())?;
-        Ok(Self { scene_file, dir, max_file_bytes, remote })
+        Ok(Self { scene_file, dir, max_file_bytes, fetch: None })
     }
 
-    /// The folder of the scene file at `path`, whose files named by URL are pinned by `pins`.
-    pub fn with_pins(
-        scene_file: &Path,
-        max_file_bytes: u64,
-        pins: &BTreeMap<String, crate::scene_file::Pin>,
-    ) -> Result<Self> {
-        let mut assets = Self::new(scene_file, max_file_bytes)?;
-        assets.remote = crate::remote::Remote::new(scene_file, pins)?;
-        Ok(assets)
-    }
-
-    /// Fetches files named by URL with `config` rather than the environment's.
-    pub fn with_remote_config(mut self, config: crate::remote::RemoteConfig) -> Self {
-        self.remote = self.remote.with_config(config);
+    /// Reads the files named by URL through `fetch`.
+    pub fn with_fetch(mut self, fetch: Box<dyn Fetch>) -> Self {
+        self.fetch = Some(fetch);
         self
     }
 
@@ -212,8 +207,19 @@ impl FolderAssets {
 
 impl Assets for FolderAssets {
     fn read(&self, reference: &str, place: &str) -> Result<Vec<u8>> {
-        if crate::remote::is_url(reference) {
-            return self.remote.read(reference, place, self.max_file_bytes);
+        if crate::web_url::is_url(reference) {
+            return match &self.fetch {
+                Some(fetch) => fetch.fetch(reference, place, self.max_file_bytes),
+                None => Err(SceneError::invalid(
+                    &self.scene_file,
+                    place,
+                    format!(
+                        "`{reference}` is a URL, and this reader of the folder fetches nothing; \
+                         load the scene with restauro_assets::load_scene, which fetches files \
+                         named by URL"
+                    ),
+                )),
+            };
         }
         let path = self.resolve(reference, place)?;
         read_regular_file(&path, self.max_file_bytes, MAX_FILE_FIX)
@@ -224,7 +230,7 @@ impl Assets for FolderAssets {
     }
 
     fn display_path(&self, reference: &str) -> PathBuf {
-        if crate::remote::is_url(reference) {
+        if crate::web_url::is_url(reference) {
             return PathBuf::from(reference);
         }
         self.dir.join(reference)
@@ -276,7 +282,7 @@ impl Assets for BundleAssets<'_> {
 /// The extension of a reference (folder path or bundle reference), lower case.
 pub fn extension(reference: &str) -> String {
     // A URL's query and fragment are not part of its file name.
-    let reference = match crate::remote::is_url(reference) {
+    let reference = match crate::web_url::is_url(reference) {
         true => reference.split(['?', '#']).next().unwrap_or(reference),
         false => reference,
     };

@@ -6,9 +6,9 @@
 //! their file names, comments or layout — have the same canonical form and so one identity,
 //! and a coordinator and its workers move each file once, by hash.
 
-use crate::assets::{Assets, BundleAssets, FolderAssets, extension};
+use crate::assets::{Assets, BundleAssets, extension};
 use crate::error::{Result, SceneError};
-use crate::load::{Limits, LoadedScene, load, read_scene_file};
+use crate::load::{Limits, LoadedScene, load};
 use crate::scene_file::{Light, SceneFile, SpectrumSource};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -22,23 +22,17 @@ pub struct Bundle {
     pub files: BTreeMap<String, Vec<u8>>,
 }
 
-/// Bundle the scene file at `path` and everything it refers to (or read the bundle an archive
-/// at `path` holds, see `archive`).
-pub fn bundle_scene(path: &Path, limits: &Limits) -> Result<Bundle> {
-    if crate::archive::is_archive(path) {
-        return crate::archive::read_archive(path, limits);
-    }
-    let scene = read_scene_file(path, limits)?;
-    let assets = FolderAssets::with_pins(path, limits.max_file_bytes, &scene.pins)?;
-    bundle_folder(scene, &assets, limits)
+/// Bundle the scene file at `path` with the files of its folder; files named by URL are
+/// refused (restauro-assets's `bundle_scene` fetches them, and reads archives too).
+pub fn bundle_folder(path: &Path, limits: &Limits) -> Result<Bundle> {
+    let scene = crate::load::read_scene_file(path, limits)?;
+    crate::pins::check_pins(path, &scene.pins)?;
+    bundle_files(scene, &crate::assets::FolderAssets::new(path, limits.max_file_bytes)?, limits)
 }
 
-/// Bundle `scene` with the files `assets` holds (a folder, whose URLs are fetched once).
-pub fn bundle_folder(
-    mut scene: SceneFile,
-    assets: &FolderAssets,
-    limits: &Limits,
-) -> Result<Bundle> {
+/// Bundle `scene` with the files `assets` holds (a folder, whose URLs are fetched once; see
+/// restauro-assets for a scene folder or archive on disk).
+pub fn bundle_files(mut scene: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Bundle> {
     let mut files = BTreeMap::new();
     let mut included = Vec::new();
     let mut add = |reference: &mut String, place: String| -> Result<()> {
@@ -78,7 +72,7 @@ pub fn bundle_folder(
 fn embed_nested(
     reference: &str,
     bytes: Vec<u8>,
-    (assets, place): (&FolderAssets, &str),
+    (assets, place): (&dyn Assets, &str),
     limits: &Limits,
     files: &mut BTreeMap<String, Vec<u8>>,
     included: &mut Vec<String>,

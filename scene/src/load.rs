@@ -359,13 +359,12 @@ fn plain_message(message: &str) -> String {
     message.to_owned()
 }
 
-/// Load and check the scene file at `path`.
-pub fn load_scene(path: &Path, limits: &Limits) -> Result<LoadedScene> {
-    if crate::archive::is_archive(path) {
-        return crate::archive::read_archive(path, limits)?.load(limits);
-    }
+/// Load and check the scene file at `path` with the files of its folder; files named by URL
+/// are refused (restauro-assets's `load_scene` fetches them, and reads archives too).
+pub fn load_folder(path: &Path, limits: &Limits) -> Result<LoadedScene> {
     let file = read_scene_file(path, limits)?;
-    let assets = FolderAssets::with_pins(path, limits.max_file_bytes, &file.pins)?;
+    crate::pins::check_pins(path, &file.pins)?;
+    let assets = FolderAssets::new(path, limits.max_file_bytes)?;
     load(file, &assets, limits)
 }
 

@@ -148,7 +148,7 @@ mod tests {
         std::fs::write(dir.path().join(PHOTO_FILE), PHOTO).unwrap();
         std::fs::write(dir.path().join("blocks.toml"), &g.scene_toml).unwrap();
         let scene =
-            crate::load::load_scene(&dir.path().join("blocks.toml"), &Default::default()).unwrap();
+            crate::load::load_folder(&dir.path().join("blocks.toml"), &Default::default()).unwrap();
         assert_eq!(scene.textures[PHOTO_FILE].width, 512);
         assert_eq!(scene.state_of(VARIANT, "photo-found", "default"), Some("degraded"));
     }

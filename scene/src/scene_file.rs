@@ -101,7 +101,7 @@ pub struct SceneFile {
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub maps: Vec<DegradationMap>,
     /// The content hash of every file the scene names by URL (`https://…`), by URL: what makes
-    /// a render from remote files reproducible (see [`crate::remote`]). Bundles name files by
+    /// a render from remote files reproducible (see [`crate::pins`]; restauro-assets fetches them). Bundles name files by
     /// hash and carry none. Not written when there are none.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub pins: BTreeMap<String, Pin>,

@@ -4,7 +4,7 @@
 //! reads, not an output of the code.
 
 use base64::Engine;
-use restauro_scene::load::{Limits, LoadedScene, load_scene};
+use restauro_scene::load::{Limits, LoadedScene, load_folder};
 use restauro_scene::{gltf_mesh, obj, ply, vrml};
 use std::path::{Path, PathBuf};
 use std::sync::mpsc;
@@ -73,7 +73,7 @@ const TRIANGLE_OBJ: &str = "v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1 2 3\n";
 
 fn load(folder: &Folder, toml: &str) -> Result<LoadedScene, String> {
     let path = folder.write("scene.toml", toml);
-    load_scene(&path, &Limits::default()).map_err(|e| e.to_string())
+    load_folder(&path, &Limits::default()).map_err(|e| e.to_string())
 }
 
 fn refused(folder: &Folder, toml: &str) -> String {
@@ -237,7 +237,7 @@ fn a_scene_file_that_is_a_fifo_or_dev_zero_is_refused_not_waited_on() {
     for path in [fifo, zero] {
         let shown = path.clone();
         let e = within(20, &format!("loading {}", shown.display()), move || {
-            load_scene(&path, &Limits::default()).map(|_| ()).unwrap_err().to_string()
+            load_folder(&path, &Limits::default()).map(|_| ()).unwrap_err().to_string()
         });
         assert_has(&e, &[&shown.display().to_string(), "not a regular file", "ordinary file"]);
     }
@@ -371,7 +371,7 @@ fn text_that_is_not_utf8_is_refused_with_its_line_and_byte() {
 #[test]
 fn a_missing_file_is_reported_once() {
     let e =
-        load_scene(Path::new("/nonexistent/restauro/scene.toml"), &Limits::default()).unwrap_err();
+        load_folder(Path::new("/nonexistent/restauro/scene.toml"), &Limits::default()).unwrap_err();
     let text = chain(&e);
     assert_has(&text, &["/nonexistent/restauro/scene.toml", "does not exist", "check the path"]);
     assert!(text.matches("does not exist").count() == 1, "said twice: {text}");
@@ -412,7 +412,7 @@ fn deeply_nested_toml_is_refused_before_it_overflows_the_stack() {
     let path = f.write("scene.toml", &deep);
     let e = std::thread::Builder::new()
         .stack_size(2 << 20)
-        .spawn(move || load_scene(&path, &Limits::default()).map(|_| ()).unwrap_err().to_string())
+        .spawn(move || load_folder(&path, &Limits::default()).map(|_| ()).unwrap_err().to_string())
         .unwrap()
         .join()
         .unwrap();

@@ -2,7 +2,7 @@
 //! restauro reads: with the scene's `origin`, a step of 1 mm survives into the placed mesh,
 //! where 32 bits at that distance resolve only 0.5 m.
 
-use restauro_scene::load::{Limits, LoadedScene, load_scene};
+use restauro_scene::load::{Limits, LoadedScene, load_folder};
 
 const EAST_M: f64 = 5_000_000.3;
 const NORTH_M: f64 = 4_000_000.7;
@@ -27,7 +27,7 @@ fn load(mesh_name: &str, mesh: &[u8], extra: &str) -> LoadedScene {
         NORTH_M - 10.0
     );
     std::fs::write(dir.path().join("scene.toml"), toml).unwrap();
-    load_scene(&dir.path().join("scene.toml"), &Limits::default()).unwrap()
+    load_folder(&dir.path().join("scene.toml"), &Limits::default()).unwrap()
 }
 
 /// The placed mesh's x coordinates (recentred), lowest first, with the step between the two

@@ -3,8 +3,8 @@
 //! separators); each `usemtl` part gets its photo, a library or photo that cannot be read is a
 //! note, and a bundle carries the library and its photos by hash.
 
-use restauro_scene::bundle::bundle_scene;
-use restauro_scene::load::{Limits, LoadedScene, load_scene};
+use restauro_scene::bundle::bundle_folder;
+use restauro_scene::load::{Limits, LoadedScene, load_folder};
 use std::path::Path;
 
 /// Two parts on two quads, both with texture coordinates.
@@ -60,7 +60,7 @@ fn each_part_gets_the_photo_its_library_names() {
             ("scan/textures/block.png", &photo),
         ],
     );
-    let scene = load_scene(&dir.path().join("scene.toml"), &Limits::default()).unwrap();
+    let scene = load_folder(&dir.path().join("scene.toml"), &Limits::default()).unwrap();
     // 8-bit 200 is 200·257 in the 16-bit texels.
     assert_eq!(photo_of(&scene, "stone"), Some([200 * 257, 100 * 257, 50 * 257]));
     assert_eq!(photo_of(&scene, "mortar"), None, "the mortar has no map_Kd");
@@ -71,7 +71,7 @@ fn each_part_gets_the_photo_its_library_names() {
 fn a_library_or_photo_that_cannot_be_read_is_a_note() {
     let dir = tempfile::tempdir().unwrap();
     write(dir.path(), &[("scan/model.obj", OBJ.as_bytes())]);
-    let scene = load_scene(&dir.path().join("scene.toml"), &Limits::default()).unwrap();
+    let scene = load_folder(&dir.path().join("scene.toml"), &Limits::default()).unwrap();
     assert_eq!(photo_of(&scene, "stone"), None);
     let notes = scene.notes.join("\n");
     assert!(
@@ -80,7 +80,7 @@ fn a_library_or_photo_that_cannot_be_read_is_a_note() {
     );
 
     write(dir.path(), &[("scan/model.mtl", MTL.as_bytes())]);
-    let scene = load_scene(&dir.path().join("scene.toml"), &Limits::default()).unwrap();
+    let scene = load_folder(&dir.path().join("scene.toml"), &Limits::default()).unwrap();
     let notes = scene.notes.join("\n");
     assert!(
         notes.contains("model.mtl") && notes.contains("the photo textures/block.png of `stone`"),
@@ -88,7 +88,7 @@ fn a_library_or_photo_that_cannot_be_read_is_a_note() {
     );
 
     write(dir.path(), &[("scan/textures/block.png", b"not a png")]);
-    let e = load_scene(&dir.path().join("scene.toml"), &Limits::default()).unwrap_err();
+    let e = load_folder(&dir.path().join("scene.toml"), &Limits::default()).unwrap_err();
     assert!(e.to_string().contains("block.png"), "{e}");
 }
 
@@ -106,7 +106,7 @@ fn a_bundle_carries_the_library_and_its_photos() {
             ("scan/textures/block.png", &photo),
         ],
     );
-    let bundle = bundle_scene(&dir.path().join("scene.toml"), &Limits::default()).unwrap();
+    let bundle = bundle_folder(&dir.path().join("scene.toml"), &Limits::default()).unwrap();
     let kinds: Vec<&str> =
         bundle.scene.included.iter().map(|r| r.rsplit('.').next().unwrap()).collect();
     assert_eq!(kinds.len(), 2, "{:?}", bundle.scene.included);
@@ -125,7 +125,7 @@ fn a_bundle_carries_the_library_and_its_photos() {
             ("scan/photo.png", &photo),
         ],
     );
-    let again = bundle_scene(&renamed.path().join("scene.toml"), &Limits::default()).unwrap();
+    let again = bundle_folder(&renamed.path().join("scene.toml"), &Limits::default()).unwrap();
     assert_eq!(again.id(), bundle.id(), "the same scan under other file names");
 }
 
@@ -134,6 +134,7 @@ fn a_photo_before_any_material_is_refused_with_its_line() {
     let dir = tempfile::tempdir().unwrap();
     let mtl = "# exported\nmap_Kd photo.png\nnewmtl stone\n";
     write(dir.path(), &[("scan/model.obj", OBJ.as_bytes()), ("scan/model.mtl", mtl.as_bytes())]);
-    let e = load_scene(&dir.path().join("scene.toml"), &Limits::default()).unwrap_err().to_string();
+    let e =
+        load_folder(&dir.path().join("scene.toml"), &Limits::default()).unwrap_err().to_string();
     assert!(e.contains("model.mtl: line 2") && e.contains("before any `newmtl`"), "{e}");
 }

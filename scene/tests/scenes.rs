@@ -1,8 +1,8 @@
 //! Scene files as a restorer writes them: every mesh format through a scene, every class of bad
 //! input refused with its place and fix, bundles that are stable and self-sufficient.
 
-use restauro_scene::bundle::bundle_scene;
-use restauro_scene::load::{Limits, LoadedScene, ResolvedLight, load_scene};
+use restauro_scene::bundle::bundle_folder;
+use restauro_scene::load::{Limits, LoadedScene, ResolvedLight, load_folder};
 use std::path::{Path, PathBuf};
 
 /// A scene folder in a temporary directory.
@@ -77,7 +77,7 @@ materials = { stone = "stone", joint = "glaze" }
 
 fn load(folder: &Folder, toml: &str) -> Result<LoadedScene, String> {
     let path = folder.write("scene.toml", toml);
-    load_scene(&path, &Limits::default()).map_err(|e| e.to_string())
+    load_folder(&path, &Limits::default()).map_err(|e| e.to_string())
 }
 
 fn refused(folder: &Folder, toml: &str) -> String {
@@ -163,9 +163,9 @@ fn a_ply_part_bound_by_name_loads_from_its_bundle_too() {
     f.write("meshes/scan.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 0 1\n3 0 1 2\n");
     let objects = "[[objects]]\nname = \"scan\"\nmesh = \"meshes/scan.ply\"\nmaterials = { default = \"stone\" }\n";
     let path = f.write("scene.toml", scene_toml(objects, ""));
-    let from_folder = load_scene(&path, &Limits::default()).unwrap();
+    let from_folder = load_folder(&path, &Limits::default()).unwrap();
     assert_eq!(from_folder.objects[0].mesh.groups[0].name, "default");
-    let bundle = bundle_scene(&path, &Limits::default()).unwrap();
+    let bundle = bundle_folder(&path, &Limits::default()).unwrap();
     let from_bundle = bundle.load(&Limits::default()).unwrap();
     assert_eq!(from_bundle.objects[0].group_materials, ["stone"]);
 }
@@ -201,19 +201,19 @@ fn a_gltf_with_its_bin_beside_it_loads_and_bundles() {
     let objects =
         "[[objects]]\nname = \"wall\"\nmesh = \"meshes/wall.gltf\"\nmaterial = \"stone\"\n";
     let path = f.write("scene.toml", scene_toml(objects, ""));
-    let from_folder = load_scene(&path, &Limits::default()).unwrap();
+    let from_folder = load_folder(&path, &Limits::default()).unwrap();
     assert_eq!(from_folder.objects[0].mesh.triangles.len(), 1);
-    let bundle = bundle_scene(&path, &Limits::default()).unwrap();
+    let bundle = bundle_folder(&path, &Limits::default()).unwrap();
     assert_eq!(bundle.files.len(), 1, "the model and its buffer are one file in the bundle");
     let from_bundle = bundle.load(&Limits::default()).unwrap();
     assert_eq!(from_bundle.objects[0].mesh.positions, from_folder.objects[0].mesh.positions);
     // A buffer outside the scene's folder is refused, as any file outside it.
     f.write("meshes/wall.gltf", gltf("../../wall.bin"));
-    let err = load_scene(&path, &Limits::default()).unwrap_err().to_string();
+    let err = load_folder(&path, &Limits::default()).unwrap_err().to_string();
     assert!(err.contains("leaves the scene's folder") || err.contains("cannot be opened"), "{err}");
     // A missing buffer names the file looked for.
     f.write("meshes/wall.gltf", gltf("gone.bin"));
-    let err = load_scene(&path, &Limits::default()).unwrap_err().to_string();
+    let err = load_folder(&path, &Limits::default()).unwrap_err().to_string();
     assert!(err.contains("meshes/gone.bin"), "{err}");
 }
 
@@ -481,13 +481,13 @@ fn limits_say_which_limit_and_how_to_raise_it() {
     f.write("meshes/wall.obj", QUAD_OBJ);
     let path = f.write("scene.toml", scene_toml(OBJ_OBJECT, ""));
     let limits = Limits { max_triangles: 2, ..Limits::default() };
-    let err = load_scene(&path, &limits).unwrap_err().to_string();
+    let err = load_folder(&path, &limits).unwrap_err().to_string();
     assert!(err.contains("the number of triangles is 3, over the limit of 2; simplify the meshes, or raise the limit with --max-triangles"), "{err}");
     let limits = Limits { max_pixels: 1000, ..Limits::default() };
-    let err = load_scene(&path, &limits).unwrap_err().to_string();
+    let err = load_folder(&path, &limits).unwrap_err().to_string();
     assert!(err.contains("the image size (pixels) is 3072, over the limit of 1000"), "{err}");
     let limits = Limits { max_file_bytes: 10, ..Limits::default() };
-    let err = load_scene(&path, &limits).unwrap_err().to_string();
+    let err = load_folder(&path, &limits).unwrap_err().to_string();
     assert!(err.contains("the file size (bytes)") && err.contains("--max-file-mb"), "{err}");
 }
 
@@ -496,25 +496,25 @@ fn bundles_are_stable_self_sufficient_and_name_files_by_content() {
     let a = Folder::new();
     a.write("meshes/wall.obj", QUAD_OBJ);
     let path_a = a.write("scene.toml", scene_toml(OBJ_OBJECT, ""));
-    let bundle = bundle_scene(&path_a, &Limits::default()).unwrap();
+    let bundle = bundle_folder(&path_a, &Limits::default()).unwrap();
     assert_eq!(bundle.files.len(), 1);
     let hash = blake3::hash(QUAD_OBJ.as_bytes()).to_hex().to_string();
     assert_eq!(bundle.scene.objects[0].mesh, format!("blake3:{hash}.obj"));
     // Bundling again gives the same identity.
-    assert_eq!(bundle_scene(&path_a, &Limits::default()).unwrap().id(), bundle.id());
+    assert_eq!(bundle_folder(&path_a, &Limits::default()).unwrap().id(), bundle.id());
     // The same scene elsewhere, with other file names, comments and layout: the same identity.
     let b = Folder::new();
     b.write("geometry/muro.obj", QUAD_OBJ);
     let moved = scene_toml(&OBJ_OBJECT.replace("meshes/wall.obj", "geometry/muro.obj"), "")
         .replace("format = 1", "# copied\nformat   =   1");
     let path_b = b.write("other-name.toml", moved);
-    assert_eq!(bundle_scene(&path_b, &Limits::default()).unwrap().id(), bundle.id());
+    assert_eq!(bundle_folder(&path_b, &Limits::default()).unwrap().id(), bundle.id());
     // A different mesh is a different scene.
     b.write("geometry/muro.obj", QUAD_OBJ.replace("v 1 0 2", "v 1 0 3"));
-    assert_ne!(bundle_scene(&path_b, &Limits::default()).unwrap().id(), bundle.id());
+    assert_ne!(bundle_folder(&path_b, &Limits::default()).unwrap().id(), bundle.id());
     // The bundle alone is enough to load the scene, as a worker does.
     let from_bundle = bundle.load(&Limits::default()).unwrap();
-    let from_folder = load_scene(&path_a, &Limits::default()).unwrap();
+    let from_folder = load_folder(&path_a, &Limits::default()).unwrap();
     assert_eq!(from_bundle.objects[0].mesh, from_folder.objects[0].mesh);
     // Rebuilt from its canonical form and files, checked; a corrupted file is caught.
     let rebuilt =
@@ -535,7 +535,7 @@ fn the_aosta_scene_validates() {
     let generated = restauro_scene::aosta::generate(320, 180, 1);
     f.write("meshes/facade.obj", &generated.facade_obj);
     let path = f.write("aosta.toml", &generated.scene_toml);
-    let scene = load_scene(Path::new(&path), &Limits::default()).unwrap();
+    let scene = load_folder(Path::new(&path), &Limits::default()).unwrap();
     assert_eq!(scene.triangle_count(), generated.triangles);
     // The summer-afternoon sun over the theatre is up and in the south-west.
     match &scene.lights[0] {
@@ -748,27 +748,6 @@ fn folder_with_quad() -> Folder {
     f
 }
 
-/// A bundle written out as a folder reads back as the same bundle: the same canonical scene,
-/// the same identity, the same files.
-#[test]
-fn a_bundle_written_as_a_folder_reads_back_as_itself() {
-    let f = Folder::new();
-    f.write("meshes/wall.obj", QUAD_OBJ);
-    let path = f.write("scene.toml", scene_toml(OBJ_OBJECT, ""));
-    let bundle = bundle_scene(&path, &Limits::default()).unwrap();
-    let tar =
-        restauro_scene::folder::folder_tar(&bundle, "wall-r1", "Revision 1\nof the wall").unwrap();
-    let out = tempfile::tempdir().unwrap();
-    tar::Archive::new(std::io::Cursor::new(tar)).unpack(out.path()).unwrap();
-    let scene = out.path().join("wall-r1/scene.toml");
-    let text = std::fs::read_to_string(&scene).unwrap();
-    assert!(text.starts_with("# Revision 1\n# of the wall\n"), "{text}");
-    let again = bundle_scene(&scene, &Limits::default()).unwrap();
-    assert_eq!(again.canonical_json(), bundle.canonical_json());
-    assert_eq!(again.id(), bundle.id());
-    assert_eq!(again.files, bundle.files);
-}
-
 /// Notes pinned to the model are checked as the rest of the file: a part that exists, links
 /// that are web addresses, one note per title, a pose the camera can take.
 #[test]
@@ -827,7 +806,7 @@ fn a_notes_images_are_bundled_and_must_be_what_their_names_say() {
     };
     let good = note("[\"photos/crack.png\", \"photos/crack.jpg\"]");
     let path = f.write("scene.toml", &good);
-    let bundle = bundle_scene(&path, &Limits::default()).unwrap();
+    let bundle = bundle_folder(&path, &Limits::default()).unwrap();
     let hash = blake3::hash(PNG_START).to_hex().to_string();
     assert_eq!(bundle.scene.annotations[0].images[0], format!("blake3:{hash}.png"));
     assert_eq!(bundle.files[&hash], PNG_START);
@@ -848,68 +827,6 @@ fn a_notes_images_are_bundled_and_must_be_what_their_names_say() {
     let many: Vec<String> = (0..33).map(|_| "\"photos/crack.png\"".to_owned()).collect();
     let message = refused(&f, &note(&format!("[{}]", many.join(", "))));
     assert!(message.contains("33 images; a note holds at most 32"), "{message}");
-}
-
-/// `entries` as a zip, each deflated.
-fn zip_of(entries: &[(&str, &[u8])]) -> Vec<u8> {
-    use std::io::Write;
-    let mut w = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
-    let options = zip::write::SimpleFileOptions::default()
-        .compression_method(zip::CompressionMethod::Deflated);
-    for (name, bytes) in entries {
-        w.start_file(*name, options).unwrap();
-        w.write_all(bytes).unwrap();
-    }
-    w.finish().unwrap().into_inner()
-}
-
-/// A scene folder sent as a zip (as a file manager packs one) bundles as the folder on disk
-/// does; a path out of the folder, a file over the size limit and a damaged zip are refused,
-/// naming what is wrong.
-#[test]
-fn a_scene_folder_sent_as_a_zip_bundles_as_the_folder_does() {
-    use restauro_scene::folder::bundle_folder_archive;
-    let toml = scene_toml(OBJ_OBJECT, "");
-    let f = Folder::new();
-    f.write("meshes/wall.obj", QUAD_OBJ);
-    let on_disk = bundle_scene(&f.write("scene.toml", &toml), &Limits::default()).unwrap();
-    let zipped = zip_of(&[
-        ("facade/scene.toml", toml.as_bytes()),
-        ("facade/meshes/wall.obj", QUAD_OBJ.as_bytes()),
-    ]);
-    let sent = bundle_folder_archive(&zipped, None, &Limits::default()).unwrap();
-    assert_eq!(sent.id(), on_disk.id());
-
-    let small = Limits { max_file_bytes: 4096, ..Limits::default() };
-    let zeros = vec![0u8; 10_000];
-    for (entries, limits, words) in [
-        (
-            vec![("../scene.toml", toml.as_bytes())],
-            Limits::default(),
-            "`../scene.toml` is not a path inside the folder",
-        ),
-        (
-            vec![("/etc/scene.toml", toml.as_bytes())],
-            Limits::default(),
-            "is not a path inside the folder",
-        ),
-        (
-            vec![("scene.toml", toml.as_bytes()), ("meshes/wall.obj", &zeros[..])],
-            small,
-            "`meshes/wall.obj` is more than 4096 bytes",
-        ),
-        (vec![("meshes/wall.obj", QUAD_OBJ.as_bytes())], Limits::default(), "it has no scene file"),
-    ] {
-        let message =
-            bundle_folder_archive(&zip_of(&entries), None, &limits).unwrap_err().to_string();
-        assert!(message.contains(words), "{message}");
-        assert!(message.starts_with("the folder sent"), "{message}");
-    }
-    let mut damaged = zipped.clone();
-    damaged.truncate(zipped.len() / 2);
-    let message =
-        bundle_folder_archive(&damaged, None, &Limits::default()).unwrap_err().to_string();
-    assert!(message.contains("not a readable zip archive"), "{message}");
 }
 
 /// A reflectance given as a number is flat at every wavelength; 0 (a black surface) is allowed,
@@ -1091,7 +1008,7 @@ fn the_preview_carries_photos_and_vertex_colours_as_detail() {
         [[objects]]\nname = \"plain\"\nmesh = \"weathered-patch.ply\"\nup_axis = \"y\"\nmaterial = \"plain\"\ntransform = { translate = [-1.0, 0.0, 0.0] }\n\
         [[lights]]\nkind = \"sun\"\nilluminance_lux = 1000.0\nazimuth_deg = 180.0\nelevation_deg = 30.0\nspectrum = \"day\"\n";
     std::fs::write(dir.path().join("scene.toml"), toml).unwrap();
-    let scene = load_scene(&dir.path().join("scene.toml"), &Limits::default()).unwrap();
+    let scene = load_folder(&dir.path().join("scene.toml"), &Limits::default()).unwrap();
     let preview = restauro_scene::gltf_export::scene_glb(&scene, |_| [0.5; 3]);
     // The document, from the GLB's JSON chunk (§4.4).
     let length = u32::from_le_bytes(preview.glb[12..16].try_into().unwrap()) as usize;

@@ -3,7 +3,7 @@
 //! thing of a scene that loads, and checks the words a restorer reads.
 
 use base64::Engine as _;
-use restauro_scene::load::{Limits, load_scene};
+use restauro_scene::load::{Limits, load_folder};
 
 const QUAD: &str =
     "v 0 0 0\nv 1 0 0\nv 1 0 1\nv 0 0 1\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nf 1/1 2/2 3/3 4/4\n";
@@ -60,7 +60,7 @@ fn png() -> Vec<u8> {
 fn refusal(dir: &std::path::Path, from: &str, to: &str) -> String {
     assert!(SCENE.contains(from), "the scene has no `{from}`");
     std::fs::write(dir.join("scene.toml"), SCENE.replace(from, to)).unwrap();
-    match load_scene(&dir.join("scene.toml"), &Limits::default()) {
+    match load_folder(&dir.join("scene.toml"), &Limits::default()) {
         Ok(_) => panic!("accepted with `{to}`"),
         Err(e) => e.to_string(),
     }
@@ -74,7 +74,7 @@ fn each_refusal_names_its_place_and_its_fix() {
     std::fs::write(d.join("photo.png"), png()).unwrap();
     std::fs::write(d.join("map.png"), png()).unwrap();
     std::fs::write(d.join("scene.toml"), SCENE).unwrap();
-    load_scene(&d.join("scene.toml"), &Limits::default()).expect("the scene itself loads");
+    load_folder(&d.join("scene.toml"), &Limits::default()).expect("the scene itself loads");
     let classes = "classes = [{ name = \"crust\", colour = [0, 0, 0], spectrum = \"soot\" }, { name = \"moss\", colour = [0, 128, 0], spectrum = \"stone\" }]";
     let cases: Vec<(&str, String, Vec<&str>)> = vec![
         ("origin = [0.0, 0.0, 0.0]", "origin = [1e12, 0.0, 0.0]".into(), vec!["origin", "out of range", "±1e9 m"]),
@@ -109,7 +109,8 @@ fn a_lod_with_descending_ranges_is_refused_with_the_rule() {
         .replace("mesh = \"quad.obj\"", "mesh = \"quad.wrl\"")
         .replace("texture = \"photo.png\"\n", "");
     std::fs::write(dir.path().join("scene.toml"), scene).unwrap();
-    let e = load_scene(&dir.path().join("scene.toml"), &Limits::default()).unwrap_err().to_string();
+    let e =
+        load_folder(&dir.path().join("scene.toml"), &Limits::default()).unwrap_err().to_string();
     assert!(
         e.contains("quad.wrl") && e.contains("`range`") && e.contains("ascending order"),
         "{e}"
@@ -150,8 +151,9 @@ fn a_gltf_photo_that_is_not_an_image_or_outside_its_buffer_is_refused() {
         ),
     ] {
         std::fs::write(dir.path().join("scan.gltf"), gltf(image)).unwrap();
-        let e =
-            load_scene(&dir.path().join("scene.toml"), &Limits::default()).unwrap_err().to_string();
+        let e = load_folder(&dir.path().join("scene.toml"), &Limits::default())
+            .unwrap_err()
+            .to_string();
         for w in words {
             assert!(e.contains(w), "`{w}` not in: {e}");
         }

@@ -2,8 +2,8 @@
 //! from the top as glTF's do) and glTF (TEXCOORD_0), PNG and JPEG decoded, bad images and
 //! untextured parts refused with the file and the fix, textures carried in bundles.
 
-use restauro_scene::bundle::bundle_scene;
-use restauro_scene::load::{Limits, LoadedScene, load_scene};
+use restauro_scene::bundle::bundle_folder;
+use restauro_scene::load::{Limits, LoadedScene, load_folder};
 use restauro_scene::texture::Texture;
 use restauro_scene::{Result, SceneError};
 use std::path::Path;
@@ -36,7 +36,7 @@ fn load_with(dir: &Path, mesh: (&str, &[u8]), texture: (&str, &[u8])) -> Result<
         texture.0, mesh.0
     );
     std::fs::write(dir.join("scene.toml"), toml).unwrap();
-    load_scene(&dir.join("scene.toml"), &Limits::default())
+    load_folder(&dir.join("scene.toml"), &Limits::default())
 }
 
 #[test]
@@ -115,7 +115,7 @@ fn bad_photos_and_parts_without_coordinates_are_refused_with_the_fix() {
     // Beyond the pixel limit, before the texels are allocated.
     load_with(d, ("quad.obj", QUAD.as_bytes()), ("photo.png", &png_bytes())).unwrap();
     let small = Limits { max_pixels: 3, ..Limits::default() };
-    let e = load_scene(&d.join("scene.toml"), &small).unwrap_err().to_string();
+    let e = load_folder(&d.join("scene.toml"), &small).unwrap_err().to_string();
     assert!(
         e.contains("2 × 2 texels is more than the 3 allowed") && e.contains("--max-pixels"),
         "{e}"
@@ -126,7 +126,7 @@ fn bad_photos_and_parts_without_coordinates_are_refused_with_the_fix() {
 fn a_bundle_carries_the_photo() {
     let dir = tempfile::tempdir().unwrap();
     load_with(dir.path(), ("quad.obj", QUAD.as_bytes()), ("photo.png", &png_bytes())).unwrap();
-    let bundle = bundle_scene(&dir.path().join("scene.toml"), &Limits::default()).unwrap();
+    let bundle = bundle_folder(&dir.path().join("scene.toml"), &Limits::default()).unwrap();
     let reference = bundle.scene.materials["stone"].texture.clone().unwrap();
     let hash = blake3::hash(&png_bytes()).to_hex().to_string();
     assert_eq!(reference, format!("blake3:{hash}.png"));
@@ -189,7 +189,7 @@ fn a_gltf_photo_beside_the_model_travels_in_the_bundle() {
         load_with(dir.path(), ("tri.gltf", gltf.as_bytes()), ("photo.png", &png_bytes())).unwrap();
     let photo = scene.objects[0].mesh.groups[0].photo.as_ref().expect("the model's photo");
     assert_eq!(photo.texels[0], [65535, 0, 0]);
-    let bundle = bundle_scene(&dir.path().join("scene.toml"), &Limits::default()).unwrap();
+    let bundle = bundle_folder(&dir.path().join("scene.toml"), &Limits::default()).unwrap();
     let loaded = bundle.load(&Limits::default()).unwrap();
     assert_eq!(loaded.objects[0].mesh.groups[0].photo.as_deref(), Some(&**photo));
 }
@@ -201,7 +201,7 @@ fn load_with_keys(dir: &Path, keys: &str) -> Result<LoadedScene> {
     let toml =
         toml.replace("texture = \"photo.png\"\n", &format!("texture = \"photo.png\"\n{keys}\n"));
     std::fs::write(dir.join("scene.toml"), toml).unwrap();
-    load_scene(&dir.join("scene.toml"), &Limits::default())
+    load_folder(&dir.join("scene.toml"), &Limits::default())
 }
 
 /// A grey patch white-balances a photo: balanced on a patch of one colour, that patch comes out
@@ -273,7 +273,7 @@ fn a_white_patch_outside_a_parts_own_photo_is_refused() {
              [[lights]]\nkind = \"sun\"\nilluminance_lux = 1000.0\nazimuth_deg = 0.0\nelevation_deg = 60.0\nspectrum = \"day\"\n"
         );
         std::fs::write(dir.path().join("scene.toml"), toml).unwrap();
-        load_scene(&dir.path().join("scene.toml"), &Limits::default())
+        load_folder(&dir.path().join("scene.toml"), &Limits::default())
     };
     load("{ x = 240, y = 0, width = 16, height = 16 }").unwrap();
     let m = refusal(load("{ x = 250, y = 0, width = 16, height = 16 }"));

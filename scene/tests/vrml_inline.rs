@@ -4,8 +4,8 @@
 //! carries the inlined files by hash, so that it loads alone and its identity does not depend
 //! on what the files were called.
 
-use restauro_scene::bundle::bundle_scene;
-use restauro_scene::load::{Limits, LoadedScene, load_scene};
+use restauro_scene::bundle::bundle_folder;
+use restauro_scene::load::{Limits, LoadedScene, load_folder};
 use std::path::Path;
 
 /// A box 2 m on a side (§6.7: 12 triangles) at the origin of the file, DEF'd `PART` as the
@@ -31,7 +31,7 @@ fn write(dir: &Path, files: &[(&str, &str)]) {
 }
 
 fn load(dir: &Path) -> restauro_scene::Result<LoadedScene> {
-    load_scene(&dir.join("scene.toml"), &Limits::default())
+    load_folder(&dir.join("scene.toml"), &Limits::default())
 }
 
 /// The world's own box, and the column inlined twice (by DEF/USE) at x = ±10.
@@ -96,7 +96,7 @@ fn a_world_that_inlines_itself_is_refused() {
     write(dir.path(), &[("world.wrl", a), ("parts/b.wrl", b)]);
     let e = load(dir.path()).unwrap_err().to_string();
     assert!(e.contains("the file inlines itself: world.wrl → parts/b.wrl → world.wrl"), "{e}");
-    let e = bundle_scene(&dir.path().join("scene.toml"), &Limits::default()).unwrap_err();
+    let e = bundle_folder(&dir.path().join("scene.toml"), &Limits::default()).unwrap_err();
     assert!(e.to_string().contains("the file inlines itself"), "{e}");
 }
 
@@ -111,7 +111,7 @@ fn a_bundle_carries_the_inlined_worlds_by_hash() {
         &[("world.wrl", &world_text), ("parts/column.wrl", COLUMN), ("parts/capital.wrl", CAPITAL)],
     );
     let from_folder = load(dir.path()).unwrap();
-    let bundle = bundle_scene(&dir.path().join("scene.toml"), &Limits::default()).unwrap();
+    let bundle = bundle_folder(&dir.path().join("scene.toml"), &Limits::default()).unwrap();
     assert_eq!(bundle.scene.included.len(), 2, "{:?}", bundle.scene.included);
     assert!(bundle.scene.included.iter().all(|r| r.starts_with("blake3:") && r.ends_with(".wrl")));
     let from_bundle = bundle.load(&Limits::default()).unwrap();
@@ -124,7 +124,7 @@ fn a_bundle_carries_the_inlined_worlds_by_hash() {
         renamed.path(),
         &[("world.wrl", &world_text), ("other/pillar.wrl", &column), ("other/top.wrl", CAPITAL)],
     );
-    let again = bundle_scene(&renamed.path().join("scene.toml"), &Limits::default()).unwrap();
+    let again = bundle_folder(&renamed.path().join("scene.toml"), &Limits::default()).unwrap();
     assert_eq!(again.id(), bundle.id(), "the same world under other file names");
 }
 

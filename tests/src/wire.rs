@@ -2,11 +2,12 @@
 //! caller against a real coordinator process: they send what the real client and worker never
 //! would (another worker's lease, a forged ticket, NaN pixels, a name with terminal escapes).
 
+use restauro_assets::bundle_scene;
 use restauro_image::framebuffer::{TileExtras, TileLayout, encode_tile};
 use restauro_proto::pb::render_client::RenderClient;
 use restauro_proto::pb::work_client::WorkClient;
 use restauro_proto::{self as pb, CHUNK_BYTES, Credentials, PROTOCOL_VERSION};
-use restauro_scene::bundle::{Bundle, bundle_scene};
+use restauro_scene::bundle::Bundle;
 use restauro_scene::job::JobSpec;
 use restauro_scene::limits::Limits;
 use restauro_scene::plan::Rect;

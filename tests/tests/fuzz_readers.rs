@@ -49,11 +49,12 @@ use exr::prelude::{
     AnyChannel, AnyChannels, Blocks, Compression, Encoding, FlatSamples, Image, Layer,
     LayerAttributes, LineOrder, SmallVec, Vec2, WritableImage, f16,
 };
+use restauro_assets::load_scene;
 use restauro_image::image_files::{MAX_PIXELS, XyzImage, read_exr, write_spectral_exr};
 use restauro_render::prepared::{PreparedScene, Settings};
 use restauro_render::tile::{film_xyz, pixel};
 use restauro_scene::guard;
-use restauro_scene::load::{Limits, load_scene};
+use restauro_scene::load::Limits;
 use restauro_scene::scene_file::Integrator;
 use restauro_spectral::colorimetry::{Observer, relative_xyz};
 use restauro_spectral::csv::{Quantity, load as load_csv};
@@ -594,9 +595,9 @@ fn archive_seeds(dir: &Path) -> Vec<(String, Vec<u8>)> {
     std::fs::write(folder.join("aosta.toml"), &aosta.scene_toml).unwrap();
     std::fs::write(folder.join("meshes/facade.obj"), &aosta.facade_obj).unwrap();
     let limits = restauro_scene::limits::Limits::default();
-    let bundle = restauro_scene::bundle::bundle_scene(&folder.join("aosta.toml"), &limits).unwrap();
+    let bundle = restauro_assets::bundle_scene(&folder.join("aosta.toml"), &limits).unwrap();
     let path = dir.join("aosta.tar");
-    restauro_scene::archive::write_archive(&bundle, &path).unwrap();
+    restauro_assets::archive::write_archive(&bundle, &path).unwrap();
     vec![("aosta.tar".into(), std::fs::read(&path).unwrap())]
 }
 
@@ -955,7 +956,7 @@ fn readers() -> Vec<Reader> {
             run: |folder| {
                 let bytes = std::fs::read(folder.join("input.zip")).unwrap();
                 let limits = Limits::default();
-                let bundle = restauro_scene::folder::bundle_folder_archive(&bytes, None, &limits)
+                let bundle = restauro_assets::folder::bundle_folder_archive(&bytes, None, &limits)
                     .map_err(|e| e.to_string())?;
                 bundle.load(&limits).map(|_| ()).map_err(|e| e.to_string())
             },

@@ -1044,7 +1044,7 @@ fn images_kept_with_notes_are_checked_served_and_downloaded() {
         .find(|n| n.ends_with(".png"));
     assert!(image_entry.is_some_and(|n| n.contains("/files/")), "no image in the download");
     let limits = restauro_scene::load::Limits::default();
-    let bundle = restauro_scene::folder::bundle_folder_archive(&r.body, None, &limits).unwrap();
+    let bundle = restauro_assets::folder::bundle_folder_archive(&r.body, None, &limits).unwrap();
     let latest = get(&s, &format!("/api/scenes/{id}/scene.json"), &auth).json();
     let read_back: serde_json::Value = serde_json::from_str(&bundle.canonical_json()).unwrap();
     assert_eq!(read_back, latest);

@@ -213,7 +213,7 @@ impl Farm {
     }
 
     /// Revision `number` of scene `id` (the latest when `None`) as a scene folder in a tar
-    /// (`restauro_scene::folder`), and the folder's name: `<scene>-revision-<n>`.
+    /// (`restauro_assets::folder`), and the folder's name: `<scene>-revision-<n>`.
     pub async fn scene_folder(
         self: &Arc<Self>,
         id: &str,
@@ -235,7 +235,7 @@ impl Farm {
         let folder = name.clone();
         tokio::task::spawn_blocking(move || -> Result<Vec<u8>> {
             let bundle = farm.bundle(&manifest)?;
-            Ok(restauro_scene::folder::folder_tar(&bundle, &folder, &comment)?)
+            Ok(restauro_assets::folder::folder_tar(&bundle, &folder, &comment)?)
         })
         .await?
         .map(|tar| (name, tar))
@@ -408,7 +408,7 @@ impl Farm {
         let bundle = tokio::task::spawn_blocking(move || -> Result<Bundle> {
             let limits = &farm.config.limits;
             let bundle =
-                restauro_scene::folder::bundle_folder_archive(&archive, scene.as_deref(), limits)?;
+                restauro_assets::folder::bundle_folder_archive(&archive, scene.as_deref(), limits)?;
             for (hash, bytes) in &bundle.files {
                 if !farm.assets.has(hash) {
                     farm.assets.keep(hash, bytes).map_err(|e| {

@@ -2,7 +2,7 @@
 //! Inline, its DEF names and PROTOs its own. Its urls are tried in order and the first that
 //! can be read is drawn; a relative url is relative to the file that holds the Inline (a remote
 //! file's by RFC 3986), and an `https://` url is fetched and pinned like any file of the scene
-//! (`crate::remote`). A file that inlines itself, directly or through others, is refused.
+//! (restauro-assets's `remote`). A file that inlines itself, directly or through others, is refused.
 //!
 //! In a bundle each url drawn is replaced by the inlined file's hash (`blake3:<hex>.wrl`, see
 //! [`embed_inlines`]), so the bundle alone holds the world.

@@ -4,6 +4,7 @@
 //! download resumes where it stopped.
 
 use super::ContentHash;
+use super::matches;
 use std::fs::File;
 use std::path::{Path, PathBuf};
 use std::time::SystemTime;
@@ -31,7 +32,7 @@ impl Cache {
     pub fn get(&self, hash: &ContentHash) -> Option<Vec<u8>> {
         let path = self.complete_path(hash);
         let bytes = std::fs::read(&path).ok()?;
-        if !hash.matches(&bytes) {
+        if !matches(hash, &bytes) {
             tracing::warn!(path = %path.display(), "a cached file does not match its hash; fetching it again");
             let _ = std::fs::remove_file(&path);
             return None;

@@ -30,87 +30,37 @@
 
 pub mod cache;
 mod http;
-pub mod web_url;
 
-use crate::error::{Result, SceneError};
-use crate::scene_file::Pin;
 pub use http::{DEADLINE_TIMEOUTS, is_public};
+use restauro_scene::assets::Fetch;
+pub use restauro_scene::pins::{Algorithm, ContentHash};
+use restauro_scene::scene_file::Pin;
+pub use restauro_scene::web_url::{WebUrl, is_url};
+use restauro_scene::{Result, SceneError};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, OnceLock};
 use std::time::Duration;
-pub use web_url::{WebUrl, is_url};
 
 /// What to do when a server's certificate is not trusted.
 const TLS_FIX: &str = "if the server uses a private certificate authority, give its certificate \
                        (PEM) in RESTAURO_CA_FILE";
 
-/// A hash function a pin may use.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Algorithm {
-    Sha256,
-    Blake3,
-}
-
-impl Algorithm {
-    pub fn name(self) -> &'static str {
-        match self {
-            Algorithm::Sha256 => "sha256",
-            Algorithm::Blake3 => "blake3",
-        }
-    }
-
-    /// The hash of `bytes` in lower-case hexadecimal.
-    pub fn hex(self, bytes: &[u8]) -> String {
-        match self {
-            Algorithm::Sha256 => ring::digest::digest(&ring::digest::SHA256, bytes)
-                .as_ref()
-                .iter()
-                .map(|b| format!("{b:02x}"))
-                .collect(),
-            Algorithm::Blake3 => blake3::hash(bytes).to_hex().to_string(),
-        }
+/// The hash of `bytes` by `algorithm`, in lower-case hexadecimal.
+pub fn digest_hex(algorithm: Algorithm, bytes: &[u8]) -> String {
+    match algorithm {
+        Algorithm::Sha256 => ring::digest::digest(&ring::digest::SHA256, bytes)
+            .as_ref()
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect(),
+        Algorithm::Blake3 => blake3::hash(bytes).to_hex().to_string(),
     }
 }
 
-/// A checked pin: which hash, and its 64 hexadecimal digits in lower case.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct ContentHash {
-    pub algorithm: Algorithm,
-    pub hex: String,
-}
-
-impl ContentHash {
-    pub fn matches(&self, bytes: &[u8]) -> bool {
-        self.algorithm.hex(bytes) == self.hex
-    }
-}
-
-impl std::fmt::Display for ContentHash {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{} = \"{}\"", self.algorithm.name(), self.hex)
-    }
-}
-
-impl TryFrom<&Pin> for ContentHash {
-    type Error = String;
-
-    fn try_from(pin: &Pin) -> Result<Self, String> {
-        let (algorithm, hex) = match (&pin.sha256, &pin.blake3) {
-            (Some(hex), None) => (Algorithm::Sha256, hex),
-            (None, Some(hex)) => (Algorithm::Blake3, hex),
-            _ => return Err("give one hash: `{ sha256 = \"…\" }` or `{ blake3 = \"…\" }`".into()),
-        };
-        let hex = hex.trim().to_ascii_lowercase();
-        if hex.len() != 64 || !hex.bytes().all(|b| b.is_ascii_hexdigit()) {
-            return Err(format!(
-                "the {} `{hex}` is not 64 hexadecimal digits; copy it whole from `{}sum`",
-                algorithm.name(),
-                if algorithm == Algorithm::Sha256 { "sha256" } else { "b3" }
-            ));
-        }
-        Ok(ContentHash { algorithm, hex })
-    }
+/// Whether `bytes` are what `hash` pins.
+pub fn matches(hash: &ContentHash, bytes: &[u8]) -> bool {
+    digest_hex(hash.algorithm, bytes) == hash.hex
 }
 
 /// What a process lets files by URL reach, set once when it starts. The coordinator fetches
@@ -220,17 +170,9 @@ pub struct Remote {
 impl Remote {
     /// Checks the scene's `[pins]`: each key a web URL, each value one well-formed hash.
     pub fn new(scene_file: &Path, pins: &BTreeMap<String, Pin>) -> Result<Remote> {
-        let mut checked = BTreeMap::new();
-        for (url, pin) in pins {
-            let place = format!("pins.\"{url}\"");
-            let invalid = |problem: String| SceneError::invalid(scene_file, &place, problem);
-            let parsed = WebUrl::parse(url).map_err(invalid)?;
-            let hash = ContentHash::try_from(pin).map_err(invalid)?;
-            checked.insert(parsed.to_string(), hash);
-        }
         Ok(Remote {
             scene_file: scene_file.to_owned(),
-            pins: checked,
+            pins: restauro_scene::pins::check_pins(scene_file, pins)?,
             config: None,
             ready: OnceLock::new(),
         })
@@ -277,6 +219,12 @@ impl Remote {
     }
 }
 
+impl Fetch for Remote {
+    fn fetch(&self, url: &str, place: &str, max_bytes: u64) -> Result<Vec<u8>> {
+        self.read(url, place, max_bytes)
+    }
+}
+
 /// The file pinned by `hash`: from the cache, or downloaded, checked and cached.
 fn fetch_pinned(
     url: &WebUrl,
@@ -298,7 +246,7 @@ fn fetch_pinned(
     tracing::info!(%url, "downloading");
     http::download(url, &mut partial.file, bounds).map_err(|f| f.problem)?;
     let bytes = std::fs::read(&partial.path).map_err(cache_problem)?;
-    let actual = hash.algorithm.hex(&bytes);
+    let actual = digest_hex(hash.algorithm, &bytes);
     if actual != hash.hex {
         let _ = std::fs::remove_file(&partial.path);
         return Err(format!(
@@ -325,7 +273,10 @@ fn unpinned(url: &WebUrl, cache: &cache::Cache, bounds: &http::Bounds) -> String
         partial.file.set_len(0).map_err(|e| e.to_string())?;
         http::download(url, &mut partial.file, bounds).map_err(|f| f.problem)?;
         let bytes = std::fs::read(&partial.path).map_err(|e| e.to_string())?;
-        let hash = ContentHash { algorithm: Algorithm::Sha256, hex: Algorithm::Sha256.hex(&bytes) };
+        let hash = ContentHash {
+            algorithm: Algorithm::Sha256,
+            hex: digest_hex(Algorithm::Sha256, &bytes),
+        };
         cache.store(partial, &hash).map_err(|e| e.to_string())?;
         Ok(hash)
     });

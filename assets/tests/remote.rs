@@ -5,11 +5,13 @@
 //! cache keeps within its bound; and a scene whose files come from the web bundles to the same
 //! identity as the same scene with the files in its folder.
 
+use restauro_assets::bundle_scene;
+use restauro_assets::remote::cache::Cache;
+use restauro_assets::remote::{Remote, RemoteConfig};
+use restauro_scene::SceneError;
 use restauro_scene::assets::{Assets, FolderAssets};
-use restauro_scene::bundle::{bundle_folder, bundle_scene};
+use restauro_scene::bundle::bundle_files;
 use restauro_scene::load::{Limits, read_scene_file};
-use restauro_scene::remote::RemoteConfig;
-use restauro_scene::remote::cache::Cache;
 use restauro_scene::scene_file::Pin;
 use std::collections::{BTreeMap, HashMap};
 use std::io::{BufRead, BufReader, Read, Write};
@@ -207,6 +209,18 @@ fn config(dir: &Path, ca_file: Option<PathBuf>) -> RemoteConfig {
     }
 }
 
+/// The files of the folder of the scene file `scene`, within `max_bytes` each, those named by
+/// URL fetched as `pins` say, with `config`.
+fn folder(
+    scene: &Path,
+    max_bytes: u64,
+    pins: &BTreeMap<String, Pin>,
+    config: RemoteConfig,
+) -> Result<FolderAssets, SceneError> {
+    let remote = Remote::new(scene, pins)?.with_config(config);
+    Ok(FolderAssets::new(scene, max_bytes)?.with_fetch(Box::new(remote)))
+}
+
 /// The folder assets of an empty scene in `dir`, with `pins`.
 fn assets(dir: &Path, pins: &[(&str, &[u8])], config: RemoteConfig) -> FolderAssets {
     let scene = dir.join("scene.toml");
@@ -217,7 +231,7 @@ fn assets(dir: &Path, pins: &[(&str, &[u8])], config: RemoteConfig) -> FolderAss
             ((*url).to_owned(), Pin { sha256: Some(sha256sum(bytes)), blake3: None })
         })
         .collect();
-    FolderAssets::with_pins(&scene, 1 << 20, &pins).unwrap().with_remote_config(config)
+    folder(&scene, 1 << 20, &pins, config).unwrap()
 }
 
 fn cached(dir: &Path, bytes: &[u8]) -> bool {
@@ -451,10 +465,8 @@ fn a_scene_from_the_web_bundles_like_the_same_scene_from_its_folder() {
     let path = web.path().join("scene.toml");
     std::fs::write(&path, toml).unwrap();
     let file = read_scene_file(&path, &Limits::default()).unwrap();
-    let assets = FolderAssets::with_pins(&path, 1 << 30, &file.pins)
-        .unwrap()
-        .with_remote_config(config(web.path(), None));
-    let from_web = bundle_folder(file, &assets, &Limits::default()).unwrap();
+    let assets = folder(&path, 1 << 30, &file.pins, config(web.path(), None)).unwrap();
+    let from_web = bundle_files(file, &assets, &Limits::default()).unwrap();
     assert_eq!(from_web.id(), from_folder.id(), "the same scene, the same identity");
     assert!(from_web.scene.pins.is_empty());
     let loaded = from_web.load(&Limits::default()).unwrap();
@@ -515,10 +527,8 @@ fn a_remote_worlds_inline_resolves_against_its_url_and_is_pinned_too() {
         let path = dir.path().join("scene.toml");
         std::fs::write(&path, toml).unwrap();
         let file = read_scene_file(&path, &Limits::default()).unwrap();
-        let assets = FolderAssets::with_pins(&path, 1 << 30, &file.pins)
-            .unwrap()
-            .with_remote_config(config(dir.path(), None));
-        bundle_folder(file, &assets, &Limits::default())
+        let assets = folder(&path, 1 << 30, &file.pins, config(dir.path(), None)).unwrap();
+        bundle_files(file, &assets, &Limits::default())
     };
     let e = bundle(scene(&[(&world_url, world)])).unwrap_err().to_string();
     assert!(e.contains(&column_url) && e.contains("no pin in [pins]"), "{e}");
@@ -575,7 +585,10 @@ fn pins_that_cannot_be_checked_are_refused_with_the_fix() {
         ),
     ] {
         let pins = BTreeMap::from([(url.to_owned(), pin)]);
-        let e = FolderAssets::with_pins(&scene, 1 << 20, &pins).err().expect("refused").to_string();
+        let e = folder(&scene, 1 << 20, &pins, config(dir.path(), None))
+            .err()
+            .expect("refused")
+            .to_string();
         assert!(e.contains(&format!("pins.\"{url}\"")) && e.contains(words), "{e}");
     }
 }

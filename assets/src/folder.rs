@@ -4,8 +4,8 @@
 //! the image the bundle renders to: reading the folder back gives the same canonical scene, and
 //! so the same identity (TOML writes each number in the shortest form that reads back exactly).
 
-use crate::bundle::Bundle;
-use crate::error::{Result, SceneError};
+use restauro_scene::bundle::Bundle;
+use restauro_scene::{Result, SceneError};
 use std::path::Path;
 
 /// The folder's scene file.
@@ -70,7 +70,7 @@ pub fn is_zip(bytes: &[u8]) -> bool {
 pub fn bundle_folder_archive(
     bytes: &[u8],
     scene: Option<&str>,
-    limits: &crate::limits::Limits,
+    limits: &restauro_scene::limits::Limits,
 ) -> Result<Bundle> {
     let dir = tempfile::tempdir().map_err(|e| SceneError::io(SENT, e))?;
     let names = if is_zip(bytes) {
@@ -101,11 +101,15 @@ fn refuse(problem: String) -> SceneError {
 }
 
 /// The entries of a tar sent, each checked against the limits.
-fn tar_entries(bytes: &[u8], limits: &crate::limits::Limits) -> Result<Vec<(String, Vec<u8>)>> {
+fn tar_entries(
+    bytes: &[u8],
+    limits: &restauro_scene::limits::Limits,
+) -> Result<Vec<(String, Vec<u8>)>> {
     // The tar reader is a third-party parser: a panic in it is an error naming the upload.
-    let entries = crate::guard::catch(|| crate::archive::entries(bytes, limits.max_file_bytes))
-        .map_err(|_| refuse("it is not a readable tar archive".into()))?
-        .map_err(refuse)?;
+    let entries =
+        restauro_scene::guard::catch(|| crate::archive::entries(bytes, limits.max_file_bytes))
+            .map_err(|_| refuse("it is not a readable tar archive".into()))?
+            .map_err(refuse)?;
     if entries.len() > FOLDER_FILES {
         return Err(refuse(format!(
             "{} files; a scene folder may have {FOLDER_FILES}",
@@ -135,7 +139,7 @@ fn inside(dir: &Path, name: &str) -> Result<std::path::PathBuf> {
 /// another compression, a link) is refused by name.
 fn unpack_zip(bytes: &[u8], dir: &Path, max_file_bytes: u64) -> Result<Vec<String>> {
     // The zip reader is a third-party parser: a panic in it is an error naming the upload.
-    crate::guard::catch(|| unpack_zip_entries(bytes, dir, max_file_bytes))
+    restauro_scene::guard::catch(|| unpack_zip_entries(bytes, dir, max_file_bytes))
         .map_err(|_| refuse("it is not a readable zip archive".into()))?
 }
 
@@ -192,7 +196,7 @@ fn bundle_unpacked(
     dir: &Path,
     names: &[String],
     scene: Option<&str>,
-    limits: &crate::limits::Limits,
+    limits: &restauro_scene::limits::Limits,
 ) -> Result<Bundle> {
     let mut scenes: Vec<(usize, &str)> = names
         .iter()
@@ -207,12 +211,12 @@ fn bundle_unpacked(
                 all.join(", ")
             )));
         }
-        return crate::bundle::bundle_scene(&dir.join(chosen), limits);
+        return crate::bundle_scene(&dir.join(chosen), limits);
     }
     scenes.sort();
     let top: Vec<&str> = scenes.iter().filter(|s| s.0 == scenes[0].0).map(|s| s.1).collect();
     match top.as_slice() {
-        [one] => crate::bundle::bundle_scene(&dir.join(one), limits),
+        [one] => crate::bundle_scene(&dir.join(one), limits),
         [] => Err(refuse(format!("it has no scene file ({SCENE_FILE} or another .toml)"))),
         many => Err(refuse(format!(
             "it has {} scene files at the same level ({}); choose one",

@@ -3,7 +3,7 @@
 //! what an earlier attempt left (RFC 9110 §14), the body bounded, and every wait bounded by
 //! one timeout: connecting, the answer's headers, and each stretch without data.
 
-use super::web_url::WebUrl;
+use super::WebUrl;
 use bytes::Bytes;
 use http_body_util::{BodyExt, Empty};
 use hyper::StatusCode;
@@ -290,7 +290,7 @@ async fn receive(
         fail(format!(
             "the file is {size} bytes, over the limit of {} bytes; {}",
             bounds.max_bytes,
-            crate::assets::MAX_FILE_FIX
+            restauro_scene::assets::MAX_FILE_FIX
         ))
     };
     if let Some(total) = announced.filter(|&t| t > bounds.max_bytes) {

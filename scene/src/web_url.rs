@@ -1,7 +1,7 @@
 //! An `http://` or `https://` URL, and the URLs a remote file names relative to its own
 //! (RFC 3986 §5.2: a glTF's buffer `model.bin`, a VRML97 `Inline`'s `../walls.wrl`).
 
-use hyper::Uri;
+use http::Uri;
 
 /// An absolute web URL: `http` or `https`, a host, a path; no credentials, no fragment.
 #[derive(Clone, Debug, PartialEq, Eq)]

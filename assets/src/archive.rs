@@ -11,9 +11,9 @@
 //! within the file-size limit, no name twice, every file the scene names present and hashing to
 //! its name, nothing else, and the identity the one its contents give.
 
-use crate::bundle::Bundle;
-use crate::error::{Result, SceneError};
-use crate::load::Limits;
+use restauro_scene::bundle::Bundle;
+use restauro_scene::limits::Limits;
+use restauro_scene::{Result, SceneError};
 use std::collections::BTreeMap;
 use std::io::Read;
 use std::path::Path;
@@ -71,13 +71,13 @@ pub fn write_archive(bundle: &Bundle, path: &Path) -> Result<()> {
 pub fn read_archive(path: &Path, limits: &Limits) -> Result<Bundle> {
     let refuse = |problem: String| SceneError::invalid(path, "archive", problem);
     let most = limits.max_file_bytes.saturating_mul(ARCHIVE_FILES);
-    let bytes = crate::assets::read_regular_file(
+    let bytes = restauro_scene::assets::read_regular_file(
         path,
         most,
         "the archive is larger than the limit allows; raise --max-file-mb",
     )?;
     // The tar reader is a third-party parser: a panic in it is an error naming the file.
-    let entries = crate::guard::catch(|| entries(&bytes, limits.max_file_bytes))
+    let entries = restauro_scene::guard::catch(|| entries(&bytes, limits.max_file_bytes))
         .map_err(|_| refuse("it is not a readable tar archive".into()))?
         .map_err(refuse)?;
     let mut files = BTreeMap::new();

@@ -73,9 +73,9 @@ fn write_relief(dir: &std::path::Path, triangles: usize) -> Result<usize> {
     let mut f = std::io::BufWriter::new(
         std::fs::File::create(&path).with_context(|| format!("writing {}", path.display()))?,
     );
-    restauro_scene::relief::write_ply(&mut f, nx, ny)?;
+    restauro_demo::scenes::relief::write_ply(&mut f, nx, ny)?;
     f.flush()?;
-    std::fs::write(dir.join("scene.toml"), restauro_scene::relief::SCENE_TOML)?;
+    std::fs::write(dir.join("scene.toml"), restauro_demo::scenes::relief::SCENE_TOML)?;
     Ok(2 * nx * ny)
 }
 

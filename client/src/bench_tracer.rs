@@ -132,7 +132,7 @@ fn load(
     let dir = tempfile::tempdir()?;
     let path = match which {
         BenchScene::Aosta => {
-            let g = restauro_scene::aosta::generate(width as u32, height as u32, 1);
+            let g = restauro_demo::scenes::aosta::generate(width as u32, height as u32, 1);
             std::fs::create_dir_all(dir.path().join("meshes"))?;
             std::fs::write(dir.path().join("meshes/facade.obj"), g.facade_obj)?;
             std::fs::write(dir.path().join("aosta.toml"), g.scene_toml)?;

@@ -85,7 +85,7 @@ pub struct AostaFiles {
 /// Writes the procedural Aosta facade scene into `out`: `aosta.toml` (a summer afternoon),
 /// `aosta-overcast.toml` (an overcast day) and `meshes/facade.obj`.
 pub fn write_aosta(out: &Path, width: u32, height: u32, seed: u64) -> Result<AostaFiles> {
-    let generated = restauro_scene::aosta::generate(width, height, seed);
+    let generated = restauro_demo::scenes::aosta::generate(width, height, seed);
     let files = AostaFiles {
         sunny: out.join("aosta.toml"),
         overcast: out.join("aosta-overcast.toml"),
@@ -93,7 +93,7 @@ pub fn write_aosta(out: &Path, width: u32, height: u32, seed: u64) -> Result<Aos
         floodlit: out.join("aosta-floodlit.toml"),
         mesh: out.join("meshes/facade.obj"),
     };
-    let photometry = restauro_scene::aosta::PHOTOMETRY
+    let photometry = restauro_demo::scenes::aosta::PHOTOMETRY
         .map(|(name, text)| (out.join("photometry").join(name), text.to_owned()));
     let texts = [
         (files.mesh.clone(), generated.facade_obj),

@@ -217,7 +217,7 @@ fn an_uncapped_path_converges_in_a_sphere_of_reflectance_095() {
 #[test]
 fn bvh_hits_match_brute_force() {
     let dir = tempfile::tempdir().unwrap();
-    let generated = restauro_scene::aosta::generate(64, 36, 3);
+    let generated = restauro_demo::scenes::aosta::generate(64, 36, 3);
     std::fs::create_dir_all(dir.path().join("meshes")).unwrap();
     std::fs::write(dir.path().join("meshes/facade.obj"), &generated.facade_obj).unwrap();
     std::fs::write(dir.path().join("aosta.toml"), &generated.scene_toml).unwrap();

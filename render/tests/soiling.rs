@@ -27,7 +27,7 @@ fn mean_share(prepared: &PreparedScene, origin: Vec3A, n: u32) -> f32 {
 #[test]
 fn the_band_under_the_cornice_is_darker_than_the_rain_washed_buttresses() {
     let dir = tempfile::tempdir().unwrap();
-    let generated = restauro_scene::aosta::generate(64, 36, 3);
+    let generated = restauro_demo::scenes::aosta::generate(64, 36, 3);
     std::fs::create_dir_all(dir.path().join("meshes")).unwrap();
     std::fs::write(dir.path().join("meshes/facade.obj"), &generated.facade_obj).unwrap();
     std::fs::write(dir.path().join("aosta.toml"), &generated.scene_toml).unwrap();

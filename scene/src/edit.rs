@@ -533,11 +533,12 @@ fn sun_edit(scene: &mut SceneFile, site: SiteTime) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::aosta;
 
+    /// The demo's Aosta facade, as restauro-demo generates it (its test `fixtures` keeps the
+    /// file so).
     fn scene() -> SceneFile {
-        crate::load::parse_scene(&aosta::generate(64, 32, 1).scene_toml, Path::new("aosta.toml"))
-            .unwrap()
+        let text = include_str!("../tests/data/edit/aosta.toml");
+        crate::load::parse_scene(text, Path::new("aosta.toml")).unwrap()
     }
 
     fn edit(json: &str) -> Edit {

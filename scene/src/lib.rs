@@ -1,7 +1,6 @@
 //! restauro-scene: what a restorer has on disk (a survey mesh, measured spectra, a luminaire's
 //! photometric file) turned into a validated scene that any worker renders identically.
 
-pub mod aosta;
 pub mod error;
 pub mod mesh;
 pub mod sun;
@@ -29,15 +28,12 @@ pub mod note_image;
 pub mod obj;
 pub mod obj_library;
 pub mod origin;
-pub mod photo_block;
 pub mod photometric;
 pub mod pins;
 pub mod plan;
 pub mod ply;
 mod ply_binary;
 mod ply_layout;
-pub mod relief;
-pub mod samples;
 pub mod scene_file;
 pub mod sky_shape;
 pub mod texture;

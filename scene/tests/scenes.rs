@@ -529,28 +529,6 @@ fn bundles_are_stable_self_sufficient_and_name_files_by_content() {
     assert!(err.contains("the bundle is corrupt"), "{err}");
 }
 
-#[test]
-fn the_aosta_scene_validates() {
-    let f = Folder::new();
-    let generated = restauro_scene::aosta::generate(320, 180, 1);
-    f.write("meshes/facade.obj", &generated.facade_obj);
-    let path = f.write("aosta.toml", &generated.scene_toml);
-    let scene = load_folder(Path::new(&path), &Limits::default()).unwrap();
-    assert_eq!(scene.triangle_count(), generated.triangles);
-    // The summer-afternoon sun over the theatre is up and in the south-west.
-    match &scene.lights[0] {
-        ResolvedLight::Sun { azimuth_deg, elevation_deg, .. } => {
-            assert!(
-                (180.0..270.0).contains(azimuth_deg) && *elevation_deg > 30.0,
-                "{azimuth_deg} {elevation_deg}"
-            );
-        }
-        other => panic!("{other:?}"),
-    }
-    assert_eq!(scene.state_of("as-found", "facade", "travertine"), Some("degraded"));
-    assert_eq!(scene.state_of("cleaned", "facade", "puddinga"), Some("cleaned"));
-}
-
 /// A house without a floor (walls and a flat roof, wound outwards), as OBJ text in Z-up world
 /// coordinates mapped to the file's by `to_file`.
 fn open_house_obj(to_file: impl Fn([f32; 3]) -> [f32; 3]) -> String {

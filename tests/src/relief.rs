@@ -23,7 +23,7 @@ pub fn relief_studio(dir: &Path, nx: usize, ny: usize) -> (Coordinator, String, 
 /// Writes `relief.ply` and `scene.toml` into `dir` (which exists).
 pub fn relief_scene(dir: &Path, nx: usize, ny: usize) {
     let mut f = std::io::BufWriter::new(std::fs::File::create(dir.join("relief.ply")).unwrap());
-    restauro_scene::relief::write_ply(&mut f, nx, ny).unwrap();
+    restauro_demo::scenes::relief::write_ply(&mut f, nx, ny).unwrap();
     f.flush().unwrap();
-    std::fs::write(dir.join("scene.toml"), restauro_scene::relief::SCENE_TOML).unwrap();
+    std::fs::write(dir.join("scene.toml"), restauro_demo::scenes::relief::SCENE_TOML).unwrap();
 }

@@ -388,7 +388,7 @@ fn texture_seeds(extension: &str) -> Vec<(String, Vec<u8>)> {
 }
 
 fn obj_seeds() -> Vec<(String, Vec<u8>)> {
-    let board = restauro_scene::samples::generate("D65", 16, 12, 1).board_obj;
+    let board = restauro_demo::scenes::samples::generate("D65", 16, 12, 1).board_obj;
     let rich = "# parts by material and group, texture coordinates, normals, negative indices\n\
         mtllib other.mtl\no block\nv 0 0 0\nv 1 0 0\nv 1 0 1\nv 0 0 1 1.0\nv 0.5 0 1.5 0.2 0.3 0.4\n\
         vt 0 0\nvt 1 0\nvt 1 1\nvn 0 -1 0\ng front\nusemtl stone\nf 1/1/1 2/2/1 3/3/1\n\
@@ -589,7 +589,7 @@ fn exr_image(width: usize, height: usize) -> XyzImage {
 
 /// A bundle archive of a small Aosta facade (`scene bundle --out`).
 fn archive_seeds(dir: &Path) -> Vec<(String, Vec<u8>)> {
-    let aosta = restauro_scene::aosta::generate(16, 9, 1);
+    let aosta = restauro_demo::scenes::aosta::generate(16, 9, 1);
     let folder = dir.join("archive-seed");
     std::fs::create_dir_all(folder.join("meshes")).unwrap();
     std::fs::write(folder.join("aosta.toml"), &aosta.scene_toml).unwrap();
@@ -604,7 +604,7 @@ fn archive_seeds(dir: &Path) -> Vec<(String, Vec<u8>)> {
 /// The Aosta folder as a file manager zips it, its entries deflated, and stored.
 fn zip_seeds() -> Vec<(String, Vec<u8>)> {
     use std::io::Write;
-    let aosta = restauro_scene::aosta::generate(16, 9, 1);
+    let aosta = restauro_demo::scenes::aosta::generate(16, 9, 1);
     [zip::CompressionMethod::Deflated, zip::CompressionMethod::Stored]
         .into_iter()
         .map(|method| {
@@ -813,8 +813,8 @@ fn readers() -> Vec<Reader> {
     };
 
     // The scene TOML itself: the demo's scenes and one that uses every kind of file and light.
-    let aosta = restauro_scene::aosta::generate(16, 9, 1);
-    let samples = restauro_scene::samples::generate("A", 16, 12, 1);
+    let aosta = restauro_demo::scenes::aosta::generate(16, 9, 1);
+    let samples = restauro_demo::scenes::samples::generate("A", 16, 12, 1);
     let facade = "g travertine\nv 0 0 0\nv 1 0 0\nv 1 0 1\nf 1 2 3\ng puddinga\nf 1 3 2\ng mortar\nf 2 3 1\ng paving\nf 1 2 3\ng ground\nf 3 2 1\ng interior\nf 2 1 3\n";
     let everything = format!(
         "{}\n[[objects]]\nname = \"scan\"\nmesh = \"meshes/scan.ply\"\nmaterial = \"grey\"\ntransform = {{ translate = [0.0, 1.0, 0.0], rotate_deg = [0.0, 0.0, 30.0], scale = [1.0, 2.0, 1.0] }}\nup_axis = \"y\"\n\n[[objects]]\nname = \"model\"\nmesh = \"meshes/model.glb\"\nmaterials = {{ marble = \"shiny\" }}\nmaterial = \"grey\"\n\n[[objects]]\nname = \"world\"\nmesh = \"meshes/world.wrl\"\nmaterial = \"grey\"\nreplaces = {{ object = \"m\", groups = [\"default\"] }}\n\n[materials.shiny]\nmodel = \"cook-torrance\"\nreflectance = \"dirty\"\nroughness = 0.3\nior = 1.5\ndegraded = {{ reflectance = \"grey\", map = \"survey\", classes = [\"crust\"] }}\n\n[[maps]]\nname = \"survey\"\nimage = \"maps/survey.png\"\ncorner = [0.0, 0.0, 0.0]\nu = [1.0, 0.0, 0.0]\nv = [0.0, 0.0, 1.0]\nclasses = [{{ name = \"crust\", colour = [0, 0, 0], spectrum = \"soot\" }}, {{ name = \"moss\", colour = [0, 128, 0], spectrum = \"grey\" }}]\n\n[spectra.lamp]\nfile = \"spectra/lamp.csv\"\nextrapolate = true\n\n[spectra.dirty]\nmix = [{{ spectrum = \"grey\", weight = 0.6 }}, {{ spectrum = \"soot\", weight = 0.4 }}]\n\n[[lights]]\nkind = \"spot\"\nposition = [0.0, -3.0, 3.0]\naim = [0.0, 0.0, 0.0]\nintensity_cd = 2000.0\ncone_deg = 20.0\nfalloff_deg = 5.0\nspectrum = \"lamp\"\nies = \"lamps/lamp.ldt\"\n\n[[lights]]\nkind = \"sky\"\npreset = \"overcast\"\nspectrum = \"light\"\n\n[[lights]]\nkind = \"sun\"\nspectrum = \"light\"\npreset = \"sun\"\nsite = {{ latitude_deg = 45.7, longitude_deg = 7.3, height_m = 580.0, datetime = \"2026-06-21T12:00:00+02:00\" }}\n\n[variants.as-found]\nstate = \"degraded\"\nstates = {{ \"model/marble\" = \"base\" }}\n",

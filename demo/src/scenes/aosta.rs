@@ -527,11 +527,11 @@ pub enum Lighting {
     Floodlit,
 }
 
-/// The luminaires of the floodlit scene, by file name (shipped in `scene/data/photometric/`,
+/// The luminaires of the floodlit scene, by file name (shipped in `demo/data/photometric/`,
 /// written beside the scene in `photometry/`; their provenance in that folder's README).
 pub const PHOTOMETRY: [(&str, &str); 2] = [
-    ("asa_15m_r2.ies", include_str!("../data/photometric/asa_15m_r2.ies")),
-    ("dt106.ies", include_str!("../data/photometric/dt106.ies")),
+    ("asa_15m_r2.ies", include_str!("../../data/photometric/asa_15m_r2.ies")),
+    ("dt106.ies", include_str!("../../data/photometric/dt106.ies")),
 ];
 
 const CLEAR_CIE: &str = r#"[[lights]]
@@ -733,7 +733,7 @@ mod tests {
     #[test]
     fn the_facade_is_masonry_of_the_stated_size() {
         let scene = generate(640, 360, 1);
-        let mesh = crate::obj::parse(&scene.facade_obj, Path::new("facade.obj")).unwrap();
+        let mesh = restauro_scene::obj::parse(&scene.facade_obj, Path::new("facade.obj")).unwrap();
         assert_eq!(mesh.triangles.len(), scene.triangles);
         let parts: Vec<String> = mesh.triangles_per_group().into_iter().map(|(n, _)| n).collect();
         assert_eq!(parts, ["ground", "interior", "mortar", "paving", "puddinga", "travertine"]);

@@ -10,7 +10,7 @@
 use std::fmt::Write as _;
 
 /// The photo, a 512 × 512 grey PNG.
-pub const PHOTO: &[u8] = include_bytes!("../../data/textures/gravel04.png");
+pub const PHOTO: &[u8] = include_bytes!("../../../data/textures/gravel04.png");
 
 /// The file name the scene gives the photo, beside it.
 pub const PHOTO_FILE: &str = "textures/conglomerate.png";
@@ -106,7 +106,7 @@ fn scene_toml(width: u32, height: u32, spp: u32) -> String {
          model = \"lambert\"\nreflectance = \"puddinga\"\ntexture = \"{PHOTO_FILE}\"\ndetail = \"luminance\"\n\
          degraded = {{ reflectance = \"puddinga_soiled\" }}\ncleaned = {{ reflectance = \"puddinga\" }}\n\n\
          [materials.paving]\nmodel = \"lambert\"\nreflectance = \"paving\"\n\n",
-        crate::aosta::STONE_SPECTRA
+        super::aosta::STONE_SPECTRA
     );
     for (name, material, _, _) in BLOCKS {
         let _ = writeln!(
@@ -115,7 +115,7 @@ fn scene_toml(width: u32, height: u32, spp: u32) -> String {
         );
     }
     s += "[[objects]]\nname = \"ground\"\nmesh = \"blocks/ground.obj\"\nmaterial = \"paving\"\n\n";
-    s += crate::aosta::SUMMER_AFTERNOON;
+    s += super::aosta::SUMMER_AFTERNOON;
     let states: Vec<String> =
         BLOCKS.iter().map(|(n, _, st, _)| format!("\"{n}\" = \"{st}\"")).collect();
     let _ = write!(
@@ -148,7 +148,8 @@ mod tests {
         std::fs::write(dir.path().join(PHOTO_FILE), PHOTO).unwrap();
         std::fs::write(dir.path().join("blocks.toml"), &g.scene_toml).unwrap();
         let scene =
-            crate::load::load_folder(&dir.path().join("blocks.toml"), &Default::default()).unwrap();
+            restauro_scene::load::load_folder(&dir.path().join("blocks.toml"), &Default::default())
+                .unwrap();
         assert_eq!(scene.textures[PHOTO_FILE].width, 512);
         assert_eq!(scene.state_of(VARIANT, "photo-found", "default"), Some("degraded"));
     }

@@ -11,7 +11,7 @@
 //! with the carbon-black soot proxy (30 %). The grey board and the white tile are ideal neutral
 //! reflectances (flat 30 % and 90 %), written beside the scene as CSV files.
 
-use crate::aosta::STONE_SPECTRA;
+use super::aosta::STONE_SPECTRA;
 use std::fmt::Write as _;
 
 /// One square on the board.

@@ -1,0 +1,7 @@
+//! restauro-demo: what `restauro demo` shows, and the procedural scenes the tests and benchmarks
+//! render: the south facade of the Roman theatre of Aosta ([`scenes::aosta`]), the paper's board
+//! of stone samples ([`scenes::samples`]), blocks of pudding stone with a photograph as detail
+//! ([`scenes::photo_block`]) and a relief of many triangles ([`scenes::relief`]). Each is written
+//! as a restorer would write it: a scene file with its meshes, spectra and luminaires.
+
+pub mod scenes;

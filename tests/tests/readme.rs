@@ -1,8 +1,9 @@
-//! The README's commands, run in order as a new user runs them, so that every line stays true.
+//! The commands of the README and of the guides, run in order as a new user runs them, so that
+//! every line stays true; and every link between those pages leads somewhere.
 //!
-//! Every ```sh block of the README is taken, in order, and run as one bash script in an empty
-//! folder (so a block may use what an earlier one wrote, as the README's order promises), with
-//! only these changes:
+//! Every ```sh block of the README and then of the guides ([`GUIDES`], in the order each guide
+//! says it follows) is taken, in order, and run as one bash script in an empty folder (so a block
+//! may use what an earlier one wrote, as the pages' order promises), with only these changes:
 //!
 //! * `cargo run --release -p restauro --` is the `restauro` executable these tests were built
 //!   with (the same code; a second, release build would take minutes);
@@ -59,6 +60,23 @@ fn adapted(line: &str, (port, studio_port): (u16, u16)) -> Option<String> {
     Some(out.replace("--spp 16", "--spp 1"))
 }
 
+/// The pages whose commands run, in the order a reader follows them: the README first, then the
+/// guides, each of which says what it builds on.
+const GUIDES: [&str; 4] =
+    ["README.md", "docs/restorers.md", "docs/lighting.md", "docs/operators.md"];
+
+/// The pages whose links are followed: the guides, and every other page of `docs/`.
+fn pages(root: &std::path::Path) -> Vec<std::path::PathBuf> {
+    let mut pages: Vec<_> = std::fs::read_dir(root.join("docs"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "md"))
+        .collect();
+    pages.sort();
+    pages.insert(0, root.join("README.md"));
+    pages
+}
+
 fn free_port() -> u16 {
     std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port()
 }
@@ -66,9 +84,11 @@ fn free_port() -> u16 {
 #[test]
 fn every_readme_command_runs_in_order() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
-    let lines = shell_lines(&readme);
-    assert!(lines.len() > 20, "premise: the README has its commands: {lines:?}");
+    let lines: Vec<String> = GUIDES
+        .iter()
+        .flat_map(|page| shell_lines(&std::fs::read_to_string(root.join(page)).unwrap()))
+        .collect();
+    assert!(lines.len() > 20, "premise: the pages have their commands: {lines:?}");
     let ports = (free_port(), free_port());
     let body: Vec<String> = lines.iter().filter_map(|l| adapted(l, ports)).collect();
     // Whatever the script leaves running (a coordinator it did not get to stop) is stopped.
@@ -92,7 +112,7 @@ fn every_readme_command_runs_in_order() {
     let out = restauro_tests::output_within(&mut bash, restauro_tests::patience());
     assert!(
         out.status.success(),
-        "the README's commands failed:\n{}\n--- stdout\n{}\n--- stderr\n{}",
+        "the commands of the README and the guides failed:\n{}\n--- stdout\n{}\n--- stderr\n{}",
         script,
         String::from_utf8_lossy(&out.stdout),
         String::from_utf8_lossy(&out.stderr)
@@ -137,4 +157,80 @@ fn copy_folder(from: &std::path::Path, to: &std::path::Path) {
             std::fs::copy(&path, &target).unwrap();
         }
     }
+}
+
+/// The GitHub anchor of a heading: lower case, punctuation dropped, spaces as hyphens.
+fn anchor(heading: &str) -> String {
+    heading
+        .trim()
+        .to_lowercase()
+        .chars()
+        .filter(|c| c.is_alphanumeric() || *c == ' ' || *c == '-' || *c == '_')
+        .map(|c| if c == ' ' { '-' } else { c })
+        .collect()
+}
+
+/// The anchors of a Markdown page's headings (outside code blocks).
+fn anchors(text: &str) -> Vec<String> {
+    let mut in_code = false;
+    let mut out = Vec::new();
+    for line in text.lines() {
+        if line.trim_start().starts_with("```") {
+            in_code = !in_code;
+        } else if !in_code && line.starts_with('#') {
+            out.push(anchor(line.trim_start_matches('#')));
+        }
+    }
+    out
+}
+
+/// The relative links of a Markdown page: `](target)`, web addresses left out.
+fn links(text: &str) -> Vec<String> {
+    text.split("](")
+        .skip(1)
+        .filter_map(|rest| rest.split(')').next())
+        .filter(|t| !t.starts_with("http://") && !t.starts_with("https://"))
+        .map(str::to_owned)
+        .collect()
+}
+
+/// Every link of the README and of `docs/` names a file of the checkout, and a heading of the
+/// page where it names one, so that a reader sent somewhere finds it.
+#[test]
+fn every_link_between_the_pages_leads_somewhere() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let mut broken = Vec::new();
+    for page in pages(&root) {
+        let text = std::fs::read_to_string(&page).unwrap();
+        for link in links(&text) {
+            let (file, fragment) = link.split_once('#').unwrap_or((&link, ""));
+            let target =
+                if file.is_empty() { page.clone() } else { page.parent().unwrap().join(file) };
+            if !target.exists() {
+                broken.push(format!("{}: {link}: no such file", page.display()));
+                continue;
+            }
+            let is_markdown = target.extension().is_some_and(|e| e == "md");
+            if !fragment.is_empty() && is_markdown {
+                let headings = anchors(&std::fs::read_to_string(&target).unwrap());
+                if !headings.iter().any(|h| h == fragment) {
+                    broken.push(format!("{}: {link}: no heading #{fragment}", page.display()));
+                }
+            }
+        }
+    }
+    assert!(broken.is_empty(), "links that lead nowhere:\n{}", broken.join("\n"));
+}
+
+#[test]
+fn anchors_are_made_as_github_makes_them() {
+    assert_eq!(
+        anchor(" What a person standing there sees: the seen image and display"),
+        "what-a-person-standing-there-sees-the-seen-image-and-display"
+    );
+    assert_eq!(anchors("# A b\n```\n# not\n```\n## C-d_e"), ["a-b", "c-d_e"]);
+    assert_eq!(
+        links("[a](b.md#c) [w](https://x.org) ![i](images/p.png)"),
+        ["b.md#c", "images/p.png"]
+    );
 }

@@ -74,7 +74,7 @@ fn place_mesh(mesh: &Path, out: &Path) -> Result<String> {
     let is_obj = mesh.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj"));
     let text =
         if is_obj { std::fs::read_to_string(mesh).unwrap_or_default() } else { String::new() };
-    for companion in restauro_scene::obj_library::companions(&text, folder) {
+    for companion in restauro_scene::formats::obj::library::companions(&text, folder) {
         let inside = Path::new(&companion).components().all(|c| matches!(c, Component::Normal(_)));
         if !inside {
             continue;

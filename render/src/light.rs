@@ -21,7 +21,7 @@
 
 use crate::spherical_rectangle::SphericalRectangle;
 use glam::Vec3A;
-use restauro_scene::photometric::Photometry;
+use restauro_scene::formats::photometric::Photometry;
 use restauro_spectral::Spectrum;
 
 /// The nearest distance at which a point light's inverse-square law is applied. A real

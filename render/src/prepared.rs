@@ -630,15 +630,15 @@ fn luminous(scene: &LoadedScene, spectrum: &str) -> Result<Spectrum, TraceError>
         .map_err(|e| TraceError::Scene(e.to_string()))
 }
 
-/// The photometric frame of a luminaire (`restauro_scene::photometric::luminaire_frame`).
+/// The photometric frame of a luminaire (`restauro_scene::formats::photometric::luminaire_frame`).
 fn frame(position: [f64; 3], aim: Option<[f64; 3]>) -> [Vec3A; 3] {
-    restauro_scene::photometric::luminaire_frame(position, aim)
+    restauro_scene::formats::photometric::luminaire_frame(position, aim)
         .map(|row| Vec3A::from(row.map(|v| v as f32)))
 }
 
 /// A measured distribution, its peak scaled to the luminaire's `intensity_cd`.
 fn photometric(
-    p: &restauro_scene::photometric::Photometry,
+    p: &restauro_scene::formats::photometric::Photometry,
     position: [f64; 3],
     aim: Option<[f64; 3]>,
 ) -> Distribution {

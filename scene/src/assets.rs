@@ -60,14 +60,14 @@ pub fn sibling(reference: &str, relative: &str) -> Result<String, String> {
 pub fn vrml_inlines<'a>(
     assets: &'a dyn Assets,
     place: &'a str,
-) -> impl Fn(&str, &str) -> Result<crate::vrml::Inlined> + Sync + 'a {
+) -> impl Fn(&str, &str) -> Result<crate::formats::vrml::Inlined> + Sync + 'a {
     move |base: &str, url: &str| {
         let reference = sibling(base, url).map_err(|e| {
             SceneError::invalid(assets.display_path(base), format!("Inline `{url}`"), e)
         })?;
         let shown = assets.display_path(&reference);
         let text = utf8_text(assets.read(&reference, place)?, &shown)?;
-        Ok(crate::vrml::Inlined { reference, shown, text })
+        Ok(crate::formats::vrml::Inlined { reference, shown, text })
     }
 }
 

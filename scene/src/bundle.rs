@@ -47,7 +47,7 @@ pub fn bundle_files(mut scene: SceneFile, assets: &dyn Assets, limits: &Limits) 
                 let file = crate::assets::sibling(reference, uri).map_err(invalid)?;
                 assets.read(&file, &place).map_err(|e| invalid(e.to_string()))
             };
-            bytes = crate::gltf_mesh::embed_buffers(&bytes, &shown, &beside)?;
+            bytes = crate::formats::gltf::mesh::embed_buffers(&bytes, &shown, &beside)?;
         }
         let hash = blake3::hash(&bytes).to_hex().to_string();
         *reference = format!("blake3:{hash}.{}", extension(reference));
@@ -90,12 +90,15 @@ fn embed_nested(
             let text = crate::assets::utf8_text(bytes, &shown)?;
             let source = crate::assets::vrml_inlines(assets, place);
             let mut store = |bytes: Vec<u8>| store(bytes, "wrl");
-            crate::vrml::embed_inlines(&text, &shown, reference, limits, &source, &mut store)?
-                .into_bytes()
+            crate::formats::vrml::embed_inlines(
+                &text, &shown, reference, limits, &source, &mut store,
+            )?
+            .into_bytes()
         }
         "obj" => {
             let text = crate::assets::utf8_text(bytes, &shown)?;
-            crate::obj_library::embed(&text, reference, assets, place, &mut store)?.into_bytes()
+            crate::formats::obj::library::embed(&text, reference, assets, place, &mut store)?
+                .into_bytes()
         }
         _ => bytes,
     })

@@ -22,9 +22,9 @@
 //! `extras.restauro_coarse`, whose primitives index the same vertices (see
 //! [`vertex_clustering`]).
 
+use crate::formats::texture::{Texture, luminance};
 use crate::load::LoadedScene;
 use crate::scene_file::{Detail, Material};
-use crate::texture::{Texture, luminance};
 use crate::vertex_clustering;
 use restauro_spectral::rgb_space::Transfer;
 use serde_json::{Value, json};

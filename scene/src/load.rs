@@ -6,14 +6,16 @@
 
 use crate::assets::{Assets, FolderAssets, extension, utf8_text};
 use crate::error::{Result, SceneError};
+use crate::formats::gltf::mesh as gltf_mesh;
+use crate::formats::photometric::{self, Photometry};
+use crate::formats::{obj, ply, vrml};
 use crate::mesh::Mesh;
-use crate::photometric::{self, Photometry};
 use crate::scene_file::{
     self, Light, MaterialModel, SceneFile, SkyModel, SkyPreset, SpectrumSource, SunPreset,
     Transmittance, UpAxis,
 };
 use crate::sun::{Site, SunPosition, direction_to_sun, sun_position};
-use crate::{gltf_mesh, obj, ply, upright, vrml};
+use crate::upright;
 use glam::{DMat3, DMat4, DVec3};
 use restauro_spectral::csv::{Quantity, load as load_csv};
 use restauro_spectral::tabulated::Coverage;
@@ -204,7 +206,7 @@ pub struct LoadedScene {
     /// report a position in the file's coordinates.
     pub origin_m: [f64; 3],
     /// The materials' photo textures, decoded, by their reference in the file.
-    pub textures: BTreeMap<String, std::sync::Arc<crate::texture::Texture>>,
+    pub textures: BTreeMap<String, std::sync::Arc<crate::formats::texture::Texture>>,
     pub camera: ResolvedCamera,
     /// Every named spectrum on the grid.
     pub spectra: BTreeMap<String, Spectrum>,
@@ -699,7 +701,7 @@ fn import_mesh(
         "obj" => {
             let text = utf8_text(bytes, &name)?;
             let mut mesh = obj::parse_limited(&text, &name, limits)?;
-            let notes = crate::obj_library::apply(
+            let notes = crate::formats::obj::library::apply(
                 &mut mesh,
                 &text,
                 reference,
@@ -1598,7 +1600,7 @@ pub fn load(file: SceneFile, assets: &dyn Assets, limits: &Limits) -> Result<Loa
 fn check_maps(
     ctx: &mut Ctx,
     limits: &Limits,
-    textures: &mut BTreeMap<String, std::sync::Arc<crate::texture::Texture>>,
+    textures: &mut BTreeMap<String, std::sync::Arc<crate::formats::texture::Texture>>,
 ) -> Result<()> {
     let file = ctx.file;
     let mut names = BTreeSet::new();
@@ -1616,7 +1618,7 @@ fn check_maps(
         }
         let bytes = ctx.assets.read(&m.image, &format!("{place}.image"))?;
         let shown = ctx.assets.display_path(&m.image);
-        let texture = crate::texture::decode(&bytes, &ext, &shown, limits.max_pixels)?;
+        let texture = crate::formats::texture::decode(&bytes, &ext, &shown, limits.max_pixels)?;
         textures.insert(m.image.clone(), std::sync::Arc::new(texture));
         let (u, v) = (DVec3::from_array(m.u), DVec3::from_array(m.v));
         if !(finite3(m.corner) && finite3(m.u) && finite3(m.v)) || u.cross(v).length() < 1e-9 {
@@ -1698,8 +1700,9 @@ fn check_soiling(ctx: &mut Ctx, place: &str, s: &crate::scene_file::Soiling) -> 
 fn load_textures(
     ctx: &Ctx,
     limits: &Limits,
-) -> Result<BTreeMap<String, std::sync::Arc<crate::texture::Texture>>> {
-    let mut out: BTreeMap<String, std::sync::Arc<crate::texture::Texture>> = BTreeMap::new();
+) -> Result<BTreeMap<String, std::sync::Arc<crate::formats::texture::Texture>>> {
+    let mut out: BTreeMap<String, std::sync::Arc<crate::formats::texture::Texture>> =
+        BTreeMap::new();
     for (name, m) in &ctx.file.materials {
         let states = [("", m.texture.as_ref(), m.white_patch)].into_iter().chain(
             [("degraded", &m.degraded), ("cleaned", &m.cleaned)].map(|(st, o)| {
@@ -1733,7 +1736,7 @@ fn load_textures(
                 continue;
             }
             let ext = extension(reference);
-            if !crate::texture::EXTENSIONS.contains(&ext.as_str()) {
+            if !crate::formats::texture::EXTENSIONS.contains(&ext.as_str()) {
                 return Err(ctx.invalid(
                     place,
                     format!("`{reference}`: `.{ext}` is not an image restauro reads; use a PNG or JPEG file"),
@@ -1741,7 +1744,7 @@ fn load_textures(
             }
             let bytes = ctx.assets.read(reference, &place)?;
             let shown = ctx.assets.display_path(reference);
-            let texture = crate::texture::decode(&bytes, &ext, &shown, limits.max_pixels)?;
+            let texture = crate::formats::texture::decode(&bytes, &ext, &shown, limits.max_pixels)?;
             check_white_patch(ctx, &at, &texture, patch)?;
             out.insert(reference.clone(), std::sync::Arc::new(texture));
         }
@@ -1753,7 +1756,7 @@ fn load_textures(
 fn check_white_patch(
     ctx: &Ctx,
     at: &str,
-    texture: &crate::texture::Texture,
+    texture: &crate::formats::texture::Texture,
     patch: Option<scene_file::PixelRect>,
 ) -> Result<()> {
     let Some(patch) = patch else { return Ok(()) };

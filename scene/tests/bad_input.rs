@@ -4,8 +4,9 @@
 //! reads, not an output of the code.
 
 use base64::Engine;
+use restauro_scene::formats::gltf::mesh as gltf_mesh;
+use restauro_scene::formats::{obj, ply, vrml};
 use restauro_scene::load::{Limits, LoadedScene, load_folder};
-use restauro_scene::{gltf_mesh, obj, ply, vrml};
 use std::path::{Path, PathBuf};
 use std::sync::mpsc;
 use std::time::Duration;

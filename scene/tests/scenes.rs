@@ -627,7 +627,7 @@ fn the_preview_glb_holds_the_scene_as_it_is_in_the_world() {
     assert!((offset[0] - 500002.0).abs() < 0.01 && (offset[2] - 1.505).abs() < 1e-3, "{offset:?}");
     let none =
         |uri: &str| -> restauro_scene::Result<Vec<u8>> { panic!("no external buffer {uri}") };
-    let (mesh, _) = restauro_scene::gltf_mesh::parse_with_cameras(
+    let (mesh, _) = restauro_scene::formats::gltf::mesh::parse_with_cameras(
         &preview.glb,
         Path::new("preview.glb"),
         &Limits::default(),
@@ -1017,7 +1017,7 @@ fn the_preview_carries_photos_and_vertex_colours_as_detail() {
     // Read back by restauro's own reader: the scan's colours as the PLY has them, the photo
     // in grey at its own size (256 texels, under the preview's bound).
     let none = |uri: &str| -> restauro_scene::Result<Vec<u8>> { panic!("no external file {uri}") };
-    let (back, _) = restauro_scene::gltf_mesh::parse_with_cameras(
+    let (back, _) = restauro_scene::formats::gltf::mesh::parse_with_cameras(
         &preview.glb,
         Path::new("preview.glb"),
         &Limits::default(),

@@ -319,7 +319,7 @@ impl Farm {
     /// Reads an IES (LM-63) or EULUMDAT file named `file_name` as a scene would, and keeps it
     /// among the assets; refused with the reader's message, naming the file.
     pub fn keep_photometry(&self, file_name: &str, bytes: &[u8]) -> Result<PhotometryInfo> {
-        use restauro_scene::photometric;
+        use restauro_scene::formats::photometric;
         type Reader = fn(&str, &std::path::Path) -> restauro_scene::Result<photometric::Photometry>;
         let extension = sent_file(file_name, bytes, &["ies", "ldt"], MAX_PHOTOMETRY_BYTES)?;
         let parse: Reader =

@@ -173,7 +173,10 @@ pub struct LightView {
 pub const SOLID_GAMMA_STEP_DEG: usize = 5;
 pub const SOLID_C_STEP_DEG: usize = 10;
 
-fn solid(p: &restauro_scene::photometric::Photometry, frame: [[f64; 3]; 3]) -> Vec<[f32; 3]> {
+fn solid(
+    p: &restauro_scene::formats::photometric::Photometry,
+    frame: [[f64; 3]; 3],
+) -> Vec<[f32; 3]> {
     let peak = p.peak_cd().max(1e-12);
     let mut out = Vec::new();
     for g in (0..=180).step_by(SOLID_GAMMA_STEP_DEG) {
@@ -191,8 +194,8 @@ fn solid(p: &restauro_scene::photometric::Photometry, frame: [[f64; 3]; 3]) -> V
 }
 
 fn light_views(scene: &LoadedScene, offset: [f64; 3]) -> Vec<LightView> {
+    use restauro_scene::formats::photometric::luminaire_frame;
     use restauro_scene::load::ResolvedLight;
-    use restauro_scene::photometric::luminaire_frame;
     use restauro_scene::scene_file::Light;
     // Luminaires resolve one to one and in order (a sun after sunset is left out, a luminaire
     // never is).

@@ -733,7 +733,8 @@ mod tests {
     #[test]
     fn the_facade_is_masonry_of_the_stated_size() {
         let scene = generate(640, 360, 1);
-        let mesh = restauro_scene::obj::parse(&scene.facade_obj, Path::new("facade.obj")).unwrap();
+        let mesh = restauro_scene::formats::obj::parse(&scene.facade_obj, Path::new("facade.obj"))
+            .unwrap();
         assert_eq!(mesh.triangles.len(), scene.triangles);
         let parts: Vec<String> = mesh.triangles_per_group().into_iter().map(|(n, _)| n).collect();
         assert_eq!(parts, ["ground", "interior", "mortar", "paving", "puddinga", "travertine"]);

@@ -55,7 +55,8 @@ mod tests {
     fn the_relief_reads_back_with_its_triangles() {
         let mut bytes = Vec::new();
         super::write_ply(&mut bytes, 4, 3).unwrap();
-        let mesh = restauro_scene::ply::parse(&bytes, std::path::Path::new("relief.ply")).unwrap();
+        let mesh = restauro_scene::formats::ply::parse(&bytes, std::path::Path::new("relief.ply"))
+            .unwrap();
         assert_eq!((mesh.positions.len(), mesh.triangles.len()), (20, 24));
         let b = mesh.bounds().unwrap();
         assert_eq!((b.min[0], b.max[0], b.max[2]), (-25.0, 25.0, 25.0));

@@ -11,10 +11,10 @@
 //! loader turns it Z-up.
 
 use crate::error::{Result, SceneError};
+use crate::formats::vrml::Viewpoint;
 use crate::guard;
 use crate::load::Limits;
 use crate::mesh::{Group, Mesh, unit_or_zero};
-use crate::vrml::Viewpoint;
 use base64::Engine;
 use glam::{DMat3, DMat4, DVec3};
 use gltf::accessor::{DataType, Dimensions};
@@ -166,7 +166,7 @@ struct Totals<'a> {
     /// Reads a file beside the model (buffers, images).
     external: External<'a>,
     /// The materials' photos decoded so far.
-    images: crate::gltf_texture::Decoded,
+    images: crate::formats::gltf::texture::Decoded,
 }
 
 /// A node's perspective camera as a viewpoint in the file's coordinates: glTF cameras look
@@ -317,7 +317,7 @@ fn add_node(
             let has_normals =
                 has(gltf::Semantic::Normals, &vec3, "VEC3 of float (componentType 5126)")?;
             let material = prim.material();
-            let photo = crate::gltf_texture::base_colour_photo(
+            let photo = crate::formats::gltf::texture::base_colour_photo(
                 &material,
                 buffers,
                 path,

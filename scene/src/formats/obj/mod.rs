@@ -4,8 +4,10 @@
 //! tobj drops `usemtl` names unless a `.mtl` library loads, and a scene's spectra replace the
 //! library's colours anyway; so the reader hands tobj a library made up here with one entry per
 //! `usemtl` name in the file, and never opens `.mtl` files itself (the library's photos are
-//! read by [`crate::obj_library`]). Faces are checked before tobj reads them, so that a refusal names its line (tobj's
+//! read by [`crate::formats::obj::library`]). Faces are checked before tobj reads them, so that a refusal names its line (tobj's
 //! errors carry no position, and it takes a two-vertex face for a degenerate triangle).
+
+pub mod library;
 
 use crate::error::{Result, SceneError};
 use crate::guard;

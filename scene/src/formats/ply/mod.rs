@@ -5,14 +5,17 @@
 //! largest value (255 for `uchar`) or 1 for floating point, and decoded to linear.
 //!
 //! Binary files (what scanners export, and the big ones) are decoded straight into columns
-//! ([`crate::ply_binary`]); ASCII files are read with ply-rs, whose element maps cost several
+//! ([`crate::formats::ply::binary`]); ASCII files are read with ply-rs, whose element maps cost several
 //! hundred bytes a vertex. Both are checked first by [`ply_layout`].
+
+mod binary;
+mod layout;
 
 use crate::error::{Result, SceneError};
 use crate::guard;
 use crate::load::Limits;
 use crate::mesh::{Group, Mesh, unit_or_zero};
-use crate::ply_layout::{self, Encoding, Header};
+use layout::{Encoding, Header};
 use ply_rs::parser::Parser;
 use ply_rs::ply::{DefaultElement, Property};
 use std::path::Path;
@@ -84,8 +87,8 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Mesh> {
 pub fn parse_limited(bytes: &[u8], path: &Path, limits: &Limits) -> Result<Mesh> {
     // Everything ply-rs would refuse, panic on or loop over is refused first, in words; the
     // binary decoder relies on the same checks.
-    let header = ply_layout::read_header(bytes, path)?;
-    ply_layout::check_body(&header, bytes, path, limits)?;
+    let header = layout::read_header(bytes, path)?;
+    layout::check_body(&header, bytes, path, limits)?;
     for (name, need) in [
         ("vertex", "a PLY mesh needs vertices with x, y, z"),
         ("face", "restauro needs faces, not a point cloud"),
@@ -103,7 +106,9 @@ pub fn parse_limited(bytes: &[u8], path: &Path, limits: &Limits) -> Result<Mesh>
     }
     let columns = match header.encoding {
         Encoding::Ascii => ascii_columns(bytes, path, &header)?,
-        Encoding::BigEndian | Encoding::LittleEndian => crate::ply_binary::decode(&header, bytes),
+        Encoding::BigEndian | Encoding::LittleEndian => {
+            crate::formats::ply::binary::decode(&header, bytes)
+        }
     };
     mesh_of(columns, path)
 }

@@ -1,11 +1,11 @@
 //! Binary PLY bodies decoded straight into the columns a mesh needs, one pass over the bytes
 //! and no allocation per element: a scan of millions of triangles reads in seconds and in
 //! little more memory than its mesh. The body's layout has been checked before (by
-//! [`crate::ply_layout::check_body`]: every element and list fits in the file); a byte the
+//! [`crate::formats::ply::layout::check_body`]: every element and list fits in the file); a byte the
 //! checks missed reads as the end of the body, never as a panic.
 
-use crate::ply::Columns;
-use crate::ply_layout::{Encoding, Header, Kind, Scalar};
+use crate::formats::ply::Columns;
+use crate::formats::ply::layout::{Encoding, Header, Kind, Scalar};
 
 /// Where an element's wanted values sit among its properties.
 #[derive(Default)]
@@ -19,7 +19,7 @@ struct Wanted {
     list: Option<usize>,
 }
 
-fn wanted(e: &crate::ply_layout::Element) -> Wanted {
+fn wanted(e: &crate::formats::ply::layout::Element) -> Wanted {
     let mut w = Wanted::default();
     if e.name == "vertex" {
         w.position = ["x", "y", "z"].map(|k| e.scalar(k));

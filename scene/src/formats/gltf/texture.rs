@@ -4,8 +4,8 @@
 //! over the measured spectrum the part is bound to, as it takes a material's `texture`.
 
 use crate::error::{Result, SceneError};
-use crate::gltf_mesh::External;
-use crate::texture::{Texture, decode};
+use crate::formats::gltf::mesh::External;
+use crate::formats::texture::{Texture, decode};
 use base64::Engine as _;
 use std::collections::HashMap;
 use std::path::Path;
@@ -105,7 +105,7 @@ fn image_bytes(
                     .decode(data)
                     .map_err(|e| SceneError::invalid(path, &place, format!("bad base64 data: {e}")))
             }
-            None => external(&crate::gltf_mesh::external_path(uri, path, image.index())?),
+            None => external(&crate::formats::gltf::mesh::external_path(uri, path, image.index())?),
         },
     }
 }

@@ -1,23 +1,5 @@
-//! restauro-coordinator: jobs, tile scheduling, leases, framebuffer assembly, the display
-//! pipeline, persistence and the gRPC services. It never links the tracer (restauro-render):
-//! it plans a job from the scene alone and assembles what workers send.
-//!
-//! The domain layer is [`farm`]; [`grpc`] is one door to it (the studio's HTTP API another).
+//! restauro-coordinator: the coordinator process. [`server`] opens the farm's doors
+//! (restauro-farm's gRPC services, restauro-studio's web page and API, and the metrics and
+//! health endpoint) on their listeners, with their limits and TLS, and stops them together.
 
-pub mod assembly;
-pub mod asset_store;
-pub mod auth;
-pub mod callers;
-pub mod error;
-pub mod farm;
-pub mod group_commit;
-pub mod grpc;
-pub mod ids;
-pub mod job;
-pub mod lease;
-pub mod metrics;
-pub mod recent;
-pub mod scheduler;
 pub mod server;
-pub mod store;
-pub mod studio;

@@ -1,14 +1,15 @@
 //! The coordinator process: its command line, and serving both services on one address until
 //! asked to stop.
 
-use crate::auth::{Role, Tokens};
-use crate::callers::CallerLimits;
-use crate::farm::{Config, Farm};
-use crate::grpc::{RenderService, WorkService};
-use crate::scheduler;
 use anyhow::{Context, Result, bail};
+use restauro_farm::auth::{Role, Tokens};
+use restauro_farm::callers::CallerLimits;
+use restauro_farm::farm::{Config, Farm};
+use restauro_farm::grpc::{RenderService, WorkService};
+use restauro_farm::scheduler;
 use restauro_ops::connections::{ConnectionLimits, GuardedListener, GuardedStream};
 use restauro_ops::signal::stop_signal;
+use restauro_ops::signal::stopped;
 use restauro_ops::token::read_token;
 use restauro_proto::pb::render_server::RenderServer;
 use restauro_proto::pb::work_server::WorkServer;
@@ -108,7 +109,7 @@ pub struct CoordinatorArgs {
 }
 
 /// The server's TLS certificate and key, read and checked before anything listens.
-fn tls_identity(args: &CoordinatorArgs) -> Result<Option<crate::studio::TlsPem>> {
+fn tls_identity(args: &CoordinatorArgs) -> Result<Option<restauro_studio::TlsPem>> {
     let (Some(cert), Some(key)) = (&args.tls_cert, &args.tls_key) else {
         return Ok(None);
     };
@@ -122,7 +123,7 @@ fn tls_identity(args: &CoordinatorArgs) -> Result<Option<crate::studio::TlsPem>>
     };
     let cert = read(cert, "certificate", "-----BEGIN CERTIFICATE-----")?;
     let key = read(key, "key", "PRIVATE KEY-----")?;
-    Ok(Some(crate::studio::TlsPem { cert, key }))
+    Ok(Some(restauro_studio::TlsPem { cert, key }))
 }
 
 /// The caller limits of the flags.
@@ -219,17 +220,11 @@ pub struct Endpoints {
     pub studio: Option<SocketAddr>,
 }
 
-/// Resolves once the coordinator's one stop (`serve`'s watch channel) turns true: every server
-/// and task that ends with the coordinator waits on it.
-pub(crate) async fn stopped(mut rx: tokio::sync::watch::Receiver<bool>) {
-    let _ = rx.wait_for(|s| *s).await;
-}
-
 /// Serves until `stop` resolves.
 pub async fn serve(
     config: Config,
     endpoints: Endpoints,
-    tls: Option<crate::studio::TlsPem>,
+    tls: Option<restauro_studio::TlsPem>,
     stop: impl Future<Output = ()> + Send + 'static,
 ) -> Result<()> {
     let listen = endpoints.grpc;
@@ -285,7 +280,7 @@ pub async fn serve(
             let tokens = tokens.clone();
             let stop = stop_rx.clone();
             let (limits, tls) = (callers.connections, tls.clone());
-            Some(crate::studio::serve(at, farm.clone(), tokens, stop, tls, limits).await?)
+            Some(restauro_studio::serve(at, farm.clone(), tokens, stop, tls, limits).await?)
         }
         None => None,
     };

@@ -36,3 +36,9 @@ pub async fn stop_signal(exit_with_stdin: bool) {
         _ = stdin_closed => {}
     }
 }
+
+/// Resolves once a process's one stop (a watch channel set to true when it stops) turns true:
+/// every server and task that ends with the process waits on it.
+pub async fn stopped(mut rx: tokio::sync::watch::Receiver<bool>) {
+    let _ = rx.wait_for(|s| *s).await;
+}

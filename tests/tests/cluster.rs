@@ -251,7 +251,7 @@ fn a_restarted_coordinator_resumes_without_rendering_finished_tiles_again() {
     coordinator.child.kill().unwrap();
     coordinator.child.wait().unwrap();
     let finished = {
-        let store = restauro_coordinator::store::Store::open(&data.join("store.redb")).unwrap();
+        let store = restauro_farm::store::Store::open(&data.join("store.redb")).unwrap();
         store.finished_tiles(&id).unwrap()
     };
     assert!(

@@ -374,7 +374,7 @@ async fn a_late_report_after_the_job_ended_stores_nothing() {
     restauro_tests::signal(&coordinator.child, "-TERM");
     let status = coordinator.child.wait().unwrap();
     assert!(status.success(), "the coordinator exited with {status}");
-    let store = restauro_coordinator::store::Store::open(&data.join("store.redb")).unwrap();
+    let store = restauro_farm::store::Store::open(&data.join("store.redb")).unwrap();
     assert!(store.finished_tiles(&job.job_id).unwrap().is_empty(), "tiles of a done job");
 }
 

@@ -190,7 +190,7 @@ async fn results_of_a_killed_coordinators_leases_are_taken_by_its_successor() {
     coordinator.child.kill().unwrap();
     coordinator.child.wait().unwrap();
     let stored = {
-        let store = restauro_coordinator::store::Store::open(&data.join("store.redb")).unwrap();
+        let store = restauro_farm::store::Store::open(&data.join("store.redb")).unwrap();
         store.finished_tiles(&job.job_id).unwrap()
     };
     let addr = url.strip_prefix("http://").unwrap();

@@ -4,7 +4,7 @@
 //! of them are completed and committed. `Instant::now()` is read for every call, as the coordinator would.
 //! The scenario is repeated to get a measurable duration; setup is not timed.
 
-use restauro_coordinator::scheduler::{Completion, Config, Scheduler, WorkerId};
+use restauro_farm::scheduler::{Completion, Config, Scheduler, WorkerId};
 use std::time::{Duration, Instant};
 
 const WORKERS: u32 = 300;

@@ -1,8 +1,8 @@
 //! What the studio's JSON says of a job and a worker: converted once, here, from the domain's
 //! types (the gRPC door converts the same types to its messages in `grpc.rs`).
 
-use crate::farm::WorkerStatus;
-use crate::job::JobStatus;
+use restauro_farm::farm::WorkerStatus;
+use restauro_farm::job::JobStatus;
 use serde::Serialize;
 
 #[derive(Clone, Debug, PartialEq, Serialize)]

@@ -9,7 +9,7 @@
 //! in the ring and the coordinator is the same, else a fresh `snapshot`.
 
 use super::views::{JobView, WorkerView};
-use crate::farm::Farm;
+use restauro_farm::farm::Farm;
 use serde::Serialize;
 use std::collections::{BTreeMap, VecDeque};
 use std::sync::{Arc, Mutex};

@@ -10,12 +10,12 @@ use super::Studio;
 use super::api::{parse, revision, scene_id};
 use super::appearance::appearance;
 use super::preview::to_world;
-use crate::error::{CoordinatorError, Result};
-use crate::farm::RevisionInfo;
 use axum::Json;
 use axum::body::Bytes;
 use axum::extract::{Path, RawQuery, State};
 use axum::response::{IntoResponse, Response};
+use restauro_farm::error::{CoordinatorError, Result};
+use restauro_farm::farm::RevisionInfo;
 use restauro_scene::edit::{self, Edit, SaveAnnotation, SaveView};
 use restauro_spectral::library;
 use serde::{Deserialize, Serialize};
@@ -100,7 +100,7 @@ pub async fn photometry(
     Path(id): Path<String>,
     RawQuery(query): RawQuery,
     body: Bytes,
-) -> Result<Json<crate::farm::PhotometryInfo>> {
+) -> Result<Json<restauro_farm::farm::PhotometryInfo>> {
     studio.farm.scene_revision(scene_id(&id)?, None)?;
     let name = super::api::query_value(query.as_deref(), "name").unwrap_or_default();
     let farm = studio.farm.clone();
@@ -161,7 +161,7 @@ pub async fn spectrum(
     let name = super::api::query_value(query.as_deref(), "name").unwrap_or_default();
     let extrapolate =
         super::api::query_value(query.as_deref(), "extrapolate").as_deref() == Some("true");
-    crate::farm::sent_file(&name, &body, &["csv", "txt"], MAX_SPECTRUM_BYTES)?;
+    restauro_farm::farm::sent_file(&name, &body, &["csv", "txt"], MAX_SPECTRUM_BYTES)?;
     let text = std::str::from_utf8(&body)
         .map_err(|_| CoordinatorError::Request(format!("{name}: not UTF-8 text")))?;
     let coverage = if extrapolate { Coverage::HoldEnds } else { Coverage::Require };

@@ -5,30 +5,19 @@
 use super::Studio;
 use super::events::Start;
 use super::views::{JobView, WorkerView};
-use crate::error::{CoordinatorError, Result};
-use crate::ids::JobId;
 use axum::Json;
 use axum::body::{Body, Bytes};
 use axum::extract::{Path, RawQuery, State};
 use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
 use axum::response::sse::{Event as SseEvent, KeepAlive, Sse};
 use axum::response::{IntoResponse, Response};
+use restauro_farm::error::{CoordinatorError, Result};
+use restauro_farm::ids::JobId;
 use serde::{Deserialize, Serialize};
 use std::convert::Infallible;
 use std::sync::Arc;
 use tokio::sync::broadcast::error::RecvError;
 use tokio_stream::wrappers::ReceiverStream;
-
-/// The one conversion of the coordinator's errors to an HTTP answer.
-impl IntoResponse for CoordinatorError {
-    fn into_response(self) -> Response {
-        #[derive(Serialize)]
-        struct Body {
-            error: String,
-        }
-        (self.http_status(), Json(Body { error: self.to_string() })).into_response()
-    }
-}
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -4,12 +4,12 @@
 //! are transparent, so that the page shows its real-time view through them.
 
 use super::Studio;
-use crate::error::{CoordinatorError, Result};
-use crate::farm::Farm;
-use crate::ids::JobId;
 use axum::extract::{Path, State};
 use axum::http::header;
 use axum::response::{IntoResponse, Response};
+use restauro_farm::error::{CoordinatorError, Result};
+use restauro_farm::farm::Farm;
+use restauro_farm::ids::JobId;
 use restauro_image::framebuffer::{Framebuffer, TileLayout};
 use restauro_image::image_files::{PngPixels, encode_png};
 use restauro_spectral::display::{DisplayParams, Exposure, encode, exposure_scale, to_u8};
@@ -35,7 +35,7 @@ fn paint(farm: &Farm, id: &JobId) -> Result<Vec<u8>> {
     let mut frame = Framebuffer::new(plan.width, plan.height, TileLayout::from(plan));
     let mut rendered = vec![false; frame.xyz.len()];
     for (index, rect) in plan.tiles().enumerate() {
-        let Some(data) = farm.store.tile(id, index as u32)? else { continue };
+        let Some(data) = farm.stored_tile(id, index as u32)? else { continue };
         frame
             .place(index as u32, &rect, &data)
             .map_err(|e| CoordinatorError::Internal(e.to_string()))?;

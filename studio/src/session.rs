@@ -9,9 +9,9 @@
 //! authorised by the cookie must also come with an `Origin` that is the studio's own, against
 //! cross-site request forgery (OWASP's "verifying origin with standard headers").
 
-use crate::auth::{Role, Tokens};
-use crate::error::{CoordinatorError, Result};
 use axum::http::{HeaderMap, Method, header};
+use restauro_farm::auth::{Role, Tokens};
+use restauro_farm::error::{CoordinatorError, Result};
 use std::time::{SystemTime, UNIX_EPOCH};
 
 /// The cookie's name.

@@ -5,14 +5,14 @@
 
 use super::Studio;
 use super::api::{query_value, scene_id};
-use crate::asset_store::asset_hash;
-use crate::error::{CoordinatorError, Result};
 use axum::Json;
 use axum::body::Bytes;
 use axum::extract::rejection::BytesRejection;
 use axum::extract::{Path, RawQuery, State};
 use axum::http::header;
 use axum::response::{IntoResponse, Response};
+use restauro_farm::asset_store::asset_hash;
+use restauro_farm::error::{CoordinatorError, Result};
 use restauro_scene::assets::extension;
 use restauro_scene::note_image;
 use serde::Serialize;
@@ -46,8 +46,12 @@ pub async fn upload(
             note_image::MAX_BYTES
         ))
     })?;
-    let kind =
-        crate::farm::sent_file(&name, &body, &note_image::EXTENSIONS, note_image::MAX_BYTES)?;
+    let kind = restauro_farm::farm::sent_file(
+        &name,
+        &body,
+        &note_image::EXTENSIONS,
+        note_image::MAX_BYTES,
+    )?;
     let media_type = note_image::media_type(&kind, &body).ok_or_else(|| {
         CoordinatorError::Request(format!("{name}: {}", note_image::not_an_image(&kind)))
     })?;

@@ -5,12 +5,12 @@
 
 use super::Studio;
 use super::api::query_value;
-use crate::error::{CoordinatorError, Result};
-use crate::ids::JobId;
 use axum::Json;
 use axum::extract::{RawQuery, State};
 use axum::http::header;
 use axum::response::{IntoResponse, Response};
+use restauro_farm::error::{CoordinatorError, Result};
+use restauro_farm::ids::JobId;
 use restauro_image::delta_e::{
     DeltaEMap, DeltaEStats, delta_e_map, map_rgb, scale_max, white_luminance,
 };

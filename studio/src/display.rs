@@ -5,12 +5,12 @@
 
 use super::Studio;
 use super::api::query_value;
-use crate::error::{CoordinatorError, Result};
-use crate::ids::JobId;
 use axum::Json;
 use axum::extract::{Path, RawQuery, State};
 use axum::http::header;
 use axum::response::{IntoResponse, Response};
+use restauro_farm::error::{CoordinatorError, Result};
+use restauro_farm::ids::JobId;
 use restauro_image::delta_e::viridis;
 use restauro_image::false_colour;
 use restauro_image::image_files::{MAX_PIXELS, PngPixels, XyzImage, encode_png, read_exr};

@@ -317,8 +317,15 @@ impl Farm {
     }
 
     /// A copy of job `id`'s record.
-    pub(crate) fn jobs_record(&self, id: &JobId) -> Option<JobRecord> {
+    /// The record of job `id`: its spec, plan and state.
+    pub fn jobs_record(&self, id: &JobId) -> Option<JobRecord> {
         self.lock().jobs.get(id).cloned()
+    }
+
+    /// The bytes of tile `index` of job `id` as the store holds them, while the job keeps its
+    /// tiles (until it is assembled or cancelled).
+    pub fn stored_tile(&self, id: &JobId, index: u32) -> crate::error::Result<Option<Vec<u8>>> {
+        Ok(self.store.tile(id, index)?)
     }
 
     fn snapshot(&self, id: &JobId) -> Option<JobStatus> {

@@ -4,9 +4,9 @@
 //! by the same code and refused with the same messages.
 
 use super::preview::{ScenePreview, to_world};
-use crate::error::{CoordinatorError, Result};
-use crate::farm::Farm;
-use crate::job::JobStatus;
+use restauro_farm::error::{CoordinatorError, Result};
+use restauro_farm::farm::Farm;
+use restauro_farm::job::JobStatus;
 use restauro_scene::bundle::Bundle;
 use restauro_scene::job::{JobName, JobSpec};
 use restauro_scene::plan::RenderOptions;

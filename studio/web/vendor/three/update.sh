@@ -5,7 +5,7 @@
 # page's content policy forbids) the browser cannot resolve it, so it is rewritten to the
 # vendored module's relative path. Nothing else is changed.
 #
-#   bash coordinator/studio/vendor/three/update.sh 0.187.0
+#   bash studio/web/vendor/three/update.sh 0.187.0
 set -euo pipefail
 version="${1:?give the three.js version, e.g. 0.187.0}"
 here="$(cd "$(dirname "$0")" && pwd)"

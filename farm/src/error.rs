@@ -193,6 +193,18 @@ impl From<CoordinatorError> for tonic::Status {
     }
 }
 
+/// The one conversion of the coordinator's errors to an HTTP answer (the studio's): the status
+/// of [`CoordinatorError::http_status`] and the message as `{"error": "…"}`.
+impl axum::response::IntoResponse for CoordinatorError {
+    fn into_response(self) -> axum::response::Response {
+        #[derive(serde::Serialize)]
+        struct Body {
+            error: String,
+        }
+        (self.http_status(), axum::Json(Body { error: self.to_string() })).into_response()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

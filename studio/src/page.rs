@@ -1,23 +1,23 @@
-//! The page's files, embedded in the binary: `coordinator/studio/` in the source tree. Plain
+//! The page's files, embedded in the binary: `studio/web/` in the source tree. Plain
 //! ES modules, so nothing is built; a change to a file is in the next `cargo build`.
 
-use crate::error::CoordinatorError;
 use axum::extract::Path;
 use axum::http::{HeaderValue, header};
 use axum::response::{IntoResponse, Response};
+use restauro_farm::error::CoordinatorError;
 
-/// A file of the page: its path under `/static/` (and under `coordinator/studio/`), as
+/// A file of the page: its path under `/static/` (and under `studio/web/`), as
 /// JavaScript.
 macro_rules! script {
     ($path:literal) => {
-        ($path, "text/javascript; charset=utf-8", include_str!(concat!("../../studio/", $path)))
+        ($path, "text/javascript; charset=utf-8", include_str!(concat!("../web/", $path)))
     };
 }
 
 /// Every file of the page: its path under `/static/`, its type and its bytes. three.js is
-/// vendored (see `coordinator/studio/vendor/README.md`).
+/// vendored (see `studio/web/vendor/README.md`).
 const FILES: &[(&str, &str, &str)] = &[
-    ("studio.css", "text/css; charset=utf-8", include_str!("../../studio/studio.css")),
+    ("studio.css", "text/css; charset=utf-8", include_str!("../web/studio.css")),
     script!("studio.js"),
     script!("api.js"),
     script!("farm.js"),
@@ -42,7 +42,7 @@ const FILES: &[(&str, &str, &str)] = &[
     script!("vendor/three/addons/utils/SkeletonUtils.js"),
 ];
 
-const INDEX: &str = include_str!("../../studio/index.html");
+const INDEX: &str = include_str!("../web/index.html");
 
 /// Only the page's own files run, and no other site may frame it. `blob:` in `connect-src`:
 /// three.js's glTF loader fetches a model's embedded photos from blob URLs it makes itself.
@@ -82,7 +82,7 @@ mod tests {
     /// would load in no browser).
     #[test]
     fn every_file_of_the_page_is_embedded() {
-        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("studio");
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("web");
         for entry in std::fs::read_dir(&dir).unwrap() {
             let name = entry.unwrap().file_name().into_string().unwrap();
             if name.ends_with(".js") || name.ends_with(".css") {

@@ -18,10 +18,6 @@ pub mod session;
 pub mod snapshot;
 pub mod views;
 
-use crate::auth::Tokens;
-use crate::error::CoordinatorError;
-use crate::farm::Farm;
-use crate::server::stopped;
 use anyhow::{Context, Result};
 use axum::Router;
 use axum::extract::connect_info::{ConnectInfo, Connected};
@@ -30,7 +26,11 @@ use axum::http::{HeaderValue, header};
 use axum::middleware::{self, Next};
 use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post};
+use restauro_farm::auth::Tokens;
+use restauro_farm::error::CoordinatorError;
+use restauro_farm::farm::Farm;
 use restauro_ops::connections::{Busy, ConnectionLimits, GuardedListener};
+use restauro_ops::signal::stopped;
 use std::net::SocketAddr;
 use std::sync::Arc;
 use tokio::net::TcpListener;
@@ -100,7 +100,7 @@ fn router(studio: Arc<Studio>) -> Router {
             "/api/scenes",
             get(api::scenes)
                 .post(edits::open_folder)
-                .layer(axum::extract::DefaultBodyLimit::max(crate::farm::MAX_FOLDER_BYTES)),
+                .layer(axum::extract::DefaultBodyLimit::max(restauro_farm::farm::MAX_FOLDER_BYTES)),
         )
         .route("/api/scenes/{id}", get(api::scene))
         .route("/api/scenes/{id}/preview.glb", get(api::scene_glb))

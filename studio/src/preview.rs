@@ -3,8 +3,8 @@
 //! scene's lights and D65 ([`appearance`]), and the scene's camera, in the GLB's coordinates. Kept for the few scenes opened last, by bundle identity.
 
 use super::appearance::{self, appearance};
-use crate::error::Result;
-use crate::farm::Farm;
+use restauro_farm::error::Result;
+use restauro_farm::farm::Farm;
 use restauro_scene::gltf_export::{self, Preview};
 use restauro_scene::load::LoadedScene;
 use serde::Serialize;
@@ -479,12 +479,12 @@ fn build(id: &str, revision: u32, scene: &LoadedScene) -> ScenePreview {
 
 /// The last few previews.
 pub struct Previews {
-    kept: crate::recent::Recent<String, Arc<ScenePreview>>,
+    kept: restauro_farm::recent::Recent<String, Arc<ScenePreview>>,
 }
 
 impl Default for Previews {
     fn default() -> Self {
-        Previews { kept: crate::recent::Recent::new(KEPT) }
+        Previews { kept: restauro_farm::recent::Recent::new(KEPT) }
     }
 }
 
@@ -508,7 +508,7 @@ impl Previews {
         let id = id.to_owned();
         let preview = tokio::task::spawn_blocking(move || Arc::new(build(&id, number, &scene)))
             .await
-            .map_err(|e| crate::error::CoordinatorError::Internal(e.to_string()))?;
+            .map_err(|e| restauro_farm::error::CoordinatorError::Internal(e.to_string()))?;
         self.kept.keep(key, preview.clone());
         Ok(preview)
     }

@@ -10,12 +10,14 @@ pub mod compare;
 pub mod display;
 pub mod edits;
 pub mod events;
+pub mod gltf_export;
 pub mod note_images;
 pub mod page;
 pub mod painting;
 pub mod preview;
 pub mod session;
 pub mod snapshot;
+pub mod vertex_clustering;
 pub mod views;
 
 use anyhow::{Context, Result};

@@ -3,9 +3,9 @@
 //! scene's lights and D65 ([`appearance`]), and the scene's camera, in the GLB's coordinates. Kept for the few scenes opened last, by bundle identity.
 
 use super::appearance::{self, appearance};
+use crate::gltf_export::{self, Preview};
 use restauro_farm::error::Result;
 use restauro_farm::farm::Farm;
-use restauro_scene::gltf_export::{self, Preview};
 use restauro_scene::load::LoadedScene;
 use serde::Serialize;
 use std::sync::Arc;

@@ -6,7 +6,7 @@
 //! buffer and cost only their indices. The cube's edge is chosen from the model's surface area
 //! so that about [`TARGET_TRIANGLES`] remain.
 
-use crate::load::LoadedScene;
+use restauro_scene::load::LoadedScene;
 use std::collections::{HashMap, HashSet};
 
 /// About how many triangles the coarse copy keeps.

@@ -22,10 +22,10 @@
 //! `extras.restauro_coarse`, whose primitives index the same vertices (see
 //! [`vertex_clustering`]).
 
-use crate::formats::texture::{Texture, luminance};
-use crate::load::LoadedScene;
-use crate::scene_file::{Detail, Material};
 use crate::vertex_clustering;
+use restauro_scene::formats::texture::{Texture, luminance};
+use restauro_scene::load::LoadedScene;
+use restauro_scene::scene_file::{Detail, Material};
 use restauro_spectral::rgb_space::Transfer;
 use serde_json::{Value, json};
 use std::collections::BTreeMap;
@@ -296,7 +296,7 @@ struct Part<'a> {
     scene: &'a LoadedScene,
     object: &'a str,
     material: &'a Material,
-    group: &'a crate::mesh::Group,
+    group: &'a restauro_scene::mesh::Group,
     /// Whether every vertex of the part has a colour.
     coloured: bool,
 }
@@ -313,7 +313,7 @@ impl Part<'_> {
             &mut Details,
             &mut Carried,
         ),
-        mesh: &crate::mesh::Mesh,
+        mesh: &restauro_scene::mesh::Mesh,
         tris: &[u32],
         attributes: &mut Value,
         material: &mut Option<usize>,

@@ -32,7 +32,7 @@ impl Panel {
         normal: Option<[f64; 3]>,
     ) -> Result<Self, Refusal> {
         let within = |p: [f64; 3]| {
-            p.iter().all(|x| x.is_finite() && x.abs() <= crate::load::MAX_COORDINATE_M)
+            p.iter().all(|x| x.is_finite() && x.abs() <= crate::limits::MAX_COORDINATE_M)
         };
         for (field, p) in [("corner", corner), ("u", u), ("v", v)] {
             if !within(p) {

@@ -55,23 +55,7 @@ pub fn sibling(reference: &str, relative: &str) -> Result<String, String> {
     Ok(parts.join("/"))
 }
 
-/// The files a VRML97 world's `Inline`s name, read through `assets`: a url is relative to the
-/// file that holds the Inline. `place` is where the scene names the world, for messages.
-pub fn vrml_inlines<'a>(
-    assets: &'a dyn Assets,
-    place: &'a str,
-) -> impl Fn(&str, &str) -> Result<crate::formats::vrml::Inlined> + Sync + 'a {
-    move |base: &str, url: &str| {
-        let reference = sibling(base, url).map_err(|e| {
-            SceneError::invalid(assets.display_path(base), format!("Inline `{url}`"), e)
-        })?;
-        let shown = assets.display_path(&reference);
-        let text = utf8_text(assets.read(&reference, place)?, &shown)?;
-        Ok(crate::formats::vrml::Inlined { reference, shown, text })
-    }
-}
-
-/// How to raise [`crate::load::Limits::max_file_bytes`].
+/// How to raise [`crate::limits::Limits::max_file_bytes`].
 pub const MAX_FILE_FIX: &str = "simplify the file or raise the limit with --max-file-mb";
 
 /// Read the whole of the regular file at `path` (symbolic links followed), at most `max_bytes`;

@@ -88,7 +88,7 @@ fn embed_nested(
     Ok(match extension(reference).as_str() {
         "wrl" => {
             let text = crate::assets::utf8_text(bytes, &shown)?;
-            let source = crate::assets::vrml_inlines(assets, place);
+            let source = crate::formats::vrml::inlines_from_assets(assets, place);
             let mut store = |bytes: Vec<u8>| store(bytes, "wrl");
             crate::formats::vrml::embed_inlines(
                 &text, &shown, reference, limits, &source, &mut store,

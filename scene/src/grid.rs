@@ -91,12 +91,12 @@ fn resolve_one(g: &Grid, invalid: &dyn Fn(&str, String) -> SceneError) -> Result
         }
     };
     for (k, p) in points.iter().enumerate() {
-        if !p.iter().all(|x| x.is_finite() && x.abs() <= crate::load::MAX_COORDINATE_M) {
+        if !p.iter().all(|x| x.is_finite() && x.abs() <= crate::limits::MAX_COORDINATE_M) {
             let field =
                 if divisions.is_some() { ".origin".to_owned() } else { format!(".points[{k}]") };
             let problem = format!(
                 "{p:?} is out of range; every coordinate must be finite and within ±{:e} m",
-                crate::load::MAX_COORDINATE_M
+                crate::limits::MAX_COORDINATE_M
             );
             return Err(invalid(&field, problem));
         }

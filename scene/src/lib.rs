@@ -27,6 +27,5 @@ pub mod origin;
 pub mod pins;
 pub mod plan;
 pub mod scene_file;
-pub mod sky_shape;
 pub mod upright;
 pub mod web_url;

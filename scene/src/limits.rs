@@ -17,6 +17,23 @@
 //! | node instances of one mesh file (VRML97 `USE`, reused glTF nodes) | 20 000 000 | `--max-instances` |
 //! | vertices of one polygon | 10 000 | `--max-polygon-vertices` |
 
+/// The bounds no flag raises: beyond them a number is a mistake of units, not a bigger scene.
+/// The largest coordinate (m, each of x, y and z, after placement) of a vertex, the camera or
+/// a light. Survey coordinates run to millions of metres (UTM northings reach 10⁷ m); beyond
+/// 10⁹ m a scene is a mistake of units or scale, and the tracer's 32-bit floats (and its BVH
+/// builder, which fails on non-finite bounds) are no longer safe.
+pub const MAX_COORDINATE_M: f64 = 1e9;
+/// The most luminous intensity a luminaire may have (cd): the brightest searchlights reach
+/// about 10⁹ cd; more would overflow the 32-bit radiance once multiplied by the spectrum.
+pub const MAX_INTENSITY_CD: f64 = 1e9;
+/// The most illuminance a sun or sky may give (lux): the sun gives about 1.3 × 10⁵ lx at the
+/// top of the atmosphere.
+pub const MAX_ILLUMINANCE_LUX: f64 = 1e6;
+
+/// The most classes one degradation map may have (ICOMOS-ISCS names a few dozen forms of
+/// decay; a map draws a handful).
+pub const MAX_MAP_CLASSES: usize = 32;
+
 /// The limits. `Default` gives the values of the table above.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Limits {

@@ -4,7 +4,7 @@
 //! illuminance and its position, given or computed for a site and time (a sun that has set then
 //! is left out, and noted); the sky has its illuminance and model. Then the scene must have a
 //! light that shines and at most one sky, whose shape is settled against the sun last
-//! ([`crate::sky_shape`]), since the sun may come after the sky in the file.
+//! ([`super::sky_shape`]), since the sun may come after the sky in the file.
 
 use super::spectra::sky_spectrum;
 use super::{Ctx, MAX_ILLUMINANCE_LUX, MAX_INTENSITY_CD, check_point};
@@ -182,7 +182,7 @@ pub(super) fn resolve_lights(ctx: &mut Ctx) -> Result<Vec<ResolvedLight>> {
             "more than one sky; a scene has one sky dome (give its total illuminance_lux)",
         ));
     }
-    crate::sky_shape::settle(&ctx.path, &file.lights, &mut lights)?;
+    super::sky_shape::settle(&ctx.path, &file.lights, &mut lights)?;
     Ok(lights)
 }
 
@@ -367,7 +367,7 @@ fn sky_light(ctx: &mut Ctx, place: &str, light: &Light) -> Result<ResolvedLight>
     };
     check_illuminance(ctx, place, lux)?;
     // The general sky's sun and the ground are settled once every light is
-    // resolved (`crate::sky_shape`): the scene's sun may come after the sky.
+    // resolved (`super::sky_shape`): the scene's sun may come after the sky.
     Ok(ResolvedLight::Sky {
         illuminance_lux: lux,
         model: model.unwrap_or(preset_model),

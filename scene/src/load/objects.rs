@@ -249,7 +249,7 @@ fn import_mesh(
         }
         "wrl" => {
             let text = utf8_text(bytes, &name)?;
-            let inlines = crate::assets::vrml_inlines(ctx.assets, place);
+            let inlines = crate::formats::vrml::inlines_from_assets(ctx.assets, place);
             let scene = vrml::parse_with_inlines(&text, &name, reference, limits, &inlines)?;
             (scene.mesh, scene.viewpoints, UpAxis::Y, scene.notes)
         }

@@ -232,3 +232,19 @@ fn splice_strings(text: &str, replacements: &BTreeMap<(u32, u32), String>) -> St
     }
     out
 }
+
+/// The files a VRML97 world's `Inline`s name, read through `assets`: a url is relative to the
+/// file that holds the Inline. `place` is where the scene names the world, for messages.
+pub fn from_assets<'a>(
+    assets: &'a dyn crate::assets::Assets,
+    place: &'a str,
+) -> impl Fn(&str, &str) -> crate::Result<Inlined> + Sync + 'a {
+    move |base: &str, url: &str| {
+        let reference = crate::assets::sibling(base, url).map_err(|e| {
+            SceneError::invalid(assets.display_path(base), format!("Inline `{url}`"), e)
+        })?;
+        let shown = assets.display_path(&reference);
+        let text = crate::assets::utf8_text(assets.read(&reference, place)?, &shown)?;
+        Ok(Inlined { reference, shown, text })
+    }
+}

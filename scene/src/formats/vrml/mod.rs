@@ -76,6 +76,7 @@ mod tests_proto;
 use builder::Builder;
 use census::Census;
 pub use inline::embed_inlines;
+pub use inline::from_assets as inlines_from_assets;
 use parser::Parser;
 
 /// A camera of the file (§6.53), in the file's root coordinate system.

@@ -9,9 +9,9 @@
 //! The ground is a uniform Lambertian plane of reflectance ρ lit by everything above it:
 //! L_ground = ρ · E_h / π, E_h = D_v + E_sun · sin(elevation) (its own shadows ignored).
 
+use super::ResolvedLight;
 use crate::cie_sky::GeneralSky;
 use crate::error::{Result, SceneError};
-use crate::load::ResolvedLight;
 use crate::scene_file::{Light, SkyModel};
 use crate::sun::{Site, SunPosition, direction_to_sun, sun_position};
 use std::path::Path;

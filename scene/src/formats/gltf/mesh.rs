@@ -190,15 +190,49 @@ fn camera_viewpoint(node: &gltf::Node, world: DMat4) -> Option<Viewpoint> {
     })
 }
 
-fn add_node(
-    node: gltf::Node,
-    parent: DMat4,
-    buffers: &[Vec<u8>],
-    mesh: &mut Mesh,
-    path: &Path,
-    depth: usize,
-    totals: &mut Totals,
-) -> Result<()> {
+/// Where a primitive is read: the file's buffers, the node's world transform, and its place
+/// for messages.
+struct PrimitiveAt<'r> {
+    buffers: &'r [Vec<u8>],
+    path: &'r Path,
+    world: DMat4,
+    /// `mesh <name> primitive <p>`.
+    place: String,
+}
+
+impl PrimitiveAt<'_> {
+    fn invalid(&self, problem: impl Into<String>) -> SceneError {
+        SceneError::invalid(self.path, self.place.clone(), problem.into())
+    }
+}
+
+/// A primitive's POSITION and index accessors, checked and worth drawing.
+struct Geometry {
+    /// The POSITION count.
+    vertices: u64,
+    /// The index count, if the primitive has an index accessor.
+    indices: Option<u64>,
+}
+
+/// A primitive's optional attributes (checked) and its material's photo.
+struct Attributes {
+    has_normals: bool,
+    has_texcoords: bool,
+    has_colours: bool,
+    photo: Option<crate::formats::gltf::texture::Photo>,
+}
+
+/// The values of a primitive, read from its buffers and transformed to the world.
+struct PrimitiveData {
+    positions: Vec<[f64; 3]>,
+    indices: Vec<u32>,
+    normals: Option<Vec<[f32; 3]>>,
+    texcoords: Option<Vec<[f32; 2]>>,
+    colours: Option<Vec<[f32; 3]>>,
+}
+
+/// The depth of the hierarchy and the number of node instances, against the limits.
+fn count_instance(path: &Path, depth: usize, totals: &mut Totals) -> Result<()> {
     if depth > 256 {
         return Err(SceneError::invalid(path, "node hierarchy", "nested more than 256 deep"));
     }
@@ -214,250 +248,318 @@ fn add_node(
             fix: "list each node once, or raise the limit with --max-instances".into(),
         });
     }
+    Ok(())
+}
+
+/// The mode, the POSITION accessor and the indices of a primitive; `None` when it has no
+/// vertices or no triangles, so nothing to draw.
+fn check_geometry(prim: &gltf::Primitive, at: &PrimitiveAt) -> Result<Option<Geometry>> {
+    if prim.mode() != Mode::Triangles {
+        return Err(at.invalid(format!(
+            "primitive mode {:?}; only triangle lists are read (re-export with triangles)",
+            prim.mode()
+        )));
+    }
+    let Some(position_accessor) = prim.get(&gltf::Semantic::Positions) else {
+        return Err(
+            at.invalid("no POSITION attribute; a triangle primitive needs its vertex positions")
+        );
+    };
+    let has_positions = check_accessor(
+        &position_accessor,
+        at.buffers,
+        at.path,
+        "POSITION",
+        &[(DataType::F32, Dimensions::Vec3)],
+        "VEC3 of float (componentType 5126)",
+    )?;
+    let index_accessor = prim.indices();
+    let has_indices = match &index_accessor {
+        Some(a) => check_accessor(
+            a,
+            at.buffers,
+            at.path,
+            "indices",
+            &[
+                (DataType::U8, Dimensions::Scalar),
+                (DataType::U16, Dimensions::Scalar),
+                (DataType::U32, Dimensions::Scalar),
+            ],
+            "SCALAR of unsigned byte, short or int (componentType 5121, 5123 or 5125)",
+        )?,
+        None => false,
+    };
+    if !has_positions || (index_accessor.is_some() && !has_indices) {
+        return Ok(None); // no vertices or no triangles: nothing to draw
+    }
+    Ok(Some(Geometry {
+        vertices: position_accessor.count() as u64,
+        indices: index_accessor.map(|a| a.count() as u64),
+    }))
+}
+
+/// The triangles and vertices the primitive adds, against the limits.
+fn check_counts(mesh: &Mesh, limits: &Limits, geometry: &Geometry, at: &PrimitiveAt) -> Result<()> {
+    let count = geometry.vertices;
+    let new_triangles = match geometry.indices {
+        Some(n) => n / 3,
+        None => count / 3,
+    };
+    let triangles = mesh.triangles.len() as u64 + new_triangles;
+    if triangles > limits.max_triangles {
+        return Err(SceneError::Limit {
+            path: at.path.to_owned(),
+            what: format!("the number of triangles (counting node instances) at {}", at.place),
+            value: triangles,
+            limit: limits.max_triangles,
+            fix: "simplify the model, or raise the limit with --max-triangles".into(),
+        });
+    }
+    // Vertices no triangle could use are not worth memory: at most three per triangle.
+    let vertices = mesh.positions.len() as u64 + count;
+    let max_vertices = limits.max_triangles.saturating_mul(3).min(u64::from(u32::MAX));
+    if vertices > max_vertices {
+        return Err(SceneError::Limit {
+            path: at.path.to_owned(),
+            what: format!("the number of vertices (counting node instances) at {}", at.place),
+            value: vertices,
+            limit: max_vertices,
+            fix: "simplify the model, or raise the triangle limit (three vertices each) \
+                  with --max-triangles"
+                .into(),
+        });
+    }
+    Ok(())
+}
+
+/// The NORMAL, TEXCOORD_n and COLOR_0 accessors, and the material's photo (whose set decides
+/// which TEXCOORD_n).
+fn check_attributes(
+    prim: &gltf::Primitive,
+    material: &gltf::Material,
+    at: &PrimitiveAt,
+    totals: &mut Totals,
+) -> Result<Attributes> {
+    // Whether the primitive has a readable `semantic` accessor (checked).
+    let has = |semantic: gltf::Semantic, allowed: &[(DataType, Dimensions)], expected| {
+        let role = semantic.to_string();
+        prim.get(&semantic).map_or(Ok(false), |a| {
+            check_accessor(&a, at.buffers, at.path, &role, allowed, expected)
+        })
+    };
+    let vec3 = [(DataType::F32, Dimensions::Vec3)];
+    let has_normals = has(gltf::Semantic::Normals, &vec3, "VEC3 of float (componentType 5126)")?;
+    let photo = crate::formats::gltf::texture::base_colour_photo(
+        material,
+        at.buffers,
+        at.path,
+        (totals.external, totals.limits.max_pixels),
+        &mut totals.images,
+    )?;
+    let set = photo.as_ref().map_or(0, |p| p.set);
+    let uv = [DataType::F32, DataType::U8, DataType::U16].map(|t| (t, Dimensions::Vec2));
+    let has_texcoords = has(
+        gltf::Semantic::TexCoords(set),
+        &uv,
+        "VEC2 of float, or of normalized unsigned byte or short",
+    )?;
+    // Vertex colours (glTF 2.0 §3.7.2.1: linear, multiplying the base colour), as a
+    // scanner's photogrammetry export carries them when it bakes no photo.
+    let colour = [DataType::F32, DataType::U8, DataType::U16]
+        .map(|t| [(t, Dimensions::Vec3), (t, Dimensions::Vec4)]);
+    let has_colours = has(
+        gltf::Semantic::Colors(0),
+        colour.as_flattened(),
+        "VEC3 or VEC4 of float, or of normalized unsigned byte or short",
+    )?;
+    Ok(Attributes { has_normals, has_texcoords, has_colours, photo })
+}
+
+/// The values of the checked accessors, positions and normals in world coordinates; the
+/// indices are checked against the vertices.
+fn read_primitive(
+    prim: &gltf::Primitive,
+    attributes: &Attributes,
+    indexed: bool,
+    at: &PrimitiveAt,
+) -> Result<PrimitiveData> {
+    let world = at.world;
+    let buffers = at.buffers;
+    let (has_normals, has_texcoords, has_colours) =
+        (attributes.has_normals, attributes.has_texcoords, attributes.has_colours);
+    let photo = attributes.photo.as_ref();
+    let set = photo.map_or(0, |p| p.set);
+    // Normals go through the inverse transpose, so a non-uniform scale keeps them normal.
+    let normal_matrix = DMat3::from_mat4(world).inverse().transpose();
+    let reader = prim.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+    let read = guard::catch(|| {
+        let positions: Option<Vec<[f64; 3]>> = reader.read_positions().map(|ps| {
+            ps.map(|p| world.transform_point3(DVec3::from_array(p.map(f64::from))).to_array())
+                .collect()
+        });
+        let indices: Option<Vec<u32>> = reader.read_indices().map(|i| i.into_u32().collect());
+        let normals: Option<Vec<[f32; 3]>> =
+            reader.read_normals().filter(|_| has_normals).map(|ns| {
+                ns.map(|n| {
+                    let n = normal_matrix * DVec3::from_array(n.map(f64::from));
+                    unit_or_zero(n.as_vec3().to_array())
+                })
+                .collect()
+            });
+        let transform = photo.and_then(|p| p.transform);
+        let texcoords: Option<Vec<[f32; 2]>> = reader
+            .read_tex_coords(set)
+            .filter(|_| has_texcoords)
+            .map(|t| t.into_f32().map(|uv| transform.map_or(uv, |x| x.apply(uv))).collect());
+        let colours: Option<Vec<[f32; 3]>> =
+            reader.read_colors(0).filter(|_| has_colours).map(|c| c.into_rgb_f32().collect());
+        (positions, indices, normals, texcoords, colours)
+    })
+    .map_err(|_| at.invalid(guard::gave_up("glTF")))?;
+    let (Some(positions), indices, normals, texcoords, colours) = read else {
+        return Err(
+            at.invalid("the POSITION values cannot be read from their buffer; the file is damaged")
+        );
+    };
+    let indices = check_indices(indices, indexed, positions.len() as u32, at)?;
+    Ok(PrimitiveData { positions, indices, normals, texcoords, colours })
+}
+
+/// The indices as read (all vertices in order without an index accessor): whole triangles, of
+/// vertices the primitive has.
+fn check_indices(
+    indices: Option<Vec<u32>>,
+    indexed: bool,
+    count: u32,
+    at: &PrimitiveAt,
+) -> Result<Vec<u32>> {
+    let indices: Vec<u32> = match (indices, indexed) {
+        (Some(i), _) => i,
+        (None, false) => (0..count).collect(),
+        (None, true) => {
+            return Err(
+                at.invalid("the indices cannot be read from their buffer; the file is damaged")
+            );
+        }
+    };
+    if !indices.len().is_multiple_of(3) {
+        return Err(at.invalid("the index count is not a multiple of 3"));
+    }
+    if let Some(bad) = indices.iter().find(|&&i| i >= count) {
+        return Err(at.invalid(format!(
+            "vertex index {bad} is out of range: the primitive has {count} vertices"
+        )));
+    }
+    Ok(indices)
+}
+
+/// The part a primitive's triangles go to: its material's name, colour, sidedness and photo.
+fn material_group(
+    mesh: &mut Mesh,
+    material: &gltf::Material,
+    photo: Option<crate::formats::gltf::texture::Photo>,
+) -> u32 {
+    let name = match (material.name(), material.index()) {
+        (Some(n), _) => n.to_owned(),
+        (None, Some(i)) => format!("material{i}"),
+        (None, None) => "default".to_owned(),
+    };
+    let [r, g, b, _] = material.pbr_metallic_roughness().base_color_factor();
+    mesh.group_index(Group {
+        name,
+        colour: Some([r, g, b]),
+        double_sided: material.double_sided(),
+        photo: photo.map(|p| p.texture),
+    })
+}
+
+/// The primitive's vertices, their shading normals, texture coordinates and colours, and its
+/// triangles in `group`, added to the mesh.
+fn append_primitive(
+    mesh: &mut Mesh,
+    data: PrimitiveData,
+    group: u32,
+    at: &PrimitiveAt,
+) -> Result<()> {
+    let PrimitiveData { positions, indices, normals, texcoords, colours } = data;
+    // A mirroring transform (negative determinant) turns the winding around.
+    let flip = at.world.determinant() < 0.0;
+    let base = mesh.positions.len() as u32;
+    let shading = mesh.normals.get_or_insert_with(Vec::new);
+    match normals {
+        Some(n) if n.len() == positions.len() => shading.extend(n),
+        // Without NORMAL the primitive is flat, as glTF 2.0 §3.7.2.1 says.
+        _ => shading.resize(base as usize + positions.len(), [0.0; 3]),
+    }
+    let uv = mesh.texcoords.get_or_insert_with(Vec::new);
+    match texcoords {
+        Some(t) if t.len() == positions.len() => uv.extend(t),
+        _ => uv.resize(base as usize + positions.len(), [f32::NAN; 2]),
+    }
+    if let Some(bad) =
+        colours.iter().flatten().position(|c| !c.iter().all(|v| (0.0..=1.0).contains(v)))
+    {
+        return Err(at.invalid(format!(
+            "COLOR_0 of vertex {bad} is outside 0 to 1; vertex colours are linear \
+             values from 0 to 1"
+        )));
+    }
+    let vertex_colours = mesh.colours.get_or_insert_with(Vec::new);
+    match colours {
+        Some(c) if c.len() == positions.len() => vertex_colours.extend(c),
+        _ => vertex_colours.resize(base as usize + positions.len(), [f32::NAN; 3]),
+    }
+    for p in positions {
+        mesh.push_position(p);
+    }
+    for t in indices.chunks_exact(3) {
+        let tri = if flip { [t[0], t[2], t[1]] } else { [t[0], t[1], t[2]] };
+        mesh.triangles.push(tri.map(|i| base + i));
+        mesh.triangle_group.push(group);
+    }
+    Ok(())
+}
+
+/// One triangle primitive of a node's mesh, checked, read and added to the mesh.
+fn add_primitive(
+    prim: &gltf::Primitive,
+    at: &PrimitiveAt,
+    mesh: &mut Mesh,
+    totals: &mut Totals,
+) -> Result<()> {
+    let Some(geometry) = check_geometry(prim, at)? else {
+        return Ok(());
+    };
+    check_counts(mesh, totals.limits, &geometry, at)?;
+    let material = prim.material();
+    let mut attributes = check_attributes(prim, &material, at, totals)?;
+    let data = read_primitive(prim, &attributes, geometry.indices.is_some(), at)?;
+    let group = material_group(mesh, &material, attributes.photo.take());
+    append_primitive(mesh, data, group, at)
+}
+
+fn add_node(
+    node: gltf::Node,
+    parent: DMat4,
+    buffers: &[Vec<u8>],
+    mesh: &mut Mesh,
+    path: &Path,
+    depth: usize,
+    totals: &mut Totals,
+) -> Result<()> {
+    count_instance(path, depth, totals)?;
     // The chain of transforms in 64 bits: a survey's offset often sits in a node's translation.
     let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
     let world = parent * local;
     totals.cameras.extend(camera_viewpoint(&node, world));
     if let Some(m) = node.mesh() {
         for (p, prim) in m.primitives().enumerate() {
-            let place = || {
-                format!(
-                    "mesh {} primitive {p}",
-                    m.name().map_or(m.index().to_string(), str::to_owned)
-                )
-            };
-            if prim.mode() != Mode::Triangles {
-                return Err(SceneError::invalid(
-                    path,
-                    place(),
-                    format!(
-                        "primitive mode {:?}; only triangle lists are read (re-export with triangles)",
-                        prim.mode()
-                    ),
-                ));
-            }
-            let Some(position_accessor) = prim.get(&gltf::Semantic::Positions) else {
-                return Err(SceneError::invalid(
-                    path,
-                    place(),
-                    "no POSITION attribute; a triangle primitive needs its vertex positions",
-                ));
-            };
-            let has_positions = check_accessor(
-                &position_accessor,
-                buffers,
-                path,
-                "POSITION",
-                &[(DataType::F32, Dimensions::Vec3)],
-                "VEC3 of float (componentType 5126)",
-            )?;
-            let index_accessor = prim.indices();
-            let has_indices = match &index_accessor {
-                Some(a) => check_accessor(
-                    a,
-                    buffers,
-                    path,
-                    "indices",
-                    &[
-                        (DataType::U8, Dimensions::Scalar),
-                        (DataType::U16, Dimensions::Scalar),
-                        (DataType::U32, Dimensions::Scalar),
-                    ],
-                    "SCALAR of unsigned byte, short or int (componentType 5121, 5123 or 5125)",
-                )?,
-                None => false,
-            };
-            if !has_positions || (index_accessor.is_some() && !has_indices) {
-                continue; // no vertices or no triangles: nothing to draw
-            }
-            let count = position_accessor.count() as u64;
-            let new_triangles = match &index_accessor {
-                Some(a) => a.count() as u64 / 3,
-                None => count / 3,
-            };
-            let triangles = mesh.triangles.len() as u64 + new_triangles;
-            if triangles > totals.limits.max_triangles {
-                return Err(SceneError::Limit {
-                    path: path.to_owned(),
-                    what: format!(
-                        "the number of triangles (counting node instances) at {}",
-                        place()
-                    ),
-                    value: triangles,
-                    limit: totals.limits.max_triangles,
-                    fix: "simplify the model, or raise the limit with --max-triangles".into(),
-                });
-            }
-            // Vertices no triangle could use are not worth memory: at most three per triangle.
-            let vertices = mesh.positions.len() as u64 + count;
-            let max_vertices =
-                totals.limits.max_triangles.saturating_mul(3).min(u64::from(u32::MAX));
-            if vertices > max_vertices {
-                return Err(SceneError::Limit {
-                    path: path.to_owned(),
-                    what: format!(
-                        "the number of vertices (counting node instances) at {}",
-                        place()
-                    ),
-                    value: vertices,
-                    limit: max_vertices,
-                    fix: "simplify the model, or raise the triangle limit (three vertices each) \
-                          with --max-triangles"
-                        .into(),
-                });
-            }
-            // Whether the primitive has a readable `semantic` accessor (checked).
-            let has = |semantic: gltf::Semantic, allowed: &[(DataType, Dimensions)], expected| {
-                let role = semantic.to_string();
-                prim.get(&semantic).map_or(Ok(false), |a| {
-                    check_accessor(&a, buffers, path, &role, allowed, expected)
-                })
-            };
-            let vec3 = [(DataType::F32, Dimensions::Vec3)];
-            let has_normals =
-                has(gltf::Semantic::Normals, &vec3, "VEC3 of float (componentType 5126)")?;
-            let material = prim.material();
-            let photo = crate::formats::gltf::texture::base_colour_photo(
-                &material,
-                buffers,
-                path,
-                (totals.external, totals.limits.max_pixels),
-                &mut totals.images,
-            )?;
-            let set = photo.as_ref().map_or(0, |p| p.set);
-            let uv = [DataType::F32, DataType::U8, DataType::U16].map(|t| (t, Dimensions::Vec2));
-            let has_texcoords = has(
-                gltf::Semantic::TexCoords(set),
-                &uv,
-                "VEC2 of float, or of normalized unsigned byte or short",
-            )?;
-            // Vertex colours (glTF 2.0 §3.7.2.1: linear, multiplying the base colour), as a
-            // scanner's photogrammetry export carries them when it bakes no photo.
-            let colour = [DataType::F32, DataType::U8, DataType::U16]
-                .map(|t| [(t, Dimensions::Vec3), (t, Dimensions::Vec4)]);
-            let has_colours = has(
-                gltf::Semantic::Colors(0),
-                colour.as_flattened(),
-                "VEC3 or VEC4 of float, or of normalized unsigned byte or short",
-            )?;
-            // Normals go through the inverse transpose, so a non-uniform scale keeps them normal.
-            let normal_matrix = DMat3::from_mat4(world).inverse().transpose();
-            let reader = prim.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
-            let read = guard::catch(|| {
-                let positions: Option<Vec<[f64; 3]>> = reader.read_positions().map(|ps| {
-                    ps.map(|p| {
-                        world.transform_point3(DVec3::from_array(p.map(f64::from))).to_array()
-                    })
-                    .collect()
-                });
-                let indices: Option<Vec<u32>> =
-                    reader.read_indices().map(|i| i.into_u32().collect());
-                let normals: Option<Vec<[f32; 3]>> =
-                    reader.read_normals().filter(|_| has_normals).map(|ns| {
-                        ns.map(|n| {
-                            let n = normal_matrix * DVec3::from_array(n.map(f64::from));
-                            unit_or_zero(n.as_vec3().to_array())
-                        })
-                        .collect()
-                    });
-                let transform = photo.as_ref().and_then(|p| p.transform);
-                let texcoords: Option<Vec<[f32; 2]>> =
-                    reader.read_tex_coords(set).filter(|_| has_texcoords).map(|t| {
-                        t.into_f32().map(|uv| transform.map_or(uv, |x| x.apply(uv))).collect()
-                    });
-                let colours: Option<Vec<[f32; 3]>> = reader
-                    .read_colors(0)
-                    .filter(|_| has_colours)
-                    .map(|c| c.into_rgb_f32().collect());
-                (positions, indices, normals, texcoords, colours)
-            })
-            .map_err(|_| SceneError::invalid(path, place(), guard::gave_up("glTF")))?;
-            let (Some(positions), indices, normals, texcoords, colours) = read else {
-                return Err(SceneError::invalid(
-                    path,
-                    place(),
-                    "the POSITION values cannot be read from their buffer; the file is damaged",
-                ));
-            };
-            let count = positions.len() as u32;
-            let indices: Vec<u32> = match (indices, &index_accessor) {
-                (Some(i), _) => i,
-                (None, None) => (0..count).collect(),
-                (None, Some(_)) => {
-                    return Err(SceneError::invalid(
-                        path,
-                        place(),
-                        "the indices cannot be read from their buffer; the file is damaged",
-                    ));
-                }
-            };
-            if !indices.len().is_multiple_of(3) {
-                return Err(SceneError::invalid(
-                    path,
-                    place(),
-                    "the index count is not a multiple of 3",
-                ));
-            }
-            if let Some(bad) = indices.iter().find(|&&i| i >= count) {
-                return Err(SceneError::invalid(
-                    path,
-                    place(),
-                    format!(
-                        "vertex index {bad} is out of range: the primitive has {count} vertices"
-                    ),
-                ));
-            }
-            let name = match (material.name(), material.index()) {
-                (Some(n), _) => n.to_owned(),
-                (None, Some(i)) => format!("material{i}"),
-                (None, None) => "default".to_owned(),
-            };
-            let [r, g, b, _] = material.pbr_metallic_roughness().base_color_factor();
-            let group = mesh.group_index(Group {
-                name,
-                colour: Some([r, g, b]),
-                double_sided: material.double_sided(),
-                photo: photo.map(|p| p.texture),
-            });
-            // A mirroring transform (negative determinant) turns the winding around.
-            let flip = world.determinant() < 0.0;
-            let base = mesh.positions.len() as u32;
-            let shading = mesh.normals.get_or_insert_with(Vec::new);
-            match normals {
-                Some(n) if n.len() == positions.len() => shading.extend(n),
-                // Without NORMAL the primitive is flat, as glTF 2.0 §3.7.2.1 says.
-                _ => shading.resize(base as usize + positions.len(), [0.0; 3]),
-            }
-            let uv = mesh.texcoords.get_or_insert_with(Vec::new);
-            match texcoords {
-                Some(t) if t.len() == positions.len() => uv.extend(t),
-                _ => uv.resize(base as usize + positions.len(), [f32::NAN; 2]),
-            }
-            if let Some(bad) =
-                colours.iter().flatten().position(|c| !c.iter().all(|v| (0.0..=1.0).contains(v)))
-            {
-                return Err(SceneError::invalid(
-                    path,
-                    place(),
-                    format!(
-                        "COLOR_0 of vertex {bad} is outside 0 to 1; vertex colours are linear \
-                         values from 0 to 1"
-                    ),
-                ));
-            }
-            let vertex_colours = mesh.colours.get_or_insert_with(Vec::new);
-            match colours {
-                Some(c) if c.len() == positions.len() => vertex_colours.extend(c),
-                _ => vertex_colours.resize(base as usize + positions.len(), [f32::NAN; 3]),
-            }
-            for p in positions {
-                mesh.push_position(p);
-            }
-            for t in indices.chunks_exact(3) {
-                let tri = if flip { [t[0], t[2], t[1]] } else { [t[0], t[1], t[2]] };
-                mesh.triangles.push(tri.map(|i| base + i));
-                mesh.triangle_group.push(group);
-            }
+            let place = format!(
+                "mesh {} primitive {p}",
+                m.name().map_or(m.index().to_string(), str::to_owned)
+            );
+            let at = PrimitiveAt { buffers, path, world, place };
+            add_primitive(&prim, &at, mesh, totals)?;
         }
     }
     for child in node.children() {

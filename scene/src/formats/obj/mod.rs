@@ -31,129 +31,181 @@ fn usemtl_names(text: &str) -> Vec<String> {
     names
 }
 
+/// One line of an OBJ text split at whitespace, with its number for messages.
+struct ObjLine<'a> {
+    path: &'a Path,
+    /// 1-based line number.
+    number: usize,
+    line: &'a str,
+    keyword: &'a str,
+    rest: Vec<&'a str>,
+}
+
+impl ObjLine<'_> {
+    fn refuse(&self, problem: String) -> SceneError {
+        SceneError::invalid(self.path, format!("line {}", self.number), problem)
+    }
+
+    /// Whether the line has at least `n` words after its keyword, the first `n` numbers.
+    fn floats(&self, n: usize) -> bool {
+        self.rest.len() >= n && self.rest[..n].iter().all(|w| w.parse::<f32>().is_ok())
+    }
+}
+
+/// The vertices, texture coordinates and normals defined so far.
+#[derive(Default)]
+struct Defined {
+    positions: i64,
+    texcoords: i64,
+    normals: i64,
+}
+
+/// A `v` line: x y z, then optionally w (not 0) or r g b.
+fn check_vertex(line: &ObjLine) -> Result<()> {
+    let rest = &line.rest;
+    if !line.floats(3) {
+        return Err(line.refuse(
+            "a vertex needs three numbers `v x y z` (then optionally w, or r g b); \
+             fix the line"
+                .into(),
+        ));
+    }
+    match rest.len() {
+        3 | 6 => {}
+        4 => match rest[3].parse::<f32>() {
+            Ok(w) if w != 0.0 => {}
+            Ok(_) => {
+                return Err(line.refuse("the vertex weight w is 0; use 1 or leave it out".into()));
+            }
+            Err(_) => {
+                return Err(
+                    line.refuse(format!("`{}` is not a number (the vertex weight w)", rest[3]))
+                );
+            }
+        },
+        n => {
+            return Err(line.refuse(format!(
+                "a vertex with {n} numbers; give x y z, x y z w, or x y z r g b"
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// One corner of a face or line: `v`, `v/vt`, `v//vn` or `v/vt/vn`, each index against what is
+/// defined before the line.
+fn check_corner(line: &ObjLine, corner: &str, defined: &Defined) -> Result<()> {
+    let mut parts = corner.split('/');
+    for (k, (what, defined)) in [
+        ("vertex", defined.positions),
+        ("texture coordinate", defined.texcoords),
+        ("normal", defined.normals),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let Some(part) = parts.next() else { break };
+        if part.is_empty() && k > 0 {
+            continue;
+        }
+        match part.parse::<i64>() {
+            Ok(index) if index != 0 && index.abs() <= defined => {}
+            Ok(index) => {
+                return Err(line.refuse(format!(
+                    "{what} index {index} is out of range: {defined} come before \
+                     this line (OBJ indices start at 1 and refer to lines above; \
+                     negative ones count back from the last)"
+                )));
+            }
+            Err(_) => {
+                return Err(line.refuse(format!(
+                    "`{corner}` is not a vertex reference like 7, 7/2, 7//5 or 7/2/5"
+                )));
+            }
+        }
+    }
+    if parts.next().is_some() {
+        return Err(
+            line.refuse(format!("`{corner}` is not a vertex reference like 7, 7/2, 7//5 or 7/2/5"))
+        );
+    }
+    Ok(())
+}
+
+/// An `f` or `l` line: enough corners, not more than `max_polygon_vertices`, each a reference
+/// to what is defined before it.
+fn check_face(line: &ObjLine, defined: &Defined, max_polygon_vertices: u64) -> Result<()> {
+    let rest = &line.rest;
+    if line.keyword == "f" && rest.len() < 3 {
+        return Err(line.refuse(format!(
+            "a face with {} vertices; a polygon needs at least 3 (delete the line or \
+             add the missing corners)",
+            rest.len()
+        )));
+    }
+    if rest.len() as u64 > max_polygon_vertices {
+        return Err(SceneError::Limit {
+            path: line.path.to_owned(),
+            what: format!("the number of vertices of the polygon on line {}", line.number),
+            value: rest.len() as u64,
+            limit: max_polygon_vertices,
+            fix: "split the polygon into smaller faces, or raise the limit with \
+                  --max-polygon-vertices"
+                .into(),
+        });
+    }
+    for corner in rest {
+        check_corner(line, corner, defined)?;
+    }
+    Ok(())
+}
+
+/// One line by its keyword, counting what it defines.
+fn check_line(line: &ObjLine, defined: &mut Defined, max_polygon_vertices: u64) -> Result<()> {
+    match line.keyword {
+        "v" => {
+            check_vertex(line)?;
+            defined.positions += 1;
+        }
+        "vt" => {
+            if !line.floats(2) {
+                return Err(line.refuse(
+                    "a texture coordinate needs two numbers `vt u v`; fix the line".into(),
+                ));
+            }
+            defined.texcoords += 1;
+        }
+        "vn" => {
+            if !line.floats(3) {
+                return Err(
+                    line.refuse("a normal needs three numbers `vn x y z`; fix the line".into())
+                );
+            }
+            defined.normals += 1;
+        }
+        "usemtl" if line.line.split_once(' ').is_none_or(|(_, n)| n.trim().is_empty()) => {
+            return Err(line.refuse(
+                "`usemtl` without a material name after a space; name the material".into(),
+            ));
+        }
+        "f" | "l" => check_face(line, defined, max_polygon_vertices)?,
+        _ => {}
+    }
+    Ok(())
+}
+
 /// Find the first line that tobj would refuse (or that would make a polygon beyond
 /// `max_polygon_vertices`), for a message with its line number. tobj's own errors carry no
 /// position, so every check it makes is made here first, the same way: words split at
 /// whitespace, numbers as 32-bit floats, indices against the vertices defined *before* the line.
 fn locate_problem(text: &str, path: &Path, max_polygon_vertices: u64) -> Option<SceneError> {
-    let (mut positions, mut texcoords, mut normals) = (0i64, 0i64, 0i64);
+    let mut defined = Defined::default();
     for (i, line) in text.lines().enumerate() {
-        let place = || format!("line {}", i + 1);
-        let refuse = |problem: String| Some(SceneError::invalid(path, place(), problem));
         let mut words = line.split_whitespace();
         let Some(keyword) = words.next() else { continue };
-        let rest: Vec<&str> = words.collect();
-        let floats =
-            |n: usize| rest.len() >= n && rest[..n].iter().all(|w| w.parse::<f32>().is_ok());
-        match keyword {
-            "v" => {
-                if !floats(3) {
-                    return refuse(
-                        "a vertex needs three numbers `v x y z` (then optionally w, or r g b); \
-                         fix the line"
-                            .into(),
-                    );
-                }
-                match rest.len() {
-                    3 | 6 => {}
-                    4 => match rest[3].parse::<f32>() {
-                        Ok(w) if w != 0.0 => {}
-                        Ok(_) => {
-                            return refuse(
-                                "the vertex weight w is 0; use 1 or leave it out".into(),
-                            );
-                        }
-                        Err(_) => {
-                            return refuse(format!(
-                                "`{}` is not a number (the vertex weight w)",
-                                rest[3]
-                            ));
-                        }
-                    },
-                    n => {
-                        return refuse(format!(
-                            "a vertex with {n} numbers; give x y z, x y z w, or x y z r g b"
-                        ));
-                    }
-                }
-                positions += 1;
-            }
-            "vt" => {
-                if !floats(2) {
-                    return refuse(
-                        "a texture coordinate needs two numbers `vt u v`; fix the line".into(),
-                    );
-                }
-                texcoords += 1;
-            }
-            "vn" => {
-                if !floats(3) {
-                    return refuse("a normal needs three numbers `vn x y z`; fix the line".into());
-                }
-                normals += 1;
-            }
-            "usemtl" if line.split_once(' ').is_none_or(|(_, n)| n.trim().is_empty()) => {
-                return refuse(
-                    "`usemtl` without a material name after a space; name the material".into(),
-                );
-            }
-            "f" | "l" => {
-                if keyword == "f" && rest.len() < 3 {
-                    return refuse(format!(
-                        "a face with {} vertices; a polygon needs at least 3 (delete the line or \
-                         add the missing corners)",
-                        rest.len()
-                    ));
-                }
-                if rest.len() as u64 > max_polygon_vertices {
-                    return Some(SceneError::Limit {
-                        path: path.to_owned(),
-                        what: format!("the number of vertices of the polygon on line {}", i + 1),
-                        value: rest.len() as u64,
-                        limit: max_polygon_vertices,
-                        fix: "split the polygon into smaller faces, or raise the limit with \
-                              --max-polygon-vertices"
-                            .into(),
-                    });
-                }
-                for corner in &rest {
-                    let mut parts = corner.split('/');
-                    for (k, (what, defined)) in [
-                        ("vertex", positions),
-                        ("texture coordinate", texcoords),
-                        ("normal", normals),
-                    ]
-                    .into_iter()
-                    .enumerate()
-                    {
-                        let Some(part) = parts.next() else { break };
-                        if part.is_empty() && k > 0 {
-                            continue;
-                        }
-                        match part.parse::<i64>() {
-                            Ok(index) if index != 0 && index.abs() <= defined => {}
-                            Ok(index) => {
-                                return refuse(format!(
-                                    "{what} index {index} is out of range: {defined} come before \
-                                     this line (OBJ indices start at 1 and refer to lines above; \
-                                     negative ones count back from the last)"
-                                ));
-                            }
-                            Err(_) => {
-                                return refuse(format!(
-                                    "`{corner}` is not a vertex reference like 7, 7/2, 7//5 or 7/2/5"
-                                ));
-                            }
-                        }
-                    }
-                    if parts.next().is_some() {
-                        return refuse(format!(
-                            "`{corner}` is not a vertex reference like 7, 7/2, 7//5 or 7/2/5"
-                        ));
-                    }
-                }
-            }
-            _ => {}
+        let line = ObjLine { path, number: i + 1, line, keyword, rest: words.collect() };
+        if let Err(problem) = check_line(&line, &mut defined, max_polygon_vertices) {
+            return Some(problem);
         }
     }
     None

@@ -151,12 +151,46 @@ impl<'a> LdtLines<'a> {
     }
 }
 
-pub(super) fn read_ldt(text: &str, path: &Path) -> Result<LdtFile> {
-    let lines = split_lines(text);
-    let header = LdtLines { path, lines: &lines };
-    let field =
-        |n: usize| n.checked_sub(1).and_then(|i| LDT_FIELDS.get(i)).copied().unwrap_or("a field");
+/// Field `n` (1-based) of [`LDT_FIELDS`], for messages.
+fn field(n: usize) -> &'static str {
+    n.checked_sub(1).and_then(|i| LDT_FIELDS.get(i)).copied().unwrap_or("a field")
+}
 
+/// The header fields 1–26 that the rest of the file is read with.
+struct LdtHeader<'a> {
+    company: &'a str,
+    isym: u64,
+    mc: usize,
+    ng: usize,
+    report: &'a str,
+    name: &'a str,
+    number: &'a str,
+    date: &'a str,
+    dff_percent: f64,
+    lor_percent: f64,
+    conversion_factor: f64,
+    /// Field 26, checked to be at least 1.
+    sets: usize,
+}
+
+/// Field 26a–26c of the first lamp set, and where the direct ratios start.
+struct LdtLamps<'a> {
+    lamps: f64,
+    lamp_type: &'a str,
+    lamp_flux_lm: f64,
+    /// 1-based line of the first direct ratio (field 27).
+    ratios_start: usize,
+}
+
+/// Which C-planes the file stores, by the symmetry, and the table size for messages.
+struct LdtPlanes {
+    /// Field 30: the C-planes Mc1..Mc2 that are stored (indices into the Mc C-angles).
+    stored: Vec<usize>,
+    counts: String,
+}
+
+/// Fields 1–26, one per line.
+fn read_ldt_header<'a>(header: &LdtLines<'a>) -> Result<LdtHeader<'a>> {
     let company = header.text(1, field(1))?;
     header.whole(2, field(2), 0, 3)?;
     let isym = header.whole(3, field(3), 0, 4)? as u64;
@@ -177,7 +211,7 @@ pub(super) fn read_ldt(text: &str, path: &Path) -> Result<LdtFile> {
     let conversion_factor = header.number(24, field(24))?;
     if conversion_factor <= 0.0 {
         return Err(SceneError::syntax(
-            path,
+            header.path,
             24,
             1,
             format!(
@@ -191,13 +225,32 @@ pub(super) fn read_ldt(text: &str, path: &Path) -> Result<LdtFile> {
     let sets = header.count(26, field(26), MAX_LAMP_SETS)?;
     if sets == 0 {
         return Err(SceneError::syntax(
-            path,
+            header.path,
             26,
             1,
             "the number of lamp sets (field 26) is 0, so there is no lamp flux to turn the cd/klm \
              table into candela; give at least one lamp set",
         ));
     }
+    Ok(LdtHeader {
+        company,
+        isym,
+        mc,
+        ng,
+        report,
+        name,
+        number,
+        date,
+        dff_percent,
+        lor_percent,
+        conversion_factor,
+        sets,
+    })
+}
+
+/// The lamp sets (fields 26a–26f) and the direct ratios (field 27).
+fn read_lamp_sets<'a>(header: &LdtLines<'a>, sets: usize) -> Result<LdtLamps<'a>> {
+    let path = header.path;
     // Fields 26a–26f, each for every set before the next field.
     let lamp_line = |field_index: usize, set: usize| 27 + field_index * sets + set;
     let lamps = header.number(lamp_line(0, 0), "number of lamps of lamp set 1 (field 26a)")?;
@@ -234,7 +287,12 @@ pub(super) fn read_ldt(text: &str, path: &Path) -> Result<LdtFile> {
             header.number(n, &what)?;
         }
     }
+    Ok(LdtLamps { lamps, lamp_type, lamp_flux_lm, ratios_start })
+}
 
+/// Checks Mc and Ng against the symmetry and picks the stored C-planes.
+fn check_planes(path: &Path, h: &LdtHeader) -> Result<LdtPlanes> {
+    let (isym, mc, ng) = (h.isym, h.mc, h.ng);
     if mc == 0 && isym != 1 {
         return Err(SceneError::syntax(
             path,
@@ -283,21 +341,22 @@ pub(super) fn read_ldt(text: &str, path: &Path) -> Result<LdtFile> {
         stored.len()
     );
     check_table_size(path, stored.len(), ng, &counts)?;
+    Ok(LdtPlanes { stored, counts })
+}
 
-    let data_start = ratios_start + 10; // 1-based line of the first C-angle
-    let mut cursor = Cursor {
-        path,
-        tokens: Tokens::new(&lines, data_start - 1, ldt_separator),
-        decimal_comma: true,
-    };
-    let c_start = cursor.tokens.next_token_position();
-    let c_angles = cursor.angles(mc, "C-angle (field 28)", 0.0, 360.0)?;
-    let gammas = cursor.angles(ng, "γ angle (field 29)", 0.0, 180.0)?;
-
+/// The angles of the stored C-planes, checked against the range the symmetry stores;
+/// `c_start` is where the C-angles begin, for the message.
+fn stored_plane_angles(
+    path: &Path,
+    isym: u64,
+    planes: &LdtPlanes,
+    c_angles: &[f64],
+    c_start: (usize, usize),
+) -> Result<Vec<f64>> {
     let plane_angles: Vec<f64> = if isym == 1 {
         vec![0.0]
     } else {
-        stored.iter().map(|&i| c_angles.get(i).copied().unwrap_or(0.0)).collect()
+        planes.stored.iter().map(|&i| c_angles.get(i).copied().unwrap_or(0.0)).collect()
     };
     let allowed: fn(f64) -> bool = match isym {
         2 => |c| c <= 180.0 + ANGLE_TOLERANCE,
@@ -320,8 +379,30 @@ pub(super) fn read_ldt(text: &str, path: &Path) -> Result<LdtFile> {
             ),
         ));
     }
-    let scale = conversion_factor * lamp_flux_lm / 1000.0;
-    let table = cursor.table(&plane_angles, &gammas, scale, &counts)?;
+    Ok(plane_angles)
+}
+
+pub(super) fn read_ldt(text: &str, path: &Path) -> Result<LdtFile> {
+    let lines = split_lines(text);
+    let header = LdtLines { path, lines: &lines };
+    let h = read_ldt_header(&header)?;
+    let lamp = read_lamp_sets(&header, h.sets)?;
+    let planes = check_planes(path, &h)?;
+    let (isym, mc, ng) = (h.isym, h.mc, h.ng);
+
+    let data_start = lamp.ratios_start + 10; // 1-based line of the first C-angle
+    let mut cursor = Cursor {
+        path,
+        tokens: Tokens::new(&lines, data_start - 1, ldt_separator),
+        decimal_comma: true,
+    };
+    let c_start = cursor.tokens.next_token_position();
+    let c_angles = cursor.angles(mc, "C-angle (field 28)", 0.0, 360.0)?;
+    let gammas = cursor.angles(ng, "γ angle (field 29)", 0.0, 180.0)?;
+    let plane_angles = stored_plane_angles(path, isym, &planes, &c_angles, c_start)?;
+
+    let scale = h.conversion_factor * lamp.lamp_flux_lm / 1000.0;
+    let table = cursor.table(&plane_angles, &gammas, scale, &planes.counts)?;
     let planes: Vec<(f64, Vec<f64>)> = plane_angles.into_iter().zip(table).collect();
     let mirrors: &[Mirror] = match isym {
         2 => &[mirror_0_180],
@@ -330,7 +411,7 @@ pub(super) fn read_ldt(text: &str, path: &Path) -> Result<LdtFile> {
         _ => &[],
     };
     let (c_deg, candela) = expand_planes(planes, mirrors);
-    let description = [company, name, number, report, date, lamp_type]
+    let description = [h.company, h.name, h.number, h.report, h.date, lamp.lamp_type]
         .iter()
         .filter(|s| !s.is_empty())
         .copied()
@@ -341,10 +422,10 @@ pub(super) fn read_ldt(text: &str, path: &Path) -> Result<LdtFile> {
         isym,
         mc,
         ng,
-        lamps: lamps as i64,
-        lamp_flux_lm,
-        conversion_factor,
-        dff_percent,
-        lor_percent,
+        lamps: lamp.lamps as i64,
+        lamp_flux_lm: lamp.lamp_flux_lm,
+        conversion_factor: h.conversion_factor,
+        dff_percent: h.dff_percent,
+        lor_percent: h.lor_percent,
     })
 }

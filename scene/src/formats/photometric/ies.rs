@@ -170,9 +170,37 @@ pub(super) fn ies_lateral(horizontal: &[f64]) -> Option<Lateral> {
     }
 }
 
-pub(super) fn read_ies(text: &str, path: &Path) -> Result<IesFile> {
-    let lines = split_lines(text);
-    let version = lines.first().map_or(IesVersion::Lm1986, |l| ies_version(l));
+/// Where the label lines end and the `TILT=` line is.
+struct IesLabels<'a> {
+    /// The label or keyword lines between the version line and the `TILT=` line.
+    header: &'a [&'a str],
+    /// Index of the `TILT=` line.
+    tilt_index: usize,
+}
+
+/// The lamp line and the ballast line, as far as they matter for the candela.
+struct IesLamp {
+    lamps: f64,
+    lumens_per_lamp: f64,
+    multiplier: f64,
+    n_vertical: usize,
+    n_horizontal: usize,
+    /// Line of the number of vertical angles, for messages.
+    vertical_line: usize,
+    ballast: f64,
+    lamp_factor: f64,
+}
+
+/// The angles of a type C web and the symmetry they give.
+struct IesAngles {
+    vertical: Vec<f64>,
+    horizontal: Vec<f64>,
+    lateral: Lateral,
+    counts: String,
+}
+
+/// The label or keyword lines, up to the `TILT=` line that ends them.
+fn read_labels<'a>(lines: &'a [&'a str], path: &Path) -> Result<IesLabels<'a>> {
     let header_start = usize::from(lines.first().is_some_and(|l| is_version_line(l)));
     let Some(tilt_index) = lines.iter().skip(header_start).position(|l| tilt_value(l).is_some())
     else {
@@ -186,30 +214,30 @@ pub(super) fn read_ies(text: &str, path: &Path) -> Result<IesFile> {
     };
     let tilt_index = tilt_index + header_start;
     let header = lines.get(header_start..tilt_index).unwrap_or(&[]);
+    Ok(IesLabels { header, tilt_index })
+}
+
+/// The `TILT=` line's value, and the tilt block after it for `TILT=INCLUDE`.
+fn read_tilt_line(cursor: &mut Cursor, lines: &[&str], tilt_index: usize) -> Result<Option<Tilt>> {
+    let path = cursor.path;
     let tilt_line = lines.get(tilt_index).copied().unwrap_or("");
     let tilt_text = tilt_value(tilt_line).unwrap_or("");
     let tilt_column =
         tilt_line.find('=').map_or(1, |i| tilt_line.get(..i).map_or(1, |s| s.chars().count() + 2));
 
-    let mut cursor = Cursor {
-        path,
-        tokens: Tokens::new(&lines, tilt_index + 1, ies_separator),
-        decimal_comma: false,
-    };
-
-    let tilt = if tilt_text.eq_ignore_ascii_case("NONE") {
-        None
+    if tilt_text.eq_ignore_ascii_case("NONE") {
+        Ok(None)
     } else if tilt_text.eq_ignore_ascii_case("INCLUDE") {
-        Some(read_tilt(&mut cursor)?)
+        Ok(Some(read_tilt(cursor)?))
     } else if tilt_text.is_empty() {
-        return Err(SceneError::syntax(
+        Err(SceneError::syntax(
             path,
             tilt_index + 1,
             tilt_column,
             "TILT= has no value; write TILT=NONE (or TILT=INCLUDE followed by the tilt table)",
-        ));
+        ))
     } else {
-        return Err(SceneError::syntax(
+        Err(SceneError::syntax(
             path,
             tilt_index + 1,
             tilt_column,
@@ -219,9 +247,42 @@ pub(super) fn read_ies(text: &str, path: &Path) -> Result<IesFile> {
                  geometry, the number of pairs, the angles and the factors), or write TILT=NONE \
                  if the lamp output does not depend on tilt"
             ),
-        ));
-    };
+        ))
+    }
+}
 
+/// The photometric type: type C (1) is read, B (2) and A (3) are refused.
+fn check_photometric_type(
+    cursor: &Cursor,
+    photometric_type: f64,
+    type_token: &Token,
+) -> Result<()> {
+    match whole(photometric_type) {
+        Some(1) => Ok(()),
+        Some(t @ (2 | 3)) => {
+            let name = if t == 2 { "B" } else { "A" };
+            Err(cursor.error_at(
+                type_token,
+                format!(
+                    "photometric type {t} (type {name} photometry) is not supported: restauro \
+                     reads type C webs (photometric type 1) only; re-export the file as type C \
+                     photometry"
+                ),
+            ))
+        }
+        _ => Err(cursor.error_at(
+            type_token,
+            format!(
+                "photometric type '{}' is unknown; LM-63 defines 1 (type C), 2 (type B) and 3 \
+                 (type A) — check the field order of this line",
+                type_token.text
+            ),
+        )),
+    }
+}
+
+/// The lamp line and the ballast line after the tilt.
+fn read_lamp_lines(cursor: &mut Cursor, version: IesVersion) -> Result<IesLamp> {
     // <# lamps> <lumens/lamp> <multiplier> <# vertical> <# horizontal> <type> <units> <w> <l> <h>
     let (lamps, _) = cursor.number(&|| "the number of lamps".to_string())?;
     let (lumens_per_lamp, lumens_token) = cursor.number(&|| "the lumens per lamp".to_string())?;
@@ -238,30 +299,7 @@ pub(super) fn read_ies(text: &str, path: &Path) -> Result<IesFile> {
     let (n_vertical, vertical_token) = cursor.count("the number of vertical angles", 1)?;
     let (n_horizontal, _) = cursor.count("the number of horizontal angles", 1)?;
     let (photometric_type, type_token) = cursor.number(&|| "the photometric type".to_string())?;
-    match whole(photometric_type) {
-        Some(1) => {}
-        Some(t @ (2 | 3)) => {
-            let name = if t == 2 { "B" } else { "A" };
-            return Err(cursor.error_at(
-                &type_token,
-                format!(
-                    "photometric type {t} (type {name} photometry) is not supported: restauro \
-                     reads type C webs (photometric type 1) only; re-export the file as type C \
-                     photometry"
-                ),
-            ));
-        }
-        _ => {
-            return Err(cursor.error_at(
-                &type_token,
-                format!(
-                    "photometric type '{}' is unknown; LM-63 defines 1 (type C), 2 (type B) and 3 \
-                     (type A) — check the field order of this line",
-                    type_token.text
-                ),
-            ));
-        }
-    }
+    check_photometric_type(cursor, photometric_type, &type_token)?;
     for what in
         ["the units type", "the luminous width", "the luminous length", "the luminous height"]
     {
@@ -276,10 +314,25 @@ pub(super) fn read_ies(text: &str, path: &Path) -> Result<IesFile> {
         1.0
     };
     cursor.number(&|| "the input watts".to_string())?;
+    Ok(IesLamp {
+        lamps,
+        lumens_per_lamp,
+        multiplier,
+        n_vertical,
+        n_horizontal,
+        vertical_line: vertical_token.line,
+        ballast,
+        lamp_factor,
+    })
+}
 
+/// The vertical and horizontal angles, and the lateral symmetry the horizontal ones give.
+fn read_ies_angles(cursor: &mut Cursor, lamp: &IesLamp) -> Result<IesAngles> {
+    let path = cursor.path;
+    let (n_vertical, n_horizontal) = (lamp.n_vertical, lamp.n_horizontal);
     let counts = format!(
         "{n_horizontal} horizontal × {n_vertical} vertical angles, line {}",
-        vertical_token.line
+        lamp.vertical_line
     );
     check_table_size(path, n_horizontal, n_vertical, &counts)?;
     let vertical = cursor.angles(n_vertical, "vertical angle", 0.0, 180.0)?;
@@ -299,8 +352,25 @@ pub(super) fn read_ies(text: &str, path: &Path) -> Result<IesFile> {
             ),
         ));
     };
+    Ok(IesAngles { vertical, horizontal, lateral, counts })
+}
+
+pub(super) fn read_ies(text: &str, path: &Path) -> Result<IesFile> {
+    let lines = split_lines(text);
+    let version = lines.first().map_or(IesVersion::Lm1986, |l| ies_version(l));
+    let labels = read_labels(&lines, path)?;
+
+    let mut cursor = Cursor {
+        path,
+        tokens: Tokens::new(&lines, labels.tilt_index + 1, ies_separator),
+        decimal_comma: false,
+    };
+
+    let tilt = read_tilt_line(&mut cursor, &lines, labels.tilt_index)?;
+    let lamp = read_lamp_lines(&mut cursor, version)?;
+    let IesAngles { vertical, horizontal, lateral, counts } = read_ies_angles(&mut cursor, &lamp)?;
     let tilt_factor = tilt.as_ref().map_or(1.0, |t| t.factor);
-    let scale = multiplier * ballast * lamp_factor * tilt_factor;
+    let scale = lamp.multiplier * lamp.ballast * lamp.lamp_factor * tilt_factor;
     let table = cursor.table(&horizontal, &vertical, scale, &counts)?;
 
     let mut planes: Vec<(f64, Vec<f64>)> = horizontal.into_iter().zip(table).collect();
@@ -320,12 +390,12 @@ pub(super) fn read_ies(text: &str, path: &Path) -> Result<IesFile> {
             gamma_deg: vertical,
             c_deg,
             candela,
-            description: ies_description(header),
+            description: ies_description(labels.header),
         },
         version,
         tilt,
-        lamps,
-        lumens_per_lamp,
+        lamps: lamp.lamps,
+        lumens_per_lamp: lamp.lumens_per_lamp,
         scale,
     })
 }

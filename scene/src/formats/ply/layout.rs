@@ -249,160 +249,230 @@ fn uint(word: &str) -> Option<u64> {
     word.parse().ok()
 }
 
+/// One header line after the first, split into its words, for the readers of each keyword.
+struct HeaderLine<'a> {
+    path: &'a Path,
+    /// 1-based line number.
+    number: usize,
+    text: &'a str,
+    words: Vec<&'a str>,
+}
+
+impl HeaderLine<'_> {
+    fn error(&self, problem: String) -> SceneError {
+        SceneError::syntax(self.path, self.number, 1, problem)
+    }
+}
+
+/// What the header has declared so far.
+#[derive(Default)]
+struct HeaderSoFar {
+    encoding: Option<Encoding>,
+    elements: Vec<Element>,
+}
+
+/// A header line's text, which must be UTF-8.
+fn header_text<'a>(path: &Path, number: usize, raw: &'a [u8]) -> Result<&'a str> {
+    std::str::from_utf8(content(raw)).map_err(|_| {
+        SceneError::syntax(
+            path,
+            number,
+            1,
+            "the header line is not text (not UTF-8); a PLY file starts with a text header \
+             (`ply`, `format …`, `element …`, `property …`, `end_header`)",
+        )
+    })
+}
+
+/// The first line, which must be `ply`.
+fn check_magic(path: &Path, text: &str) -> Result<()> {
+    if text.trim_end_matches([' ', '\t']) != "ply" {
+        return Err(SceneError::syntax(
+            path,
+            1,
+            1,
+            "the file does not start with the line `ply`; it is not a PLY file",
+        ));
+    }
+    Ok(())
+}
+
+/// A later line: no carriage return inside, no leading space, then its words.
+fn header_line<'a>(path: &'a Path, number: usize, text: &'a str) -> Result<HeaderLine<'a>> {
+    let at_line = |problem: &str| SceneError::syntax(path, number, 1, problem);
+    if text.contains('\r') {
+        return Err(at_line(
+            "a carriage return inside a header line; end header lines with a line break",
+        ));
+    }
+    if text.starts_with([' ', '\t']) {
+        return Err(at_line("a header line may not start with a space; remove it"));
+    }
+    let words: Vec<&str> = text.split([' ', '\t']).filter(|w| !w.is_empty()).collect();
+    Ok(HeaderLine { path, number, text, words })
+}
+
+/// `format <encoding> <version>`.
+fn read_format(line: &HeaderLine, so_far: &mut HeaderSoFar) -> Result<()> {
+    let words = &line.words;
+    let e = match words.get(1).copied() {
+        Some("ascii") => Encoding::Ascii,
+        Some("binary_big_endian") => Encoding::BigEndian,
+        Some("binary_little_endian") => Encoding::LittleEndian,
+        _ => {
+            return Err(line.error(
+                "the format must be `ascii`, `binary_little_endian` or \
+                 `binary_big_endian`"
+                    .into(),
+            ));
+        }
+    };
+    let version_ok = words.len() == 3
+        && words[2].split_once('.').is_some_and(|(a, b)| {
+            uint(a).is_some_and(|a| a <= u64::from(u16::MAX))
+                && uint(b).is_some_and(|b| b <= u64::from(u8::MAX))
+        });
+    if !version_ok {
+        return Err(line.error(
+            "the format line ends with a version like 1.0; write `format <encoding> 1.0`".into(),
+        ));
+    }
+    if so_far.encoding.is_some_and(|previous| previous != e) {
+        return Err(line.error("a second `format` line contradicts the first; keep one".into()));
+    }
+    so_far.encoding = Some(e);
+    Ok(())
+}
+
+/// `element <name> <count>`.
+fn read_element(line: &HeaderLine, so_far: &mut HeaderSoFar) -> Result<()> {
+    let words = &line.words;
+    let (Some(name), Some(count), 3) = (words.get(1), words.get(2), words.len()) else {
+        return Err(line.error("write an element as `element <name> <count>`".into()));
+    };
+    if !is_ident(name) {
+        return Err(
+            line.error(format!("`{name}` is not an element name (letters, digits, _ and -)"))
+        );
+    }
+    let Some(count) = uint(count) else {
+        return Err(line.error(format!(
+            "the count `{count}` of element `{name}` is not a whole number below 2^64"
+        )));
+    };
+    if so_far.elements.iter().any(|e| e.name == *name) {
+        return Err(line.error(format!("element `{name}` is declared twice; keep one")));
+    }
+    so_far.elements.push(Element {
+        name: (*name).to_owned(),
+        count,
+        properties: Vec::new(),
+        line: line.number,
+    });
+    Ok(())
+}
+
+/// The type of a `property` line: a scalar or a list.
+fn property_kind(line: &HeaderLine) -> Result<Kind> {
+    let words = &line.words;
+    Ok(match words.get(1).copied() {
+        Some("list") if words.len() == 5 => {
+            match (Scalar::parse(words[2]), Scalar::parse(words[3])) {
+                (Some(Scalar::Float | Scalar::Double), _) => {
+                    return Err(line.error(format!(
+                        "the count of list `{}` is a {}; a list count is an integer type (uchar, ushort, uint, …)",
+                        words[4], words[2]
+                    )));
+                }
+                (Some(c), Some(t)) => Kind::List(c, t),
+                _ => return Err(line.error("a list property is `property list <count type> <item type> <name>`, with types like uchar, int or float".into())),
+            }
+        }
+        Some(t) if words.len() == 3 => match Scalar::parse(t) {
+            Some(s) => Kind::Scalar(s),
+            None => return Err(line.error(format!("`{t}` is not a PLY type; use char, uchar, short, ushort, int, uint, float or double"))),
+        },
+        _ => return Err(line.error("write a property as `property <type> <name>` or `property list <count type> <item type> <name>`".into())),
+    })
+}
+
+/// `property <type> <name>` or `property list <count type> <item type> <name>`, of the last
+/// element.
+fn read_property(line: &HeaderLine, so_far: &mut HeaderSoFar) -> Result<()> {
+    let kind = property_kind(line)?;
+    let name = line.words.last().copied().unwrap_or("");
+    if !is_ident(name) {
+        return Err(
+            line.error(format!("`{name}` is not a property name (letters, digits, _ and -)"))
+        );
+    }
+    let Some(element) = so_far.elements.last_mut() else {
+        return Err(line.error(format!(
+            "property `{name}` comes before any `element` line; declare the element first"
+        )));
+    };
+    if element.properties.iter().any(|p| p.name == name) {
+        return Err(line.error(format!(
+            "property `{name}` of element `{}` is declared twice; keep one",
+            element.name
+        )));
+    }
+    element.properties.push(Property { name: name.to_owned(), kind });
+    Ok(())
+}
+
+/// `end_header`: the header is complete if it had a `format` line.
+fn end_header(line: &HeaderLine, so_far: HeaderSoFar, body: usize) -> Result<Header> {
+    let Some(encoding) = so_far.encoding else {
+        return Err(line.error(
+            "the header has no `format` line; add `format ascii 1.0` or \
+             `format binary_little_endian 1.0` after `ply`"
+                .into(),
+        ));
+    };
+    Ok(Header { encoding, elements: so_far.elements, body, lines: line.number })
+}
+
+/// A line of no keyword ply-rs knows.
+fn unknown_line(line: &HeaderLine) -> SceneError {
+    let shown: String = line.text.chars().take(40).collect();
+    line.error(format!(
+        "`{shown}` is not a PLY header line (`format`, `comment`, `obj_info`, \
+         `element`, `property` or `end_header`)"
+    ))
+}
+
 /// Read the header by ply-rs's grammar; anything it would refuse (or panic on) is refused
 /// with its line.
 pub(crate) fn read_header(bytes: &[u8], path: &Path) -> Result<Header> {
-    let mut encoding = None;
-    let mut elements: Vec<Element> = Vec::new();
+    let mut so_far = HeaderSoFar::default();
     let mut number = 0;
     for (at, raw) in lines_from(bytes, 0) {
         number += 1;
-        let at_line = |problem: String| SceneError::syntax(path, number, 1, problem);
-        let Ok(text) = std::str::from_utf8(content(raw)) else {
-            return Err(at_line(
-                "the header line is not text (not UTF-8); a PLY file starts with a text header \
-                 (`ply`, `format …`, `element …`, `property …`, `end_header`)"
-                    .into(),
-            ));
-        };
+        let text = header_text(path, number, raw)?;
         // A last line cut short is a truncated file, whatever its words.
         if !raw.ends_with(b"\n") && !text.starts_with("end_header") {
             break;
         }
         if number == 1 {
-            if text.trim_end_matches([' ', '\t']) != "ply" {
-                return Err(at_line(
-                    "the file does not start with the line `ply`; it is not a PLY file".into(),
-                ));
-            }
+            check_magic(path, text)?;
             continue;
         }
-        if text.contains('\r') {
-            return Err(at_line(
-                "a carriage return inside a header line; end header lines with a line break".into(),
-            ));
-        }
-        if text.starts_with([' ', '\t']) {
-            return Err(at_line("a header line may not start with a space; remove it".into()));
-        }
-        let words: Vec<&str> = text.split([' ', '\t']).filter(|w| !w.is_empty()).collect();
-        match words.first().copied().unwrap_or("") {
+        let line = header_line(path, number, text)?;
+        let first = line.words.first().copied().unwrap_or("");
+        match first {
             "comment" | "obj_info"
-                if text.len() == words[0].len() || is_space(text.as_bytes()[words[0].len()]) => {}
-            "end_header" if words.len() == 1 => {
-                let Some(encoding) = encoding else {
-                    return Err(at_line(
-                        "the header has no `format` line; add `format ascii 1.0` or \
-                         `format binary_little_endian 1.0` after `ply`"
-                            .into(),
-                    ));
-                };
-                return Ok(Header { encoding, elements, body: at + raw.len(), lines: number });
+                if text.len() == first.len() || is_space(text.as_bytes()[first.len()]) => {}
+            "end_header" if line.words.len() == 1 => {
+                return end_header(&line, so_far, at + raw.len());
             }
-            "format" => {
-                let e = match words.get(1).copied() {
-                    Some("ascii") => Encoding::Ascii,
-                    Some("binary_big_endian") => Encoding::BigEndian,
-                    Some("binary_little_endian") => Encoding::LittleEndian,
-                    _ => {
-                        return Err(at_line(
-                            "the format must be `ascii`, `binary_little_endian` or \
-                             `binary_big_endian`"
-                                .into(),
-                        ));
-                    }
-                };
-                let version_ok = words.len() == 3
-                    && words[2].split_once('.').is_some_and(|(a, b)| {
-                        uint(a).is_some_and(|a| a <= u64::from(u16::MAX))
-                            && uint(b).is_some_and(|b| b <= u64::from(u8::MAX))
-                    });
-                if !version_ok {
-                    return Err(at_line(
-                        "the format line ends with a version like 1.0; write `format <encoding> 1.0`"
-                            .into(),
-                    ));
-                }
-                if encoding.is_some_and(|previous| previous != e) {
-                    return Err(at_line(
-                        "a second `format` line contradicts the first; keep one".into(),
-                    ));
-                }
-                encoding = Some(e);
-            }
-            "element" => {
-                let (Some(name), Some(count), 3) = (words.get(1), words.get(2), words.len()) else {
-                    return Err(at_line("write an element as `element <name> <count>`".into()));
-                };
-                if !is_ident(name) {
-                    return Err(at_line(format!(
-                        "`{name}` is not an element name (letters, digits, _ and -)"
-                    )));
-                }
-                let Some(count) = uint(count) else {
-                    return Err(at_line(format!(
-                        "the count `{count}` of element `{name}` is not a whole number below 2^64"
-                    )));
-                };
-                if elements.iter().any(|e| e.name == *name) {
-                    return Err(at_line(format!("element `{name}` is declared twice; keep one")));
-                }
-                elements.push(Element {
-                    name: (*name).to_owned(),
-                    count,
-                    properties: Vec::new(),
-                    line: number,
-                });
-            }
-            "property" => {
-                let kind = match words.get(1).copied() {
-                    Some("list") if words.len() == 5 => {
-                        match (Scalar::parse(words[2]), Scalar::parse(words[3])) {
-                            (Some(Scalar::Float | Scalar::Double), _) => {
-                                return Err(at_line(format!(
-                                    "the count of list `{}` is a {}; a list count is an integer type (uchar, ushort, uint, …)",
-                                    words[4], words[2]
-                                )));
-                            }
-                            (Some(c), Some(t)) => Kind::List(c, t),
-                            _ => return Err(at_line("a list property is `property list <count type> <item type> <name>`, with types like uchar, int or float".into())),
-                        }
-                    }
-                    Some(t) if words.len() == 3 => match Scalar::parse(t) {
-                        Some(s) => Kind::Scalar(s),
-                        None => return Err(at_line(format!("`{t}` is not a PLY type; use char, uchar, short, ushort, int, uint, float or double"))),
-                    },
-                    _ => return Err(at_line("write a property as `property <type> <name>` or `property list <count type> <item type> <name>`".into())),
-                };
-                let name = words[words.len() - 1];
-                if !is_ident(name) {
-                    return Err(at_line(format!(
-                        "`{name}` is not a property name (letters, digits, _ and -)"
-                    )));
-                }
-                let Some(element) = elements.last_mut() else {
-                    return Err(at_line(format!(
-                        "property `{name}` comes before any `element` line; declare the element first"
-                    )));
-                };
-                if element.properties.iter().any(|p| p.name == name) {
-                    return Err(at_line(format!(
-                        "property `{name}` of element `{}` is declared twice; keep one",
-                        element.name
-                    )));
-                }
-                element.properties.push(Property { name: name.to_owned(), kind });
-            }
+            "format" => read_format(&line, &mut so_far)?,
+            "element" => read_element(&line, &mut so_far)?,
+            "property" => read_property(&line, &mut so_far)?,
             "ply" => {
-                return Err(at_line("a second `ply` line inside the header; remove it".into()));
+                return Err(line.error("a second `ply` line inside the header; remove it".into()));
             }
-            _ => {
-                let shown: String = text.chars().take(40).collect();
-                return Err(at_line(format!(
-                    "`{shown}` is not a PLY header line (`format`, `comment`, `obj_info`, \
-                     `element`, `property` or `end_header`)"
-                )));
-            }
+            _ => return Err(unknown_line(&line)),
         }
     }
     Err(SceneError::invalid(

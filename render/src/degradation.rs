@@ -8,8 +8,8 @@
 
 use crate::texture::{LuminancePyramid, level_of_detail};
 use glam::{Vec2, Vec3A};
-use restauro_scene::formats::texture::Texture;
 use restauro_scene::scene_file::DegradationMap;
+use restauro_scene::texture::Texture;
 use restauro_spectral::Spectrum;
 use std::sync::Arc;
 

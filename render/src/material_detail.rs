@@ -10,10 +10,10 @@
 use crate::texture::{Detail, Pyramid, TexturedTriangle, inverse_smooth_spectrum, luminance};
 use crate::vertex_colour::{PaletteBuilder, VertexPalette};
 use glam::{Vec2, Vec3A};
-use restauro_scene::formats::texture::Texture;
 use restauro_scene::load::LoadedScene;
 use restauro_scene::mesh::Mesh;
 use restauro_scene::scene_file::Detail as DetailKind;
+use restauro_scene::texture::Texture;
 use std::collections::BTreeMap;
 use std::sync::Arc;
 

@@ -17,7 +17,7 @@
 
 use crate::vertex_colour::{ColourPoint, VertexPalette};
 use glam::Vec2;
-use restauro_scene::formats::texture::Texture;
+use restauro_scene::texture::Texture;
 use restauro_spectral::Spectrum;
 use restauro_spectral::rgb_space::Transfer;
 use restauro_spectral::rgb_upsampling::{SigmoidPolynomial, fit};
@@ -175,7 +175,7 @@ pub struct LuminancePyramid {
     levels: Vec<Level>,
 }
 
-pub(crate) use restauro_scene::formats::texture::luminance;
+pub(crate) use restauro_scene::texture::luminance;
 
 impl LuminancePyramid {
     pub fn new(texture: &Texture) -> Self {

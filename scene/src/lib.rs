@@ -4,6 +4,7 @@
 pub mod error;
 pub mod mesh;
 pub mod sun;
+pub mod texture;
 
 pub use error::{Result, SceneError};
 pub use mesh::{Bounds, Group, Mesh};

@@ -12,7 +12,7 @@ pub struct Group {
     pub double_sided: bool,
     /// The photo the file lays on the part (glTF `baseColorTexture`): detail over the
     /// spectrum the scene binds it to, unless the scene's material gives its own.
-    pub photo: Option<std::sync::Arc<crate::formats::texture::Texture>>,
+    pub photo: Option<std::sync::Arc<crate::texture::Texture>>,
 }
 
 impl Group {

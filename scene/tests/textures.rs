@@ -3,8 +3,8 @@
 //! untextured parts refused with the file and the fix, textures carried in bundles.
 
 use restauro_scene::bundle::bundle_folder;
-use restauro_scene::formats::texture::Texture;
 use restauro_scene::load::{Limits, LoadedScene, load_folder};
+use restauro_scene::texture::Texture;
 use restauro_scene::{Result, SceneError};
 use std::path::Path;
 
@@ -141,13 +141,9 @@ fn a_bundle_carries_the_photo() {
 fn a_jpeg_decodes_as_an_independent_decoder_reads_it() {
     let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/texture");
     let bytes = std::fs::read(data.join("gradient.jpg")).unwrap();
-    let texture = restauro_scene::formats::texture::decode(
-        &bytes,
-        "jpg",
-        &data.join("gradient.jpg"),
-        1 << 20,
-    )
-    .unwrap();
+    let texture =
+        restauro_scene::texture::decode(&bytes, "jpg", &data.join("gradient.jpg"), 1 << 20)
+            .unwrap();
     assert_eq!((texture.width, texture.height), (16, 8));
     let reference = std::fs::read_to_string(data.join("gradient.txt")).unwrap();
     let (mut worst, mut sum, mut n) = (0i32, 0i32, 0);

@@ -23,9 +23,9 @@
 //! [`vertex_clustering`]).
 
 use crate::vertex_clustering;
-use restauro_scene::formats::texture::{Texture, luminance};
 use restauro_scene::load::LoadedScene;
 use restauro_scene::scene_file::{Detail, Material};
+use restauro_scene::texture::{Texture, luminance};
 use restauro_spectral::rgb_space::Transfer;
 use serde_json::{Value, json};
 use std::collections::BTreeMap;

@@ -13,7 +13,7 @@ use std::collections::{BTreeMap, BTreeSet};
 pub(super) fn check_maps(
     ctx: &mut Ctx,
     limits: &Limits,
-    textures: &mut BTreeMap<String, std::sync::Arc<crate::formats::texture::Texture>>,
+    textures: &mut BTreeMap<String, std::sync::Arc<crate::texture::Texture>>,
 ) -> Result<()> {
     let file = ctx.file;
     let mut names = BTreeSet::new();
@@ -31,7 +31,7 @@ pub(super) fn check_maps(
         }
         let bytes = ctx.assets.read(&m.image, &format!("{place}.image"))?;
         let shown = ctx.assets.display_path(&m.image);
-        let texture = crate::formats::texture::decode(&bytes, &ext, &shown, limits.max_pixels)?;
+        let texture = crate::texture::decode(&bytes, &ext, &shown, limits.max_pixels)?;
         textures.insert(m.image.clone(), std::sync::Arc::new(texture));
         let (u, v) = (DVec3::from_array(m.u), DVec3::from_array(m.v));
         if !(finite3(m.corner) && finite3(m.u) && finite3(m.v)) || u.cross(v).length() < 1e-9 {

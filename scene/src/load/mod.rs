@@ -47,7 +47,7 @@ pub struct LoadedScene {
     /// report a position in the file's coordinates.
     pub origin_m: [f64; 3],
     /// The materials' photo textures, decoded, by their reference in the file.
-    pub textures: BTreeMap<String, std::sync::Arc<crate::formats::texture::Texture>>,
+    pub textures: BTreeMap<String, std::sync::Arc<crate::texture::Texture>>,
     pub camera: ResolvedCamera,
     /// Every named spectrum on the grid.
     pub spectra: BTreeMap<String, Spectrum>,

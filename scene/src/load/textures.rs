@@ -12,9 +12,8 @@ use std::collections::BTreeMap;
 pub(super) fn load_textures(
     ctx: &Ctx,
     limits: &Limits,
-) -> Result<BTreeMap<String, std::sync::Arc<crate::formats::texture::Texture>>> {
-    let mut out: BTreeMap<String, std::sync::Arc<crate::formats::texture::Texture>> =
-        BTreeMap::new();
+) -> Result<BTreeMap<String, std::sync::Arc<crate::texture::Texture>>> {
+    let mut out: BTreeMap<String, std::sync::Arc<crate::texture::Texture>> = BTreeMap::new();
     for (name, m) in &ctx.file.materials {
         let states = [("", m.texture.as_ref(), m.white_patch)].into_iter().chain(
             [("degraded", &m.degraded), ("cleaned", &m.cleaned)].map(|(st, o)| {
@@ -48,7 +47,7 @@ pub(super) fn load_textures(
                 continue;
             }
             let ext = extension(reference);
-            if !crate::formats::texture::EXTENSIONS.contains(&ext.as_str()) {
+            if !crate::texture::EXTENSIONS.contains(&ext.as_str()) {
                 return Err(ctx.invalid(
                     place,
                     format!("`{reference}`: `.{ext}` is not an image restauro reads; use a PNG or JPEG file"),
@@ -56,7 +55,7 @@ pub(super) fn load_textures(
             }
             let bytes = ctx.assets.read(reference, &place)?;
             let shown = ctx.assets.display_path(reference);
-            let texture = crate::formats::texture::decode(&bytes, &ext, &shown, limits.max_pixels)?;
+            let texture = crate::texture::decode(&bytes, &ext, &shown, limits.max_pixels)?;
             check_white_patch(ctx, &at, &texture, patch)?;
             out.insert(reference.clone(), std::sync::Arc::new(texture));
         }
@@ -68,7 +67,7 @@ pub(super) fn load_textures(
 fn check_white_patch(
     ctx: &Ctx,
     at: &str,
-    texture: &crate::formats::texture::Texture,
+    texture: &crate::texture::Texture,
     patch: Option<scene_file::PixelRect>,
 ) -> Result<()> {
     let Some(patch) = patch else { return Ok(()) };

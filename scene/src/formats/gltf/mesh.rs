@@ -13,7 +13,7 @@
 use crate::error::{Result, SceneError};
 use crate::formats::vrml::Viewpoint;
 use crate::guard;
-use crate::load::Limits;
+use crate::limits::Limits;
 use crate::mesh::{Group, Mesh, unit_or_zero};
 use base64::Engine;
 use glam::{DMat3, DMat4, DVec3};

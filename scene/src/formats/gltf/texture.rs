@@ -5,7 +5,7 @@
 
 use crate::error::{Result, SceneError};
 use crate::formats::gltf::mesh::External;
-use crate::formats::texture::{Texture, decode};
+use crate::texture::{Texture, decode};
 use base64::Engine as _;
 use std::collections::HashMap;
 use std::path::Path;

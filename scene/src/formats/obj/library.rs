@@ -10,8 +10,8 @@
 
 use crate::assets::{Assets, extension, sibling, utf8_text};
 use crate::error::{Result, SceneError};
-use crate::formats::texture::{Texture, decode};
 use crate::mesh::Mesh;
+use crate::texture::{Texture, decode};
 use std::collections::HashMap;
 use std::path::Path;
 use std::sync::Arc;

@@ -11,7 +11,7 @@ pub mod library;
 
 use crate::error::{Result, SceneError};
 use crate::guard;
-use crate::load::Limits;
+use crate::limits::Limits;
 use crate::mesh::{Group, Mesh};
 use std::collections::{BTreeSet, HashMap};
 use std::path::Path;

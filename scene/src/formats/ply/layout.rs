@@ -12,7 +12,7 @@
 //! offset, the element and the fix.
 
 use crate::error::{Result, SceneError};
-use crate::load::Limits;
+use crate::limits::Limits;
 use std::path::Path;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

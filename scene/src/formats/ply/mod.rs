@@ -13,7 +13,7 @@ mod layout;
 
 use crate::error::{Result, SceneError};
 use crate::guard;
-use crate::load::Limits;
+use crate::limits::Limits;
 use crate::mesh::{Group, Mesh, unit_or_zero};
 use layout::{Encoding, Header};
 use ply_rs::parser::Parser;

@@ -12,7 +12,7 @@ use super::notes::Notes;
 use super::parser::{Field, Node, Value};
 use super::{MAX_DEPTH, Viewpoint};
 use crate::error::SceneError;
-use crate::load::Limits;
+use crate::limits::Limits;
 use crate::mesh::{Group, Mesh};
 
 /// Turns the parsed nodes into the mesh, instance by instance.

@@ -9,7 +9,7 @@ use super::lexer::Pos;
 use super::parser::{Node, Value};
 use super::primitives;
 use crate::error::SceneError;
-use crate::load::Limits;
+use crate::limits::Limits;
 
 pub(super) const TRIANGLES_FIX: &str = "simplify the model or split it into several files, or \
                                         raise the limit with --max-triangles";

@@ -18,7 +18,7 @@ use super::math::Mat;
 use super::parser::{Node, Parser, Value};
 use super::{InlineFn, Inlined, check_header};
 use crate::error::SceneError;
-use crate::load::Limits;
+use crate::limits::Limits;
 
 /// A file an Inline names, parsed.
 pub(super) struct InlinedFile {

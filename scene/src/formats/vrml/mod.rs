@@ -51,7 +51,7 @@
 use std::path::Path;
 
 use crate::error::SceneError;
-use crate::load::Limits;
+use crate::limits::Limits;
 use crate::mesh::Mesh;
 
 mod builder;
@@ -126,7 +126,7 @@ pub type InlineFn<'a> = dyn Fn(&str, &str) -> crate::Result<Inlined> + Sync + 'a
 pub fn load(path: &Path) -> crate::Result<VrmlScene> {
     let bytes = crate::assets::read_regular_file(
         path,
-        crate::load::Limits::default().max_file_bytes,
+        crate::limits::Limits::default().max_file_bytes,
         crate::assets::MAX_FILE_FIX,
     )?;
     parse(&crate::assets::utf8_text(bytes, path)?, path)

@@ -7,36 +7,9 @@ use restauro_assets::folder::{bundle_folder_archive, folder_tar};
 use restauro_scene::limits::Limits;
 use std::path::{Path, PathBuf};
 
-/// One wall of one material under the sun: the least a scene that loads holds.
-const SCENE: &str = r#"format = 1
-[camera]
-position = [0.0, -10.0, 1.0]
-target = [0.0, 0.0, 1.0]
-width = 32
-height = 24
-
-[spectra]
-travertine = "travertine_tufa_solid__eco_ward73"
-sunlight = { illuminant = "D65" }
-
-[materials.stone]
-model = "lambert"
-reflectance = "travertine"
-
-[[objects]]
-name = "wall"
-mesh = "meshes/wall.obj"
-materials = { stone = "stone" }
-
-[[lights]]
-kind = "sun"
-illuminance_lux = 100000.0
-azimuth_deg = 180.0
-elevation_deg = 50.0
-spectrum = "sunlight"
-"#;
-
-const WALL_OBJ: &str = "v -1 0 0\nv 1 0 0\nv 1 0 2\nv -1 0 2\nusemtl stone\nf 1 2 3 4\n";
+/// The wall fixture: two parts, stone and a glazed joint, under the sun.
+const SCENE: &str = include_str!("../../scene/tests/data/wall/scene.toml");
+const WALL_OBJ: &str = include_str!("../../scene/tests/data/wall/meshes/wall.obj");
 
 /// The scene and its wall written into `dir`; the scene file's path.
 fn write_scene(dir: &Path) -> PathBuf {

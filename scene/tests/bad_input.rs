@@ -448,3 +448,15 @@ fn gltf_references_and_glb_framing_the_gltf_crate_trusts_are_checked() {
     let e = gltf_mesh::parse(&glb, Path::new("arch.glb")).unwrap_err().to_string();
     assert_has(&e, &["arch.glb", "GLB header", "length of 5 bytes", "truncated or damaged"]);
 }
+
+/// The scene model reads a folder and fetches nothing: a file named by URL is refused, naming
+/// the place and the loader that fetches it (restauro-assets), and never reaches the network.
+#[test]
+fn a_url_read_without_a_fetcher_names_the_loader_that_fetches() {
+    let folder = Folder::new();
+    let url = "https://survey.example.org/aosta/facade.obj";
+    let message = refused(&folder, &scene(url, "", SUN));
+    assert!(message.contains("objects[0] (wall).mesh"), "{message}");
+    assert!(message.contains(&format!("`{url}` is a URL")), "{message}");
+    assert!(message.contains("restauro_assets::load_scene"), "{message}");
+}

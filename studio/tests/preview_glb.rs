@@ -6,43 +6,9 @@ use restauro_scene::load::{Limits, LoadedScene, load_folder};
 use restauro_studio::gltf_export::scene_glb;
 use std::path::Path;
 
-/// A wall of two parts, stone and a glazed joint, under the sun.
-const WALL_SCENE: &str = r#"format = 1
-[camera]
-position = [0.0, -10.0, 1.0]
-target = [0.0, 0.0, 1.0]
-width = 64
-height = 48
-
-[spectra]
-travertine = "travertine_tufa_solid__eco_ward73"
-sunlight = { illuminant = "D65" }
-
-[materials.stone]
-model = "lambert"
-reflectance = "travertine"
-
-[materials.glaze]
-model = "cook-torrance"
-reflectance = "travertine"
-roughness = 0.2
-ior = 1.5
-
-[[objects]]
-name = "wall"
-mesh = "meshes/wall.obj"
-materials = { stone = "stone", joint = "glaze" }
-
-[[lights]]
-kind = "sun"
-illuminance_lux = 100000.0
-azimuth_deg = 180.0
-elevation_deg = 50.0
-spectrum = "sunlight"
-"#;
-
-const QUAD_OBJ: &str =
-    "v -1 0 0\nv 1 0 0\nv 1 0 2\nv -1 0 2\nusemtl stone\nf 1 2 3 4\nusemtl joint\nf 1 2 3\n";
+/// The wall fixture: two parts, stone and a glazed joint, under the sun.
+const WALL_SCENE: &str = include_str!("../../scene/tests/data/wall/scene.toml");
+const QUAD_OBJ: &str = include_str!("../../scene/tests/data/wall/meshes/wall.obj");
 
 /// The wall scene with `obj` as its mesh, loaded (the folder is kept while the scene is used).
 fn wall(obj: &str) -> (tempfile::TempDir, LoadedScene) {

@@ -29,14 +29,14 @@
 //! with a D65 white; pixels that see the sky are left out.
 
 use crate::cli::DemoArgs;
-use crate::cluster::{self, Client, LocalCluster};
-use crate::progress::Progress;
-use crate::scene_cmd::write_aosta;
 use crate::sheet::{Grid, Rgb8, colour_bar};
 use anyhow::{Context, Result, anyhow, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use restauro_assets::bundle_scene;
 use restauro_assets::load_scene;
+use restauro_cluster::progress::Progress;
+use restauro_cluster::{self as cluster, Client, LocalCluster};
+use restauro_demo::scene_files::write_aosta;
 use restauro_demo::scenes::photo_block;
 use restauro_demo::scenes::samples::{self, PixelRect, SAMPLES, WHITE_REFLECTANCE};
 use restauro_image::atomic_file;

@@ -1,9 +1,9 @@
 //! `submit`, `watch`, `fetch`, `cancel`, `jobs`, `workers`: a client of a running coordinator.
 
 use crate::cli::{ConnectArgs, FetchArgs, JobArgs, SubmitArgs};
-use crate::cluster::{self, Client, refused};
 use crate::render::{checked_bundle, job_spec};
 use anyhow::{Context, Result, bail};
+use restauro_cluster::{self as cluster, Client, refused};
 use restauro_proto as pb;
 use std::fmt::Write as _;
 use std::path::Path;

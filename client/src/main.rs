@@ -5,7 +5,7 @@ use std::process::ExitCode;
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    restauro::progress::set_mode(cli.progress);
+    restauro_cluster::progress::set_mode(cli.progress);
     let result = match &cli.command {
         Command::Color(args) => restauro::color::run(args),
         Command::Demo(args) => restauro::demo::run(args),
@@ -30,7 +30,7 @@ fn main() -> ExitCode {
         Command::Compare(args) => restauro::compare::run(args),
         Command::Studio(args) => restauro::studio_cmd::run(args),
         Command::Scene(command) => restauro::scene_cmd::run(command),
-        Command::Bench(args) => restauro::bench::run(args),
+        Command::Bench(args) => restauro_bench::run(args).map_err(anyhow::Error::from),
     };
     match result.and_then(|text| Ok(std::io::stdout().lock().write_all(text.as_bytes())?)) {
         Ok(()) => ExitCode::SUCCESS,

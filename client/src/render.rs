@@ -4,11 +4,11 @@
 //! plan and the results written by the same code, so the images are bit-identical.
 
 use crate::cli::{IntegratorArg, RenderArgs};
-use crate::cluster::{self, LocalCluster};
-use crate::progress::Progress;
 use anyhow::{Context, Result};
 use restauro_assets::bundle_scene;
 use restauro_assets::load_scene;
+use restauro_cluster::progress::Progress;
+use restauro_cluster::{self as cluster, LocalCluster};
 use restauro_image::framebuffer::{Framebuffer, TileExtras, TileLayout, encode_tile};
 use restauro_image::image_files::{MAX_PIXELS, read_exr};
 use restauro_image::results::{ResultOptions, write_grid_results, write_results};

@@ -2,8 +2,8 @@
 //! person standing there sees, and to a display.
 
 use crate::cli::{DisplayArgs, DisplayTarget, RetinexArgs};
-use crate::progress::Progress;
 use anyhow::{Context, Result, bail};
+use restauro_cluster::progress::Progress;
 use restauro_image::image_files::{
     MAX_PIXELS, PngPixels, XyzImage, read_exr, write_png, write_xyz_exr,
 };

@@ -1,13 +1,13 @@
 //! `restauro scene aosta | check | bundle`.
 
 use crate::cli::SceneCommand;
-use anyhow::{Context, Result};
+use anyhow::Result;
 use restauro_assets::bundle_scene;
 use restauro_assets::load_scene;
-use restauro_image::atomic_file;
+use restauro_demo::scene_files::write_aosta;
 use restauro_scene::load::{Limits, LoadedScene};
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// A summary of a loaded scene: what a restorer checks before rendering.
 pub fn summary(path: &Path, scene: &LoadedScene) -> String {
@@ -66,47 +66,6 @@ fn parts(scene: &LoadedScene, mesh: &restauro_scene::mesh::Mesh, materials: &[St
         format!("{}→{m}{own}", g.name)
     };
     mesh.groups.iter().zip(materials).enumerate().map(part).collect::<Vec<_>>().join(", ")
-}
-
-/// The files of a generated Aosta scene.
-pub struct AostaFiles {
-    /// `aosta.toml`: a summer afternoon.
-    pub sunny: PathBuf,
-    /// `aosta-overcast.toml`: an overcast day.
-    pub overcast: PathBuf,
-    /// `aosta-clear.toml`: the afternoon's sun under the CIE standard clear sky.
-    pub clear: PathBuf,
-    /// `aosta-floodlit.toml`: a night under floodlights, with a calculation grid.
-    pub floodlit: PathBuf,
-    /// `meshes/facade.obj`, which all of them use.
-    pub mesh: PathBuf,
-}
-
-/// Writes the procedural Aosta facade scene into `out`: `aosta.toml` (a summer afternoon),
-/// `aosta-overcast.toml` (an overcast day) and `meshes/facade.obj`.
-pub fn write_aosta(out: &Path, width: u32, height: u32, seed: u64) -> Result<AostaFiles> {
-    let generated = restauro_demo::scenes::aosta::generate(width, height, seed);
-    let files = AostaFiles {
-        sunny: out.join("aosta.toml"),
-        overcast: out.join("aosta-overcast.toml"),
-        clear: out.join("aosta-clear.toml"),
-        floodlit: out.join("aosta-floodlit.toml"),
-        mesh: out.join("meshes/facade.obj"),
-    };
-    let photometry = restauro_demo::scenes::aosta::PHOTOMETRY
-        .map(|(name, text)| (out.join("photometry").join(name), text.to_owned()));
-    let texts = [
-        (files.mesh.clone(), generated.facade_obj),
-        (files.sunny.clone(), generated.scene_toml),
-        (files.overcast.clone(), generated.overcast_toml),
-        (files.clear.clone(), generated.clear_toml),
-        (files.floodlit.clone(), generated.floodlit_toml),
-    ];
-    for (path, text) in texts.iter().chain(&photometry) {
-        atomic_file::write(path, text.as_bytes())
-            .with_context(|| format!("cannot write {}", path.display()))?;
-    }
-    Ok(files)
 }
 
 pub fn run(command: &SceneCommand) -> Result<String> {

@@ -4,9 +4,9 @@
 //! scene to the same cluster from another terminal.
 
 use crate::cli::StudioArgs;
-use crate::cluster::{self, LocalCluster, runtime};
 use anyhow::{Context, Result};
 use restauro_assets::bundle_scene;
+use restauro_cluster::{self as cluster, LocalCluster, runtime};
 use restauro_scene::job::{JobName, JobSpec};
 use restauro_scene::limits::Limits;
 use restauro_scene::plan::RenderOptions;

@@ -4,7 +4,7 @@
 mod common;
 use common::*;
 
-use restauro::bench::mondrian;
+use restauro_bench::mondrian;
 use restauro_image::image_files::{MAX_PIXELS, XyzImage, read_exr, write_exr, write_xyz_exr};
 use restauro_spectral::appearance::{ChannelSpace, d65_white};
 use std::path::{Path, PathBuf};

@@ -4,4 +4,5 @@
 //! ([`scenes::photo_block`]) and a relief of many triangles ([`scenes::relief`]). Each is written
 //! as a restorer would write it: a scene file with its meshes, spectra and luminaires.
 
+pub mod scene_files;
 pub mod scenes;

@@ -1,21 +1,20 @@
-//! Talking to a coordinator as a client — upload a scene's assets, submit, watch with a progress
-//! bar, fetch the results — and starting an embedded local cluster: a coordinator and workers
-//! as real processes of this same executable, on loopback, that end with this process.
+//! Talking to a coordinator as a client: upload a scene's assets, submit, watch with a progress
+//! bar, fetch the results.
 
+use crate::error::{ClusterError, io_doing, io_error};
 use crate::progress::Progress;
-use anyhow::{Context, Result, anyhow, bail};
 use restauro_image::atomic_file;
 use restauro_proto::pb::render_client::RenderClient;
 use restauro_proto::{self as pb, CHUNK_BYTES, Credentials, PROTOCOL_VERSION};
 use restauro_scene::bundle::Bundle;
-use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 use tonic::service::interceptor::InterceptedService;
 use tonic::transport::Channel;
 
 pub type Client = RenderClient<InterceptedService<Channel, Credentials>>;
+
+type Result<T, E = ClusterError> = std::result::Result<T, E>;
 
 /// A Tokio runtime for a command's network calls.
 pub fn runtime() -> Result<tokio::runtime::Runtime> {
@@ -23,11 +22,11 @@ pub fn runtime() -> Result<tokio::runtime::Runtime> {
         .worker_threads(2)
         .enable_all()
         .build()
-        .context("starting the async runtime")
+        .map_err(io_doing("starting the async runtime"))
 }
 
 /// Explains a refusal of the coordinator in the user's terms.
-pub fn refused(what: &str, status: tonic::Status) -> anyhow::Error {
+pub fn refused(what: &str, status: tonic::Status) -> ClusterError {
     let code = match status.code() {
         tonic::Code::Unauthenticated => "unauthenticated",
         tonic::Code::PermissionDenied => "forbidden",
@@ -38,7 +37,7 @@ pub fn refused(what: &str, status: tonic::Status) -> anyhow::Error {
         tonic::Code::Unavailable => "coordinator unreachable",
         _ => "failed",
     };
-    anyhow!("{what}: {code}: {}", status.message())
+    ClusterError::Refused { what: what.to_owned(), code, message: status.message().to_owned() }
 }
 
 /// A client of a local (plaintext) coordinator.
@@ -54,14 +53,14 @@ pub async fn connect_as(
     tls_ca: Option<&Path>,
     protocol_version: u32,
 ) -> Result<Client> {
-    let credentials =
-        Credentials::new(token, protocol_version).map_err(|e| anyhow!("client token: {e}"))?;
+    let credentials = Credentials::new(token, protocol_version)
+        .map_err(|e| ClusterError::Token(e.to_string()))?;
     let channel =
         restauro_proto::transport::endpoint(url, tls_ca)?.connect().await.map_err(|e| {
-            anyhow!(
-                "connecting to the coordinator at {url}: {}",
-                restauro_proto::transport::error_chain(&e)
-            )
+            ClusterError::Connect {
+                url: url.to_owned(),
+                chain: restauro_proto::transport::error_chain(&e),
+            }
         })?;
     Ok(RenderClient::with_interceptor(channel, credentials).max_decoding_message_size(8 << 20))
 }
@@ -80,9 +79,9 @@ pub async fn upload(client: &mut Client, bundle: &Bundle) -> Result<()> {
             .strip_prefix("blake3:")
             .and_then(|r| r.split_once('.'))
             .map(|(h, _)| h)
-            .ok_or_else(|| anyhow!("bad reference {reference}"))?;
+            .ok_or_else(|| ClusterError::BadReference(reference.clone()))?;
         let data =
-            bundle.files.get(hash).ok_or_else(|| anyhow!("{reference} is not in the bundle"))?;
+            bundle.files.get(hash).ok_or_else(|| ClusterError::NotInBundle(reference.clone()))?;
         let total = data.len() as u64;
         let mut chunks: Vec<pb::Chunk> = data
             .chunks(CHUNK_BYTES)
@@ -204,12 +203,12 @@ pub async fn watch(client: &mut Client, job_id: &str, show: bool) -> Result<pb::
 /// Downloads every result file of a finished job into `out`, each written atomically; the
 /// files travel at once, each written as soon as it has arrived.
 pub async fn fetch(client: &Client, status: &pb::JobStatus, out: &Path) -> Result<Vec<PathBuf>> {
-    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    std::fs::create_dir_all(out).map_err(io_error("creating", out))?;
     let mut downloads = tokio::task::JoinSet::new();
     for (index, name) in status.results.iter().enumerate() {
         // Only a plain file name is accepted from the coordinator: nothing lands outside `out`.
         if name.contains(['/', '\\']) || name.starts_with('.') || name.is_empty() {
-            bail!("the coordinator named a result `{name}`, which is not a plain file name");
+            return Err(ClusterError::ResultName(name.clone()));
         }
         let (mut client, name, path) = (client.clone(), name.clone(), out.join(name));
         let job_id = status.job_id.clone();
@@ -218,8 +217,8 @@ pub async fn fetch(client: &Client, status: &pb::JobStatus, out: &Path) -> Resul
             let written = path.clone();
             tokio::task::spawn_blocking(move || atomic_file::write(&path, &data))
                 .await?
-                .with_context(|| format!("writing {}", written.display()))?;
-            anyhow::Ok((index, written))
+                .map_err(io_error("writing", &written))?;
+            Ok::<_, ClusterError>((index, written))
         });
     }
     let mut written = Vec::new();
@@ -242,10 +241,9 @@ async fn fetch_file(client: &mut Client, job_id: &str, name: &str) -> Result<Vec
     loop {
         let status = match fetch_once(client, job_id, name).await {
             Ok((data, announced)) if data.len() as u64 == announced => return Ok(data),
-            Ok((data, announced)) => bail!(
-                "{what}: the coordinator sent {} of the {announced} bytes it announced",
-                data.len()
-            ),
+            Ok((data, announced)) => {
+                return Err(ClusterError::ShortFile { what, sent: data.len(), announced });
+            }
             Err(status) => status,
         };
         let (waited, patience) = if status.code() == tonic::Code::ResourceExhausted {
@@ -278,162 +276,4 @@ async fn fetch_once(
         data.extend_from_slice(&chunk.data);
     }
     Ok((data, announced))
-}
-
-/// A coordinator and workers started as child processes of this executable, on loopback. They
-/// exit when this process closes their standard input — on drop, or when it dies.
-pub struct LocalCluster {
-    children: Vec<Child>,
-    pub url: String,
-    /// The studio's address, when the coordinator was asked to serve it (`--studio-listen`).
-    pub studio_url: Option<String>,
-    pub client_token: String,
-    /// The file holding `client_token`, for commands run beside the cluster.
-    pub client_token_file: PathBuf,
-    pub worker_token: String,
-    _dir: tempfile::TempDir,
-}
-
-/// A fresh secret: 256 bits from the operating system's random source (UUID v4 draws them).
-fn random_token() -> String {
-    format!("{}{}", uuid::Uuid::new_v4().simple(), uuid::Uuid::new_v4().simple())
-}
-
-impl LocalCluster {
-    /// Starts a coordinator and `workers` workers sharing this machine's cores; their logs go to
-    /// `logs` when given, else into the temporary folder that goes with the cluster.
-    pub fn start(workers: usize, logs: Option<&Path>) -> Result<LocalCluster> {
-        Self::start_with(workers, logs, &[])
-    }
-
-    /// As `start`, with more arguments for the coordinator.
-    pub fn start_with(
-        workers: usize,
-        logs: Option<&Path>,
-        coordinator_args: &[&str],
-    ) -> Result<LocalCluster> {
-        let exe = std::env::current_exe().context("finding this executable")?;
-        let dir = tempfile::Builder::new().prefix("restauro-cluster-").tempdir()?;
-        let client_token = random_token();
-        let worker_token = random_token();
-        let client_file = dir.path().join("client.token");
-        let worker_file = dir.path().join("worker.token");
-        std::fs::write(&client_file, &client_token)?;
-        std::fs::write(&worker_file, &worker_token)?;
-        let log_dir = logs.unwrap_or(dir.path()).to_owned();
-        std::fs::create_dir_all(&log_dir)
-            .with_context(|| format!("creating {}", log_dir.display()))?;
-        let log = |name: &str| -> Result<Stdio> {
-            let path = log_dir.join(format!("{name}.log"));
-            let file = std::fs::File::create(&path)
-                .with_context(|| format!("creating {}", path.display()))?;
-            Ok(Stdio::from(file))
-        };
-        let mut coordinator = Command::new(&exe)
-            .args(["coordinator", "--listen", "127.0.0.1:0", "--exit-with-stdin", "--data"])
-            .arg(dir.path().join("data"))
-            .arg("--client-token-file")
-            .arg(&client_file)
-            .arg("--worker-token-file")
-            .arg(&worker_file)
-            .args(coordinator_args)
-            .env("RUST_LOG", std::env::var("RUST_LOG").unwrap_or_else(|_| "warn".into()))
-            // An operator's setting for one service; here it would put three processes on
-            // one port.
-            .env_remove("RESTAURO_METRICS_LISTEN")
-            .stdin(Stdio::piped())
-            .stdout(Stdio::piped())
-            .stderr(log("coordinator")?)
-            .spawn()
-            .context("starting the embedded coordinator")?;
-        let stdout = coordinator.stdout.take().expect("piped");
-        let mut children = vec![coordinator];
-        let mut stdout = BufReader::new(stdout);
-        let mut line = String::new();
-        stdout.read_line(&mut line).context("reading the coordinator's address")?;
-        let Some(addr) = line.trim().strip_prefix("listening on ") else {
-            let log = std::fs::read_to_string(log_dir.join("coordinator.log")).unwrap_or_default();
-            for c in &mut children {
-                let _ = c.kill();
-            }
-            bail!("the embedded coordinator did not start: {}", log.trim());
-        };
-        let url = format!("http://{addr}");
-        // The studio's address follows when it was asked for (after the metrics', which the
-        // embedded cluster never serves).
-        let mut studio_url = None;
-        if coordinator_args.contains(&"--studio-listen") {
-            let mut line = String::new();
-            stdout.read_line(&mut line).context("reading the studio's address")?;
-            studio_url = line.trim().strip_prefix("studio on ").map(str::to_owned);
-        }
-        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-        let threads = (cores / workers.max(1)).max(1);
-        for i in 0..workers {
-            let child = Command::new(&exe)
-                .args(["worker", "--exit-with-stdin", "--coordinator", &url, "--token-file"])
-                .arg(&worker_file)
-                .args(["--threads", &threads.to_string(), "--name", &format!("local-{}", i + 1)])
-                .arg("--cache")
-                .arg(dir.path().join(format!("cache-{i}")))
-                .env("RUST_LOG", std::env::var("RUST_LOG").unwrap_or_else(|_| "warn".into()))
-                // An operator's setting for one service; here it would put three processes on
-                // one port.
-                .env_remove("RESTAURO_METRICS_LISTEN")
-                .stdin(Stdio::piped())
-                .stdout(Stdio::null())
-                .stderr(log(&format!("worker-{}", i + 1))?)
-                .spawn()
-                .context("starting an embedded worker")?;
-            children.push(child);
-        }
-        Ok(LocalCluster {
-            children,
-            url,
-            studio_url,
-            client_token,
-            client_token_file: client_file,
-            worker_token,
-            _dir: dir,
-        })
-    }
-}
-
-impl LocalCluster {
-    /// The coordinator's process id.
-    pub fn coordinator_pid(&self) -> u32 {
-        self.children[0].id()
-    }
-}
-
-impl Drop for LocalCluster {
-    fn drop(&mut self) {
-        // Closing stdin asks each process to stop: the workers first (they drain and leave while
-        // the coordinator still answers), then the coordinator.
-        let deadline = Instant::now() + Duration::from_secs(10);
-        let (coordinator, workers) = self.children.split_at_mut(1);
-        for child in workers.iter_mut() {
-            drop(child.stdin.take());
-        }
-        for child in workers.iter_mut() {
-            stop_child(child, deadline);
-        }
-        drop(coordinator[0].stdin.take());
-        stop_child(&mut coordinator[0], deadline);
-    }
-}
-
-/// Waits for a child asked to stop; kills it at the deadline.
-fn stop_child(child: &mut Child, deadline: Instant) {
-    loop {
-        match child.try_wait() {
-            Ok(Some(_)) => return,
-            Ok(None) if Instant::now() < deadline => std::thread::sleep(Duration::from_millis(5)),
-            _ => {
-                let _ = child.kill();
-                let _ = child.wait();
-                return;
-            }
-        }
-    }
 }

@@ -9,11 +9,11 @@
 //! tile counted was leased, reported, checked and committed durably (in groups) by the
 //! coordinator.
 
-use crate::bench_tracer::process_cpu_seconds;
-use crate::cli::BenchArgs;
-use crate::cluster::{self, LocalCluster};
-use anyhow::{Context, Result, anyhow, bail};
+use crate::args::BenchArgs;
+use crate::cpu::process_cpu_seconds;
+use crate::error::BenchError;
 use restauro_assets::bundle_scene;
+use restauro_cluster::{self as cluster, LocalCluster};
 use restauro_image::framebuffer::TileLayout;
 use restauro_proto::pb::work_client::WorkClient;
 use restauro_proto::{self as pb, Credentials, PROTOCOL_VERSION};
@@ -51,10 +51,10 @@ struct Counts {
     accepted: AtomicU64,
 }
 
+type Result<T, E = BenchError> = std::result::Result<T, E>;
+
 pub fn bench(args: &BenchArgs) -> Result<String> {
-    let dir = tempfile::Builder::new().prefix("restauro-bench-scheduler-").tempdir()?;
-    let scene =
-        crate::scene_cmd::write_aosta(dir.path(), args.width as u32, args.height as u32, 1)?.sunny;
+    let (_dir, scene) = crate::aosta_scene("restauro-bench-scheduler-", args)?;
     let bundle = bundle_scene(&scene, &Limits::default())?;
     // The tiles' layout: with a sky, each pixel carries its sky coverage too, and with a sun
     // its mask of lights.
@@ -112,11 +112,17 @@ pub fn bench(args: &BenchArgs) -> Result<String> {
         let deadline = Instant::now() + Duration::from_secs(600);
         while counts.accepted.load(Ordering::Relaxed) < total_tiles {
             if Instant::now() > deadline {
-                bail!("the benchmark did not finish in 10 minutes");
+                return Err(BenchError::Stopped(
+                    "the benchmark did not finish in 10 minutes".into(),
+                ));
             }
             match tasks.try_join_next() {
-                Some(Ok(Err(e))) => bail!("a simulated worker failed: {e:#}"),
-                Some(Err(e)) => bail!("a simulated worker stopped: {e}"),
+                Some(Ok(Err(e))) => {
+                    return Err(BenchError::Stopped(format!("a simulated worker failed: {e}")));
+                }
+                Some(Err(e)) => {
+                    return Err(BenchError::Stopped(format!("a simulated worker stopped: {e}")));
+                }
                 _ => {}
             }
             tokio::time::sleep(Duration::from_millis(2)).await;
@@ -129,7 +135,7 @@ pub fn bench(args: &BenchArgs) -> Result<String> {
             r??;
         }
         let accepted = counts.accepted.load(Ordering::Relaxed);
-        anyhow::Ok(SchedulerBench {
+        Ok::<_, BenchError>(SchedulerBench {
             benchmark: "scheduler",
             simulated_workers: workers,
             jobs,
@@ -167,14 +173,16 @@ async fn futures_join_all<T: Send + 'static>(
     Ok(out.into_iter().map(|(_, v)| v).collect())
 }
 
+/// A simulated worker's call that the coordinator refused.
+fn refused(what: &'static str, status: tonic::Status) -> BenchError {
+    BenchError::Refused { what, message: status.message().to_owned() }
+}
+
 /// A simulated worker's own connection, registered.
 async fn register(url: &str, token: &str, index: usize) -> Result<(Worker, pb::WorkerSession)> {
-    let channel = Endpoint::from_shared(url.to_owned())?
-        .tcp_nodelay(true)
-        .connect()
-        .await
-        .context("connecting a simulated worker")?;
-    let credentials = Credentials::new(token, PROTOCOL_VERSION).map_err(|e| anyhow!("{e}"))?;
+    let channel = Endpoint::from_shared(url.to_owned())?.tcp_nodelay(true).connect().await?;
+    let credentials = Credentials::new(token, PROTOCOL_VERSION)
+        .map_err(|e| BenchError::Stopped(e.to_string()))?;
     let mut client = WorkClient::with_interceptor(channel, credentials);
     let reply = client
         .register(pb::RegisterRequest {
@@ -185,8 +193,11 @@ async fn register(url: &str, token: &str, index: usize) -> Result<(Worker, pb::W
             identity: (index as u64).to_le_bytes().repeat(4),
         })
         .await
-        .map_err(|s| anyhow!("registering a simulated worker: {}", s.message()))?;
-    let session = reply.into_inner().session.context("registered without a session")?;
+        .map_err(|s| refused("registering a simulated worker", s))?;
+    let session = reply
+        .into_inner()
+        .session
+        .ok_or_else(|| BenchError::Stopped("registered without a session".into()))?;
     Ok((client, session))
 }
 
@@ -202,10 +213,10 @@ async fn simulated_worker(
         let reply = client
             .pull_leases(pb::PullRequest { session: Some(session.clone()), max: 4, wait_ms: 50 })
             .await
-            .map_err(|s| anyhow!("pulling: {}", s.message()))?
+            .map_err(|s| refused("pulling", s))?
             .into_inner();
         if !reply.known {
-            bail!("the coordinator forgot a simulated worker");
+            return Err(BenchError::Stopped("the coordinator forgot a simulated worker".into()));
         }
         counts.leases.fetch_add(reply.leases.len() as u64, Ordering::Relaxed);
         for lease in reply.leases {
@@ -226,7 +237,7 @@ async fn simulated_worker(
             let reply = client
                 .report_tile(tokio_stream::iter(messages))
                 .await
-                .map_err(|s| anyhow!("reporting: {}", s.message()))?
+                .map_err(|s| refused("reporting", s))?
                 .into_inner();
             if reply.accepted {
                 counts.accepted.fetch_add(1, Ordering::Relaxed);

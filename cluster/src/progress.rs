@@ -13,7 +13,7 @@
 //! one every [`PLAIN_INTERVAL`] (`RESTAURO_PROGRESS_INTERVAL_S` sets another), and one when the
 //! stage ends if any was printed before it.
 
-use anyhow::{Context, Result};
+use crate::error::ClusterError;
 use clap::ValueEnum;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::{IsTerminal, Write};
@@ -130,8 +130,14 @@ impl std::ops::Deref for Progress {
 impl Progress {
     /// A display of `stage` (the bar's message, when it has none), counting `unit` up to
     /// `length`, drawn as a bar with `template` (an indicatif template).
-    pub fn new(stage: &str, unit: &str, length: Option<u64>, template: &str) -> Result<Self> {
-        let style = ProgressStyle::with_template(template).context("progress template")?;
+    pub fn new(
+        stage: &str,
+        unit: &str,
+        length: Option<u64>,
+        template: &str,
+    ) -> Result<Self, ClusterError> {
+        let style =
+            ProgressStyle::with_template(template).map_err(ClusterError::ProgressTemplate)?;
         let target = match mode() {
             ProgressMode::Bar => ProgressDrawTarget::stderr(),
             _ => ProgressDrawTarget::hidden(),

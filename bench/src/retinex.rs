@@ -1,9 +1,8 @@
-//! `restauro bench`: measured speed, printed as JSON. Tests never assert wall-clock times; this
-//! is where the figures in the issues' notes come from.
+//! `restauro bench retinex`: the seen image of a synthetic Mondrian, timed (adapted to the
+//! light, and by the Retinex alone).
 
-use crate::cli::{BenchArgs, BenchTarget};
-use anyhow::Result;
-use restauro_spectral::appearance::ChannelSpace;
+use crate::args::BenchArgs;
+use crate::error::BenchError;
 use restauro_spectral::keyed_random::KeyedRng;
 use restauro_spectral::retinex::{PhaseSeconds, RetinexParams, RetinexStats};
 use restauro_spectral::seen::{Adaptation, SeenParams, seen_image};
@@ -11,7 +10,7 @@ use serde::Serialize;
 use std::time::Instant;
 
 #[derive(Serialize)]
-struct RetinexBench {
+pub(crate) struct RetinexBench {
     benchmark: &'static str,
     /// What the seen image adapts to: `light` (the farm's seen image: the known light, the
     /// paths for lightness) or `retinex` (the paths alone, in CAT02 cones).
@@ -76,25 +75,11 @@ pub fn mondrian(width: usize, height: usize, seed: u64) -> Vec<[f32; 3]> {
     img
 }
 
-pub fn run(args: &BenchArgs) -> Result<String> {
-    match args.target {
-        BenchTarget::Tracer => crate::bench_tracer::bench(args),
-        BenchTarget::Cluster => crate::bench_cluster::bench(args),
-        BenchTarget::Scheduler => crate::bench_scheduler::bench(args),
-        BenchTarget::Mesh => crate::bench_mesh::bench(args),
-        BenchTarget::Retinex => {
-            let mut out = String::new();
-            for adaptation in [Adaptation::Light, Adaptation::Retinex(ChannelSpace::default())] {
-                out += &serde_json::to_string_pretty(&seen_bench(args, adaptation)?)?;
-                out += "\n";
-            }
-            Ok(out)
-        }
-    }
-}
-
 /// Times the seen image of a test card by `adaptation` (`restauro bench retinex`).
-fn seen_bench(args: &BenchArgs, adaptation: Adaptation) -> Result<RetinexBench> {
+pub(crate) fn seen_bench(
+    args: &BenchArgs,
+    adaptation: Adaptation,
+) -> Result<RetinexBench, BenchError> {
     let (w, h) = (args.width, args.height);
     let img = mondrian(w, h, 1);
     let white: Vec<[f32; 4]> = (0..w * h).map(|i| lit(i, w, h)).collect();

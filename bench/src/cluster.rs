@@ -1,16 +1,16 @@
 //! `restauro bench cluster`: the throughput of a render through an embedded local cluster (a
 //! coordinator and two worker processes on loopback) against the same render in one process.
 //!
-//! Both are timed end to end as a user runs them — `restauro render SCENE` and
-//! `restauro render SCENE --in-process` — from reading the scene to the last result file on
-//! disk, Retinex included, alternating so that the machine's drift affects both alike. The
+//! Both are timed end to end as a user runs them, each a process of this executable —
+//! `restauro render SCENE` and `restauro render SCENE --in-process` — from reading the scene to
+//! the last result file on disk, Retinex included, alternating so that the machine's drift affects both alike. The
 //! cluster's figure therefore includes its process start-ups, the upload, each worker's scene
 //! preparation and the results' trip back.
 
-use crate::cli::{BenchArgs, Cli, Command};
-use anyhow::{Context, Result, bail};
-use clap::Parser;
+use crate::args::BenchArgs;
+use crate::error::{BenchError, io_doing};
 use serde::Serialize;
+use std::process::{Command, Stdio};
 use std::time::Instant;
 
 #[derive(Serialize)]
@@ -44,23 +44,29 @@ fn median(v: &[f64]) -> f64 {
     if n % 2 == 1 { s[n / 2] } else { 0.5 * (s[n / 2 - 1] + s[n / 2]) }
 }
 
-/// One `restauro render` with these arguments, timed.
-fn timed_render(args: &[String]) -> Result<f64> {
-    let cli = Cli::try_parse_from(args).context("building the render command")?;
-    let Command::Render(render) = &cli.command else { bail!("not a render command") };
+/// One `restauro render` with these arguments, run as a user runs it (this executable, as a
+/// process of its own), timed.
+fn timed_render(args: &[String]) -> Result<f64, BenchError> {
+    let exe = std::env::current_exe().map_err(io_doing("finding this executable"))?;
     let started = Instant::now();
-    crate::render::run(render)?;
-    Ok(started.elapsed().as_secs_f64())
+    let output = Command::new(exe)
+        .args(args)
+        .stdin(Stdio::null())
+        .output()
+        .map_err(io_doing("running `restauro render`"))?;
+    let seconds = started.elapsed().as_secs_f64();
+    if !output.status.success() {
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        return Err(BenchError::Render(stderr.trim().to_owned()));
+    }
+    Ok(seconds)
 }
 
-pub fn bench(args: &BenchArgs) -> Result<String> {
-    let dir = tempfile::Builder::new().prefix("restauro-bench-cluster-").tempdir()?;
-    let scene =
-        crate::scene_cmd::write_aosta(dir.path(), args.width as u32, args.height as u32, 1)?.sunny;
+pub fn bench(args: &BenchArgs) -> Result<String, BenchError> {
+    let (dir, scene) = crate::aosta_scene("restauro-bench-cluster-", args)?;
     let workers = 2;
     let command = |in_process: bool| -> Vec<String> {
         let mut v: Vec<String> = vec![
-            "restauro".into(),
             "render".into(),
             scene.display().to_string(),
             "--out".into(),
@@ -71,6 +77,8 @@ pub fn bench(args: &BenchArgs) -> Result<String> {
             args.spp.to_string(),
             "--workers".into(),
             workers.to_string(),
+            "--progress".into(),
+            "none".into(),
         ];
         if in_process {
             v.push("--in-process".into());

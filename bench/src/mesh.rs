@@ -5,9 +5,9 @@
 //! prepared scene's own count (what a worker's scene cache charges for it) and the process's
 //! peak resident set while reading and preparing, reset before each size (Linux).
 
-use crate::bench_tracer::timed;
-use crate::cli::BenchArgs;
-use anyhow::{Context, Result};
+use crate::args::BenchArgs;
+use crate::cpu::timed;
+use crate::error::{BenchError, io_doing};
 use restauro_assets::load_scene;
 use restauro_render::prepared::{PreparedScene, Settings};
 use restauro_render::tile::{Rect, render_tile};
@@ -66,28 +66,34 @@ fn reset_peak() {
 
 /// A relief of about `triangles` triangles (2:1, two triangles a quad), written as binary PLY
 /// with its scene into `dir`.
-fn write_relief(dir: &std::path::Path, triangles: usize) -> Result<usize> {
+fn write_relief(dir: &std::path::Path, triangles: usize) -> Result<usize, BenchError> {
     let ny = ((triangles as f64 / 4.0).sqrt().round() as usize).max(1);
     let nx = (triangles / (2 * ny)).max(1);
     let path = dir.join("relief.ply");
-    let mut f = std::io::BufWriter::new(
-        std::fs::File::create(&path).with_context(|| format!("writing {}", path.display()))?,
-    );
-    restauro_demo::scenes::relief::write_ply(&mut f, nx, ny)?;
-    f.flush()?;
-    std::fs::write(dir.join("scene.toml"), restauro_demo::scenes::relief::SCENE_TOML)?;
+    let writing = format!("writing {}", path.display());
+    let mut f = std::io::BufWriter::new(std::fs::File::create(&path).map_err(io_doing(&writing))?);
+    restauro_demo::scenes::relief::write_ply(&mut f, nx, ny).map_err(io_doing(&writing))?;
+    f.flush().map_err(io_doing(&writing))?;
+    std::fs::write(dir.join("scene.toml"), restauro_demo::scenes::relief::SCENE_TOML)
+        .map_err(io_doing("writing the relief's scene.toml"))?;
     Ok(2 * nx * ny)
 }
 
-pub fn bench(args: &BenchArgs) -> Result<String> {
-    let say = |what: String| crate::progress::say(&format!("bench mesh: {what}"));
+pub fn bench(args: &BenchArgs) -> Result<String, BenchError> {
+    let say = |what: String| restauro_cluster::progress::say(&format!("bench mesh: {what}"));
     let (w, h) = (args.width, args.height);
     let mut sizes: Vec<Size> = Vec::new();
     for &asked in &args.triangles {
-        let dir = tempfile::Builder::new().prefix("restauro-bench-mesh-").tempdir()?;
+        let dir = tempfile::Builder::new()
+            .prefix("restauro-bench-mesh-")
+            .tempdir()
+            .map_err(io_doing("creating a temporary folder"))?;
         say(format!("writing a relief of {asked} triangles"));
         let triangles = write_relief(dir.path(), asked)?;
-        let file_mib = std::fs::metadata(dir.path().join("relief.ply"))?.len() as f64 / 1048576.0;
+        let file_mib = std::fs::metadata(dir.path().join("relief.ply"))
+            .map_err(io_doing("reading relief.ply's size"))?
+            .len() as f64
+            / 1048576.0;
         reset_peak();
         let before = resident_bytes();
         say(format!("reading {triangles} triangles"));

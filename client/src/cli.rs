@@ -2,6 +2,7 @@
 //! function the tests call directly.
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use restauro_scene::scene_file::Integrator;
 use restauro_spectral::Observer;
 use restauro_spectral::adaptation::ConeSpace;
 use std::path::PathBuf;
@@ -151,7 +152,7 @@ pub struct RenderArgs {
     pub variants: Vec<String>,
     /// Override the scene's integrator.
     #[arg(long, value_enum)]
-    pub integrator: Option<IntegratorArg>,
+    pub integrator: Option<Integrator>,
     /// Override the scene's samples per pixel.
     #[arg(long)]
     pub spp: Option<u32>,
@@ -198,7 +199,7 @@ pub struct IlluminanceArgs {
     /// Override the scene's integrator: whitted computes the direct light only, path the
     /// inter-reflected light too.
     #[arg(long, value_enum)]
-    pub integrator: Option<IntegratorArg>,
+    pub integrator: Option<Integrator>,
     /// Samples per point (by default the scene's samples per pixel).
     #[arg(long)]
     pub spp: Option<u32>,
@@ -290,12 +291,6 @@ pub struct FetchArgs {
     pub out: PathBuf,
     #[command(flatten)]
     pub connect: ConnectArgs,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum IntegratorArg {
-    Whitted,
-    Path,
 }
 
 #[derive(Debug, Args)]

@@ -3,7 +3,7 @@
 //! `--in-process`, in this process. Either way the scene and options are resolved by the same
 //! plan and the results written by the same code, so the images are bit-identical.
 
-use crate::cli::{IntegratorArg, RenderArgs};
+use crate::cli::RenderArgs;
 use anyhow::{Context, Result};
 use restauro_assets::bundle_scene;
 use restauro_assets::load_scene;
@@ -19,7 +19,6 @@ use restauro_scene::bundle::Bundle;
 use restauro_scene::job::{JobName, JobSpec, RetinexOptions};
 use restauro_scene::load::Limits;
 use restauro_scene::plan::{Plan, RenderOptions};
-use restauro_scene::scene_file::Integrator;
 use restauro_spectral::display::Exposure;
 use restauro_spectral::retinex::RetinexParams;
 use std::fmt::Write as _;
@@ -29,10 +28,7 @@ use std::time::Instant;
 pub fn render_options(args: &RenderArgs) -> RenderOptions {
     RenderOptions {
         variant: args.variant.clone(),
-        integrator: args.integrator.map(|i| match i {
-            IntegratorArg::Whitted => Integrator::Whitted,
-            IntegratorArg::Path => Integrator::Path,
-        }),
+        integrator: args.integrator,
         samples_per_pixel: args.spp,
         width: args.width,
         height: args.height,

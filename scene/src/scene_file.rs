@@ -332,7 +332,10 @@ pub struct ViewpointRef {
     pub name: Option<String>,
 }
 
+/// How light is gathered: the scene file's `render.integrator`, a job's option and, with the
+/// `cli` feature, the command line's `--integrator` value, one type for all three.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum Integrator {
     /// Direct light with shadows plus specular reflection: the paper's method.

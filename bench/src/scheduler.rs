@@ -19,6 +19,7 @@ use restauro_proto::pb::work_client::WorkClient;
 use restauro_proto::{self as pb, Credentials, PROTOCOL_VERSION};
 use restauro_scene::load::Limits;
 use serde::Serialize;
+use std::num::NonZeroU32;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::{Duration, Instant};
@@ -91,8 +92,8 @@ pub fn bench(args: &BenchArgs) -> Result<String> {
             let spec = restauro_scene::job::JobSpec {
                 name: restauro_scene::job::JobName::new(&format!("bench-{j}"))?,
                 render: restauro_scene::plan::RenderOptions {
-                    tile: Some(tile),
-                    samples_per_pixel: Some(1),
+                    tile: NonZeroU32::new(tile),
+                    samples_per_pixel: Some(NonZeroU32::MIN),
                     ..Default::default()
                 },
                 ..Default::default()

@@ -5,6 +5,7 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use restauro_scene::scene_file::Integrator;
 use restauro_spectral::Observer;
 use restauro_spectral::adaptation::ConeSpace;
+use std::num::NonZeroU32;
 use std::path::PathBuf;
 
 #[derive(Debug, Parser)]
@@ -154,20 +155,20 @@ pub struct RenderArgs {
     #[arg(long, value_enum)]
     pub integrator: Option<Integrator>,
     /// Override the scene's samples per pixel.
-    #[arg(long)]
-    pub spp: Option<u32>,
+    #[arg(long, value_parser = option_count)]
+    pub spp: Option<NonZeroU32>,
     /// Override the image width (pixels).
-    #[arg(long)]
-    pub width: Option<u32>,
+    #[arg(long, value_parser = option_count)]
+    pub width: Option<NonZeroU32>,
     /// Override the image height (pixels).
-    #[arg(long)]
-    pub height: Option<u32>,
+    #[arg(long, value_parser = option_count)]
+    pub height: Option<NonZeroU32>,
     /// Also write the 81-band spectral radiance into the EXR.
     #[arg(long)]
     pub spectral: bool,
     /// Tile edge in pixels (by default chosen so every worker gets several tiles).
-    #[arg(long)]
-    pub tile: Option<u32>,
+    #[arg(long, value_parser = option_count)]
+    pub tile: Option<NonZeroU32>,
     /// The PNG's exposure: auto[:KEY], absolute:<cd/m²> or relative.
     #[arg(long, default_value = "auto")]
     pub exposure: String,
@@ -201,8 +202,8 @@ pub struct IlluminanceArgs {
     #[arg(long, value_enum)]
     pub integrator: Option<Integrator>,
     /// Samples per point (by default the scene's samples per pixel).
-    #[arg(long)]
-    pub spp: Option<u32>,
+    #[arg(long, value_parser = option_count)]
+    pub spp: Option<NonZeroU32>,
     /// Print the JSON document (schema restauro.illuminance/1) instead of a summary.
     #[arg(long)]
     pub json: bool,
@@ -549,6 +550,13 @@ impl AdaptArg {
             AdaptArg::None => None,
         }
     }
+}
+
+/// A count a render option gives (`--spp`, `--width`, `--height`, `--tile`), checked here where
+/// it enters: a zero is refused as the wire and the studio refuse it.
+fn option_count(s: &str) -> Result<NonZeroU32, String> {
+    let value: u32 = s.parse().map_err(|e| format!("`{s}`: {e}"))?;
+    restauro_scene::job::option_count("", value).map_err(|e| e.problem)
 }
 
 fn parse_bits(s: &str) -> Result<u8, String> {

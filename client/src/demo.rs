@@ -55,6 +55,7 @@ use restauro_spectral::rgb_space::RgbSpace;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
+use std::num::NonZeroU32;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -474,7 +475,7 @@ async fn render_all(
             priority: (jobs.len() - index) as i32,
             render: RenderOptions {
                 variant: job.kind.variant(),
-                samples_per_pixel: Some(job.spp),
+                samples_per_pixel: NonZeroU32::new(job.spp),
                 grids: matches!(job.kind, Kind::Grid),
                 ..RenderOptions::default()
             },

@@ -92,8 +92,8 @@ fn render_writes_exr_with_spectral_layers_and_png() {
         err.contains("unknown variant `polished`; the scene defines as-found, cleaned"),
         "{err}"
     );
-    let err = refused(&["render", s, "--out", r, "--spp", "0"]);
-    assert!(err.contains("--spp: 0; use at least 1"), "{err}");
+    let err = refused_usage(&["render", s, "--out", r, "--spp", "0"]);
+    assert!(err.contains("'--spp <SPP>': 0; use at least 1"), "{err}");
 }
 
 /// `scene bundle --out FILE.tar` writes one file to share; `scene check` and `render` take it as

@@ -13,11 +13,12 @@
 //! | `pb::Rect` | `restauro_scene::plan::Rect` |
 
 use crate::pb;
-use restauro_scene::job::{JobName, JobSpec, JobSpecError, RetinexOptions};
+use restauro_scene::job::{JobName, JobSpec, JobSpecError, RetinexOptions, option_count};
 use restauro_scene::limits::Limits;
 use restauro_scene::plan::{Plan, Rect, RenderOptions};
 use restauro_scene::scene_file::Integrator;
 use restauro_spectral::display::Exposure;
+use std::num::NonZeroU32;
 
 /// A wire message the domain cannot hold: the field and what is wrong with it.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
@@ -66,14 +67,15 @@ impl From<Option<Integrator>> for pb::Integrator {
 impl TryFrom<pb::RenderOptions> for RenderOptions {
     type Error = WireError;
     fn try_from(o: pb::RenderOptions) -> Result<Self, WireError> {
+        let count = |field, value: Option<u32>| value.map(|v| option_count(field, v)).transpose();
         Ok(RenderOptions {
             integrator: integrator_from_wire(o.integrator, "render.integrator")?,
             variant: o.variant,
-            samples_per_pixel: o.samples_per_pixel,
-            width: o.width,
-            height: o.height,
+            samples_per_pixel: count("render.samples_per_pixel", o.samples_per_pixel)?,
+            width: count("render.width", o.width)?,
+            height: count("render.height", o.height)?,
             spectral: o.spectral,
-            tile: o.tile,
+            tile: count("render.tile", o.tile)?,
             grids: o.grids,
         })
     }
@@ -84,11 +86,11 @@ impl From<&RenderOptions> for pb::RenderOptions {
         pb::RenderOptions {
             variant: o.variant.clone(),
             integrator: pb::Integrator::from(o.integrator) as i32,
-            samples_per_pixel: o.samples_per_pixel,
-            width: o.width,
-            height: o.height,
+            samples_per_pixel: o.samples_per_pixel.map(NonZeroU32::get),
+            width: o.width.map(NonZeroU32::get),
+            height: o.height.map(NonZeroU32::get),
             spectral: o.spectral,
-            tile: o.tile,
+            tile: o.tile.map(NonZeroU32::get),
             grids: o.grids,
         }
     }
@@ -269,11 +271,11 @@ mod tests {
             render: RenderOptions {
                 variant: Some("cleaned".into()),
                 integrator: Some(Integrator::Path),
-                samples_per_pixel: Some(9),
-                width: Some(320),
+                samples_per_pixel: NonZeroU32::new(9),
+                width: NonZeroU32::new(320),
                 height: None,
                 spectral: true,
-                tile: Some(32),
+                tile: NonZeroU32::new(32),
                 grids: true,
             },
             exposure: Exposure::Absolute { white_cd_m2: 120.0 },
@@ -300,9 +302,18 @@ mod tests {
         r.exposure =
             Some(pb::Exposure { mode: Some(pb::exposure::Mode::AbsoluteWhiteCdM2(f64::NAN)) });
         assert_eq!(field(r), "exposure");
-        let mut r = ok;
-        r.render.as_mut().unwrap().tile = Some(0);
-        assert_eq!(field(r), "render.tile");
+        type Zero = fn(&mut pb::RenderOptions);
+        let zeroes: [(&str, Zero); 4] = [
+            ("render.samples_per_pixel", |o| o.samples_per_pixel = Some(0)),
+            ("render.width", |o| o.width = Some(0)),
+            ("render.height", |o| o.height = Some(0)),
+            ("render.tile", |o| o.tile = Some(0)),
+        ];
+        for (name, zero) in zeroes {
+            let mut r = ok.clone();
+            zero(r.render.as_mut().unwrap());
+            assert_eq!(field(r), name);
+        }
     }
 
     #[test]

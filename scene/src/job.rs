@@ -11,6 +11,7 @@ use restauro_spectral::display::Exposure;
 use restauro_spectral::retinex::MAX_PATHS;
 use serde::{Deserialize, Serialize};
 use std::fmt;
+use std::num::NonZeroU32;
 
 /// A job's field that cannot be used, and what to do instead.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
@@ -22,6 +23,14 @@ pub struct JobSpecError {
 
 fn refuse(field: &'static str, problem: impl Into<String>) -> JobSpecError {
     JobSpecError { field, problem: problem.into() }
+}
+
+/// A count a render option gives (samples per pixel, a size, a tile edge) as the checked value
+/// [`RenderOptions`] holds: a zero is refused, naming `field`. Each edge where an option enters
+/// (the wire, the studio's request, the command line) calls it once.
+pub fn option_count(field: &'static str, value: u32) -> Result<NonZeroU32, JobSpecError> {
+    NonZeroU32::new(value)
+        .ok_or_else(|| refuse(field, "0; use at least 1, or leave it out for the scene's"))
 }
 
 /// A job's name, as lists show it and as its result files are called: at most
@@ -157,16 +166,6 @@ impl JobSpec {
         if self.render.variant.as_deref().is_some_and(str::is_empty) {
             return Err(refuse("render.variant", "an empty variant name; leave it out instead"));
         }
-        for (field, value) in [
-            ("render.samples_per_pixel", self.render.samples_per_pixel),
-            ("render.width", self.render.width),
-            ("render.height", self.render.height),
-            ("render.tile", self.render.tile),
-        ] {
-            if value == Some(0) {
-                return Err(refuse(field, "0; use at least 1, or leave it out for the scene's"));
-            }
-        }
         Ok(self)
     }
 }
@@ -216,10 +215,16 @@ mod tests {
         assert!(spec(Exposure::Absolute { white_cd_m2: 0.0 }).is_err());
         assert!(spec(Exposure::Absolute { white_cd_m2: f64::INFINITY }).is_err());
         assert!(spec(Exposure::Relative).is_ok());
-        let zero = JobSpec {
-            render: RenderOptions { samples_per_pixel: Some(0), ..RenderOptions::default() },
-            ..JobSpec::default()
-        };
-        assert_eq!(zero.checked().unwrap_err().field, "render.samples_per_pixel");
+        let zero = option_count("render.samples_per_pixel", 0).unwrap_err();
+        assert_eq!(zero.field, "render.samples_per_pixel");
+        assert!(zero.problem.contains("use at least 1"), "{zero}");
+        assert_eq!(option_count("render.tile", 16).unwrap().get(), 16);
+        // A stored job's options are read back as the same checked values: a zero is refused.
+        let stored = r#"{"variant":null,"integrator":null,"samples_per_pixel":0,"width":null,
+            "height":null,"spectral":false,"tile":null}"#;
+        assert!(serde_json::from_str::<RenderOptions>(stored).is_err());
+        let stored = stored.replace("\"samples_per_pixel\":0", "\"samples_per_pixel\":4");
+        let options: RenderOptions = serde_json::from_str(&stored).unwrap();
+        assert_eq!(options.samples_per_pixel.map(NonZeroU32::get), Some(4));
     }
 }

@@ -7,6 +7,7 @@ use crate::error::{Result, SceneError};
 use crate::load::{Limits, LoadedScene};
 use crate::scene_file::Integrator;
 use serde::{Deserialize, Serialize};
+use std::num::NonZeroU32;
 use std::path::Path;
 
 /// A rectangle of pixels, from the top-left corner of the image.
@@ -18,18 +19,20 @@ pub struct Rect {
     pub height: u32,
 }
 
-/// What a render may change of the scene's own settings; `None` keeps the scene's.
+/// What a render may change of the scene's own settings; `None` keeps the scene's. The counts
+/// cannot be zero: each edge that makes one (the command line, the wire, the studio's request)
+/// refuses a zero there, naming its own field, so that past it they are checked values.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct RenderOptions {
     pub variant: Option<String>,
     pub integrator: Option<Integrator>,
-    pub samples_per_pixel: Option<u32>,
-    pub width: Option<u32>,
-    pub height: Option<u32>,
+    pub samples_per_pixel: Option<NonZeroU32>,
+    pub width: Option<NonZeroU32>,
+    pub height: Option<NonZeroU32>,
     /// Keep the 81-band spectral radiance of every pixel.
     pub spectral: bool,
     /// The tile edge in pixels; `None` chooses one (see [`auto_tile`]).
-    pub tile: Option<u32>,
+    pub tile: Option<NonZeroU32>,
     /// Compute the illuminance at the scene's calculation grids instead of the camera's image
     /// (see [`Plan::grids`]). Absent in jobs stored before grids existed.
     #[serde(default)]
@@ -40,7 +43,12 @@ impl RenderOptions {
     /// The quick render a scene opened in the studio gets first (160 × 90 px, 1 sample per
     /// pixel), so that the studio holds it and shows it at once.
     pub fn quick_preview() -> Self {
-        Self { samples_per_pixel: Some(1), width: Some(160), height: Some(90), ..Self::default() }
+        Self {
+            samples_per_pixel: Some(NonZeroU32::MIN),
+            width: NonZeroU32::new(160),
+            height: NonZeroU32::new(90),
+            ..Self::default()
+        }
     }
 }
 
@@ -164,8 +172,8 @@ impl Plan {
             (u32::try_from(points).unwrap_or(u32::MAX), SENSOR_ROWS)
         } else {
             (
-                options.width.unwrap_or(scene.camera.width),
-                options.height.unwrap_or(scene.camera.height),
+                options.width.map_or(scene.camera.width, NonZeroU32::get),
+                options.height.map_or(scene.camera.height, NonZeroU32::get),
             )
         };
         let plan = Plan {
@@ -173,7 +181,9 @@ impl Plan {
             height,
             variant: options.variant.clone(),
             integrator: options.integrator.unwrap_or(render.integrator),
-            samples_per_pixel: options.samples_per_pixel.unwrap_or(render.samples_per_pixel),
+            samples_per_pixel: options
+                .samples_per_pixel
+                .map_or(render.samples_per_pixel, NonZeroU32::get),
             max_depth: render.max_depth,
             seed: render.seed,
             spectral: options.spectral,
@@ -192,7 +202,7 @@ impl Plan {
                     .iter()
                     .any(|l| !matches!(l, crate::load::ResolvedLight::Sky { .. })),
             white: !options.grids,
-            tile: options.tile.unwrap_or_else(|| match options.grids {
+            tile: options.tile.map(NonZeroU32::get).unwrap_or_else(|| match options.grids {
                 // A strip two sensors high: about 48 tiles along it.
                 true => width.div_ceil(48).next_multiple_of(16).clamp(16, 4096),
                 false => auto_tile(width, height),

@@ -8,7 +8,7 @@ use restauro_farm::error::{CoordinatorError, Result};
 use restauro_farm::farm::Farm;
 use restauro_farm::job::JobStatus;
 use restauro_scene::bundle::Bundle;
-use restauro_scene::job::{JobName, JobSpec};
+use restauro_scene::job::{JobName, JobSpec, option_count};
 use restauro_scene::plan::RenderOptions;
 use restauro_scene::scene_file::Integrator;
 use serde::Deserialize;
@@ -81,14 +81,15 @@ pub async fn take(
         Some(v) => format!("{stem}-{v}"),
         None => stem,
     });
+    let count = |field, value| option_count(field, value).map_err(|e| refuse(e.field, e.problem));
     let spec = JobSpec {
         name: JobName::new(&name).map_err(|e| refuse("name", e.problem))?,
         render: RenderOptions {
             variant: request.variant,
             integrator: Some(integrator),
-            samples_per_pixel: Some(request.samples_per_pixel),
-            width: Some(request.width),
-            height: Some(request.height),
+            samples_per_pixel: Some(count("render.samples_per_pixel", request.samples_per_pixel)?),
+            width: Some(count("render.width", request.width)?),
+            height: Some(count("render.height", request.height)?),
             spectral: false,
             tile: None,
             grids: false,

@@ -11,6 +11,7 @@ use restauro_scene::bundle::Bundle;
 use restauro_scene::job::JobSpec;
 use restauro_scene::limits::Limits;
 use restauro_scene::plan::Rect;
+use std::num::NonZeroU32;
 use std::path::Path;
 use std::time::Duration;
 use tonic::service::interceptor::InterceptedService;
@@ -72,8 +73,8 @@ pub fn spec(name: &str, tile: u32, spp: u32) -> JobSpec {
     JobSpec {
         name: restauro_scene::job::JobName::new(name).unwrap(),
         render: restauro_scene::plan::RenderOptions {
-            samples_per_pixel: Some(spp),
-            tile: Some(tile),
+            samples_per_pixel: NonZeroU32::new(spp),
+            tile: NonZeroU32::new(tile),
             ..Default::default()
         },
         ..JobSpec::default()

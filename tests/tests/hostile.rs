@@ -9,6 +9,7 @@ use restauro_scene::job::JobSpec;
 use restauro_scene::plan::{Rect, RenderOptions};
 use restauro_tests::wire::{self, is_final, spec};
 use restauro_tests::{Coordinator, Worker, restauro, text};
+use std::num::NonZeroU32;
 use std::path::Path;
 use std::time::Duration;
 use tonic::Code;
@@ -204,9 +205,9 @@ async fn jobs_of_too_many_tiles_are_refused_without_harm() {
         wire::farm(d, 32, 16, &["--max-pixels", "300000000"]).await;
     let huge = |size: u32, tile: u32| JobSpec {
         render: RenderOptions {
-            width: Some(size),
-            height: Some(size),
-            tile: Some(tile),
+            width: NonZeroU32::new(size),
+            height: NonZeroU32::new(size),
+            tile: NonZeroU32::new(tile),
             ..RenderOptions::default()
         },
         ..spec("huge", tile, 1)

@@ -8,6 +8,7 @@ use restauro_scene::plan::{Rect, RenderOptions};
 use restauro_scene::scene_file::Integrator;
 use restauro_tests::wire::{self, is_final, spec};
 use restauro_tests::{Coordinator, Worker, http_get, sample, signal, wait_for};
+use std::num::NonZeroU32;
 use std::path::Path;
 use std::time::Duration;
 
@@ -119,8 +120,8 @@ async fn workers_render_within_the_coordinators_limits() {
     let over_default = JobSpec {
         render: RenderOptions {
             integrator: Some(Integrator::Whitted),
-            width: Some(2),
-            height: Some(1),
+            width: NonZeroU32::new(2),
+            height: NonZeroU32::new(1),
             ..spec("many-samples", 8, 70_000).render
         },
         ..spec("many-samples", 8, 70_000)

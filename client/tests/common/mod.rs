@@ -24,3 +24,15 @@ pub fn refused(args: &[&str]) -> String {
     assert!(!err.contains("panicked"), "{err}");
     err
 }
+
+/// A value the command line itself refuses, before anything runs: exit status 2 (a usage
+/// error), nothing on stdout, clap's `error:` naming the flag on stderr.
+pub fn refused_usage(args: &[&str]) -> String {
+    let out = restauro(args);
+    assert_eq!(out.status.code(), Some(2), "{args:?} should be a usage error");
+    assert!(out.stdout.is_empty());
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert!(err.starts_with("error: "), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    err
+}

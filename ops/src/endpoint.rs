@@ -26,8 +26,13 @@ pub trait Probe: Send + Sync + 'static {
     /// The registry to encode.
     fn registry(&self) -> &Registry;
     /// `Ok` when ready for work, else why not.
-    fn ready(&self) -> Result<(), String>;
+    fn ready(&self) -> Result<(), NotReady>;
 }
+
+/// Why a process is not ready for work, in words; `/readyz` answers `not ready: <why>`.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct NotReady(pub String);
 
 /// The registry in the Prometheus text format.
 pub fn encode_registry(registry: &Registry) -> String {
@@ -112,7 +117,7 @@ mod tests {
             &self.0
         }
 
-        fn ready(&self) -> Result<(), String> {
+        fn ready(&self) -> Result<(), NotReady> {
             Ok(())
         }
     }

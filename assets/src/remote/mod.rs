@@ -188,7 +188,7 @@ impl Remote {
     /// `place` says where the scene names it, for messages.
     pub fn read(&self, url: &str, place: &str, max_bytes: u64) -> Result<Vec<u8>> {
         let invalid = |problem: String| SceneError::invalid(&self.scene_file, place, problem);
-        let parsed = WebUrl::parse(url).map_err(invalid)?;
+        let parsed = WebUrl::parse(url).map_err(|e| invalid(e.to_string()))?;
         let (config, tls) = self.ready().map_err(|e| invalid(format!("{url}: {e}")))?;
         let bounds = http::Bounds {
             max_bytes,

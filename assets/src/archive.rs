@@ -11,9 +11,10 @@
 //! within the file-size limit, no name twice, every file the scene names present and hashing to
 //! its name, nothing else, and the identity the one its contents give.
 
+use crate::error::{AssetsError, Result};
+use restauro_scene::SceneError;
 use restauro_scene::bundle::Bundle;
 use restauro_scene::limits::Limits;
-use restauro_scene::{Result, SceneError};
 use std::collections::BTreeMap;
 use std::io::Read;
 use std::path::Path;
@@ -62,14 +63,14 @@ pub fn write_archive(bundle: &Bundle, path: &Path) -> Result<()> {
     std::fs::write(&temporary, &bytes).map_err(|e| SceneError::io(&temporary, e))?;
     std::fs::rename(&temporary, path).map_err(|e| {
         let _ = std::fs::remove_file(&temporary);
-        SceneError::io(path, e)
+        SceneError::io(path, e).into()
     })
 }
 
 /// Reads the archive at `path` back into the bundle it holds (see the module comment for what
 /// is checked).
 pub fn read_archive(path: &Path, limits: &Limits) -> Result<Bundle> {
-    let refuse = |problem: String| SceneError::invalid(path, "archive", problem);
+    let refuse = |problem: String| AssetsError::Archive { path: path.to_owned(), problem };
     let most = limits.max_file_bytes.saturating_mul(ARCHIVE_FILES);
     let bytes = restauro_scene::assets::read_regular_file(
         path,

@@ -4,8 +4,9 @@
 //! the image the bundle renders to: reading the folder back gives the same canonical scene, and
 //! so the same identity (TOML writes each number in the shortest form that reads back exactly).
 
+use crate::error::{AssetsError, Result, SENT};
+use restauro_scene::SceneError;
 use restauro_scene::bundle::Bundle;
-use restauro_scene::{Result, SceneError};
 use std::path::Path;
 
 /// The folder's scene file.
@@ -13,7 +14,7 @@ pub const SCENE_FILE: &str = "scene.toml";
 
 /// `bundle` as a tar of the folder `name/`, with `comment` (lines without `#`) atop the TOML.
 pub fn folder_tar(bundle: &Bundle, name: &str, comment: &str) -> Result<Vec<u8>> {
-    let refuse = |problem: String| SceneError::invalid(Path::new(name), "scene folder", problem);
+    let refuse = |problem: String| AssetsError::FolderTar { name: name.to_owned(), problem };
     let mut scene = bundle.scene.clone();
     let mut files = Vec::new();
     for reference in Bundle::references_mut(&mut scene) {
@@ -44,7 +45,7 @@ pub fn folder_tar(bundle: &Bundle, name: &str, comment: &str) -> Result<Vec<u8>>
     for (path, bytes) in files {
         add(&path, bytes).map_err(io)?;
     }
-    builder.into_inner().map_err(io)
+    Ok(builder.into_inner().map_err(io)?)
 }
 
 /// The most files a scene folder sent as a tar may hold.
@@ -93,11 +94,8 @@ pub fn bundle_folder_archive(
     bundle_unpacked(dir.path(), &names, scene, limits)
 }
 
-/// Where the upload is named in messages.
-const SENT: &str = "the folder sent";
-
-fn refuse(problem: String) -> SceneError {
-    SceneError::invalid(Path::new(SENT), "folder", problem)
+fn refuse(problem: String) -> AssetsError {
+    AssetsError::Folder { problem }
 }
 
 /// The entries of a tar sent, each checked against the limits.

@@ -5,13 +5,14 @@
 //!
 //! The scene model (restauro-scene) reads every file through its `Assets` trait and knows no
 //! network, so that it and the tracer build without tokio, hyper or rustls; this crate gives a
-//! folder its fetcher.
+//! folder its fetcher. Its errors are [`AssetsError`]s: the scene model's, or its own.
 
 pub mod archive;
+pub mod error;
 pub mod folder;
 pub mod remote;
 
-use restauro_scene::Result;
+pub use error::{AssetsError, Result};
 use restauro_scene::assets::FolderAssets;
 use restauro_scene::bundle::{Bundle, bundle_files};
 use restauro_scene::limits::Limits;
@@ -30,11 +31,11 @@ pub fn folder_assets(path: &Path, scene: &SceneFile, limits: &Limits) -> Result<
 /// URL), or a bundle archive.
 pub fn load_scene(path: &Path, limits: &Limits) -> Result<LoadedScene> {
     if archive::is_archive(path) {
-        return archive::read_archive(path, limits)?.load(limits);
+        return Ok(archive::read_archive(path, limits)?.load(limits)?);
     }
     let file = read_scene_file(path, limits)?;
     let assets = folder_assets(path, &file, limits)?;
-    load(file, &assets, limits)
+    Ok(load(file, &assets, limits)?)
 }
 
 /// Bundle the scene file at `path` and everything it refers to (or read the bundle an archive
@@ -45,5 +46,5 @@ pub fn bundle_scene(path: &Path, limits: &Limits) -> Result<Bundle> {
     }
     let scene = read_scene_file(path, limits)?;
     let assets = folder_assets(path, &scene, limits)?;
-    bundle_files(scene, &assets, limits)
+    Ok(bundle_files(scene, &assets, limits)?)
 }

@@ -5,10 +5,10 @@
 //! cache keeps within its bound; and a scene whose files come from the web bundles to the same
 //! identity as the same scene with the files in its folder.
 
+use restauro_assets::AssetsError;
 use restauro_assets::bundle_scene;
 use restauro_assets::remote::cache::Cache;
 use restauro_assets::remote::{Remote, RemoteConfig};
-use restauro_scene::SceneError;
 use restauro_scene::assets::{Assets, FolderAssets};
 use restauro_scene::bundle::bundle_files;
 use restauro_scene::load::{Limits, read_scene_file};
@@ -216,7 +216,7 @@ fn folder(
     max_bytes: u64,
     pins: &BTreeMap<String, Pin>,
     config: RemoteConfig,
-) -> Result<FolderAssets, SceneError> {
+) -> Result<FolderAssets, AssetsError> {
     let remote = Remote::new(scene, pins)?.with_config(config);
     Ok(FolderAssets::new(scene, max_bytes)?.with_fetch(Box::new(remote)))
 }

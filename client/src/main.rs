@@ -23,7 +23,7 @@ fn main() -> ExitCode {
         }
         Command::Worker(args) => {
             restauro_ops::logging::init();
-            restauro_worker::process::run(args).map(|()| String::new())
+            restauro_worker::process::run(args).map(|()| String::new()).map_err(Into::into)
         }
         Command::Retinex(args) => restauro::retinex::run(args),
         Command::Display(args) => restauro::retinex::run_display(args),

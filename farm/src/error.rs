@@ -123,6 +123,14 @@ pub enum CoordinatorError {
 
 pub type Result<T, E = CoordinatorError> = std::result::Result<T, E>;
 
+/// A scene folder or bundle the assets crate refuses: a scene error as the scene model words it
+/// (an asset refusal is worded as an invalid file), mapped to a status as any scene error is.
+impl From<restauro_assets::AssetsError> for CoordinatorError {
+    fn from(e: restauro_assets::AssetsError) -> Self {
+        CoordinatorError::Scene(e.into_scene_error())
+    }
+}
+
 /// A blocking task that panicked or was cancelled: the coordinator's own fault, said as such.
 impl From<tokio::task::JoinError> for CoordinatorError {
     fn from(e: tokio::task::JoinError) -> Self {

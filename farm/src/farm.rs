@@ -1063,8 +1063,8 @@ impl restauro_ops::endpoint::Probe for Farm {
     }
 
     /// Not ready while the store cannot be written: new work would only fail.
-    fn ready(&self) -> std::result::Result<(), String> {
-        self.store.problem().map_or(Ok(()), Err)
+    fn ready(&self) -> std::result::Result<(), restauro_ops::endpoint::NotReady> {
+        self.store.problem().map_or(Ok(()), |why| Err(restauro_ops::endpoint::NotReady(why)))
     }
 }
 

@@ -4,8 +4,8 @@
 //! coordinator, a coordinator whose store is open).
 
 use crate::connections::{ConnectionLimits, GuardedListener};
+use crate::error::{OpsError, Result};
 use crate::metrics_access::Access;
-use anyhow::{Context, Result};
 use axum::Router;
 use axum::extract::State;
 use axum::http::{HeaderMap, StatusCode, header};
@@ -26,8 +26,13 @@ pub trait Probe: Send + Sync + 'static {
     /// The registry to encode.
     fn registry(&self) -> &Registry;
     /// `Ok` when ready for work, else why not.
-    fn ready(&self) -> Result<(), String>;
+    fn ready(&self) -> Result<(), NotReady>;
 }
+
+/// Why a process is not ready for work, in words; `/readyz` answers `not ready: <why>`.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct NotReady(pub String);
 
 /// The registry in the Prometheus text format.
 pub fn encode_registry(registry: &Registry) -> String {
@@ -83,8 +88,8 @@ pub async fn serve(
 ) -> Result<(SocketAddr, JoinHandle<()>)> {
     let listener = TcpListener::bind(listen)
         .await
-        .with_context(|| format!("listening for metrics on {listen}"))?;
-    let addr = listener.local_addr()?;
+        .map_err(|error| OpsError::Listen { addr: listen, error })?;
+    let addr = listener.local_addr().map_err(OpsError::LocalAddr)?;
     let listener = GuardedListener::new(listener, limits);
     let app = Router::new()
         .route("/metrics", get(metrics))
@@ -112,7 +117,7 @@ mod tests {
             &self.0
         }
 
-        fn ready(&self) -> Result<(), String> {
+        fn ready(&self) -> Result<(), NotReady> {
             Ok(())
         }
     }
@@ -126,7 +131,8 @@ mod tests {
         let probe: Arc<dyn Probe> = Arc::new(Nothing(Registry::default()));
         let limits = ConnectionLimits::default();
         let serving = serve(at, probe, Access::Open, limits, std::future::pending());
-        let error = runtime.block_on(serving).unwrap_err();
+        // As a binary prints it: the error and its cause.
+        let error = anyhow::Error::from(runtime.block_on(serving).unwrap_err());
         let message = format!("{error:#}");
         assert!(message.starts_with(&format!("listening for metrics on {at}:")), "{message}");
     }

@@ -5,8 +5,11 @@
 
 pub mod connections;
 pub mod endpoint;
+pub mod error;
 pub mod logging;
 pub mod metric;
 pub mod metrics_access;
 pub mod signal;
 pub mod token;
+
+pub use error::{OpsError, Result};

@@ -16,8 +16,8 @@
 //! `/healthz` and `/readyz` stay open in every case: they say only whether the process runs and
 //! is ready, and the probes that ask (kubelet, a load balancer) send no token.
 
+use crate::error::{OpsError, Result};
 use crate::token::read_token;
-use anyhow::{Result, bail};
 use std::net::SocketAddr;
 use std::path::PathBuf;
 
@@ -82,12 +82,7 @@ impl MetricsArgs {
         if at.ip().is_loopback() || self.metrics_public {
             return Ok(Some((at, Access::Open)));
         }
-        bail!(
-            "--metrics-listen {at} can be reached from other machines, and /metrics tells them \
-             the farm's jobs, workers and load: give --metrics-token-file FILE (Prometheus \
-             sends it with `authorization: {{ credentials_file: FILE }}`), serve on 127.0.0.1, \
-             or give --metrics-public if the network already guards the port"
-        )
+        Err(OpsError::OpenMetrics { at })
     }
 }
 

@@ -1,7 +1,7 @@
 //! Bearer tokens, read from a file (a mounted Secret, a systemd credential) or else from an
 //! environment variable — never from the command line, where other users could read them.
 
-use anyhow::{Context, Result, bail};
+use crate::error::{OpsError, Result};
 use std::path::Path;
 
 /// The token in `file`, else in the environment variable `variable`; refuses an empty one and
@@ -9,12 +9,12 @@ use std::path::Path;
 pub fn read_token(file: Option<&Path>, variable: &str, flag: &str) -> Result<String> {
     let token = match file {
         Some(path) => std::fs::read_to_string(path)
-            .with_context(|| format!("reading the token file {}", path.display()))?,
+            .map_err(|error| OpsError::TokenFile { path: path.to_owned(), error })?,
         None => std::env::var(variable).unwrap_or_default(),
     };
     let token = token.trim().to_owned();
     if token.is_empty() {
-        bail!("no token: give {flag} FILE or set {variable}");
+        return Err(OpsError::NoToken { flag: flag.to_owned(), variable: variable.to_owned() });
     }
     Ok(token)
 }
@@ -49,7 +49,10 @@ mod tests {
     fn a_missing_token_file_is_named() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("absent.token");
-        let message = format!("{:#}", read_token(Some(&path), UNSET, "--token-file").unwrap_err());
+        // As a binary prints it: the error and its cause.
+        let error =
+            anyhow::Error::from(read_token(Some(&path), UNSET, "--token-file").unwrap_err());
+        let message = format!("{error:#}");
         assert!(
             message.starts_with(&format!("reading the token file {}:", path.display())),
             "{message}"

@@ -37,10 +37,9 @@ pub struct Credentials {
 
 impl Credentials {
     /// Fails when the token holds characters a header cannot carry.
-    pub fn new(token: &str, protocol_version: u32) -> Result<Self, String> {
-        let authorization = format!("Bearer {}", token.trim())
-            .parse()
-            .map_err(|_| "the token holds characters an HTTP header cannot carry".to_owned())?;
+    pub fn new(token: &str, protocol_version: u32) -> Result<Self, transport::DialError> {
+        let authorization =
+            format!("Bearer {}", token.trim()).parse().map_err(|_| transport::DialError::Token)?;
         let version = protocol_version.to_string().parse().expect("digits are ASCII");
         Ok(Self { authorization, version })
     }

@@ -6,12 +6,17 @@ use std::path::Path;
 use std::time::Duration;
 use tonic::transport::{Certificate, ClientTlsConfig, Endpoint};
 
+/// Why a connection to the coordinator cannot be set up: its URL, the CA certificate, or the
+/// token sent with every call.
 #[derive(Debug, thiserror::Error)]
 pub enum DialError {
     #[error("coordinator URL `{url}`: {problem}")]
     Url { url: String, problem: String },
     #[error("the CA certificate {path}: {problem}")]
     Ca { path: String, problem: String },
+    /// A bearer token that cannot travel in the `authorization` header ([`crate::Credentials`]).
+    #[error("the token holds characters an HTTP header cannot carry")]
+    Token,
 }
 
 /// An endpoint for `url`, ready to connect.

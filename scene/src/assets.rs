@@ -24,7 +24,7 @@ pub trait Assets: Sync {
 /// The reference of a file that the file `reference` names by the relative path `relative`
 /// (a glTF's buffer `model.bin` beside `meshes/model.gltf` is `meshes/model.bin`; beside
 /// `https://x.org/scan/model.gltf` it is `https://x.org/scan/model.bin`).
-pub fn sibling(reference: &str, relative: &str) -> Result<String, String> {
+pub fn sibling(reference: &str, relative: &str) -> Result<String, crate::web_url::UrlError> {
     if crate::web_url::is_url(relative) {
         return Ok(relative.to_owned());
     }

@@ -44,7 +44,8 @@ pub fn bundle_files(mut scene: SceneFile, assets: &dyn Assets, limits: &Limits) 
             let shown = assets.display_path(reference);
             let beside = |uri: &str| {
                 let invalid = |e: String| SceneError::invalid(&shown, format!("buffer `{uri}`"), e);
-                let file = crate::assets::sibling(reference, uri).map_err(invalid)?;
+                let file =
+                    crate::assets::sibling(reference, uri).map_err(|e| invalid(e.to_string()))?;
                 assets.read(&file, &place).map_err(|e| invalid(e.to_string()))
             };
             bytes = crate::formats::gltf::mesh::embed_buffers(&bytes, &shown, &beside)?;

@@ -37,22 +37,31 @@ impl std::fmt::Display for ContentHash {
     }
 }
 
-impl TryFrom<&Pin> for ContentHash {
-    type Error = String;
+/// Why a pin is not one well-formed hash.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum PinError {
+    #[error("give one hash: `{{ sha256 = \"…\" }}` or `{{ blake3 = \"…\" }}`")]
+    NotOneHash,
+    #[error(
+        "the {} `{hex}` is not 64 hexadecimal digits; copy it whole from `{}sum`",
+        algorithm.name(),
+        if *algorithm == Algorithm::Sha256 { "sha256" } else { "b3" }
+    )]
+    NotHex { algorithm: Algorithm, hex: String },
+}
 
-    fn try_from(pin: &Pin) -> Result<Self, String> {
+impl TryFrom<&Pin> for ContentHash {
+    type Error = PinError;
+
+    fn try_from(pin: &Pin) -> Result<Self, PinError> {
         let (algorithm, hex) = match (&pin.sha256, &pin.blake3) {
             (Some(hex), None) => (Algorithm::Sha256, hex),
             (None, Some(hex)) => (Algorithm::Blake3, hex),
-            _ => return Err("give one hash: `{ sha256 = \"…\" }` or `{ blake3 = \"…\" }`".into()),
+            _ => return Err(PinError::NotOneHash),
         };
         let hex = hex.trim().to_ascii_lowercase();
         if hex.len() != 64 || !hex.bytes().all(|b| b.is_ascii_hexdigit()) {
-            return Err(format!(
-                "the {} `{hex}` is not 64 hexadecimal digits; copy it whole from `{}sum`",
-                algorithm.name(),
-                if algorithm == Algorithm::Sha256 { "sha256" } else { "b3" }
-            ));
+            return Err(PinError::NotHex { algorithm, hex });
         }
         Ok(ContentHash { algorithm, hex })
     }
@@ -68,8 +77,8 @@ pub fn check_pins(
     for (url, pin) in pins {
         let place = format!("pins.\"{url}\"");
         let invalid = |problem: String| SceneError::invalid(scene_file, &place, problem);
-        let parsed = WebUrl::parse(url).map_err(invalid)?;
-        let hash = ContentHash::try_from(pin).map_err(invalid)?;
+        let parsed = WebUrl::parse(url).map_err(|e| invalid(e.to_string()))?;
+        let hash = ContentHash::try_from(pin).map_err(|e| invalid(e.to_string()))?;
         checked.insert(parsed.to_string(), hash);
     }
     Ok(checked)

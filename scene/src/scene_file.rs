@@ -1036,11 +1036,10 @@ mod vec3 {
 mod tests {
     use super::*;
 
-    fn camera(position: &str) -> Result<Camera, String> {
+    fn camera(position: &str) -> Result<Camera, toml::de::Error> {
         toml::from_str(&format!(
             "position = {position}\ntarget = [0, 0, 0]\nwidth = 1\nheight = 1\n"
         ))
-        .map_err(|e| e.message().to_owned())
     }
 
     /// serde's own `[f64; 3]` would take the first three of four numbers without a word.
@@ -1048,11 +1047,11 @@ mod tests {
     fn vectors_of_any_other_length_are_refused_with_the_field() {
         assert_eq!(camera("[1, 2, 3]").unwrap().position, Some([1.0, 2.0, 3.0]));
         assert_eq!(
-            camera("[1, 2, 3, 4]").unwrap_err(),
+            camera("[1, 2, 3, 4]").unwrap_err().message(),
             "`position` has 4 numbers; give exactly 3, [x, y, z]"
         );
         assert_eq!(
-            camera("[1]").unwrap_err(),
+            camera("[1]").unwrap_err().message(),
             "`position` has 1 number; give exactly 3, [x, y, z]"
         );
         let t: Result<Transform, _> = toml::from_str("scale = [1, 2]");

@@ -34,34 +34,45 @@ impl Site {
     }
 }
 
+/// Why the sun's position cannot be computed: the date-time, ΔT, the atmosphere or the site.
+#[derive(Debug, thiserror::Error)]
+pub enum SunError {
+    #[error(
+        "`{datetime}` is not an RFC 3339 date-time ({error}); write it with its UTC offset, e.g. \
+         2026-07-15T16:30:00+02:00"
+    )]
+    DateTime { datetime: String, error: chrono::ParseError },
+    #[error("ΔT for {datetime}: {error}")]
+    DeltaT { datetime: String, error: solar_positioning::Error },
+    #[error("atmosphere for refraction: {0}")]
+    Atmosphere(solar_positioning::Error),
+    #[error("solar position at latitude {latitude_deg}, longitude {longitude_deg}: {error}")]
+    Position { latitude_deg: f64, longitude_deg: f64, error: solar_positioning::Error },
+}
+
 /// The sun's topocentric position at `site` at `datetime` (RFC 3339 with a UTC offset, e.g.
 /// `2026-07-15T16:30:00+02:00`). ΔT (TT − UT1) is estimated from the date unless given.
 pub fn sun_position(
     site: Site,
     datetime: &str,
     delta_t_s: Option<f64>,
-) -> Result<SunPosition, String> {
-    let time: DateTime<FixedOffset> = DateTime::parse_from_rfc3339(datetime).map_err(|e| {
-        format!(
-            "`{datetime}` is not an RFC 3339 date-time ({e}); write it with its UTC offset, e.g. \
-             2026-07-15T16:30:00+02:00"
-        )
-    })?;
+) -> Result<SunPosition, SunError> {
+    let time: DateTime<FixedOffset> = DateTime::parse_from_rfc3339(datetime)
+        .map_err(|error| SunError::DateTime { datetime: datetime.to_owned(), error })?;
     let dt = match delta_t_s {
         Some(v) => v,
         None => delta_t::estimate_from_date_like(&time)
-            .map_err(|e| format!("ΔT for {datetime}: {e}"))?,
+            .map_err(|error| SunError::DeltaT { datetime: datetime.to_owned(), error })?,
     };
     let refraction = RefractionCorrection::new(site.pressure_mbar, site.temperature_c)
-        .map_err(|e| format!("atmosphere for refraction: {e}"))?;
+        .map_err(SunError::Atmosphere)?;
     let location = Location { latitude: site.latitude_deg, longitude: site.longitude_deg };
     let p = SolarPositions::new()
         .at(&time, location, site.height_m, dt, Some(refraction))
-        .map_err(|e| {
-            format!(
-                "solar position at latitude {}, longitude {}: {e}",
-                site.latitude_deg, site.longitude_deg
-            )
+        .map_err(|error| SunError::Position {
+            latitude_deg: site.latitude_deg,
+            longitude_deg: site.longitude_deg,
+            error,
         })?;
     Ok(SunPosition { azimuth_deg: p.azimuth(), elevation_deg: p.elevation_angle() })
 }
@@ -107,10 +118,13 @@ mod tests {
 
     #[test]
     fn bad_dates_are_refused_with_the_fix() {
-        let err = sun_position(Site::new(45.7, 7.3, 580.0), "15/07/2026 16:30", None).unwrap_err();
+        let err = sun_position(Site::new(45.7, 7.3, 580.0), "15/07/2026 16:30", None)
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("write it with its UTC offset"), "{err}");
         let err = sun_position(Site::new(95.0, 7.3, 580.0), "2026-07-15T16:30:00+02:00", None)
-            .unwrap_err();
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("latitude 95"), "{err}");
     }
 }

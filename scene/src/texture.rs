@@ -11,6 +11,36 @@ use std::path::Path;
 /// The extensions a texture may have.
 pub const EXTENSIONS: [&str; 3] = ["png", "jpg", "jpeg"];
 
+/// Why a photo cannot be used: a white-balance patch that does not fit it, or a file that does
+/// not decode (each says what to do).
+#[derive(Debug, thiserror::Error)]
+pub enum TextureError {
+    #[error(
+        "the rectangle of {} × {} pixels at ({}, {}) is not inside the photo's {width} × \
+         {height} pixels; give the grey patch's top-left pixel (x from the left, y from the top) \
+         and its size",
+        patch.width, patch.height, patch.x, patch.y
+    )]
+    PatchOutside { patch: PixelRect, width: u32, height: u32 },
+    #[error("the patch is black in {channel}; choose a grey patch that the light reaches")]
+    PatchBlack { channel: &'static str },
+    #[error(
+        "{width} × {height} texels is more than the {max_pixels} allowed; scale the image down, \
+         or raise the limit with --max-pixels"
+    )]
+    TooManyTexels { width: u64, height: u64, max_pixels: u64 },
+    #[error("not a PNG image restauro can read ({0})")]
+    NotPng(png::DecodingError),
+    #[error("the PNG image is too large to decode")]
+    PngTooLarge,
+    #[error("not a JPEG image restauro can read ({0:?})")]
+    NotJpeg(zune_jpeg::errors::DecodeErrors),
+    #[error("the JPEG image has no frame header")]
+    NoJpegFrame,
+    #[error("the JPEG image decoded to fewer texels than its header gives")]
+    JpegShort,
+}
+
 /// A decoded image: rows from the top, each texel's sRGB-encoded red, green and blue scaled to
 /// 0..=65535 (8-bit files times 257, so both depths share one type).
 #[derive(Clone, Debug, PartialEq)]
@@ -30,24 +60,21 @@ impl Texture {
 
     /// Why `patch` cannot white-balance this photo, in words: it reaches beyond the image, is
     /// empty, or is black in a channel (no gain makes that grey).
-    pub fn check_patch(&self, patch: PixelRect) -> std::result::Result<(), String> {
+    pub fn check_patch(&self, patch: PixelRect) -> std::result::Result<(), TextureError> {
         let PixelRect { x, y, width, height } = patch;
         let inside = u64::from(x) + u64::from(width) <= u64::from(self.width)
             && u64::from(y) + u64::from(height) <= u64::from(self.height);
         if width == 0 || height == 0 || !inside {
-            return Err(format!(
-                "the rectangle of {width} × {height} pixels at ({x}, {y}) is not inside the \
-                 photo's {} × {} pixels; give the grey patch's top-left pixel (x from the left, \
-                 y from the top) and its size",
-                self.width, self.height
-            ));
+            return Err(TextureError::PatchOutside {
+                patch,
+                width: self.width,
+                height: self.height,
+            });
         }
         let mean = self.patch_mean(patch);
         if let Some(k) = (0..3).find(|&k| mean[k] <= 1e-4) {
             let channel = ["red", "green", "blue"][k];
-            return Err(format!(
-                "the patch is black in {channel}; choose a grey patch that the light reaches"
-            ));
+            return Err(TextureError::PatchBlack { channel });
         }
         Ok(())
     }
@@ -107,24 +134,23 @@ pub fn decode(bytes: &[u8], extension: &str, path: &Path, max_pixels: u64) -> Re
     };
     let texture = decoded
         .map_err(|_| SceneError::invalid(path, "texture", guard::gave_up(format)))?
-        .map_err(|problem| SceneError::invalid(path, "texture", problem))?;
+        .map_err(|problem| SceneError::invalid(path, "texture", problem.to_string()))?;
     if texture.width == 0 || texture.height == 0 {
         return Err(SceneError::invalid(path, "texture", "the image has no pixels"));
     }
     Ok(texture)
 }
 
-fn too_big(width: u64, height: u64, max_pixels: u64) -> Option<String> {
-    (width * height > max_pixels).then(|| {
-        format!(
-            "{width} × {height} texels is more than the {max_pixels} allowed; scale the image \
-             down, or raise the limit with --max-pixels"
-        )
+fn too_big(width: u64, height: u64, max_pixels: u64) -> Option<TextureError> {
+    (width * height > max_pixels).then_some(TextureError::TooManyTexels {
+        width,
+        height,
+        max_pixels,
     })
 }
 
-fn decode_png(bytes: &[u8], max_pixels: u64) -> std::result::Result<Texture, String> {
-    let not_png = |e: png::DecodingError| format!("not a PNG image restauro can read ({e})");
+fn decode_png(bytes: &[u8], max_pixels: u64) -> std::result::Result<Texture, TextureError> {
+    let not_png = TextureError::NotPng;
     let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
     // Palettes and grey levels below 8 bits become 8-bit channels; 16 bits stay 16.
     decoder.set_transformations(png::Transformations::EXPAND);
@@ -133,7 +159,7 @@ fn decode_png(bytes: &[u8], max_pixels: u64) -> std::result::Result<Texture, Str
     if let Some(problem) = too_big(u64::from(width), u64::from(height), max_pixels) {
         return Err(problem);
     }
-    let size = reader.output_buffer_size().ok_or("the PNG image is too large to decode")?;
+    let size = reader.output_buffer_size().ok_or(TextureError::PngTooLarge)?;
     let mut buffer = vec![0; size];
     let frame = reader.next_frame(&mut buffer).map_err(not_png)?;
     let channels = frame.color_type.samples();
@@ -156,23 +182,22 @@ fn decode_png(bytes: &[u8], max_pixels: u64) -> std::result::Result<Texture, Str
     Ok(Texture { width, height, texels })
 }
 
-fn decode_jpeg(bytes: &[u8], max_pixels: u64) -> std::result::Result<Texture, String> {
+fn decode_jpeg(bytes: &[u8], max_pixels: u64) -> std::result::Result<Texture, TextureError> {
     use zune_core::bytestream::ZCursor;
     use zune_core::colorspace::ColorSpace;
     use zune_core::options::DecoderOptions;
-    let not_jpeg =
-        |e: zune_jpeg::errors::DecodeErrors| format!("not a JPEG image restauro can read ({e:?})");
+    let not_jpeg = TextureError::NotJpeg;
     let options = DecoderOptions::default().jpeg_set_out_colorspace(ColorSpace::RGB);
     let mut decoder = zune_jpeg::JpegDecoder::new_with_options(ZCursor::new(bytes), options);
     decoder.decode_headers().map_err(not_jpeg)?;
-    let info = decoder.info().ok_or("the JPEG image has no frame header")?;
+    let info = decoder.info().ok_or(TextureError::NoJpegFrame)?;
     let (width, height) = (u32::from(info.width), u32::from(info.height));
     if let Some(problem) = too_big(u64::from(width), u64::from(height), max_pixels) {
         return Err(problem);
     }
     let rgb = decoder.decode().map_err(not_jpeg)?;
     if rgb.len() != width as usize * height as usize * 3 {
-        return Err("the JPEG image decoded to fewer texels than its header gives".into());
+        return Err(TextureError::JpegShort);
     }
     let texels =
         rgb.chunks_exact(3).map(|t| [t[0], t[1], t[2]].map(|c| u16::from(c) * 257)).collect();

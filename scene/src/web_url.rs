@@ -10,6 +10,29 @@ pub struct WebUrl {
     secure: bool,
 }
 
+/// Why a text is not a URL restauro fetches; each message says what is accepted.
+#[derive(Debug, thiserror::Error)]
+pub enum UrlError {
+    #[error("`{text}` is not an absolute URL (https://host/path)")]
+    NotAbsolute { text: String },
+    #[error(
+        "`{text}`: only https:// and http:// URLs are fetched, not {scheme}://; put the file on \
+         a web server, or copy it into the scene's folder"
+    )]
+    Scheme { text: String, scheme: String },
+    /// The URL parser's own wording is part of the message, not a `source`: the message is
+    /// written whole into a scene error's problem.
+    #[error("`{text}` is not a valid URL ({error}); spaces must be written %20")]
+    Malformed { text: String, error: http::uri::InvalidUri },
+    #[error("`{text}` names no host")]
+    NoHost { text: String },
+    #[error(
+        "`{text}` carries credentials; restauro fetches public files only (the URL would be \
+         written into logs and scene files)"
+    )]
+    Credentials { text: String },
+}
+
 /// Whether a scene's file reference is a URL (rather than a path in the scene's folder).
 pub fn is_url(reference: &str) -> bool {
     scheme_of(reference).is_some()
@@ -27,38 +50,33 @@ fn scheme_of(reference: &str) -> Option<String> {
 
 impl WebUrl {
     /// Parses an absolute URL; the message says what is wrong and what is accepted.
-    pub fn parse(text: &str) -> Result<WebUrl, String> {
+    pub fn parse(text: &str) -> Result<WebUrl, UrlError> {
+        let text_owned = || text.to_owned();
         let without_fragment = text.split('#').next().unwrap_or(text);
         let scheme = scheme_of(without_fragment)
-            .ok_or_else(|| format!("`{text}` is not an absolute URL (https://host/path)"))?;
+            .ok_or_else(|| UrlError::NotAbsolute { text: text_owned() })?;
         let secure = match scheme.as_str() {
             "https" => true,
             "http" => false,
             other => {
-                return Err(format!(
-                    "`{text}`: only https:// and http:// URLs are fetched, not {other}://; put \
-                     the file on a web server, or copy it into the scene's folder"
-                ));
+                return Err(UrlError::Scheme { text: text_owned(), scheme: other.to_owned() });
             }
         };
-        let uri: Uri = without_fragment.parse().map_err(|e| {
-            format!("`{text}` is not a valid URL ({e}); spaces must be written %20")
-        })?;
-        let authority = uri.authority().ok_or_else(|| format!("`{text}` names no host"))?;
+        let uri: Uri = without_fragment
+            .parse()
+            .map_err(|error| UrlError::Malformed { text: text_owned(), error })?;
+        let authority = uri.authority().ok_or_else(|| UrlError::NoHost { text: text_owned() })?;
         if authority.as_str().contains('@') {
-            return Err(format!(
-                "`{text}` carries credentials; restauro fetches public files only (the URL \
-                 would be written into logs and scene files)"
-            ));
+            return Err(UrlError::Credentials { text: text_owned() });
         }
         if authority.host().is_empty() {
-            return Err(format!("`{text}` names no host"));
+            return Err(UrlError::NoHost { text: text_owned() });
         }
         Ok(WebUrl { uri, secure })
     }
 
     /// The URL `reference` names when it appears inside the file at this URL.
-    pub fn join(&self, reference: &str) -> Result<WebUrl, String> {
+    pub fn join(&self, reference: &str) -> Result<WebUrl, UrlError> {
         let reference = reference.split('#').next().unwrap_or(reference);
         if scheme_of(reference).is_some() {
             return WebUrl::parse(reference);
@@ -184,12 +202,12 @@ mod tests {
         assert!(is_url("https://x.org/a.obj"));
         assert!(!is_url("meshes/a.obj"));
         assert!(!is_url("C:\\meshes\\a.obj"));
-        let e = WebUrl::parse("ftp://x.org/a.obj").unwrap_err();
+        let e = WebUrl::parse("ftp://x.org/a.obj").unwrap_err().to_string();
         assert!(e.contains("only https:// and http://"), "{e}");
-        let e = WebUrl::parse("https://me:secret@x.org/a.obj").unwrap_err();
+        let e = WebUrl::parse("https://me:secret@x.org/a.obj").unwrap_err().to_string();
         assert!(e.contains("credentials"), "{e}");
         let base = WebUrl::parse("https://x.org/scan/model.gltf").unwrap();
-        let e = base.join("file:///etc/passwd").unwrap_err();
+        let e = base.join("file:///etc/passwd").unwrap_err().to_string();
         assert!(e.contains("not file://"), "{e}");
         let url = WebUrl::parse("https://[::1]:8443/a%20b.obj").unwrap();
         assert_eq!((url.host(), url.port(), url.path_and_query()), ("::1", 8443, "/a%20b.obj"));

@@ -16,5 +16,5 @@ struct Cli {
 
 fn main() -> anyhow::Result<()> {
     restauro_ops::logging::init();
-    run(&Cli::parse().args)
+    Ok(run(&Cli::parse().args)?)
 }

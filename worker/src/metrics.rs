@@ -84,11 +84,11 @@ impl restauro_ops::endpoint::Probe for WorkerMetrics {
         &self.registry
     }
 
-    fn ready(&self) -> Result<(), String> {
+    fn ready(&self) -> Result<(), restauro_ops::endpoint::NotReady> {
         if self.registered.get() == 1 {
             Ok(())
         } else {
-            Err("not registered with a coordinator".into())
+            Err(restauro_ops::endpoint::NotReady("not registered with a coordinator".into()))
         }
     }
 }

@@ -11,10 +11,10 @@
 //! proves it was given out, see the coordinator's `lease`), so a coordinator restart loses no
 //! finished work.
 
+use crate::error::{Result, WorkerError};
 use crate::failure::{JobError, retryable};
 use crate::metrics::WorkerMetrics;
 use crate::scene_cache::SceneCache;
-use anyhow::{Context, Result, anyhow, bail};
 use restauro_image::framebuffer::{TileExtras, TileLayout, encode_tile, tile_sizes};
 use restauro_ops::signal::stop_signal;
 use restauro_ops::token::read_token;
@@ -118,16 +118,17 @@ pub fn run(args: &WorkerArgs) -> Result<()> {
         .num_threads(threads)
         .thread_name(|i| format!("render-{i}"))
         .build()
-        .context("starting the render threads")?;
+        .map_err(WorkerError::RenderThreads)?;
     let cache =
         args.cache.clone().unwrap_or_else(|| std::env::temp_dir().join("restauro-worker-cache"));
-    std::fs::create_dir_all(&cache).with_context(|| format!("creating {}", cache.display()))?;
+    std::fs::create_dir_all(&cache)
+        .map_err(|error| WorkerError::Cache { path: cache.clone(), error })?;
     remove_partial_assets(&cache);
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(1)
         .enable_all()
         .build()
-        .context("starting the async runtime")?;
+        .map_err(WorkerError::Runtime)?;
     runtime.block_on(async {
         let (stop_tx, stop) = watch::channel(false);
         let exit_with_stdin = args.exit_with_stdin;
@@ -150,8 +151,8 @@ pub fn run(args: &WorkerArgs) -> Result<()> {
                 )
                 .await?;
                 let mut out = std::io::stdout().lock();
-                writeln!(out, "metrics on {addr}")?;
-                out.flush()?;
+                writeln!(out, "metrics on {addr}").map_err(WorkerError::Stdout)?;
+                out.flush().map_err(WorkerError::Stdout)?;
                 Some(task)
             }
             None => None,
@@ -209,7 +210,7 @@ impl Worker {
     /// orchestrator scaling workers down while the coordinator restarts must not see a failure).
     async fn connect(&self) -> Result<Option<Client>> {
         let credentials = Credentials::new(&self.token, self.args.protocol_version)
-            .map_err(|e| anyhow!("worker token: {e}"))?;
+            .map_err(WorkerError::Token)?;
         let endpoint = restauro_proto::transport::endpoint(
             &self.args.coordinator,
             self.args.tls_ca.as_deref(),
@@ -275,7 +276,7 @@ impl Worker {
             {
                 Ok(r) => r.into_inner(),
                 Err(status) if is_refusal(&status) => {
-                    bail!("the coordinator refused this worker: {}", status.message())
+                    return Err(WorkerError::Refused(status));
                 }
                 Err(status) => {
                     warn!("registering: {}; retrying", status.message());
@@ -283,7 +284,7 @@ impl Worker {
                     continue;
                 }
             };
-            let session = reply.session.ok_or_else(|| anyhow!("registered without a session"))?;
+            let session = reply.session.ok_or(WorkerError::NoSession)?;
             info!(worker = session.worker_id, %name, capacity, "registered");
             self.session.send_replace(Some(session.clone()));
             self.metrics.registered.set(1);
@@ -343,7 +344,7 @@ impl Worker {
                             reports.spawn(delivery.instrument(span));
                         }
                         Ok(None) => {}
-                        Err(e) => warn!("{e:#}"),
+                        Err(e) => warn!("{}", restauro_proto::transport::error_chain(&e)),
                     }
                 }
             }
@@ -417,7 +418,7 @@ impl Worker {
                 .append(true)
                 .open(log)
                 .and_then(|mut f| f.write_all(line.as_bytes()))
-                .with_context(|| format!("appending to {}", log.display()))?;
+                .map_err(|error| WorkerError::TileLog { path: log.clone(), error })?;
         }
         let started = Instant::now();
         let (tx, rx) = oneshot::channel();
@@ -488,7 +489,7 @@ impl Worker {
                 retryable,
             })
             .await
-            .map_err(|s| anyhow!("reporting a failed tile: {}", s.message()))?;
+            .map_err(WorkerError::ReportFailure)?;
         Ok(())
     }
 

@@ -31,12 +31,12 @@
 pub mod cache;
 mod http;
 
+use crate::error::{AssetsError, Result};
 pub use http::{DEADLINE_TIMEOUTS, is_public};
 use restauro_scene::assets::Fetch;
 pub use restauro_scene::pins::{Algorithm, ContentHash};
 use restauro_scene::scene_file::Pin;
 pub use restauro_scene::web_url::{WebUrl, is_url};
-use restauro_scene::{Result, SceneError};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, OnceLock};
@@ -100,13 +100,9 @@ impl RemoteConfig {
         let var = |name: &str| std::env::var(name).ok().filter(|v| !v.trim().is_empty());
         let number = |name: &str, default: u64| -> Result<u64> {
             var(name).map_or(Ok(default), |v| {
-                v.trim().parse().map_err(|_| {
-                    SceneError::invalid(
-                        "the environment",
-                        name,
-                        format!("`{v}` is not a whole number"),
-                    )
-                })
+                v.trim()
+                    .parse()
+                    .map_err(|_| AssetsError::Setting { name: name.to_owned(), value: v.clone() })
             })
         };
         let policy = POLICY.get().cloned().unwrap_or_default();
@@ -187,8 +183,12 @@ impl Remote {
     /// The bytes of the file at `url`, from the cache or the network, checked against its pin.
     /// `place` says where the scene names it, for messages.
     pub fn read(&self, url: &str, place: &str, max_bytes: u64) -> Result<Vec<u8>> {
-        let invalid = |problem: String| SceneError::invalid(&self.scene_file, place, problem);
-        let parsed = WebUrl::parse(url).map_err(invalid)?;
+        let invalid = |problem: String| AssetsError::Fetch {
+            scene_file: self.scene_file.clone(),
+            place: place.to_owned(),
+            problem,
+        };
+        let parsed = WebUrl::parse(url).map_err(|e| invalid(e.to_string()))?;
         let (config, tls) = self.ready().map_err(|e| invalid(format!("{url}: {e}")))?;
         let bounds = http::Bounds {
             max_bytes,
@@ -220,8 +220,9 @@ impl Remote {
 }
 
 impl Fetch for Remote {
-    fn fetch(&self, url: &str, place: &str, max_bytes: u64) -> Result<Vec<u8>> {
-        self.read(url, place, max_bytes)
+    /// A failure crosses into the scene's loader as the scene model's error, worded the same.
+    fn fetch(&self, url: &str, place: &str, max_bytes: u64) -> restauro_scene::Result<Vec<u8>> {
+        self.read(url, place, max_bytes).map_err(AssetsError::into_scene_error)
     }
 }
 

@@ -327,7 +327,7 @@ fn sun_position_of(
         (None, None, Some(s)) => {
             let site = Site::new(s.latitude_deg, s.longitude_deg, s.height_m);
             sun_position(site, &s.datetime, None)
-                .map_err(|e| ctx.invalid(format!("{place}.site"), e))?
+                .map_err(|e| ctx.invalid(format!("{place}.site"), e.to_string()))?
         }
         (az, el, None) => {
             // The paper's sun preset stands 50° above the horizon; due south

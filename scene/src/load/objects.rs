@@ -241,7 +241,8 @@ fn import_mesh(
             // A buffer that cannot be read is the model's problem: the message names the model.
             let beside = |uri: &str| {
                 let invalid = |e: String| SceneError::invalid(&name, format!("buffer `{uri}`"), e);
-                let file = crate::assets::sibling(reference, uri).map_err(invalid)?;
+                let file =
+                    crate::assets::sibling(reference, uri).map_err(|e| invalid(e.to_string()))?;
                 ctx.assets.read(&file, place).map_err(|e| invalid(e.to_string()))
             };
             let (mesh, cameras) = gltf_mesh::parse_with_cameras(&bytes, &name, limits, &beside)?;

@@ -116,7 +116,8 @@ fn own_sun_direction(
         }
         (None, None, Some(s)) => {
             let site = Site::new(s.latitude_deg, s.longitude_deg, s.height_m);
-            let p = sun_position(site, &s.datetime, None).map_err(|e| invalid(".site", e))?;
+            let p = sun_position(site, &s.datetime, None)
+                .map_err(|e| invalid(".site", e.to_string()))?;
             if p.elevation_deg <= 0.0 {
                 let problem = format!(
                     "at {} the sun is below the horizon (elevation {:.2}°); a CIE general sky is \

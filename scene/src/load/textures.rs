@@ -71,5 +71,7 @@ fn check_white_patch(
     patch: Option<scene_file::PixelRect>,
 ) -> Result<()> {
     let Some(patch) = patch else { return Ok(()) };
-    texture.check_patch(patch).map_err(|problem| ctx.invalid(format!("{at}.white_patch"), problem))
+    texture
+        .check_patch(patch)
+        .map_err(|problem| ctx.invalid(format!("{at}.white_patch"), problem.to_string()))
 }

@@ -58,7 +58,7 @@ impl Builder<'_> {
             return Err(self.invalid_field(node, "url", "an Inline needs the url of a file"));
         }
         let (file, _) = first_readable(&urls, |url| self.inlined_file(url))
-            .map_err(|problem| self.invalid_field(node, "url", problem))?;
+            .map_err(|problem| self.invalid_field(node, "url", problem.to_string()))?;
         if let Some(problem) = cycle(&self.files, &file.reference) {
             return Err(self.invalid_field(node, "url", problem));
         }
@@ -128,7 +128,7 @@ fn embed(
         let base = chain.last().cloned().unwrap_or_default();
         // The urls are tried in order, as when the world is drawn.
         let (inlined, chosen) = first_readable(&urls, |url| source(&base, url))
-            .map_err(|problem| SceneError::invalid(path, &place, problem))?;
+            .map_err(|problem| SceneError::invalid(path, &place, problem.to_string()))?;
         let quote = quotes[chosen];
         seen.insert((quote.line, quote.column));
         if let Some(problem) = cycle(chain, &inlined.reference) {
@@ -145,19 +145,28 @@ fn embed(
     Ok(splice_strings(body, &replacements))
 }
 
+/// None of an Inline's urls can be read: each url's refusal, in the order they were tried.
+#[derive(Debug, thiserror::Error)]
+#[error("no url can be read: {}", joined(.0))]
+struct Unreadable(Vec<SceneError>);
+
+fn joined(problems: &[SceneError]) -> String {
+    problems.iter().map(ToString::to_string).collect::<Vec<_>>().join("; ")
+}
+
 /// The first of `urls` that `read` reads, with its index; else every url's problem.
 fn first_readable<T>(
     urls: &[String],
     mut read: impl FnMut(&str) -> crate::Result<T>,
-) -> Result<(T, usize), String> {
+) -> Result<(T, usize), Unreadable> {
     let mut problems = Vec::new();
     for (i, url) in urls.iter().enumerate() {
         match read(url) {
             Ok(file) => return Ok((file, i)),
-            Err(e) => problems.push(e.to_string()),
+            Err(e) => problems.push(e),
         }
     }
-    Err(format!("no url can be read: {}", problems.join("; ")))
+    Err(Unreadable(problems))
 }
 
 /// The refusal of an inlined file already among the files being walked (`chain`, outermost
@@ -241,7 +250,7 @@ pub fn from_assets<'a>(
 ) -> impl Fn(&str, &str) -> crate::Result<Inlined> + Sync + 'a {
     move |base: &str, url: &str| {
         let reference = crate::assets::sibling(base, url).map_err(|e| {
-            SceneError::invalid(assets.display_path(base), format!("Inline `{url}`"), e)
+            SceneError::invalid(assets.display_path(base), format!("Inline `{url}`"), e.to_string())
         })?;
         let shown = assets.display_path(&reference);
         let text = crate::assets::utf8_text(assets.read(&reference, place)?, &shown)?;

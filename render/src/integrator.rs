@@ -33,6 +33,8 @@
 //! All 81 bands travel together on every ray; nothing here allocates.
 
 use crate::bsdf::{Bsdf, cosine_sample};
+use crate::frame::Frame;
+pub use crate::frame::lift_along;
 use crate::glass::{Optics, Transmission};
 use crate::prepared::{Hit, PreparedScene};
 use crate::sampler::PixelSampler;
@@ -74,37 +76,6 @@ fn lit_mask(lux: &LitLux) -> u32 {
         .fold(0, |mask, (k, _)| mask | 1 << k)
 }
 
-/// A local frame around a normal (Duff et al., "Building an orthonormal basis, revisited",
-/// JCGT 6(1), 2017).
-#[derive(Clone, Copy)]
-pub(crate) struct Frame {
-    x: Vec3A,
-    y: Vec3A,
-    z: Vec3A,
-}
-
-impl Frame {
-    #[inline]
-    pub(crate) fn new(n: Vec3A) -> Self {
-        let sign = 1.0f32.copysign(n.z);
-        let a = -1.0 / (sign + n.z);
-        let b = n.x * n.y * a;
-        Self {
-            x: Vec3A::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
-            y: Vec3A::new(b, sign + n.y * n.y * a, -n.y),
-            z: n,
-        }
-    }
-    #[inline]
-    fn to_local(self, v: Vec3A) -> Vec3A {
-        Vec3A::new(v.dot(self.x), v.dot(self.y), v.dot(self.z))
-    }
-    #[inline]
-    pub(crate) fn to_world(self, v: Vec3A) -> Vec3A {
-        self.x * v.x + self.y * v.y + self.z * v.z
-    }
-}
-
 /// The reflectance of a light source: what [`Weight::add`] takes for a light added unreflected.
 static NO_LIGHT: Spectrum = Spectrum::ZERO;
 
@@ -112,13 +83,6 @@ static NO_LIGHT: Spectrum = Spectrum::ZERO;
 #[inline]
 pub fn lift(hit: &Hit) -> Vec3A {
     lift_along(hit.point, hit.normal)
-}
-
-/// `point` lifted off its surface along the unit `normal`.
-#[inline]
-pub fn lift_along(point: Vec3A, normal: Vec3A) -> Vec3A {
-    let scale = 1.0 + point.abs().max_element();
-    point + normal * (2e-5 * scale)
 }
 
 /// Whether a bounce `direction`, above the surface by the shading normal, goes into the surface
@@ -443,7 +407,8 @@ fn walk(
         let footprint_m = spread * travelled_m / wo.z.abs().max(0.01).sqrt();
         let mut rho = scene.reflectance(&hit, footprint_m, &mut textured_rho);
         if let Some(soiling) = scene.soiling(hit.material) {
-            let share = soiling.share(scene, lift(&hit), hit.shading, sampler, rays);
+            let occluded = |from, towards| scene.occluded(from, towards, f32::INFINITY);
+            let share = soiling.share(occluded, lift(&hit), hit.shading, sampler, rays);
             soiling.mix(rho, share, &mut soiled_rho);
             rho = &soiled_rho;
         }

@@ -9,7 +9,6 @@ use crate::glass::Transmission;
 use crate::light::{Distribution, Light, Panel};
 use crate::material_detail::{MaterialDetails, Surface, own_detail};
 use crate::sampler::Strata;
-use crate::sensor::Sensor;
 use crate::sky::Sky;
 use crate::soiling::Soiling;
 use crate::texture::{Detail, DetailPoint, LuminancePyramid, Pyramid, TexturedTriangle};
@@ -121,6 +120,15 @@ pub struct PreparedScene {
     panels: Vec<Panel>,
     /// Whether any triangle is glass: shadow rays then pass through panes.
     has_glass: bool,
+}
+
+/// A sensor of a calculation grid: where the grids' irradiance is computed
+/// ([`crate::sensor::irradiance_sum`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Sensor {
+    pub point: Vec3A,
+    /// Unit; the side whose illuminance is computed.
+    pub normal: Vec3A,
 }
 
 /// A triangle without shading normals in [`PreparedScene::smooth_of`].
@@ -512,7 +520,7 @@ impl PreparedScene {
                 return BLOCKED;
             }
             // On, beyond the pane (the hit's normal faces back along the ray).
-            from = crate::integrator::lift_along(hit.point, -hit.normal);
+            from = crate::frame::lift_along(hit.point, -hit.normal);
         }
         BLOCKED
     }

@@ -118,11 +118,36 @@ impl XyzImage {
 /// OpenEXR default, when it has none).
 pub fn read_exr(path: &Path, max_pixels: usize) -> Result<XyzImage> {
     use std::io::{Seek, SeekFrom};
-    let exr_err = |e: exr::error::Error| ImageFileError::Exr {
-        path: path.to_owned(),
-        problem: exr_problem(&e),
-    };
-    // A FIFO would block the open itself, and a device never end: only regular files are opened.
+    let mut reader = io::BufReader::new(open_regular_file(path)?);
+    // The header first, so that an enormous image is refused before it is allocated.
+    let meta = guarded(path, || exr::meta::MetaData::read_from_buffered(&mut reader, false))?;
+    check_size(path, &meta.headers, max_pixels)?;
+    reader
+        .seek(SeekFrom::Start(0))
+        .map_err(|error| ImageFileError::Io { path: path.to_owned(), error })?;
+    let image = guarded(path, || {
+        read()
+            .no_deep_data()
+            .largest_resolution_level()
+            .all_channels()
+            .first_valid_layer()
+            .all_attributes()
+            .non_parallel()
+            .from_buffered(reader)
+    })?;
+    let (width, height) = (image.layer_data.size.width(), image.layer_data.size.height());
+    let list = &image.layer_data.channel_data.list;
+    let channels =
+        Channels { path, width, names: list.iter().map(|c| c.name.to_string()).collect(), list };
+    let pixels = channels.xyz(height, image.attributes.chromaticities)?;
+    let (emitter, lit_by) = (channels.emitter(), channels.lit_by());
+    let white = channels.white(height)?;
+    Ok(XyzImage { width, height, pixels, emitter, lit_by, white })
+}
+
+/// The file at `path`, opened only if it is a regular file: a FIFO would block the open
+/// itself, and a device never end.
+fn open_regular_file(path: &Path) -> Result<std::fs::File> {
     let io_err = |error| ImageFileError::Io { path: path.to_owned(), error };
     let not_a_file = || ImageFileError::NotAFile { path: path.to_owned() };
     if !std::fs::metadata(path).map_err(io_err)?.is_file() {
@@ -132,20 +157,28 @@ pub fn read_exr(path: &Path, max_pixels: usize) -> Result<XyzImage> {
     if !file.metadata().map_err(io_err)?.is_file() {
         return Err(not_a_file());
     }
-    let mut reader = io::BufReader::new(file);
-    // The exr crate is fed hostile files too: it runs inside the panic guard, on this thread
-    // (`non_parallel`, so that a panic cannot happen on a worker thread outside the guard).
-    let gave_up = || ImageFileError::Exr {
-        path: path.to_owned(),
-        problem: restauro_scene::guard::gave_up("OpenEXR"),
-    };
-    // The header first, so that an enormous image is refused before it is allocated.
-    let meta = restauro_scene::guard::catch(|| {
-        exr::meta::MetaData::read_from_buffered(&mut reader, false)
-    })
-    .map_err(|_| gave_up())?
-    .map_err(exr_err)?;
-    for header in &meta.headers {
+    Ok(file)
+}
+
+/// What the exr crate reads with `read`, its panic and its error each worded as a refusal of
+/// the file. The exr crate is fed hostile files too: it runs inside the panic guard, on this
+/// thread (`non_parallel`, so that a panic cannot happen on a worker thread outside the guard).
+fn guarded<T>(
+    path: &Path,
+    read: impl FnOnce() -> std::result::Result<T, exr::error::Error>,
+) -> Result<T> {
+    restauro_scene::guard::catch(read)
+        .map_err(|_| ImageFileError::Exr {
+            path: path.to_owned(),
+            problem: restauro_scene::guard::gave_up("OpenEXR"),
+        })?
+        .map_err(|e| ImageFileError::Exr { path: path.to_owned(), problem: exr_problem(&e) })
+}
+
+/// Refuses a file any of whose layers has more than `max_pixels` pixels or [`MAX_SAMPLES`]
+/// samples, from its headers alone.
+fn check_size(path: &Path, headers: &[exr::meta::header::Header], max_pixels: usize) -> Result<()> {
+    for header in headers {
         let (width, height) = (header.layer_size.width(), header.layer_size.height());
         let pixels = width.checked_mul(height);
         if pixels.is_none_or(|n| n > max_pixels) {
@@ -167,83 +200,105 @@ pub fn read_exr(path: &Path, max_pixels: usize) -> Result<XyzImage> {
             });
         }
     }
-    reader.seek(SeekFrom::Start(0)).map_err(io_err)?;
-    let image = restauro_scene::guard::catch(|| {
-        read()
-            .no_deep_data()
-            .largest_resolution_level()
-            .all_channels()
-            .first_valid_layer()
-            .all_attributes()
-            .non_parallel()
-            .from_buffered(reader)
-    })
-    .map_err(|_| gave_up())?
-    .map_err(exr_err)?;
-    let (width, height) = (image.layer_data.size.width(), image.layer_data.size.height());
-    let channels = &image.layer_data.channel_data.list;
-    let names: Vec<String> = channels.iter().map(|c| c.name.to_string()).collect();
-    let find = |name: &str| names.iter().position(|n| n == name);
-    let values = |i: usize| -> Result<Vec<f32>> {
-        let v: Vec<f32> = channels[i].sample_data.values_as_f32().collect();
+    Ok(())
+}
+
+/// The channels of a layer read, by name.
+struct Channels<'a> {
+    path: &'a Path,
+    width: usize,
+    names: Vec<String>,
+    list: &'a [AnyChannel<FlatSamples>],
+}
+
+impl Channels<'_> {
+    fn find(&self, name: &str) -> Option<usize> {
+        self.names.iter().position(|n| n == name)
+    }
+
+    /// Channel `i`'s values, refused at the first that is no colour value.
+    fn values(&self, i: usize) -> Result<Vec<f32>> {
+        let v: Vec<f32> = self.list[i].sample_data.values_as_f32().collect();
         if let Some(bad) = v.iter().position(|&x| !is_colour_value(x)) {
             return Err(ImageFileError::OutOfRange {
-                path: path.to_owned(),
-                channel: names[i].clone(),
-                x: bad % width,
-                y: bad / width,
+                path: self.path.to_owned(),
+                channel: self.names[i].clone(),
+                x: bad % self.width,
+                y: bad / self.width,
                 value: v[bad],
             });
         }
         Ok(v)
-    };
-    let (planes, to_xyz) = if let (Some(x), Some(y), Some(z)) = (find("X"), find("Y"), find("Z")) {
-        ([values(x)?, values(y)?, values(z)?], None)
-    } else if let (Some(r), Some(g), Some(b)) = (find("R"), find("G"), find("B")) {
-        let c = image.attributes.chromaticities;
-        let m = match c {
-            Some(c) => {
-                let xy =
-                    |v: exr::math::Vec2<f32>| Chromaticity::new(f64::from(v.0), f64::from(v.1));
-                rgb_to_xyz_matrix([xy(c.red), xy(c.green), xy(c.blue)], xy(c.white))
-            }
-            None => RgbSpace::Srgb.rgb_to_xyz().transpose().to_cols_array_2d(),
+    }
+
+    /// The pixels as XYZ: X, Y, Z as they are, else R, G, B by the primaries and white of
+    /// `chromaticities` (Rec. 709 and D65 without).
+    fn xyz(
+        &self,
+        height: usize,
+        chromaticities: Option<exr::meta::attribute::Chromaticities>,
+    ) -> Result<Vec<[f32; 3]>> {
+        let find = |name| self.find(name);
+        let (planes, to_xyz) = if let (Some(x), Some(y), Some(z)) =
+            (find("X"), find("Y"), find("Z"))
+        {
+            ([self.values(x)?, self.values(y)?, self.values(z)?], None)
+        } else if let (Some(r), Some(g), Some(b)) = (find("R"), find("G"), find("B")) {
+            let m = match chromaticities {
+                Some(c) => {
+                    let xy =
+                        |v: exr::math::Vec2<f32>| Chromaticity::new(f64::from(v.0), f64::from(v.1));
+                    rgb_to_xyz_matrix([xy(c.red), xy(c.green), xy(c.blue)], xy(c.white))
+                }
+                None => RgbSpace::Srgb.rgb_to_xyz().transpose().to_cols_array_2d(),
+            };
+            ([self.values(r)?, self.values(g)?, self.values(b)?], Some(m))
+        } else {
+            return Err(ImageFileError::NoColourChannels {
+                path: self.path.to_owned(),
+                channels: self.names.clone(),
+            });
         };
-        ([values(r)?, values(g)?, values(b)?], Some(m))
-    } else {
-        return Err(ImageFileError::NoColourChannels { path: path.to_owned(), channels: names });
-    };
-    let pixels = (0..width * height)
-        .map(|i| {
-            let p = [planes[0][i], planes[1][i], planes[2][i]];
-            match &to_xyz {
-                None => p,
-                Some(m) => std::array::from_fn(|r| {
-                    (m[r][0] * f64::from(p[0])
-                        + m[r][1] * f64::from(p[1])
-                        + m[r][2] * f64::from(p[2])) as f32
-                }),
-            }
-        })
-        .collect();
-    let emitter = find("emitter")
-        .map(|i| channels[i].sample_data.values_as_f32().map(|v| v != 0.0).collect());
-    // A mask is a whole number below 2²⁴; anything else (NaN, negative, a fraction from a
-    // resampling tool) is no mask, and its pixel is put with the unlit ones.
-    let lit_by = find("lit_by").map(|i| {
+        let pixels = (0..self.width * height)
+            .map(|i| {
+                let p = [planes[0][i], planes[1][i], planes[2][i]];
+                match &to_xyz {
+                    None => p,
+                    Some(m) => std::array::from_fn(|r| {
+                        (m[r][0] * f64::from(p[0])
+                            + m[r][1] * f64::from(p[1])
+                            + m[r][2] * f64::from(p[2])) as f32
+                    }),
+                }
+            })
+            .collect();
+        Ok(pixels)
+    }
+
+    /// The `emitter` mask: nonzero for light sources.
+    fn emitter(&self) -> Option<Vec<bool>> {
+        let i = self.find("emitter")?;
+        Some(self.list[i].sample_data.values_as_f32().map(|v| v != 0.0).collect())
+    }
+
+    /// The `lit_by` masks. A mask is a whole number below 2²⁴; anything else (NaN, negative, a
+    /// fraction from a resampling tool) is no mask, and its pixel is put with the unlit ones.
+    fn lit_by(&self) -> Option<Vec<u32>> {
+        let i = self.find("lit_by")?;
         let mask = |v: f32| {
             if v.fract() == 0.0 && (0.0..16_777_216.0).contains(&v) { v as u32 } else { 0 }
         };
-        channels[i].sample_data.values_as_f32().map(mask).collect()
-    });
-    let white = match WHITE_CHANNELS.map(find) {
-        [Some(x), Some(y), Some(z), Some(s)] => {
-            let planes = [values(x)?, values(y)?, values(z)?, values(s)?];
-            Some((0..width * height).map(|i| planes.each_ref().map(|p| p[i])).collect())
-        }
-        _ => None,
-    };
-    Ok(XyzImage { width, height, pixels, emitter, lit_by, white })
+        Some(self.list[i].sample_data.values_as_f32().map(mask).collect())
+    }
+
+    /// The adapting white, when all of [`WHITE_CHANNELS`] are there.
+    fn white(&self, height: usize) -> Result<Option<Vec<[f32; 4]>>> {
+        let [Some(x), Some(y), Some(z), Some(s)] = WHITE_CHANNELS.map(|n| self.find(n)) else {
+            return Ok(None);
+        };
+        let planes = [self.values(x)?, self.values(y)?, self.values(z)?, self.values(s)?];
+        Ok(Some((0..self.width * height).map(|i| planes.each_ref().map(|p| p[i])).collect()))
+    }
 }
 
 /// The RGB → XYZ matrix (rows) of arbitrary primaries and white, as restauro's display spaces

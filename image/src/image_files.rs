@@ -3,12 +3,13 @@
 //! file is written whole or not at all ([`crate::atomic_file`]).
 
 use crate::atomic_file;
+use crate::error::ImageError;
 use crate::radiometric_bound::is_colour_value;
 use exr::prelude::*;
 use restauro_spectral::colorimetry::Chromaticity;
 use restauro_spectral::rgb_space::RgbSpace;
 use std::io;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Images larger than this are refused before their pixels are read (16384 × 16384).
 pub const MAX_PIXELS: usize = 1 << 28;
@@ -18,48 +19,6 @@ pub const MAX_PIXELS: usize = 1 << 28;
 /// must reserve, so it is checked first (restauro's own spectral images, 88 channels, stay under
 /// it up to about 4900 × 4900 pixels).
 pub const MAX_SAMPLES: usize = 1 << 31;
-
-/// What went wrong with an image file. The underlying error is worded into each message and not
-/// kept as the error's `source`, so that a caller printing the whole chain (`anyhow`'s `{:#}`)
-/// says it once.
-#[derive(Debug, thiserror::Error)]
-pub enum ImageFileError {
-    #[error("{}: {}", path.display(), restauro_scene::error::io_problem(error))]
-    Io { path: PathBuf, error: io::Error },
-    #[error("{}: not a readable OpenEXR file: {problem}", path.display())]
-    Exr { path: PathBuf, problem: String },
-    #[error(
-        "{}: not a regular file (a FIFO, a device or a folder); give the path of an OpenEXR file",
-        path.display()
-    )]
-    NotAFile { path: PathBuf },
-    #[error(
-        "{}: no colour channels; restauro reads X, Y, Z or R, G, B, and this file has {}",
-        path.display(),
-        if channels.is_empty() { "none".to_owned() } else { channels.join(", ") }
-    )]
-    NoColourChannels { path: PathBuf, channels: Vec<String> },
-    #[error(
-        "{}: {width}×{height} is larger than the limit of {max} pixels; crop or downscale it",
-        path.display()
-    )]
-    TooLarge { path: PathBuf, width: usize, height: usize, max: usize },
-    #[error(
-        "{}: {channels} channels of {width}×{height} pixels are more than the limit of {max} \
-         samples; keep fewer channels (e.g. drop the spectral layers) or crop the image",
-        path.display()
-    )]
-    TooManySamples { path: PathBuf, width: usize, height: usize, channels: usize, max: usize },
-    #[error(
-        "{}: channel {channel} at pixel ({x}, {y}) is {value:e}; colour values must be finite \
-         and within ±{bound:e} (cd/m² for absolute XYZ); scale the image into that range",
-        path.display(),
-        bound = crate::radiometric_bound::MAX_RADIOMETRIC
-    )]
-    OutOfRange { path: PathBuf, channel: String, x: usize, y: usize, value: f32 },
-    #[error("{}: cannot write the PNG: {error}", path.display())]
-    Png { path: PathBuf, error: png::EncodingError },
-}
 
 /// An error of the exr crate in plain words, with what to do.
 fn exr_problem(error: &exr::error::Error) -> String {
@@ -81,7 +40,7 @@ fn exr_problem(error: &exr::error::Error) -> String {
     }
 }
 
-type Result<T> = std::result::Result<T, ImageFileError>;
+type Result<T, E = ImageError> = std::result::Result<T, E>;
 
 /// A linear image as CIE XYZ (any scale: absolute cd/m² from the renderer, relative otherwise).
 #[derive(Clone, Debug, PartialEq)]
@@ -124,7 +83,7 @@ pub fn read_exr(path: &Path, max_pixels: usize) -> Result<XyzImage> {
     check_size(path, &meta.headers, max_pixels)?;
     reader
         .seek(SeekFrom::Start(0))
-        .map_err(|error| ImageFileError::Io { path: path.to_owned(), error })?;
+        .map_err(|error| ImageError::Io { path: path.to_owned(), error })?;
     let image = guarded(path, || {
         read()
             .no_deep_data()
@@ -148,8 +107,8 @@ pub fn read_exr(path: &Path, max_pixels: usize) -> Result<XyzImage> {
 /// The file at `path`, opened only if it is a regular file: a FIFO would block the open
 /// itself, and a device never end.
 fn open_regular_file(path: &Path) -> Result<std::fs::File> {
-    let io_err = |error| ImageFileError::Io { path: path.to_owned(), error };
-    let not_a_file = || ImageFileError::NotAFile { path: path.to_owned() };
+    let io_err = |error| ImageError::Io { path: path.to_owned(), error };
+    let not_a_file = || ImageError::NotAFile { path: path.to_owned() };
     if !std::fs::metadata(path).map_err(io_err)?.is_file() {
         return Err(not_a_file());
     }
@@ -168,11 +127,11 @@ fn guarded<T>(
     read: impl FnOnce() -> std::result::Result<T, exr::error::Error>,
 ) -> Result<T> {
     restauro_scene::guard::catch(read)
-        .map_err(|_| ImageFileError::Exr {
+        .map_err(|_| ImageError::Exr {
             path: path.to_owned(),
             problem: restauro_scene::guard::gave_up("OpenEXR"),
         })?
-        .map_err(|e| ImageFileError::Exr { path: path.to_owned(), problem: exr_problem(&e) })
+        .map_err(|e| ImageError::Exr { path: path.to_owned(), problem: exr_problem(&e) })
 }
 
 /// Refuses a file any of whose layers has more than `max_pixels` pixels or [`MAX_SAMPLES`]
@@ -182,7 +141,7 @@ fn check_size(path: &Path, headers: &[exr::meta::header::Header], max_pixels: us
         let (width, height) = (header.layer_size.width(), header.layer_size.height());
         let pixels = width.checked_mul(height);
         if pixels.is_none_or(|n| n > max_pixels) {
-            return Err(ImageFileError::TooLarge {
+            return Err(ImageError::TooLarge {
                 path: path.to_owned(),
                 width,
                 height,
@@ -191,7 +150,7 @@ fn check_size(path: &Path, headers: &[exr::meta::header::Header], max_pixels: us
         }
         let channels = header.channels.list.len();
         if pixels.and_then(|n| n.checked_mul(channels)).is_none_or(|n| n > MAX_SAMPLES) {
-            return Err(ImageFileError::TooManySamples {
+            return Err(ImageError::TooManySamples {
                 path: path.to_owned(),
                 width,
                 height,
@@ -220,7 +179,7 @@ impl Channels<'_> {
     fn values(&self, i: usize) -> Result<Vec<f32>> {
         let v: Vec<f32> = self.list[i].sample_data.values_as_f32().collect();
         if let Some(bad) = v.iter().position(|&x| !is_colour_value(x)) {
-            return Err(ImageFileError::OutOfRange {
+            return Err(ImageError::OutOfRange {
                 path: self.path.to_owned(),
                 channel: self.names[i].clone(),
                 x: bad % self.width,
@@ -254,7 +213,7 @@ impl Channels<'_> {
             };
             ([self.values(r)?, self.values(g)?, self.values(b)?], Some(m))
         } else {
-            return Err(ImageFileError::NoColourChannels {
+            return Err(ImageError::NoColourChannels {
                 path: self.path.to_owned(),
                 channels: self.names.clone(),
             });
@@ -346,7 +305,7 @@ pub fn write_exr(
         sort_header_attributes(&mut bytes);
         io::Write::write_all(w, &bytes)
     })
-    .map_err(|error| ImageFileError::Io { path: path.to_owned(), error })
+    .map_err(|error| ImageError::Io { path: path.to_owned(), error })
 }
 
 /// Puts the attributes of a single-part OpenEXR header in name order. The exr crate keeps them
@@ -491,9 +450,9 @@ pub fn write_png(
     space: RgbSpace,
 ) -> Result<()> {
     let bytes = encode_png(width, height, pixels, space)
-        .map_err(|error| ImageFileError::Png { path: path.to_owned(), error })?;
+        .map_err(|error| ImageError::Png { path: path.to_owned(), error })?;
     atomic_file::write(path, &bytes)
-        .map_err(|error| ImageFileError::Io { path: path.to_owned(), error })
+        .map_err(|error| ImageError::Io { path: path.to_owned(), error })
 }
 
 /// The PNG file of `pixels` (RGB, row by row), tagged with `space`, as bytes.
@@ -550,6 +509,7 @@ pub fn encode_png(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::path::PathBuf;
 
     fn scratch(name: &str) -> PathBuf {
         let dir = std::env::temp_dir().join(format!("restauro-img-{name}-{}", std::process::id()));

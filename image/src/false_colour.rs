@@ -5,6 +5,7 @@
 //! colour and `restauro display --false-colour luminance` both draw with this.
 
 use crate::delta_e::viridis;
+use crate::error::ImageError;
 use std::fmt;
 use std::str::FromStr;
 
@@ -18,12 +19,12 @@ pub enum Scale {
 }
 
 impl FromStr for Scale {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
+    type Err = ImageError;
+    fn from_str(s: &str) -> Result<Self, ImageError> {
         match s {
             "log" => Ok(Scale::Log),
             "linear" => Ok(Scale::Linear),
-            other => Err(format!("`{other}` is not a scale; use log or linear")),
+            other => Err(ImageError::UnknownScale { text: other.to_owned() }),
         }
     }
 }
@@ -62,17 +63,13 @@ impl Unit {
 
 impl Range {
     /// A range for `scale`, refused unless min < max (and 0 < min on a log scale).
-    pub fn new(min_cd_m2: f64, max_cd_m2: f64, scale: Scale) -> Result<Self, String> {
+    pub fn new(min_cd_m2: f64, max_cd_m2: f64, scale: Scale) -> Result<Self, ImageError> {
         let finite = min_cd_m2.is_finite() && max_cd_m2.is_finite();
         if !finite || min_cd_m2 >= max_cd_m2 || min_cd_m2 < 0.0 {
-            return Err(format!(
-                "the range {min_cd_m2}:{max_cd_m2} cd/m²: give MIN:MAX with 0 ≤ MIN < MAX"
-            ));
+            return Err(ImageError::EmptyRange { min_cd_m2, max_cd_m2 });
         }
         if scale == Scale::Log && min_cd_m2 <= 0.0 {
-            return Err(format!(
-                "the range {min_cd_m2}:{max_cd_m2} cd/m²: a log scale starts above 0 cd/m²"
-            ));
+            return Err(ImageError::LogRangeFromZero { min_cd_m2, max_cd_m2 });
         }
         Ok(Range { min: min_cd_m2, max: max_cd_m2 })
     }

@@ -3,12 +3,13 @@
 //! file is written whole or not at all ([`crate::atomic_file`]).
 
 use crate::atomic_file;
+use crate::error::ImageError;
 use crate::radiometric_bound::is_colour_value;
 use exr::prelude::*;
 use restauro_spectral::colorimetry::Chromaticity;
 use restauro_spectral::rgb_space::RgbSpace;
 use std::io;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Images larger than this are refused before their pixels are read (16384 × 16384).
 pub const MAX_PIXELS: usize = 1 << 28;
@@ -18,48 +19,6 @@ pub const MAX_PIXELS: usize = 1 << 28;
 /// must reserve, so it is checked first (restauro's own spectral images, 88 channels, stay under
 /// it up to about 4900 × 4900 pixels).
 pub const MAX_SAMPLES: usize = 1 << 31;
-
-/// What went wrong with an image file. The underlying error is worded into each message and not
-/// kept as the error's `source`, so that a caller printing the whole chain (`anyhow`'s `{:#}`)
-/// says it once.
-#[derive(Debug, thiserror::Error)]
-pub enum ImageFileError {
-    #[error("{}: {}", path.display(), restauro_scene::error::io_problem(error))]
-    Io { path: PathBuf, error: io::Error },
-    #[error("{}: not a readable OpenEXR file: {problem}", path.display())]
-    Exr { path: PathBuf, problem: String },
-    #[error(
-        "{}: not a regular file (a FIFO, a device or a folder); give the path of an OpenEXR file",
-        path.display()
-    )]
-    NotAFile { path: PathBuf },
-    #[error(
-        "{}: no colour channels; restauro reads X, Y, Z or R, G, B, and this file has {}",
-        path.display(),
-        if channels.is_empty() { "none".to_owned() } else { channels.join(", ") }
-    )]
-    NoColourChannels { path: PathBuf, channels: Vec<String> },
-    #[error(
-        "{}: {width}×{height} is larger than the limit of {max} pixels; crop or downscale it",
-        path.display()
-    )]
-    TooLarge { path: PathBuf, width: usize, height: usize, max: usize },
-    #[error(
-        "{}: {channels} channels of {width}×{height} pixels are more than the limit of {max} \
-         samples; keep fewer channels (e.g. drop the spectral layers) or crop the image",
-        path.display()
-    )]
-    TooManySamples { path: PathBuf, width: usize, height: usize, channels: usize, max: usize },
-    #[error(
-        "{}: channel {channel} at pixel ({x}, {y}) is {value:e}; colour values must be finite \
-         and within ±{bound:e} (cd/m² for absolute XYZ); scale the image into that range",
-        path.display(),
-        bound = crate::radiometric_bound::MAX_RADIOMETRIC
-    )]
-    OutOfRange { path: PathBuf, channel: String, x: usize, y: usize, value: f32 },
-    #[error("{}: cannot write the PNG: {error}", path.display())]
-    Png { path: PathBuf, error: png::EncodingError },
-}
 
 /// An error of the exr crate in plain words, with what to do.
 fn exr_problem(error: &exr::error::Error) -> String {
@@ -81,7 +40,7 @@ fn exr_problem(error: &exr::error::Error) -> String {
     }
 }
 
-type Result<T> = std::result::Result<T, ImageFileError>;
+type Result<T, E = ImageError> = std::result::Result<T, E>;
 
 /// A linear image as CIE XYZ (any scale: absolute cd/m² from the renderer, relative otherwise).
 #[derive(Clone, Debug, PartialEq)]
@@ -118,57 +77,14 @@ impl XyzImage {
 /// OpenEXR default, when it has none).
 pub fn read_exr(path: &Path, max_pixels: usize) -> Result<XyzImage> {
     use std::io::{Seek, SeekFrom};
-    let exr_err = |e: exr::error::Error| ImageFileError::Exr {
-        path: path.to_owned(),
-        problem: exr_problem(&e),
-    };
-    // A FIFO would block the open itself, and a device never end: only regular files are opened.
-    let io_err = |error| ImageFileError::Io { path: path.to_owned(), error };
-    let not_a_file = || ImageFileError::NotAFile { path: path.to_owned() };
-    if !std::fs::metadata(path).map_err(io_err)?.is_file() {
-        return Err(not_a_file());
-    }
-    let file = std::fs::File::open(path).map_err(io_err)?;
-    if !file.metadata().map_err(io_err)?.is_file() {
-        return Err(not_a_file());
-    }
-    let mut reader = io::BufReader::new(file);
-    // The exr crate is fed hostile files too: it runs inside the panic guard, on this thread
-    // (`non_parallel`, so that a panic cannot happen on a worker thread outside the guard).
-    let gave_up = || ImageFileError::Exr {
-        path: path.to_owned(),
-        problem: restauro_scene::guard::gave_up("OpenEXR"),
-    };
+    let mut reader = io::BufReader::new(open_regular_file(path)?);
     // The header first, so that an enormous image is refused before it is allocated.
-    let meta = restauro_scene::guard::catch(|| {
-        exr::meta::MetaData::read_from_buffered(&mut reader, false)
-    })
-    .map_err(|_| gave_up())?
-    .map_err(exr_err)?;
-    for header in &meta.headers {
-        let (width, height) = (header.layer_size.width(), header.layer_size.height());
-        let pixels = width.checked_mul(height);
-        if pixels.is_none_or(|n| n > max_pixels) {
-            return Err(ImageFileError::TooLarge {
-                path: path.to_owned(),
-                width,
-                height,
-                max: max_pixels,
-            });
-        }
-        let channels = header.channels.list.len();
-        if pixels.and_then(|n| n.checked_mul(channels)).is_none_or(|n| n > MAX_SAMPLES) {
-            return Err(ImageFileError::TooManySamples {
-                path: path.to_owned(),
-                width,
-                height,
-                channels,
-                max: MAX_SAMPLES,
-            });
-        }
-    }
-    reader.seek(SeekFrom::Start(0)).map_err(io_err)?;
-    let image = restauro_scene::guard::catch(|| {
+    let meta = guarded(path, || exr::meta::MetaData::read_from_buffered(&mut reader, false))?;
+    check_size(path, &meta.headers, max_pixels)?;
+    reader
+        .seek(SeekFrom::Start(0))
+        .map_err(|error| ImageError::Io { path: path.to_owned(), error })?;
+    let image = guarded(path, || {
         read()
             .no_deep_data()
             .largest_resolution_level()
@@ -177,73 +93,171 @@ pub fn read_exr(path: &Path, max_pixels: usize) -> Result<XyzImage> {
             .all_attributes()
             .non_parallel()
             .from_buffered(reader)
-    })
-    .map_err(|_| gave_up())?
-    .map_err(exr_err)?;
+    })?;
     let (width, height) = (image.layer_data.size.width(), image.layer_data.size.height());
-    let channels = &image.layer_data.channel_data.list;
-    let names: Vec<String> = channels.iter().map(|c| c.name.to_string()).collect();
-    let find = |name: &str| names.iter().position(|n| n == name);
-    let values = |i: usize| -> Result<Vec<f32>> {
-        let v: Vec<f32> = channels[i].sample_data.values_as_f32().collect();
-        if let Some(bad) = v.iter().position(|&x| !is_colour_value(x)) {
-            return Err(ImageFileError::OutOfRange {
+    let list = &image.layer_data.channel_data.list;
+    let channels =
+        Channels { path, width, names: list.iter().map(|c| c.name.to_string()).collect(), list };
+    let pixels = channels.xyz(height, image.attributes.chromaticities)?;
+    let (emitter, lit_by) = (channels.emitter(), channels.lit_by());
+    let white = channels.white(height)?;
+    Ok(XyzImage { width, height, pixels, emitter, lit_by, white })
+}
+
+/// The file at `path`, opened only if it is a regular file: a FIFO would block the open
+/// itself, and a device never end.
+fn open_regular_file(path: &Path) -> Result<std::fs::File> {
+    let io_err = |error| ImageError::Io { path: path.to_owned(), error };
+    let not_a_file = || ImageError::NotAFile { path: path.to_owned() };
+    if !std::fs::metadata(path).map_err(io_err)?.is_file() {
+        return Err(not_a_file());
+    }
+    let file = std::fs::File::open(path).map_err(io_err)?;
+    if !file.metadata().map_err(io_err)?.is_file() {
+        return Err(not_a_file());
+    }
+    Ok(file)
+}
+
+/// What the exr crate reads with `read`, its panic and its error each worded as a refusal of
+/// the file. The exr crate is fed hostile files too: it runs inside the panic guard, on this
+/// thread (`non_parallel`, so that a panic cannot happen on a worker thread outside the guard).
+fn guarded<T>(
+    path: &Path,
+    read: impl FnOnce() -> std::result::Result<T, exr::error::Error>,
+) -> Result<T> {
+    restauro_scene::guard::catch(read)
+        .map_err(|_| ImageError::Exr {
+            path: path.to_owned(),
+            problem: restauro_scene::guard::gave_up("OpenEXR"),
+        })?
+        .map_err(|e| ImageError::Exr { path: path.to_owned(), problem: exr_problem(&e) })
+}
+
+/// Refuses a file any of whose layers has more than `max_pixels` pixels or [`MAX_SAMPLES`]
+/// samples, from its headers alone.
+fn check_size(path: &Path, headers: &[exr::meta::header::Header], max_pixels: usize) -> Result<()> {
+    for header in headers {
+        let (width, height) = (header.layer_size.width(), header.layer_size.height());
+        let pixels = width.checked_mul(height);
+        if pixels.is_none_or(|n| n > max_pixels) {
+            return Err(ImageError::TooLarge {
                 path: path.to_owned(),
-                channel: names[i].clone(),
-                x: bad % width,
-                y: bad / width,
+                width,
+                height,
+                max: max_pixels,
+            });
+        }
+        let channels = header.channels.list.len();
+        if pixels.and_then(|n| n.checked_mul(channels)).is_none_or(|n| n > MAX_SAMPLES) {
+            return Err(ImageError::TooManySamples {
+                path: path.to_owned(),
+                width,
+                height,
+                channels,
+                max: MAX_SAMPLES,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The channels of a layer read, by name.
+struct Channels<'a> {
+    path: &'a Path,
+    width: usize,
+    names: Vec<String>,
+    list: &'a [AnyChannel<FlatSamples>],
+}
+
+impl Channels<'_> {
+    fn find(&self, name: &str) -> Option<usize> {
+        self.names.iter().position(|n| n == name)
+    }
+
+    /// Channel `i`'s values, refused at the first that is no colour value.
+    fn values(&self, i: usize) -> Result<Vec<f32>> {
+        let v: Vec<f32> = self.list[i].sample_data.values_as_f32().collect();
+        if let Some(bad) = v.iter().position(|&x| !is_colour_value(x)) {
+            return Err(ImageError::OutOfRange {
+                path: self.path.to_owned(),
+                channel: self.names[i].clone(),
+                x: bad % self.width,
+                y: bad / self.width,
                 value: v[bad],
             });
         }
         Ok(v)
-    };
-    let (planes, to_xyz) = if let (Some(x), Some(y), Some(z)) = (find("X"), find("Y"), find("Z")) {
-        ([values(x)?, values(y)?, values(z)?], None)
-    } else if let (Some(r), Some(g), Some(b)) = (find("R"), find("G"), find("B")) {
-        let c = image.attributes.chromaticities;
-        let m = match c {
-            Some(c) => {
-                let xy =
-                    |v: exr::math::Vec2<f32>| Chromaticity::new(f64::from(v.0), f64::from(v.1));
-                rgb_to_xyz_matrix([xy(c.red), xy(c.green), xy(c.blue)], xy(c.white))
-            }
-            None => RgbSpace::Srgb.rgb_to_xyz().transpose().to_cols_array_2d(),
+    }
+
+    /// The pixels as XYZ: X, Y, Z as they are, else R, G, B by the primaries and white of
+    /// `chromaticities` (Rec. 709 and D65 without).
+    fn xyz(
+        &self,
+        height: usize,
+        chromaticities: Option<exr::meta::attribute::Chromaticities>,
+    ) -> Result<Vec<[f32; 3]>> {
+        let find = |name| self.find(name);
+        let (planes, to_xyz) = if let (Some(x), Some(y), Some(z)) =
+            (find("X"), find("Y"), find("Z"))
+        {
+            ([self.values(x)?, self.values(y)?, self.values(z)?], None)
+        } else if let (Some(r), Some(g), Some(b)) = (find("R"), find("G"), find("B")) {
+            let m = match chromaticities {
+                Some(c) => {
+                    let xy =
+                        |v: exr::math::Vec2<f32>| Chromaticity::new(f64::from(v.0), f64::from(v.1));
+                    rgb_to_xyz_matrix([xy(c.red), xy(c.green), xy(c.blue)], xy(c.white))
+                }
+                None => RgbSpace::Srgb.rgb_to_xyz().transpose().to_cols_array_2d(),
+            };
+            ([self.values(r)?, self.values(g)?, self.values(b)?], Some(m))
+        } else {
+            return Err(ImageError::NoColourChannels {
+                path: self.path.to_owned(),
+                channels: self.names.clone(),
+            });
         };
-        ([values(r)?, values(g)?, values(b)?], Some(m))
-    } else {
-        return Err(ImageFileError::NoColourChannels { path: path.to_owned(), channels: names });
-    };
-    let pixels = (0..width * height)
-        .map(|i| {
-            let p = [planes[0][i], planes[1][i], planes[2][i]];
-            match &to_xyz {
-                None => p,
-                Some(m) => std::array::from_fn(|r| {
-                    (m[r][0] * f64::from(p[0])
-                        + m[r][1] * f64::from(p[1])
-                        + m[r][2] * f64::from(p[2])) as f32
-                }),
-            }
-        })
-        .collect();
-    let emitter = find("emitter")
-        .map(|i| channels[i].sample_data.values_as_f32().map(|v| v != 0.0).collect());
-    // A mask is a whole number below 2²⁴; anything else (NaN, negative, a fraction from a
-    // resampling tool) is no mask, and its pixel is put with the unlit ones.
-    let lit_by = find("lit_by").map(|i| {
+        let pixels = (0..self.width * height)
+            .map(|i| {
+                let p = [planes[0][i], planes[1][i], planes[2][i]];
+                match &to_xyz {
+                    None => p,
+                    Some(m) => std::array::from_fn(|r| {
+                        (m[r][0] * f64::from(p[0])
+                            + m[r][1] * f64::from(p[1])
+                            + m[r][2] * f64::from(p[2])) as f32
+                    }),
+                }
+            })
+            .collect();
+        Ok(pixels)
+    }
+
+    /// The `emitter` mask: nonzero for light sources.
+    fn emitter(&self) -> Option<Vec<bool>> {
+        let i = self.find("emitter")?;
+        Some(self.list[i].sample_data.values_as_f32().map(|v| v != 0.0).collect())
+    }
+
+    /// The `lit_by` masks. A mask is a whole number below 2²⁴; anything else (NaN, negative, a
+    /// fraction from a resampling tool) is no mask, and its pixel is put with the unlit ones.
+    fn lit_by(&self) -> Option<Vec<u32>> {
+        let i = self.find("lit_by")?;
         let mask = |v: f32| {
             if v.fract() == 0.0 && (0.0..16_777_216.0).contains(&v) { v as u32 } else { 0 }
         };
-        channels[i].sample_data.values_as_f32().map(mask).collect()
-    });
-    let white = match WHITE_CHANNELS.map(find) {
-        [Some(x), Some(y), Some(z), Some(s)] => {
-            let planes = [values(x)?, values(y)?, values(z)?, values(s)?];
-            Some((0..width * height).map(|i| planes.each_ref().map(|p| p[i])).collect())
-        }
-        _ => None,
-    };
-    Ok(XyzImage { width, height, pixels, emitter, lit_by, white })
+        Some(self.list[i].sample_data.values_as_f32().map(mask).collect())
+    }
+
+    /// The adapting white, when all of [`WHITE_CHANNELS`] are there.
+    fn white(&self, height: usize) -> Result<Option<Vec<[f32; 4]>>> {
+        let [Some(x), Some(y), Some(z), Some(s)] = WHITE_CHANNELS.map(|n| self.find(n)) else {
+            return Ok(None);
+        };
+        let planes = [self.values(x)?, self.values(y)?, self.values(z)?, self.values(s)?];
+        Ok(Some((0..self.width * height).map(|i| planes.each_ref().map(|p| p[i])).collect()))
+    }
 }
 
 /// The RGB → XYZ matrix (rows) of arbitrary primaries and white, as restauro's display spaces
@@ -291,7 +305,7 @@ pub fn write_exr(
         sort_header_attributes(&mut bytes);
         io::Write::write_all(w, &bytes)
     })
-    .map_err(|error| ImageFileError::Io { path: path.to_owned(), error })
+    .map_err(|error| ImageError::Io { path: path.to_owned(), error })
 }
 
 /// Puts the attributes of a single-part OpenEXR header in name order. The exr crate keeps them
@@ -436,9 +450,9 @@ pub fn write_png(
     space: RgbSpace,
 ) -> Result<()> {
     let bytes = encode_png(width, height, pixels, space)
-        .map_err(|error| ImageFileError::Png { path: path.to_owned(), error })?;
+        .map_err(|error| ImageError::Png { path: path.to_owned(), error })?;
     atomic_file::write(path, &bytes)
-        .map_err(|error| ImageFileError::Io { path: path.to_owned(), error })
+        .map_err(|error| ImageError::Io { path: path.to_owned(), error })
 }
 
 /// The PNG file of `pixels` (RGB, row by row), tagged with `space`, as bytes.
@@ -495,6 +509,7 @@ pub fn encode_png(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::path::PathBuf;
 
     fn scratch(name: &str) -> PathBuf {
         let dir = std::env::temp_dir().join(format!("restauro-img-{name}-{}", std::process::id()));

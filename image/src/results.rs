@@ -4,10 +4,9 @@
 //! (`restauro_spectral::seen`; paper §2.5) — as a relative-XYZ EXR and a PNG. Every file is written under a
 //! temporary name and renamed, so a reader never sees half of one.
 
+use crate::error::ImageError;
 use crate::framebuffer::Framebuffer;
-use crate::image_files::{
-    ImageFileError, PngPixels, XyzImage, write_png, write_spectral_exr, write_xyz_exr,
-};
+use crate::image_files::{PngPixels, XyzImage, write_png, write_spectral_exr, write_xyz_exr};
 use restauro_spectral::appearance::ChannelSpace;
 use restauro_spectral::display::{DisplayParams, Exposure, encode, to_u8};
 use restauro_spectral::grid::wavelength_nm;
@@ -16,14 +15,6 @@ use restauro_spectral::rgb_space::RgbSpace;
 use restauro_spectral::seen::{Adaptation, SeenParams, seen_image};
 use std::path::Path;
 use std::time::Instant;
-
-#[derive(Debug, thiserror::Error)]
-pub enum ResultsError {
-    #[error(transparent)]
-    File(#[from] ImageFileError),
-    #[error("retinex: {0}")]
-    Retinex(String),
-}
 
 /// What to write, beyond the pixels.
 pub struct ResultOptions<'a> {
@@ -42,11 +33,7 @@ pub struct Written {
     pub retinex_s: f64,
 }
 
-fn write_display_png(
-    path: &Path,
-    image: &XyzImage,
-    exposure: Exposure,
-) -> Result<(), ResultsError> {
+fn write_display_png(path: &Path, image: &XyzImage, exposure: Exposure) -> Result<(), ImageError> {
     let encoded = encode(&image.pixels, &DisplayParams { space: RgbSpace::Srgb, exposure });
     write_png(path, image.width, image.height, &PngPixels::Eight(to_u8(&encoded)), RgbSpace::Srgb)?;
     Ok(())
@@ -65,7 +52,7 @@ pub fn write_grid_results(
     frame: Framebuffer,
     name: &str,
     info: &str,
-) -> Result<Written, ResultsError> {
+) -> Result<Written, ImageError> {
     let image = XyzImage {
         width: frame.width as usize,
         height: frame.height as usize,
@@ -92,7 +79,7 @@ pub fn write_results(
     dir: &Path,
     frame: Framebuffer,
     options: &ResultOptions<'_>,
-) -> Result<Written, ResultsError> {
+) -> Result<Written, ImageError> {
     let name = options.name;
     let (width, height) = (frame.width as usize, frame.height as usize);
     // A pixel most of whose camera samples saw the sky is a light source: marked in the EXR's
@@ -155,7 +142,7 @@ pub fn write_results(
             adaptation,
             &|_, _| {},
         )
-        .map_err(|e| ResultsError::Retinex(e.to_string()))?;
+        .map_err(ImageError::Retinex)?;
         retinex_s = started.elapsed().as_secs_f64();
         let settings = report.settings(&params);
         let perceived = XyzImage { width, height, pixels: perceived, emitter, lit_by, white: None };

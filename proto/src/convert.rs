@@ -110,7 +110,7 @@ impl TryFrom<pb::Exposure> for Exposure {
                 return Err(WireError::new("exposure.relative", "false; leave the mode out"));
             }
         };
-        exposure.checked().map_err(|e| WireError::new("exposure", e))
+        exposure.checked().map_err(|e| WireError::new("exposure", e.to_string()))
     }
 }
 

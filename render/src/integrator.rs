@@ -33,6 +33,8 @@
 //! All 81 bands travel together on every ray; nothing here allocates.
 
 use crate::bsdf::{Bsdf, cosine_sample};
+use crate::frame::Frame;
+pub use crate::frame::lift_along;
 use crate::glass::{Optics, Transmission};
 use crate::prepared::{Hit, PreparedScene};
 use crate::sampler::PixelSampler;
@@ -40,6 +42,7 @@ use glam::Vec3A;
 use restauro_scene::scene_file::Integrator;
 use restauro_spectral::Spectrum;
 use std::f32::consts::PI;
+use std::ops::ControlFlow;
 
 pub use restauro_scene::plan::LIT_BITS;
 /// A light lights a point when it gives at least this share of the direct illuminance there
@@ -74,37 +77,6 @@ fn lit_mask(lux: &LitLux) -> u32 {
         .fold(0, |mask, (k, _)| mask | 1 << k)
 }
 
-/// A local frame around a normal (Duff et al., "Building an orthonormal basis, revisited",
-/// JCGT 6(1), 2017).
-#[derive(Clone, Copy)]
-pub(crate) struct Frame {
-    x: Vec3A,
-    y: Vec3A,
-    z: Vec3A,
-}
-
-impl Frame {
-    #[inline]
-    pub(crate) fn new(n: Vec3A) -> Self {
-        let sign = 1.0f32.copysign(n.z);
-        let a = -1.0 / (sign + n.z);
-        let b = n.x * n.y * a;
-        Self {
-            x: Vec3A::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
-            y: Vec3A::new(b, sign + n.y * n.y * a, -n.y),
-            z: n,
-        }
-    }
-    #[inline]
-    fn to_local(self, v: Vec3A) -> Vec3A {
-        Vec3A::new(v.dot(self.x), v.dot(self.y), v.dot(self.z))
-    }
-    #[inline]
-    pub(crate) fn to_world(self, v: Vec3A) -> Vec3A {
-        self.x * v.x + self.y * v.y + self.z * v.z
-    }
-}
-
 /// The reflectance of a light source: what [`Weight::add`] takes for a light added unreflected.
 static NO_LIGHT: Spectrum = Spectrum::ZERO;
 
@@ -112,13 +84,6 @@ static NO_LIGHT: Spectrum = Spectrum::ZERO;
 #[inline]
 pub fn lift(hit: &Hit) -> Vec3A {
     lift_along(hit.point, hit.normal)
-}
-
-/// `point` lifted off its surface along the unit `normal`.
-#[inline]
-pub fn lift_along(point: Vec3A, normal: Vec3A) -> Vec3A {
-    let scale = 1.0 + point.abs().max_element();
-    point + normal * (2e-5 * scale)
 }
 
 /// Whether a bounce `direction`, above the surface by the shading normal, goes into the surface
@@ -377,10 +342,7 @@ fn walk(
     let mut neutral = 1.0f32;
     let mut spectral: Option<Spectrum> = None;
     let (mut origin, mut direction) = (origin, direction);
-    let max_depth = match scene.settings.max_depth {
-        0 => UNCAPPED_DEPTH_GUARD,
-        cap => cap,
-    };
+    let max_depth = depth_cap(scene.settings.max_depth);
     // Whether light met on escaping (the sky, an area luminaire) counts: along the camera's own
     // ray, and after a reflection in glass; not after a surface, whose direct light sampled the
     // sky and the luminaires already (through any glass on the way). `view`: every surface so
@@ -389,32 +351,19 @@ fn walk(
     let mut view = path.from_depth == 0;
     let mut surface = false;
     // The width of the ray's cone (a pixel's, widening with the distance travelled), for the
-    // filtering of photo textures; and where a textured surface's reflectance is put.
+    // filtering of photo textures; and where a textured or soiled surface's reflectance is put.
     let spread = scene.camera.pixel_spread();
     let mut travelled_m = 0.0f32;
-    let mut textured_rho = Spectrum::ZERO;
-    let mut soiled_rho = Spectrum::ZERO;
+    let (mut textured_rho, mut soiled_rho) = (Spectrum::ZERO, Spectrum::ZERO);
     for depth in path.from_depth..max_depth {
         *rays += 1;
         let hit = scene.intersect(origin, direction, f32::INFINITY);
-        let reach = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
-        let through = match &spectral {
-            Some(t) => Weight::Spectral(t),
-            None => Weight::Neutral(neutral),
-        };
-        if let Some((panel, front)) = scene.panel_hit(origin, direction, reach) {
-            // An area luminaire in front of the surface, seen from its emitting side; it ends
-            // the path.
-            if counts && front {
-                through.add(out, &panel.per_nit, &NO_LIGHT, 0.0, panel.luminance_cd_m2);
+        let through = weight_of(&spectral, neutral);
+        let hit = match surface_or_source(scene, (origin, direction), hit, through, counts, out) {
+            ControlFlow::Continue(hit) => hit,
+            ControlFlow::Break(seen) => {
+                return Seen { sky: view && seen, lit_by: lit_mask(&lux), surface };
             }
-            return Seen { sky: view && front, lit_by: lit_mask(&lux), surface };
-        }
-        let Some(hit) = hit else {
-            if let Some(sky) = scene.sky.as_ref().filter(|_| counts) {
-                through.add(out, &sky.per_nit, &NO_LIGHT, 0.0, sky.luminance_cd_m2(direction));
-            }
-            return Seen { sky: view, lit_by: lit_mask(&lux), surface };
         };
         travelled_m += hit.t;
         let bsdf = &scene.materials[hit.material as usize];
@@ -426,27 +375,16 @@ fn walk(
             if depth + 1 == max_depth {
                 break;
             }
-            let Some(transmit) = through_pane(glass, wo.z, sampler, &mut neutral, &mut spectral)
-            else {
-                break;
-            };
-            if transmit {
-                origin = lift_along(hit.point, -hit.normal);
-            } else {
-                direction = frame.to_world(Vec3A::new(-wo.x, -wo.y, wo.z));
-                origin = lift(&hit);
-                counts = true;
-            }
+            let weights = (&mut neutral, &mut spectral);
+            let across = across_pane(glass, (&hit, frame, wo), direction, sampler, weights);
+            let Some(((from, along), reflected)) = across else { break };
+            (origin, direction, counts) = (from, along, counts || reflected);
             continue;
         }
         // The cone's width over a slanted surface: w/√|cos θ| (the mean of its two axes).
         let footprint_m = spread * travelled_m / wo.z.abs().max(0.01).sqrt();
-        let mut rho = scene.reflectance(&hit, footprint_m, &mut textured_rho);
-        if let Some(soiling) = scene.soiling(hit.material) {
-            let share = soiling.share(scene, lift(&hit), hit.shading, sampler, rays);
-            soiling.mix(rho, share, &mut soiled_rho);
-            rho = &soiled_rho;
-        }
+        let buffers = (&mut textured_rho, &mut soiled_rho);
+        let rho = surface_reflectance(scene, &hit, footprint_m, sampler, rays, buffers);
         // The camera's first surface measures its white diffuser, seen through the same glass
         // (`before`, the weight the path arrived with).
         let mut white = if view { path.camera.take() } else { None };
@@ -461,63 +399,204 @@ fn walk(
         }
         match scene.settings.integrator {
             Integrator::Whitted => {
-                let Some(f) = bsdf.mirror_reflectance(wo.z) else { break };
-                match &mut spectral {
-                    Some(s) => *s *= f,
-                    None => neutral *= f,
-                }
-                direction = frame.to_world(Vec3A::new(-wo.x, -wo.y, wo.z));
-                if below_surface(&hit, direction) {
-                    break;
+                match mirror_bounce(bsdf, &vertex, &mut neutral, &mut spectral) {
+                    Some(mirrored) => direction = mirrored,
+                    None => break,
                 }
             }
             Integrator::Path => {
-                let (u, u1, u2) = (sampler.next_1d(), sampler.next_1d(), sampler.next_1d());
-                let Some((wi, pdf)) = bsdf.sample(wo, u, u1, u2) else { break };
-                let f = bsdf.eval_with(rho, wo, wi) * (wi.z / pdf);
-                let throughput = match &mut spectral {
-                    Some(t) => {
-                        *t *= f;
-                        t
-                    }
-                    None => spectral.insert(f * neutral),
-                };
+                let sampled = sample_bounce(bsdf, &vertex, sampler, neutral, &mut spectral);
+                let Some((wi, pdf, throughput)) = sampled else { break };
                 direction = frame.to_world(wi);
                 if below_surface(&hit, direction) {
                     break;
                 }
                 if let (Some(white), Some((spectral_before, neutral_before))) = (white, before) {
-                    // The rest of the path is the radiance L_i arriving along wi, walked on its
-                    // own: this surface reflects throughput · L_i of it, and the white
-                    // diffuser L_i · cos θ / (π · pdf), both behind any glass on the way in.
-                    let rest = Path {
-                        from_depth: depth + 1,
-                        escape: Escape::Nothing,
-                        camera: None,
-                        roulette: throughput.max_value(),
-                    };
-                    let mut incoming = Spectrum::ZERO;
-                    walk(scene, (lift(&hit), direction), rest, sampler, rays, &mut incoming);
-                    *out += *throughput * incoming;
-                    let arrived = match &spectral_before {
-                        Some(t) => Weight::Spectral(t),
-                        None => Weight::Neutral(neutral_before),
-                    };
-                    arrived.add(white, &incoming, &NO_LIGHT, 0.0, wi.z / (PI * pdf));
+                    let rest = ((lift(&hit), direction), depth + 1);
+                    let camera = (weight_of(&spectral_before, neutral_before), white);
+                    let bounce = (&*throughput, wi.z / (PI * pdf));
+                    walk_rest(scene, rest, bounce, camera, sampler, rays, out);
                     return Seen { sky: false, lit_by: lit_mask(&lux), surface };
                 }
-                if depth >= 2 {
-                    let survive = (throughput.max_value() * path.roulette).min(0.95);
-                    if sampler.next_1d() >= survive {
-                        break;
-                    }
-                    *throughput /= survive;
+                if depth >= 2 && !survives_roulette(throughput, path.roulette, sampler) {
+                    break;
                 }
             }
         }
         origin = lift(&hit);
     }
     Seen { sky: false, lit_by: lit_mask(&lux), surface }
+}
+
+/// What the light arriving along a path is multiplied by: its spectral throughput once it has
+/// one, else its neutral factor.
+#[inline]
+fn weight_of(spectral: &Option<Spectrum>, neutral: f32) -> Weight<'_> {
+    match spectral {
+        Some(t) => Weight::Spectral(t),
+        None => Weight::Neutral(neutral),
+    }
+}
+
+/// What a ray meets: the surface `hit` it goes on to, or a light source that ends the path,
+/// an area luminaire before the surface (whichever side it meets) or the sky when it meets no
+/// surface. At a source it adds the source's radiance, times `through`, when light met on
+/// escaping `counts`, and breaks with whether the ray saw a source (a luminaire from its
+/// emitting side, or the sky).
+#[inline]
+fn surface_or_source(
+    scene: &PreparedScene,
+    (origin, direction): (Vec3A, Vec3A),
+    hit: Option<Hit>,
+    through: Weight<'_>,
+    counts: bool,
+    out: &mut Spectrum,
+) -> ControlFlow<bool, Hit> {
+    let reach = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
+    if let Some((panel, front)) = scene.panel_hit(origin, direction, reach) {
+        if counts && front {
+            through.add(out, &panel.per_nit, &NO_LIGHT, 0.0, panel.luminance_cd_m2);
+        }
+        return ControlFlow::Break(front);
+    }
+    let Some(hit) = hit else {
+        if let Some(sky) = scene.sky.as_ref().filter(|_| counts) {
+            through.add(out, &sky.per_nit, &NO_LIGHT, 0.0, sky.luminance_cd_m2(direction));
+        }
+        return ControlFlow::Break(true);
+    };
+    ControlFlow::Continue(hit)
+}
+
+/// Where a path goes at a pane ([`through_pane`] chooses, and weights the path): the ray it
+/// goes on along, straight on from beyond the pane or mirrored off it (`wo`, the direction back
+/// along the incoming ray in the pane's frame), and whether it reflected; `None` when the pane
+/// neither reflects nor transmits.
+#[inline]
+fn across_pane(
+    glass: &crate::glass::Glass,
+    (hit, frame, wo): (&Hit, Frame, Vec3A),
+    direction: Vec3A,
+    sampler: &mut PixelSampler,
+    (neutral, spectral): (&mut f32, &mut Option<Spectrum>),
+) -> Option<((Vec3A, Vec3A), bool)> {
+    Some(if through_pane(glass, wo.z, sampler, neutral, spectral)? {
+        ((lift_along(hit.point, -hit.normal), direction), false)
+    } else {
+        ((lift(hit), frame.to_world(Vec3A::new(-wo.x, -wo.y, wo.z))), true)
+    })
+}
+
+/// The diffuse reflectance at a hit, as the light sees it: its material's, under its photo's
+/// or vertex colours' detail filtered over `footprint_m` ([`PreparedScene::reflectance`]), and
+/// under its soiling's deposit, one estimate of the share it covers there
+/// ([`crate::soiling`]). `buffers` hold the textured and the soiled reflectance.
+#[inline]
+fn surface_reflectance<'a>(
+    scene: &'a PreparedScene,
+    hit: &Hit,
+    footprint_m: f32,
+    sampler: &mut PixelSampler,
+    rays: &mut u64,
+    (textured_rho, soiled_rho): (&'a mut Spectrum, &'a mut Spectrum),
+) -> &'a Spectrum {
+    let rho = scene.reflectance(hit, footprint_m, textured_rho);
+    let Some(soiling) = scene.soiling(hit.material) else { return rho };
+    let occluded = |from, towards| scene.occluded(from, towards, f32::INFINITY);
+    let share = soiling.share(occluded, lift(hit), hit.shading, sampler, rays);
+    soiling.mix(rho, share, soiled_rho);
+    soiled_rho
+}
+
+/// Whitted's bounce: the mirror direction, the path's weight multiplied by the surface's
+/// Fresnel reflectance; `None` when the surface has no specular part or the mirror direction
+/// goes into it ([`below_surface`]).
+#[inline]
+fn mirror_bounce(
+    bsdf: &Bsdf,
+    v: &Vertex<'_>,
+    neutral: &mut f32,
+    spectral: &mut Option<Spectrum>,
+) -> Option<Vec3A> {
+    let f = bsdf.mirror_reflectance(v.wo.z)?;
+    match spectral {
+        Some(s) => *s *= f,
+        None => *neutral *= f,
+    }
+    let direction = v.frame.to_world(Vec3A::new(-v.wo.x, -v.wo.y, v.wo.z));
+    (!below_surface(v.hit, direction)).then_some(direction)
+}
+
+/// The path tracer's bounce: a direction drawn from the BSDF (in the vertex's frame) and its
+/// pdf, and the path's throughput, multiplied by f · cos θ / pdf (spectral from the first
+/// bounce on); `None` when the BSDF gives no direction.
+#[inline]
+fn sample_bounce<'s>(
+    bsdf: &Bsdf,
+    v: &Vertex<'_>,
+    sampler: &mut PixelSampler,
+    neutral: f32,
+    spectral: &'s mut Option<Spectrum>,
+) -> Option<(Vec3A, f32, &'s mut Spectrum)> {
+    let (u, u1, u2) = (sampler.next_1d(), sampler.next_1d(), sampler.next_1d());
+    let (wi, pdf) = bsdf.sample(v.wo, u, u1, u2)?;
+    let f = bsdf.eval_with(v.rho, v.wo, wi) * (wi.z / pdf);
+    match spectral {
+        Some(t) => *t *= f,
+        None => *spectral = Some(f * neutral),
+    }
+    Some((wi, pdf, spectral.as_mut()?))
+}
+
+/// Russian roulette from the third surface on: the path goes on with probability
+/// min(0.95, the largest band of its throughput, times the one it started with), and its
+/// throughput is divided by that probability when it does.
+#[inline]
+fn survives_roulette(throughput: &mut Spectrum, roulette: f32, sampler: &mut PixelSampler) -> bool {
+    let survive = (throughput.max_value() * roulette).min(0.95);
+    if sampler.next_1d() >= survive {
+        return false;
+    }
+    *throughput /= survive;
+    true
+}
+
+/// The surfaces a path meets at most: `render.max_depth`, or for 0 (no cap)
+/// [`UNCAPPED_DEPTH_GUARD`].
+#[inline]
+fn depth_cap(max_depth: u32) -> u32 {
+    match max_depth {
+        0 => UNCAPPED_DEPTH_GUARD,
+        cap => cap,
+    }
+}
+
+/// The rest of a camera path past its first surface (`from_depth` surfaces met), under the path
+/// tracer: the radiance L_i arriving along the sampled direction, walked on its own, its
+/// roulette's odds scaled by the throughput so far. The surface reflects
+/// `throughput` · L_i of it into `out`, and the white diffuser there L_i · cos θ / (π · pdf)
+/// (`bounce`'s second part) into `white`, both behind any glass on the way in (`arrived`, the
+/// weight the path arrived with).
+#[allow(clippy::too_many_arguments)] // the walk's context, and the two sums the rest adds to
+fn walk_rest(
+    scene: &PreparedScene,
+    (ray, from_depth): ((Vec3A, Vec3A), u32),
+    (throughput, white_scale): (&Spectrum, f32),
+    (arrived, white): (Weight<'_>, &mut Spectrum),
+    sampler: &mut PixelSampler,
+    rays: &mut u64,
+    out: &mut Spectrum,
+) {
+    let rest = Path {
+        from_depth,
+        escape: Escape::Nothing,
+        camera: None,
+        roulette: throughput.max_value(),
+    };
+    let mut incoming = Spectrum::ZERO;
+    walk(scene, ray, rest, sampler, rays, &mut incoming);
+    *out += *throughput * incoming;
+    arrived.add(white, &incoming, &NO_LIGHT, 0.0, white_scale);
 }
 
 /// A path meets a pane: it goes through or reflects off, chosen by their shares (mean over the

@@ -9,7 +9,6 @@ use crate::glass::Transmission;
 use crate::light::{Distribution, Light, Panel};
 use crate::material_detail::{MaterialDetails, Surface, own_detail};
 use crate::sampler::Strata;
-use crate::sensor::Sensor;
 use crate::sky::Sky;
 use crate::soiling::Soiling;
 use crate::texture::{Detail, DetailPoint, LuminancePyramid, Pyramid, TexturedTriangle};
@@ -20,7 +19,8 @@ use obvhs::cwbvh::CwBvh;
 use obvhs::ray::{Ray, RayHit};
 use obvhs::rt_triangle::RtTriangle;
 use obvhs::triangle::Triangle;
-use restauro_scene::load::{LoadedScene, ResolvedLight};
+use restauro_scene::load::{LoadedObject, LoadedScene, ResolvedLight};
+use restauro_scene::mesh::Mesh;
 use restauro_scene::plan::Plan;
 use restauro_scene::scene_file::{Integrator, MaterialModel, Transmittance};
 use restauro_spectral::Spectrum;
@@ -123,6 +123,15 @@ pub struct PreparedScene {
     has_glass: bool,
 }
 
+/// A sensor of a calculation grid: where the grids' irradiance is computed
+/// ([`crate::sensor::irradiance_sum`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Sensor {
+    pub point: Vec3A,
+    /// Unit; the side whose illuminance is computed.
+    pub normal: Vec3A,
+}
+
 /// A triangle without shading normals in [`PreparedScene::smooth_of`].
 const FLAT: u32 = u32::MAX;
 
@@ -163,133 +172,35 @@ impl PreparedScene {
         variant: Option<&str>,
         settings: Settings,
     ) -> Result<Self, TraceError> {
-        if let Some(v) = variant
-            && !scene.file.variants.contains_key(v)
-        {
-            let known: Vec<&str> = scene.file.variants.keys().map(String::as_str).collect();
-            return Err(TraceError::UnknownVariant {
-                name: v.to_owned(),
-                known: if known.is_empty() { "none".into() } else { known.join(", ") },
-            });
-        }
-        // Materials: one BSDF per (material, state), and per part's own photo where one
-        // shows (the file's photo of a part, under a material without a texture of its own).
-        let mut index: BTreeMap<(String, String, Option<String>), u32> = BTreeMap::new();
-        let mut materials = Vec::new();
-        let mut tris = Vec::new();
-        let mut material_of = Vec::new();
-        let mut smooth = Vec::new();
-        let mut details = MaterialDetails::default();
-        // Per material: its name and state, for its degradation map and soiling.
-        let mut material_states: Vec<(String, String)> = Vec::new();
-        let viewer = scene.viewer();
-        let (mut textured, mut coloured) = (Vec::new(), Vec::new());
-        for o in &scene.objects {
-            let m = &o.mesh;
-            let coloured_groups = m.coloured_groups();
-            let group_bsdf: Vec<u32> = m
-                .groups
-                .iter()
-                .zip(&o.group_materials)
-                .zip(&coloured_groups)
-                .map(|((g, name), &coloured)| {
-                    let state = variant
-                        .and_then(|v| scene.state_of(v, &o.name, &g.name))
-                        .unwrap_or("base")
-                        .to_owned();
-                    let own = own_detail(scene, (name, &state), &o.name, g, coloured);
-                    let key = (name.clone(), state.clone(), own.as_ref().map(|(k, _)| k.clone()));
-                    *index.entry(key).or_insert_with(|| {
-                        materials.push(bsdf(scene, name, &state));
-                        material_states.push((name.clone(), state.clone()));
-                        details.add_material(scene, name, &state, own);
-                        (materials.len() - 1) as u32
-                    })
-                })
-                .collect();
-            let colours = details.vertex_colours(m, &group_bsdf);
-            // Levels of detail: the camera's choice ([`restauro_scene::lod`]).
-            let shown = m.levels.shown(&viewer);
-            for (k, (t, &g)) in m.triangles.iter().zip(&m.triangle_group).enumerate() {
-                if o.hidden_groups[g as usize] || shown.as_ref().is_some_and(|s| !s[k]) {
-                    continue;
-                }
-                let [a, b, c] = t.map(|i| Vec3A::from(m.positions[i as usize]));
-                tris.push(Triangle { v0: a, v1: b, v2: c });
-                material_of.push(group_bsdf[g as usize]);
-                // Panes are traced flat: through glass, rays go on from the hit itself.
-                let pane = matches!(materials[group_bsdf[g as usize] as usize], Bsdf::Glass(_));
-                let normals = m.normals.as_ref().filter(|_| !pane);
-                if let Some(corners) = normals.and_then(|n| smooth_normals(n, t, [a, b, c])) {
-                    smooth.push((tris.len() as u32 - 1, corners));
-                }
-                let bsdf_index = group_bsdf[g as usize];
-                let at = tris.len() as u32 - 1;
-                match details.triangle(bsdf_index, m, t, [a, b, c], colours.as_deref()) {
-                    Some(Surface::Textured(t)) => textured.push((at, t)),
-                    Some(Surface::Coloured(corners)) => coloured.push((at, corners)),
-                    None => {}
-                }
-            }
-        }
+        check_variant(scene, variant)?;
+        let Gathered {
+            materials,
+            material_states,
+            details,
+            tris,
+            material_of,
+            smooth,
+            textured,
+            coloured,
+            ..
+        } = Gathered::from_scene(scene, variant);
         if tris.is_empty() {
             return Err(TraceError::Scene("nothing to render: every part is hidden".into()));
         }
-        let bvh = obvhs::cwbvh::builder::build_cwbvh_from_tris(
-            &tris,
-            BvhBuildParams::medium_build(),
-            &mut Duration::default(),
-        );
+        let (bvh, triangles, normals) = build_bvh(&tris);
         // Triangles in BVH order, so a hit's slot indexes them directly.
         let order = &bvh.primitive_indices;
-        let triangles: Vec<RtTriangle> =
-            order.iter().map(|&i| RtTriangle::from(&tris[i as usize])).collect();
-        let normals: Vec<Vec3A> = order
-            .iter()
-            .map(|&i| {
-                let t = &tris[i as usize];
-                (t.v1 - t.v0).cross(t.v2 - t.v0).normalize_or_zero()
-            })
-            .collect();
         let material_of: Vec<u32> = order.iter().map(|&i| material_of[i as usize]).collect();
         let (smooth_of, vertex_normals) = in_bvh_order(&smooth, order);
         let (texture_of, textured) = in_bvh_order(&textured, order);
         let (coloured_of, coloured) = in_bvh_order(&coloured, order);
         let (details, pyramids, palette) = details.details();
-        let mut lights = Vec::new();
-        let mut sky = None;
-        for l in &scene.lights {
-            match l {
-                ResolvedLight::Sky { illuminance_lux, model, spectrum, general, ground_cd_m2 } => {
-                    let per_nit = luminous(scene, spectrum)?;
-                    sky =
-                        Some(Sky::new(*illuminance_lux, *model, per_nit, *general, *ground_cd_m2));
-                }
-                _ => lights.push(light(scene, l)?),
-            }
-        }
-        let sensors = scene
-            .grids
-            .iter()
-            .flat_map(|g| {
-                let normal = Vec3A::from(g.normal.map(|x| x as f32));
-                g.points
-                    .iter()
-                    .map(move |p| Sensor { point: Vec3A::from(p.map(|x| x as f32)), normal })
-            })
-            .collect();
-        let panels = lights
-            .iter()
-            .filter_map(|l| match l {
-                Light::Area(p) => Some(p.clone()),
-                _ => None,
-            })
-            .collect();
+        let (lights, sky) = lights_and_sky(scene)?;
         let has_glass = materials.iter().any(|m| matches!(m, Bsdf::Glass(_)));
         Ok(Self {
             has_glass,
-            sensors,
-            panels,
+            sensors: grid_sensors(scene),
+            panels: area_panels(&lights),
             camera: Camera::new(&scene.camera),
             strata: Strata::new(settings.samples_per_pixel),
             settings,
@@ -512,7 +423,7 @@ impl PreparedScene {
                 return BLOCKED;
             }
             // On, beyond the pane (the hit's normal faces back along the ray).
-            from = crate::integrator::lift_along(hit.point, -hit.normal);
+            from = crate::frame::lift_along(hit.point, -hit.normal);
         }
         BLOCKED
     }
@@ -533,6 +444,175 @@ impl PreparedScene {
             .filter(|t| t.is_finite())
             .min_by(f32::total_cmp)
     }
+}
+
+/// Refuses a variant the scene does not define, naming those it does.
+fn check_variant(scene: &LoadedScene, variant: Option<&str>) -> Result<(), TraceError> {
+    if let Some(v) = variant
+        && !scene.file.variants.contains_key(v)
+    {
+        let known: Vec<&str> = scene.file.variants.keys().map(String::as_str).collect();
+        return Err(TraceError::UnknownVariant {
+            name: v.to_owned(),
+            known: if known.is_empty() { "none".into() } else { known.join(", ") },
+        });
+    }
+    Ok(())
+}
+
+/// The triangles to trace, in the meshes' order (before the BVH orders them), and the materials
+/// they resolve to: one BSDF per (material, state), and per part's own photo where one shows
+/// (the file's photo of a part, under a material without a texture of its own).
+#[derive(Default)]
+struct Gathered {
+    /// Each BSDF's index, by material, state and the part's own detail.
+    index: BTreeMap<(String, String, Option<String>), u32>,
+    materials: Vec<Bsdf>,
+    /// Per material: its name and state, for its degradation map and soiling.
+    material_states: Vec<(String, String)>,
+    details: MaterialDetails,
+    tris: Vec<Triangle>,
+    /// Per triangle, its material.
+    material_of: Vec<u32>,
+    /// The triangles with shading normals, by index in `tris`, and their vertex normals.
+    smooth: Vec<(u32, [Vec3A; 3])>,
+    /// The triangles on which a photo gives their material detail.
+    textured: Vec<(u32, TexturedTriangle)>,
+    /// The triangles whose vertex colours give their material detail: their corners' colours.
+    coloured: Vec<(u32, [u32; 3])>,
+}
+
+impl Gathered {
+    /// Every triangle shown of every object, its part's material in `variant`'s state.
+    fn from_scene(scene: &LoadedScene, variant: Option<&str>) -> Self {
+        let mut gathered = Self::default();
+        let viewer = scene.viewer();
+        for o in &scene.objects {
+            let m = &o.mesh;
+            let group_bsdf = gathered.group_materials(scene, variant, o);
+            let colours = gathered.details.vertex_colours(m, &group_bsdf);
+            // Levels of detail: the camera's choice ([`restauro_scene::lod`]).
+            let shown = m.levels.shown(&viewer);
+            for (k, (t, &g)) in m.triangles.iter().zip(&m.triangle_group).enumerate() {
+                if o.hidden_groups[g as usize] || shown.as_ref().is_some_and(|s| !s[k]) {
+                    continue;
+                }
+                gathered.add_triangle(m, t, group_bsdf[g as usize], colours.as_deref());
+            }
+        }
+        gathered
+    }
+
+    /// Per group of object `o`'s mesh, its BSDF's index, each BSDF added the first time a
+    /// group needs it.
+    fn group_materials(
+        &mut self,
+        scene: &LoadedScene,
+        variant: Option<&str>,
+        o: &LoadedObject,
+    ) -> Vec<u32> {
+        let m = &o.mesh;
+        let coloured_groups = m.coloured_groups();
+        m.groups
+            .iter()
+            .zip(&o.group_materials)
+            .zip(&coloured_groups)
+            .map(|((g, name), &coloured)| {
+                let state = variant
+                    .and_then(|v| scene.state_of(v, &o.name, &g.name))
+                    .unwrap_or("base")
+                    .to_owned();
+                let own = own_detail(scene, (name, &state), &o.name, g, coloured);
+                let key = (name.clone(), state.clone(), own.as_ref().map(|(k, _)| k.clone()));
+                *self.index.entry(key).or_insert_with(|| {
+                    self.materials.push(bsdf(scene, name, &state));
+                    self.material_states.push((name.clone(), state.clone()));
+                    self.details.add_material(scene, name, &state, own);
+                    (self.materials.len() - 1) as u32
+                })
+            })
+            .collect()
+    }
+
+    /// Triangle `t` of mesh `m`, of BSDF `bsdf_index`, with its shading normals and its share
+    /// of its material's detail (`colours`, the mesh's vertex colours in the palette).
+    fn add_triangle(&mut self, m: &Mesh, t: &[u32; 3], bsdf_index: u32, colours: Option<&[u32]>) {
+        let [a, b, c] = t.map(|i| Vec3A::from(m.positions[i as usize]));
+        self.tris.push(Triangle { v0: a, v1: b, v2: c });
+        self.material_of.push(bsdf_index);
+        // Panes are traced flat: through glass, rays go on from the hit itself.
+        let pane = matches!(self.materials[bsdf_index as usize], Bsdf::Glass(_));
+        let normals = m.normals.as_ref().filter(|_| !pane);
+        if let Some(corners) = normals.and_then(|n| smooth_normals(n, t, [a, b, c])) {
+            self.smooth.push((self.tris.len() as u32 - 1, corners));
+        }
+        let at = self.tris.len() as u32 - 1;
+        match self.details.triangle(bsdf_index, m, t, [a, b, c], colours) {
+            Some(Surface::Textured(t)) => self.textured.push((at, t)),
+            Some(Surface::Coloured(corners)) => self.coloured.push((at, corners)),
+            None => {}
+        }
+    }
+}
+
+/// The BVH over `tris`, and the triangles and their normals in its order.
+fn build_bvh(tris: &[Triangle]) -> (CwBvh, Vec<RtTriangle>, Vec<Vec3A>) {
+    let bvh = obvhs::cwbvh::builder::build_cwbvh_from_tris(
+        tris,
+        BvhBuildParams::medium_build(),
+        &mut Duration::default(),
+    );
+    let order = &bvh.primitive_indices;
+    let triangles: Vec<RtTriangle> =
+        order.iter().map(|&i| RtTriangle::from(&tris[i as usize])).collect();
+    let normals: Vec<Vec3A> = order
+        .iter()
+        .map(|&i| {
+            let t = &tris[i as usize];
+            (t.v1 - t.v0).cross(t.v2 - t.v0).normalize_or_zero()
+        })
+        .collect();
+    (bvh, triangles, normals)
+}
+
+/// The scene's lights as spectral terms, and its sky apart (at most one: the loader refuses
+/// two).
+fn lights_and_sky(scene: &LoadedScene) -> Result<(Vec<Light>, Option<Sky>), TraceError> {
+    let mut lights = Vec::new();
+    let mut sky = None;
+    for l in &scene.lights {
+        match l {
+            ResolvedLight::Sky { illuminance_lux, model, spectrum, general, ground_cd_m2 } => {
+                let per_nit = luminous(scene, spectrum)?;
+                sky = Some(Sky::new(*illuminance_lux, *model, per_nit, *general, *ground_cd_m2));
+            }
+            _ => lights.push(light(scene, l)?),
+        }
+    }
+    Ok((lights, sky))
+}
+
+/// The sensors of every calculation grid, in the grids' order.
+fn grid_sensors(scene: &LoadedScene) -> Vec<Sensor> {
+    scene
+        .grids
+        .iter()
+        .flat_map(|g| {
+            let normal = Vec3A::from(g.normal.map(|x| x as f32));
+            g.points.iter().map(move |p| Sensor { point: Vec3A::from(p.map(|x| x as f32)), normal })
+        })
+        .collect()
+}
+
+/// The area luminaires among `lights`.
+fn area_panels(lights: &[Light]) -> Vec<Panel> {
+    lights
+        .iter()
+        .filter_map(|l| match l {
+            Light::Area(p) => Some(p.clone()),
+            _ => None,
+        })
+        .collect()
 }
 
 /// Per material (by name and state), its state's soiling; empty when none has one.

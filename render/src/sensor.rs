@@ -15,8 +15,9 @@
 //! Each of a sensor's two rows has its own keyed random sequence, so the grids are bit-identical
 //! wherever their tiles are computed.
 
+use crate::frame::{Frame, lift_along};
 use crate::glass::Transmission;
-use crate::integrator::{Escape, Frame, lift_along, trace};
+use crate::integrator::{Escape, trace};
 use crate::light::Light;
 use crate::prepared::PreparedScene;
 use crate::sampler::PixelKey;
@@ -25,13 +26,8 @@ use restauro_scene::scene_file::Integrator;
 use restauro_spectral::Spectrum;
 use std::f32::consts::PI;
 
-/// A sensor of a calculation grid.
-#[derive(Clone, Copy, Debug)]
-pub struct Sensor {
-    pub point: Vec3A,
-    /// Unit; the side whose illuminance is computed.
-    pub normal: Vec3A,
-}
+/// The sensors themselves are part of the prepared scene ([`PreparedScene::sensors`]).
+pub use crate::prepared::Sensor;
 
 /// What a sensor's row holds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

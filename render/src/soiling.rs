@@ -7,8 +7,7 @@
 //! cornice darkens smoothly, without a map.
 
 use crate::bsdf::cosine_sample;
-use crate::integrator::Frame;
-use crate::prepared::PreparedScene;
+use crate::frame::Frame;
 use crate::sampler::PixelSampler;
 use glam::Vec3A;
 use restauro_scene::scene_file::Soiling as SoilingFile;
@@ -50,10 +49,11 @@ impl Soiling {
     }
 
     /// One estimate of the share the deposit covers at a point with shading normal `normal`,
-    /// rays leaving from `origin`.
+    /// rays leaving from `origin`; `occluded(origin, direction)` is the scene's shadow ray to
+    /// infinity ([`crate::prepared::PreparedScene::occluded`]).
     pub fn share(
         &self,
-        scene: &PreparedScene,
+        occluded: impl Fn(Vec3A, Vec3A) -> bool,
         origin: Vec3A,
         normal: Vec3A,
         sampler: &mut PixelSampler,
@@ -62,11 +62,11 @@ impl Soiling {
         let (u1, u2) = sampler.next2();
         let to_sky = Frame::new(normal).to_world(cosine_sample(u1, u2));
         *rays += 2;
-        let v_sky = to_sky.z > 0.0 && !scene.occluded(origin, to_sky, f32::INFINITY);
+        let v_sky = to_sky.z > 0.0 && !occluded(origin, to_sky);
         let (u1, u2) = sampler.next2();
         let to_rain = Frame::new(self.to_rain).to_world(cone_sample(u1, u2));
         let cos = normal.dot(to_rain);
-        let v_rain = if cos > 0.0 && !scene.occluded(origin, to_rain, f32::INFINITY) {
+        let v_rain = if cos > 0.0 && !occluded(origin, to_rain) {
             cos / self.exposure_of_facing_wall
         } else {
             0.0

@@ -11,7 +11,7 @@
 //! No filtering is needed: colours given per vertex vary no faster than the geometry, which a
 //! pixel's samples already filter.
 
-use crate::texture::luminance;
+use restauro_scene::texture::luminance;
 use restauro_spectral::Spectrum;
 use restauro_spectral::rgb_space::Transfer;
 use restauro_spectral::rgb_upsampling::{SigmoidPolynomial, fit};

@@ -43,6 +43,18 @@ fn render(stone: &str, light: Light, card: bool) -> (TileResult, Vec<usize>) {
 fn render_with(stone: &str, light: Light, card: bool, spp: u32) -> (TileResult, Vec<usize>) {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
+    write_meshes(d);
+    std::fs::write(d.join("scene.toml"), scene_toml(stone, light, card, spp)).unwrap();
+    let loaded = load_folder(&d.join("scene.toml"), &Limits::default()).unwrap();
+    let prepared = PreparedScene::new(&loaded, None, Settings::from(&loaded.file.render)).unwrap();
+    let tile = render_tile(&prepared, Rect { x: 0, y: 0, width: W, height: H }, false);
+    let wall = wall_pixels(&prepared);
+    assert!(wall.len() > 300, "premise: the wall is in view ({} pixels)", wall.len());
+    (tile, wall)
+}
+
+/// The square's paving, the wall and the card, one quad each, into folder `d`.
+fn write_meshes(d: &std::path::Path) {
     let quad = |name: &str, v: [[f32; 3]; 4]| {
         let mut s = String::new();
         for p in v {
@@ -56,12 +68,11 @@ fn render_with(stone: &str, light: Light, card: bool, spp: u32) -> (TileResult, 
     );
     quad("wall.obj", [[-5.0, 6.0, 0.0], [5.0, 6.0, 0.0], [5.0, 6.0, 4.0], [-5.0, 6.0, 4.0]]);
     quad("card.obj", [[-3.2, 5.0, 0.4], [-2.0, 5.0, 0.4], [-2.0, 5.0, 1.6], [-3.2, 5.0, 1.6]]);
-    let card = if card {
-        "[[objects]]\nname = \"card\"\nmesh = \"card.obj\"\nmaterial = \"card\"\n"
-    } else {
-        ""
-    };
-    let lights = match light {
+}
+
+/// The `[[lights]]` of `light`.
+fn lights_toml(light: Light) -> String {
+    match light {
         Light::SunAndSky => r#"[[lights]]
 kind = "sun"
 illuminance_lux = 80000.0
@@ -93,8 +104,19 @@ falloff_deg = 10.0
 spectrum = "flood"
 "#
         ),
+    }
+}
+
+/// The scene file of a case: the camera, the path tracer at `spp`, the spectra and materials,
+/// the ground, the wall of `stone`, the card when `card`, and the lights.
+fn scene_toml(stone: &str, light: Light, card: bool, spp: u32) -> String {
+    let card = if card {
+        "[[objects]]\nname = \"card\"\nmesh = \"card.obj\"\nmaterial = \"card\"\n"
+    } else {
+        ""
     };
-    let toml = format!(
+    let lights = lights_toml(light);
+    format!(
         r#"format = 1
 [camera]
 position = [0.0, -8.0, 1.6]
@@ -133,25 +155,22 @@ name = "wall"
 mesh = "wall.obj"
 material = "stone"
 {card}{lights}"#
-    );
-    std::fs::write(d.join("scene.toml"), toml).unwrap();
-    let loaded = load_folder(&d.join("scene.toml"), &Limits::default()).unwrap();
-    let prepared = PreparedScene::new(&loaded, None, Settings::from(&loaded.file.render)).unwrap();
-    let tile = render_tile(&prepared, Rect { x: 0, y: 0, width: W, height: H }, false);
-    // The wall's right half, 0.5 m in from its edges, by where each pixel's centre ray meets
-    // the plane y = 6.
+    )
+}
+
+/// The wall's right half, 0.5 m in from its edges, by where each pixel's centre ray meets
+/// the plane y = 6.
+fn wall_pixels(prepared: &PreparedScene) -> Vec<usize> {
     let o = prepared.camera.origin;
-    let wall: Vec<usize> = (0..(W * H) as usize)
+    (0..(W * H) as usize)
         .filter(|&p| {
             let (dir, _) =
-                restauro_render::tile::camera_ray(&prepared, p as u32 % W, p as u32 / W, 0);
+                restauro_render::tile::camera_ray(prepared, p as u32 % W, p as u32 / W, 0);
             let t = (6.0 - o.y) / dir.y;
             let at = o + dir * t;
             t > 0.0 && (0.5..4.5).contains(&at.x) && (0.5..3.5).contains(&at.z)
         })
-        .collect();
-    assert!(wall.len() > 300, "premise: the wall is in view ({} pixels)", wall.len());
-    (tile, wall)
+        .collect()
 }
 
 /// The seen image of a tile, as the farm makes it.

@@ -18,7 +18,8 @@ fn mean_share(prepared: &PreparedScene, origin: Vec3A, n: u32) -> f32 {
     let total: f32 = (0..n)
         .map(|s| {
             let mut sampler = PixelSampler::new(7, 0, 0, s);
-            soiling.share(prepared, lift(&hit), hit.shading, &mut sampler, &mut rays)
+            let occluded = |from, towards| prepared.occluded(from, towards, f32::INFINITY);
+            soiling.share(occluded, lift(&hit), hit.shading, &mut sampler, &mut rays)
         })
         .sum();
     total / n as f32

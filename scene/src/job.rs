@@ -162,7 +162,7 @@ impl JobSpec {
     /// Checks what the plan does not: the exposure's number, and that the options name no
     /// empty variant.
     pub fn checked(self) -> Result<Self, JobSpecError> {
-        self.exposure.checked().map_err(|e| refuse("exposure", e))?;
+        self.exposure.checked().map_err(|e| refuse("exposure", e.to_string()))?;
         if self.render.variant.as_deref().is_some_and(str::is_empty) {
             return Err(refuse("render.variant", "an empty variant name; leave it out instead"));
         }

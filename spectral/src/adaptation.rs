@@ -5,6 +5,7 @@
 //! The cone spaces are also the channel spaces of the Retinex stage (the paper's l, m, s).
 
 use crate::colorimetry::Xyz;
+use crate::error::Error;
 use glam::{DMat3, DVec3};
 use serde::Serialize;
 use std::fmt;
@@ -62,16 +63,18 @@ impl fmt::Display for ConeSpace {
 }
 
 impl FromStr for ConeSpace {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self, Error> {
         match s.to_ascii_lowercase().as_str() {
             "von-kries" | "vonkries" | "hpe" => Ok(ConeSpace::VonKries),
             "bradford" => Ok(ConeSpace::Bradford),
             "cat02" => Ok(ConeSpace::Cat02),
             "cat16" => Ok(ConeSpace::Cat16),
-            _ => Err(format!(
-                "unknown chromatic adaptation `{s}`; use von-kries, bradford, cat02 or cat16"
-            )),
+            _ => Err(Error::UnknownChoice {
+                kind: "chromatic adaptation",
+                name: s.to_owned(),
+                choices: "von-kries, bradford, cat02 or cat16",
+            }),
         }
     }
 }

@@ -10,7 +10,7 @@
 
 use crate::adaptation::ConeSpace;
 use crate::colorimetry::{Chromaticity, Xyz};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::retinex::{RetinexParams, RetinexStats, retinex};
 use crate::rgb_space::RgbSpace;
 use glam::{DMat3, DVec3};
@@ -52,8 +52,8 @@ impl fmt::Display for ChannelSpace {
 }
 
 impl FromStr for ChannelSpace {
-    type Err = String;
-    fn from_str(s: &str) -> std::result::Result<Self, String> {
+    type Err = Error;
+    fn from_str(s: &str) -> std::result::Result<Self, Error> {
         match s.to_ascii_lowercase().as_str() {
             "lms" | "lms-hpe" => Ok(ChannelSpace::Lms(ConeSpace::VonKries)),
             "lms-cat02" => Ok(ChannelSpace::Lms(ConeSpace::Cat02)),
@@ -62,10 +62,12 @@ impl FromStr for ChannelSpace {
             "rgb" | "rgb-srgb" => Ok(ChannelSpace::Rgb(RgbSpace::Srgb)),
             "rgb-p3" => Ok(ChannelSpace::Rgb(RgbSpace::DisplayP3)),
             "rgb-rec2020" => Ok(ChannelSpace::Rgb(RgbSpace::Rec2020)),
-            _ => Err(format!(
-                "unknown Retinex channel space `{s}`; use lms (= lms-hpe), lms-cat02, \
-                 lms-cat16, lms-bradford, rgb (= rgb-srgb), rgb-p3 or rgb-rec2020"
-            )),
+            _ => Err(Error::UnknownChoice {
+                kind: "Retinex channel space",
+                name: s.to_owned(),
+                choices: "lms (= lms-hpe), lms-cat02, lms-cat16, lms-bradford, rgb (= rgb-srgb), \
+                          rgb-p3 or rgb-rec2020",
+            }),
         }
     }
 }

@@ -2,7 +2,8 @@
 //! the CIE 1931 2° and CIE 1964 10° colour-matching functions, the photopic luminous efficiency
 //! V(λ), illuminants A, B, C, D50, D55, D65, D75, E and F1–F12, and the daylight basis
 //! S0, S1, S2. All are CIE 15:2004 / ISO/CIE 11664 tables at 5 nm, taken at the 81 grid
-//! wavelengths without interpolation.
+//! wavelengths without interpolation. Beside them, the constant that turns them into
+//! photometric units, K_m = 683 lm/W.
 //!
 //! The tables are parsed from the embedded text the first time one is used. They are the
 //! program's own data, checked by the tests below, so a malformed table is a build defect and
@@ -11,6 +12,10 @@
 use crate::grid::{BANDS, band_of};
 use crate::spectrum::Spectrum;
 use std::sync::LazyLock;
+
+/// The maximum luminous efficacy of photopic vision, K_m = 683 lm/W (the paper's K_max; the SI
+/// definition of the candela fixes 683 lm/W at 540 THz, CIE 15:2004 §7.1).
+pub const K_M_LM_PER_W: f64 = 683.0;
 
 const CMF_1931: &str = include_str!("../../data/cie/cie1931_2deg_xyz_cmf_5nm_380-780.csv");
 const CMF_1964: &str = include_str!("../../data/cie/cie1964_10deg_xyz_cmf_5nm_380-780.csv");
@@ -144,7 +149,7 @@ pub fn scotopic_v() -> &'static Spectrum {
 /// V′(λ₀) = 683/1699; the table's V′(555 nm) = 0.402 gives 1699).
 pub fn scotopic_efficacy_lm_per_w() -> f64 {
     let at_555 = TABLES.scotopic_v.at_nm(555.0).expect("555 nm is on the grid");
-    crate::colorimetry::K_M_LM_PER_W / at_555
+    K_M_LM_PER_W / at_555
 }
 
 #[cfg(test)]

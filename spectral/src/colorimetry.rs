@@ -12,9 +12,8 @@ use crate::spectrum::Spectrum;
 use serde::Serialize;
 use std::fmt;
 
-/// The maximum luminous efficacy of photopic vision, K_m = 683 lm/W (the paper's K_max; the SI
-/// definition of the candela fixes 683 lm/W at 540 THz, CIE 15:2004 §7.1).
-pub const K_M_LM_PER_W: f64 = 683.0;
+/// K_m, the maximum luminous efficacy of photopic vision: a CIE constant, kept with the tables.
+pub use crate::cie::K_M_LM_PER_W;
 
 /// The CIE standard colorimetric observers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize)]

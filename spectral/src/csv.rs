@@ -62,12 +62,9 @@ fn parse_field(text: &str, field: &'static str) -> std::result::Result<f64, Spec
 
 /// Parse the text of a spectrum file. `file` names it in messages.
 pub fn parse(text: &str, file: &str, quantity: Quantity) -> Result<SpectrumFile> {
-    let mut wavelengths = Vec::new();
-    let mut values = Vec::new();
-    let mut lines_of = Vec::new();
+    let mut points = Points::default();
     let mut comments = Vec::new();
     let mut header_allowed = true;
-    let mut clamped: Option<(usize, f64, usize)> = None; // (count, most negative, first line)
 
     // Spreadsheet exports often begin with a UTF-8 byte-order mark; without this the first data
     // line would not parse as a number and be taken for a header.
@@ -84,92 +81,158 @@ pub fn parse(text: &str, file: &str, quantity: Quantity) -> Result<SpectrumFile>
         if content.is_empty() {
             continue;
         }
-        let fields: Vec<&str> = content.split(',').map(str::trim).collect();
-        if fields.len() != 2 {
-            // A header may name more columns than two, but data may not.
-            if header_allowed && fields[0].parse::<f64>().is_err() {
-                header_allowed = false;
-                continue;
-            }
-            return Err(err(SpectrumProblem::FieldCount { found: fields.len() }));
-        }
-        let wavelength = match parse_field(fields[0], "wavelength") {
-            Ok(v) => v,
-            Err(SpectrumProblem::NotANumber { .. }) if header_allowed => {
-                header_allowed = false;
-                continue;
-            }
-            Err(p) => return Err(err(p)),
+        let Some((wavelength, value)) = data_point(content, &mut header_allowed).map_err(err)?
+        else {
+            continue;
         };
-        header_allowed = false;
-        let mut value = parse_field(fields[1], "value").map_err(err)?;
+        points.push(line, wavelength, value, quantity).map_err(err)?;
+    }
+    points.finish(file, comments)
+}
+
+/// The wavelength and value on a line with content, or `None` for the header: the first such
+/// line, when its first field is not a number.
+fn data_point(
+    content: &str,
+    header_allowed: &mut bool,
+) -> std::result::Result<Option<(f64, f64)>, SpectrumProblem> {
+    let fields: Vec<&str> = content.split(',').map(str::trim).collect();
+    if fields.len() != 2 {
+        // A header may name more columns than two, but data may not.
+        if *header_allowed && fields[0].parse::<f64>().is_err() {
+            *header_allowed = false;
+            return Ok(None);
+        }
+        return Err(SpectrumProblem::FieldCount { found: fields.len() });
+    }
+    let wavelength = match parse_field(fields[0], "wavelength") {
+        Ok(v) => v,
+        Err(SpectrumProblem::NotANumber { .. }) if *header_allowed => {
+            *header_allowed = false;
+            return Ok(None);
+        }
+        Err(p) => return Err(p),
+    };
+    *header_allowed = false;
+    let value = parse_field(fields[1], "value")?;
+    Ok(Some((wavelength, value)))
+}
+
+/// The data points read so far, each checked against the one before it.
+#[derive(Default)]
+struct Points {
+    wavelengths: Vec<f64>,
+    values: Vec<f64>,
+    /// The 1-based line of each point.
+    lines: Vec<usize>,
+    /// The negative values clamped to 0: (count, most negative, first line).
+    clamped: Option<(usize, f64, usize)>,
+}
+
+impl Points {
+    /// Adds the point on line `line`, after its checks: the wavelength positive and above the
+    /// one before, the value as `quantity` allows.
+    fn push(
+        &mut self,
+        line: usize,
+        wavelength: f64,
+        value: f64,
+        quantity: Quantity,
+    ) -> std::result::Result<(), SpectrumProblem> {
         if wavelength <= 0.0 {
-            return Err(err(SpectrumProblem::NonPositiveWavelength { wavelength_nm: wavelength }));
+            return Err(SpectrumProblem::NonPositiveWavelength { wavelength_nm: wavelength });
         }
-        if let (Some(&previous_nm), Some(&previous_line)) = (wavelengths.last(), lines_of.last()) {
-            if wavelength == previous_nm {
-                return Err(err(SpectrumProblem::Duplicate {
-                    wavelength_nm: wavelength,
-                    previous_line,
-                }));
-            }
-            if wavelength < previous_nm {
-                return Err(err(SpectrumProblem::Unsorted {
-                    previous_nm,
-                    wavelength_nm: wavelength,
-                    previous_line,
-                }));
-            }
+        self.check_order(wavelength)?;
+        let value = self.checked_value(line, value, quantity)?;
+        self.wavelengths.push(wavelength);
+        self.values.push(value);
+        self.lines.push(line);
+        Ok(())
+    }
+
+    /// Refuses a wavelength equal to or below the previous point's.
+    fn check_order(&self, wavelength: f64) -> std::result::Result<(), SpectrumProblem> {
+        let (Some(&previous_nm), Some(&previous_line)) =
+            (self.wavelengths.last(), self.lines.last())
+        else {
+            return Ok(());
+        };
+        if wavelength == previous_nm {
+            return Err(SpectrumProblem::Duplicate { wavelength_nm: wavelength, previous_line });
         }
+        if wavelength < previous_nm {
+            return Err(SpectrumProblem::Unsorted {
+                previous_nm,
+                wavelength_nm: wavelength,
+                previous_line,
+            });
+        }
+        Ok(())
+    }
+
+    /// The value as kept: noise just below zero clamped to 0 (and counted), anything else
+    /// below, above one for a reflectance, or above [`MAX_VALUE`] refused.
+    fn checked_value(
+        &mut self,
+        line: usize,
+        mut value: f64,
+        quantity: Quantity,
+    ) -> std::result::Result<f64, SpectrumProblem> {
         if value < 0.0 {
             if value < -NEGATIVE_NOISE_TOLERANCE {
-                return Err(err(SpectrumProblem::Negative {
+                return Err(SpectrumProblem::Negative {
                     value,
                     tolerance: NEGATIVE_NOISE_TOLERANCE,
-                }));
+                });
             }
-            let c = clamped.get_or_insert((0, 0.0, line));
+            let c = self.clamped.get_or_insert((0, 0.0, line));
             c.0 += 1;
             c.1 = c.1.min(value);
             value = 0.0;
         }
         if quantity == Quantity::Reflectance && value > 1.0 {
-            return Err(err(SpectrumProblem::AboveOne { value }));
+            return Err(SpectrumProblem::AboveOne { value });
         }
         if value > MAX_VALUE {
-            return Err(err(SpectrumProblem::TooLarge { value, max: MAX_VALUE }));
+            return Err(SpectrumProblem::TooLarge { value, max: MAX_VALUE });
         }
-        wavelengths.push(wavelength);
-        values.push(value);
-        lines_of.push(line);
+        Ok(value)
     }
 
-    if wavelengths.len() < 2 {
-        return Err(Error::spectrum(
-            file,
-            None,
-            SpectrumProblem::TooFewPoints { found: wavelengths.len() },
-        ));
-    }
-    let largest = *wavelengths.last().expect("two points");
-    if largest < 100.0 {
-        let line = *lines_of.last().expect("two points");
-        return Err(Error::spectrum(file, Some(line), SpectrumProblem::Micrometres { largest }));
-    }
-    let notes = clamped
-        .map(|(count, most_negative, first_line)| Note::ClampedNegative {
-            count,
-            most_negative,
-            first_line,
+    /// The file, after the checks on the data as a whole: at least two points, in nanometres.
+    fn finish(self, file: &str, comments: Vec<String>) -> Result<SpectrumFile> {
+        let Points { wavelengths, values, lines, clamped } = self;
+        if wavelengths.len() < 2 {
+            return Err(Error::spectrum(
+                file,
+                None,
+                SpectrumProblem::TooFewPoints { found: wavelengths.len() },
+            ));
+        }
+        let largest = *wavelengths.last().expect("two points");
+        if largest < 100.0 {
+            let line = *lines.last().expect("two points");
+            return Err(Error::spectrum(
+                file,
+                Some(line),
+                SpectrumProblem::Micrometres { largest },
+            ));
+        }
+        let notes = clamped
+            .map(|(count, most_negative, first_line)| Note::ClampedNegative {
+                count,
+                most_negative,
+                first_line,
+            })
+            .into_iter()
+            .collect();
+        Ok(SpectrumFile {
+            data: TabulatedSpectrum::new(file, wavelengths, values)?,
+            comments,
+            notes,
+            lines,
         })
-        .into_iter()
-        .collect();
-    Ok(SpectrumFile {
-        data: TabulatedSpectrum::new(file, wavelengths, values)?,
-        comments,
-        notes,
-        lines: lines_of,
-    })
+    }
 }
 
 /// Parse and resample onto the grid in one step.

@@ -22,6 +22,7 @@
 //! clipped per channel: the colour moves towards the grey of the same luminance along a straight
 //! line in linear RGB, so that luminance and hue are kept and only chroma is given up.
 
+use crate::error::{Error, ExposureProblem};
 use crate::rgb_space::RgbSpace;
 use crate::tone;
 use glam::DVec3;
@@ -50,30 +51,34 @@ impl Default for Exposure {
 
 impl Exposure {
     /// The exposure if its number is usable: finite and above 0 (and a key at most 1).
-    pub fn checked(self) -> Result<Self, String> {
+    pub fn checked(self) -> Result<Self, Error> {
+        self.problem().map_or(Ok(self), |p| Err(Error::Exposure(p)))
+    }
+
+    /// What is wrong with the exposure's number, if anything.
+    fn problem(self) -> Option<ExposureProblem> {
         match self {
-            Exposure::Automatic { key } if !(key.is_finite() && key > 0.0 && key <= 1.0) => Err(
-                format!("an automatic exposure's key of {key}: use a number above 0, at most 1"),
-            ),
+            Exposure::Automatic { key } if !(key.is_finite() && key > 0.0 && key <= 1.0) => {
+                Some(ExposureProblem::Key { key })
+            }
             Exposure::Absolute { white_cd_m2 }
                 if !(white_cd_m2.is_finite() && white_cd_m2 > 0.0 && white_cd_m2 < 1e12) =>
             {
-                Err(format!(
-                    "an absolute exposure's white of {white_cd_m2} cd/m²: use a luminance above 0"
-                ))
+                Some(ExposureProblem::White { white_cd_m2 })
             }
-            ok => Ok(ok),
+            _ => None,
         }
     }
 }
 
 /// `auto`, `auto:<key>`, `absolute:<cd/m²>` or `relative` (the command line's form).
 impl std::str::FromStr for Exposure {
-    type Err = String;
+    type Err = Error;
 
-    fn from_str(text: &str) -> Result<Self, String> {
+    fn from_str(text: &str) -> Result<Self, Error> {
         let lower = text.trim().to_ascii_lowercase();
-        let number = |s: &str| s.parse::<f64>().map_err(|_| format!("`{s}` is not a number"));
+        let number =
+            |s: &str| s.parse::<f64>().map_err(|_| Error::NotANumber { text: s.to_owned() });
         let exposure = match lower.as_str() {
             "auto" => Exposure::default(),
             "relative" => Exposure::Relative,
@@ -83,13 +88,14 @@ impl std::str::FromStr for Exposure {
                 } else if let Some(l) = lower.strip_prefix("absolute:") {
                     Exposure::Absolute { white_cd_m2: number(l)? }
                 } else {
-                    return Err(format!(
-                        "exposure `{text}`: use auto, auto:<key>, absolute:<cd/m²> or relative"
-                    ));
+                    return Err(Error::UnknownExposure { text: text.to_owned() });
                 }
             }
         };
-        exposure.checked().map_err(|e| format!("exposure `{text}`: {e}"))
+        match exposure.problem() {
+            Some(problem) => Err(Error::ExposureText { text: text.to_owned(), problem }),
+            None => Ok(exposure),
+        }
     }
 }
 

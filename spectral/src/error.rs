@@ -136,6 +136,37 @@ pub enum Error {
     /// A number outside the range where a formula holds.
     #[error("{quantity} = {value} is out of range: {expected}")]
     OutOfRange { quantity: &'static str, value: f64, expected: &'static str },
+
+    /// A name that is none of a closed set's (a colour space, a chromatic adaptation, a
+    /// Retinex channel space), with the names it may be.
+    #[error("unknown {kind} `{name}`; use {choices}")]
+    UnknownChoice { kind: &'static str, name: String, choices: &'static str },
+
+    /// An exposure whose number is unusable.
+    #[error("{0}")]
+    Exposure(ExposureProblem),
+
+    /// The number of an exposure given as text (`auto:<key>`, `absolute:<cd/m²>`) that is no
+    /// number.
+    #[error("`{text}` is not a number")]
+    NotANumber { text: String },
+
+    /// Exposure text of none of the forms.
+    #[error("exposure `{text}`: use auto, auto:<key>, absolute:<cd/m²> or relative")]
+    UnknownExposure { text: String },
+
+    /// Exposure text whose number is unusable.
+    #[error("exposure `{text}`: {problem}")]
+    ExposureText { text: String, problem: ExposureProblem },
+}
+
+/// What is wrong with an exposure's number (`restauro_spectral::display::Exposure`).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ExposureProblem {
+    #[error("an automatic exposure's key of {key}: use a number above 0, at most 1")]
+    Key { key: f64 },
+    #[error("an absolute exposure's white of {white_cd_m2} cd/m²: use a luminance above 0")]
+    White { white_cd_m2: f64 },
 }
 
 fn suggestion_text(suggestions: &[String]) -> String {

@@ -4,6 +4,7 @@
 
 use crate::adaptation::{from_vec, to_vec};
 use crate::colorimetry::{Chromaticity, Xyz};
+use crate::error::Error;
 use glam::{DMat3, DVec3};
 use serde::Serialize;
 use std::fmt;
@@ -139,14 +140,18 @@ impl fmt::Display for RgbSpace {
 }
 
 impl FromStr for RgbSpace {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self, Error> {
         match s.to_ascii_lowercase().as_str() {
             "srgb" => Ok(RgbSpace::Srgb),
             "p3" | "display-p3" => Ok(RgbSpace::DisplayP3),
             "rec2020" | "bt2020" => Ok(RgbSpace::Rec2020),
             "adobe-rgb" | "adobergb" | "adobe" => Ok(RgbSpace::AdobeRgb),
-            _ => Err(format!("unknown colour space `{s}`; use srgb, p3, rec2020 or adobe-rgb")),
+            _ => Err(Error::UnknownChoice {
+                kind: "colour space",
+                name: s.to_owned(),
+                choices: "srgb, p3, rec2020 or adobe-rgb",
+            }),
         }
     }
 }

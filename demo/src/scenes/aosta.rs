@@ -340,10 +340,39 @@ fn jambs(obj: &mut Obj, left: f64, right: f64, z0: f64, z1: f64) {
     );
 }
 
+/// The paving in front of the facade, x0..x1 across and y0..y1 from the square's far edge to
+/// the buttresses' fronts.
+struct Paving {
+    x0: f64,
+    x1: f64,
+    y0: f64,
+    y1: f64,
+}
+
+/// The whole facade, its surroundings included: the courses with their openings, the
+/// buttresses, the cornice, the back of the wall, the paving, and the ground and theatre around.
+/// The blocks take their variation from `seed`, drawn in this order.
 fn facade(seed: u64) -> Obj {
     let mut obj = Obj::new();
     let mut rng = KeyedRng::from_parts(&[seed, 0x000a_057a]);
     let half = WIDTH_M / 2.0;
+    let openings = openings(half);
+    let cornice = HEIGHT_M - 0.8;
+    courses(&mut obj, &mut rng, -half, half, 0.0, cornice, &openings);
+    for o in &openings {
+        frame_opening(&mut obj, &mut rng, o);
+    }
+    buttresses(&mut obj, &mut rng, half, cornice);
+    cornice_band(&mut obj, half, cornice);
+    back_of_wall(&mut obj, half, cornice, &openings);
+    let paving = Paving { x0: -half - 4.0, x1: half + 4.0, y0: -16.0, y1: -BUTTRESS_DEPTH_M };
+    paving_slabs(&mut obj, &mut rng, &paving);
+    surroundings(&mut obj, &paving);
+    obj
+}
+
+/// Per bay, from the west: its arch below and its two tiers of windows above.
+fn openings(half: f64) -> Vec<Opening> {
     let bay = WIDTH_M / BAYS as f64;
     let mut openings = Vec::new();
     for i in 0..BAYS {
@@ -358,58 +387,61 @@ fn facade(seed: u64) -> Obj {
             lintel: COURSE_M,
         });
     }
-    let cornice = HEIGHT_M - 0.8;
-    courses(&mut obj, &mut rng, -half, half, 0.0, cornice, &openings);
-    for o in &openings {
-        match *o {
-            Opening::Arch { cx, half_width, impost, ring } => {
-                voussoirs(&mut obj, &mut rng, cx, half_width, ring, impost);
-                jambs(&mut obj, cx - half_width, cx + half_width, 0.0, impost);
-            }
-            Opening::Window { rect, lintel } => {
-                jambs(&mut obj, rect.x0, rect.x1, rect.z0, rect.z1);
-                obj.material("travertine");
-                // Sill (faces up) and lintel soffit (faces down).
-                obj.quad(
-                    [rect.x0, 0.0, rect.z0],
-                    [rect.x1, 0.0, rect.z0],
-                    [rect.x1, THICKNESS_M, rect.z0],
-                    [rect.x0, THICKNESS_M, rect.z0],
-                );
-                obj.quad(
-                    [rect.x0, THICKNESS_M, rect.z1],
-                    [rect.x1, THICKNESS_M, rect.z1],
-                    [rect.x1, 0.0, rect.z1],
-                    [rect.x0, 0.0, rect.z1],
-                );
-                let proud = 0.04;
-                block(
-                    &mut obj,
-                    "travertine",
-                    Rect {
-                        x0: rect.x0 - 0.4,
-                        x1: rect.x1 + 0.4,
-                        z0: rect.z1,
-                        z1: rect.z1 + lintel,
-                    },
-                    0.0,
-                    proud,
-                );
-            }
+    openings
+}
+
+/// An opening's frame: an arch's voussoirs and jambs; a window's jambs, sill, soffit and lintel.
+fn frame_opening(obj: &mut Obj, rng: &mut KeyedRng, o: &Opening) {
+    match *o {
+        Opening::Arch { cx, half_width, impost, ring } => {
+            voussoirs(obj, rng, cx, half_width, ring, impost);
+            jambs(obj, cx - half_width, cx + half_width, 0.0, impost);
+        }
+        Opening::Window { rect, lintel } => {
+            jambs(obj, rect.x0, rect.x1, rect.z0, rect.z1);
+            obj.material("travertine");
+            // Sill (faces up) and lintel soffit (faces down).
+            obj.quad(
+                [rect.x0, 0.0, rect.z0],
+                [rect.x1, 0.0, rect.z0],
+                [rect.x1, THICKNESS_M, rect.z0],
+                [rect.x0, THICKNESS_M, rect.z0],
+            );
+            obj.quad(
+                [rect.x0, THICKNESS_M, rect.z1],
+                [rect.x1, THICKNESS_M, rect.z1],
+                [rect.x1, 0.0, rect.z1],
+                [rect.x0, 0.0, rect.z1],
+            );
+            let proud = 0.04;
+            block(
+                obj,
+                "travertine",
+                Rect { x0: rect.x0 - 0.4, x1: rect.x1 + 0.4, z0: rect.z1, z1: rect.z1 + lintel },
+                0.0,
+                proud,
+            );
         }
     }
-    // Buttresses between the bays and at the ends: courses on their fronts, plain sides.
+}
+
+/// Buttresses between the bays and at the ends: courses on their fronts, plain sides.
+fn buttresses(obj: &mut Obj, rng: &mut KeyedRng, half: f64, cornice: f64) {
+    let bay = WIDTH_M / BAYS as f64;
     for i in 0..=BAYS {
         let cx = -half + bay * i as f64;
         let (x0, x1) = (cx - BUTTRESS_WIDTH_M / 2.0, cx + BUTTRESS_WIDTH_M / 2.0);
         let y = -BUTTRESS_DEPTH_M;
-        courses(&mut obj, &mut rng, x0, x1, y, cornice, &[]);
+        courses(obj, rng, x0, x1, y, cornice, &[]);
         obj.material("travertine");
         obj.quad([x0, 0.0, 0.0], [x0, y, 0.0], [x0, y, cornice], [x0, 0.0, cornice]);
         obj.quad([x1, y, 0.0], [x1, 0.0, 0.0], [x1, 0.0, cornice], [x1, y, cornice]);
         obj.quad([x0, y, cornice], [x1, y, cornice], [x1, 0.0, cornice], [x0, 0.0, cornice]);
     }
-    // The cornice: a projecting band along the top.
+}
+
+/// The cornice: a projecting band along the top.
+fn cornice_band(obj: &mut Obj, half: f64, cornice: f64) {
     obj.material("travertine");
     let (y0, y1, z0, z1) = (-BUTTRESS_DEPTH_M - 0.25, THICKNESS_M, cornice, HEIGHT_M);
     obj.quad(
@@ -430,8 +462,11 @@ fn facade(seed: u64) -> Obj {
         [half + 0.3, y1, z1],
         [-half - 0.3, y1, z1],
     );
-    // The back of the wall (seen from the theatre's inside), course by course around the
-    // openings, and its ends.
+}
+
+/// The back of the wall (seen from the theatre's inside), course by course around the
+/// openings, and its ends.
+fn back_of_wall(obj: &mut Obj, half: f64, cornice: f64, openings: &[Opening]) {
     let rows = (cornice / COURSE_M).ceil() as usize;
     for row in 0..rows {
         let (z0, z1) = (row as f64 * COURSE_M, ((row + 1) as f64 * COURSE_M).min(cornice));
@@ -467,8 +502,11 @@ fn facade(seed: u64) -> Obj {
         [half, THICKNESS_M, cornice],
         [half, 0.0, cornice],
     );
-    // Paving slabs in front, on a bed of mortar.
-    let (px0, px1, py0, py1) = (-half - 4.0, half + 4.0, -16.0, -BUTTRESS_DEPTH_M);
+}
+
+/// Paving slabs in front, on a bed of mortar, in rows offset by half a slab.
+fn paving_slabs(obj: &mut Obj, rng: &mut KeyedRng, paving: &Paving) {
+    let Paving { x0: px0, x1: px1, y0: py0, y1: py1 } = *paving;
     obj.material("mortar");
     obj.quad([px0, py0, -0.02], [px1, py0, -0.02], [px1, py1, -0.02], [px0, py1, -0.02]);
     let (slab_x, slab_y) = (1.1, 0.75);
@@ -494,8 +532,12 @@ fn facade(seed: u64) -> Obj {
         y = y1;
         row += 1;
     }
-    // The ground around, and inside the theatre behind the wall: its floor and the cavea's
-    // retaining wall, seen through the openings.
+}
+
+/// The ground around the paving, and inside the theatre behind the wall: its floor and the
+/// cavea's retaining wall, seen through the openings.
+fn surroundings(obj: &mut Obj, paving: &Paving) {
+    let Paving { x0: px0, x1: px1, y0: py0, y1: py1 } = *paving;
     obj.material("ground");
     obj.quad([-80.0, -80.0, -0.03], [80.0, -80.0, -0.03], [80.0, py0, -0.03], [-80.0, py0, -0.03]);
     obj.quad([-80.0, py0, -0.03], [px0, py0, -0.03], [px0, 30.0, -0.03], [-80.0, 30.0, -0.03]);
@@ -509,7 +551,6 @@ fn facade(seed: u64) -> Obj {
     obj.quad([px0, py1, -0.03], [px1, py1, -0.03], [px1, 0.0, -0.03], [px0, 0.0, -0.03]);
     obj.material("interior");
     obj.quad([-60.0, 14.0, 0.0], [60.0, 14.0, 0.0], [60.0, 14.0, 14.0], [-60.0, 14.0, 14.0]);
-    obj
 }
 
 /// The light of a generated scene.

@@ -1,5 +1,6 @@
 //! The one error of the benchmarks: what was being measured when it failed.
 
+use restauro_assets::AssetsError;
 use restauro_cluster::ClusterError;
 use restauro_render::prepared::TraceError;
 use restauro_scene::error::SceneError;
@@ -15,12 +16,14 @@ pub enum BenchError {
     },
     #[error(transparent)]
     Scene(#[from] SceneError),
+    #[error(transparent)]
+    Assets(#[from] AssetsError),
     /// A scene that did not load, with the benchmark's name for it.
     #[error("{what}")]
     SceneNamed {
         what: String,
         #[source]
-        source: SceneError,
+        source: AssetsError,
     },
     #[error(transparent)]
     JobSpec(#[from] restauro_scene::job::JobSpecError),

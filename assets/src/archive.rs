@@ -80,7 +80,7 @@ pub fn read_archive(path: &Path, limits: &Limits) -> Result<Bundle> {
     // The tar reader is a third-party parser: a panic in it is an error naming the file.
     let entries = restauro_scene::guard::catch(|| entries(&bytes, limits.max_file_bytes))
         .map_err(|_| refuse("it is not a readable tar archive".into()))?
-        .map_err(refuse)?;
+        .map_err(|e| refuse(e.to_string()))?;
     let mut files = BTreeMap::new();
     let mut manifest = None;
     for (name, data) in entries {
@@ -132,38 +132,52 @@ pub fn read_archive(path: &Path, limits: &Limits) -> Result<Bundle> {
     Ok(bundle)
 }
 
-/// The archive's entries, names and bytes, each within `max_bytes`; no name twice.
+/// Why a tar's entries cannot be taken; each message says which entry and what to do.
+#[derive(Debug, thiserror::Error)]
+pub(crate) enum EntryProblem {
+    #[error("it is not a tar archive: {0}")]
+    NotTar(std::io::Error),
+    #[error("a damaged entry: {0}")]
+    Damaged(std::io::Error),
+    #[error("an entry with an unreadable name: {0}")]
+    UnreadableName(std::io::Error),
+    #[error("`{0}` is not a regular file")]
+    NotRegular(String),
+    #[error("`{name}` is {size} bytes, above the file-size limit; raise --max-file-mb")]
+    TooBig { name: String, size: u64 },
+    #[error("`{0}` is in it twice")]
+    Twice(String),
+    #[error("`{name}`: {source}")]
+    Unreadable { name: String, source: std::io::Error },
+}
+
 /// The regular files of the tar `bytes` (directory entries skipped; anything else, or a file
 /// above `max_bytes`, or a name twice, refused), each with its name.
 pub(crate) fn entries(
     bytes: &[u8],
     max_bytes: u64,
-) -> std::result::Result<Vec<(String, Vec<u8>)>, String> {
+) -> std::result::Result<Vec<(String, Vec<u8>)>, EntryProblem> {
     let mut archive = tar::Archive::new(bytes);
     let mut out: Vec<(String, Vec<u8>)> = Vec::new();
-    for entry in archive.entries().map_err(|e| format!("it is not a tar archive: {e}"))? {
-        let mut entry = entry.map_err(|e| format!("a damaged entry: {e}"))?;
-        let name = entry
-            .path()
-            .map_err(|e| format!("an entry with an unreadable name: {e}"))?
-            .to_string_lossy()
-            .into_owned();
+    for entry in archive.entries().map_err(EntryProblem::NotTar)? {
+        let mut entry = entry.map_err(EntryProblem::Damaged)?;
+        let name =
+            entry.path().map_err(EntryProblem::UnreadableName)?.to_string_lossy().into_owned();
+        let unreadable = |source| EntryProblem::Unreadable { name: name.clone(), source };
         match entry.header().entry_type() {
             tar::EntryType::Regular => {}
             tar::EntryType::Directory => continue,
-            _ => return Err(format!("`{name}` is not a regular file")),
+            _ => return Err(EntryProblem::NotRegular(name)),
         }
-        let size = entry.header().size().map_err(|e| format!("`{name}`: {e}"))?;
+        let size = entry.header().size().map_err(unreadable)?;
         if size > max_bytes {
-            return Err(format!(
-                "`{name}` is {size} bytes, above the file-size limit; raise --max-file-mb"
-            ));
+            return Err(EntryProblem::TooBig { name, size });
         }
         if out.iter().any(|(n, _)| *n == name) {
-            return Err(format!("`{name}` is in it twice"));
+            return Err(EntryProblem::Twice(name));
         }
         let mut data = Vec::with_capacity(size as usize);
-        entry.read_to_end(&mut data).map_err(|e| format!("`{name}`: {e}"))?;
+        entry.read_to_end(&mut data).map_err(unreadable)?;
         out.push((name, data));
     }
     Ok(out)

@@ -107,7 +107,7 @@ fn tar_entries(
     let entries =
         restauro_scene::guard::catch(|| crate::archive::entries(bytes, limits.max_file_bytes))
             .map_err(|_| refuse("it is not a readable tar archive".into()))?
-            .map_err(refuse)?;
+            .map_err(|e| refuse(e.to_string()))?;
     if entries.len() > FOLDER_FILES {
         return Err(refuse(format!(
             "{} files; a scene folder may have {FOLDER_FILES}",

@@ -38,6 +38,35 @@ pub use restauro_scene::pins::{Algorithm, ContentHash};
 use restauro_scene::scene_file::Pin;
 pub use restauro_scene::web_url::{WebUrl, is_url};
 use std::collections::BTreeMap;
+
+/// Why a file named by URL cannot be had, worded for the user; it becomes the `problem` of an
+/// [`AssetsError::Fetch`] naming where the scene names the URL. Clone, so that the TLS
+/// client's setup, made once, can refuse every URL alike.
+#[derive(Clone, Debug, thiserror::Error)]
+enum FetchProblem {
+    /// The environment's download settings.
+    #[error("{0}")]
+    Setting(String),
+    #[error("RESTAURO_CA_FILE {}: {message}", path.display())]
+    CaFile { path: PathBuf, message: String },
+    #[error("RESTAURO_CA_FILE {}: no PEM certificate", path.display())]
+    NoCertificate { path: PathBuf },
+    #[error("{0}")]
+    Tls(String),
+    #[error("the download cache {}: {message}", dir.display())]
+    Cache { dir: PathBuf, message: String },
+    /// The download itself (the server, the network, a bound), as [`http::download`] words it.
+    #[error("{0}")]
+    Download(String),
+    #[error(
+        "it serves a file whose {algorithm} is {actual}, but the scene pins {pinned}: the file \
+         changed where it is kept, or the pin is wrong; check the file, then correct [pins]"
+    )]
+    Mismatch { algorithm: &'static str, actual: String, pinned: String },
+    /// A URL without a pin, refused with what it serves now (or why it cannot be fetched).
+    #[error("the URL has no pin in [pins], so a render from it could not be made again; {0}")]
+    Unpinned(String),
+}
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, OnceLock};
 use std::time::Duration;
@@ -125,7 +154,7 @@ impl RemoteConfig {
     }
 
     /// The TLS client: the system's certificates and those of `ca_file`.
-    fn tls(&self) -> Result<Arc<rustls::ClientConfig>, String> {
+    fn tls(&self) -> std::result::Result<Arc<rustls::ClientConfig>, FetchProblem> {
         use rustls::pki_types::CertificateDer;
         use rustls::pki_types::pem::PemObject;
         let mut roots = rustls::RootCertStore::empty();
@@ -136,18 +165,18 @@ impl RemoteConfig {
         if let Some(path) = &self.ca_file {
             let certs: Vec<_> = CertificateDer::pem_file_iter(path)
                 .and_then(|certs| certs.collect::<Result<Vec<_>, _>>())
-                .map_err(|e| format!("RESTAURO_CA_FILE {}: {e}", path.display()))?;
+                .map_err(|e| ca_file(path, e))?;
             if certs.is_empty() {
-                return Err(format!("RESTAURO_CA_FILE {}: no PEM certificate", path.display()));
+                return Err(FetchProblem::NoCertificate { path: path.clone() });
             }
             for cert in certs {
-                roots.add(cert).map_err(|e| format!("RESTAURO_CA_FILE {}: {e}", path.display()))?;
+                roots.add(cert).map_err(|e| ca_file(path, e))?;
             }
         }
         let provider = Arc::new(rustls::crypto::ring::default_provider());
         let config = rustls::ClientConfig::builder_with_provider(provider)
             .with_safe_default_protocol_versions()
-            .map_err(|e| e.to_string())?
+            .map_err(|e| FetchProblem::Tls(e.to_string()))?
             .with_root_certificates(roots)
             .with_no_client_auth();
         Ok(Arc::new(config))
@@ -160,7 +189,7 @@ pub struct Remote {
     scene_file: PathBuf,
     pins: BTreeMap<String, ContentHash>,
     config: Option<RemoteConfig>,
-    ready: OnceLock<std::result::Result<(RemoteConfig, Arc<rustls::ClientConfig>), String>>,
+    ready: OnceLock<std::result::Result<(RemoteConfig, Arc<rustls::ClientConfig>), FetchProblem>>,
 }
 
 impl Remote {
@@ -204,12 +233,15 @@ impl Remote {
         fetched.map_err(|problem| invalid(format!("{parsed}: {problem}")))
     }
 
-    fn ready(&self) -> std::result::Result<&(RemoteConfig, Arc<rustls::ClientConfig>), String> {
+    fn ready(
+        &self,
+    ) -> std::result::Result<&(RemoteConfig, Arc<rustls::ClientConfig>), FetchProblem> {
         self.ready
             .get_or_init(|| {
                 let config = match &self.config {
                     Some(c) => c.clone(),
-                    None => RemoteConfig::from_env().map_err(|e| e.to_string())?,
+                    None => RemoteConfig::from_env()
+                        .map_err(|e| FetchProblem::Setting(e.to_string()))?,
                 };
                 let tls = config.tls()?;
                 Ok((config, tls))
@@ -232,12 +264,11 @@ fn fetch_pinned(
     hash: &ContentHash,
     cache: &cache::Cache,
     bounds: &http::Bounds,
-) -> std::result::Result<Vec<u8>, String> {
+) -> std::result::Result<Vec<u8>, FetchProblem> {
     if let Some(bytes) = cache.get(hash) {
         return Ok(bytes);
     }
-    let cache_problem =
-        |e: std::io::Error| format!("the download cache {}: {e}", cache.dir.display());
+    let cache_problem = |e: std::io::Error| cache_problem(cache, e);
     let mut partial =
         cache.partial(&format!("{}-{}", hash.algorithm.name(), hash.hex)).map_err(cache_problem)?;
     // Another process may have finished it while this one waited for the lock.
@@ -245,17 +276,17 @@ fn fetch_pinned(
         return Ok(bytes);
     }
     tracing::info!(%url, "downloading");
-    http::download(url, &mut partial.file, bounds).map_err(|f| f.problem)?;
+    http::download(url, &mut partial.file, bounds)
+        .map_err(|f| FetchProblem::Download(f.problem))?;
     let bytes = std::fs::read(&partial.path).map_err(cache_problem)?;
     let actual = digest_hex(hash.algorithm, &bytes);
     if actual != hash.hex {
         let _ = std::fs::remove_file(&partial.path);
-        return Err(format!(
-            "it serves a file whose {} is {actual}, but the scene pins {}: the file changed \
-             where it is kept, or the pin is wrong; check the file, then correct [pins]",
-            hash.algorithm.name(),
-            hash.hex
-        ));
+        return Err(FetchProblem::Mismatch {
+            algorithm: hash.algorithm.name(),
+            actual,
+            pinned: hash.hex.clone(),
+        });
     }
     cache.store(partial, hash).map_err(cache_problem)?;
     Ok(bytes)
@@ -263,29 +294,45 @@ fn fetch_pinned(
 
 /// The refusal of a URL without a pin. The file is fetched all the same (and cached), so that
 /// the message can give the pin of what the URL serves now, for the user to check and add.
-fn unpinned(url: &WebUrl, cache: &cache::Cache, bounds: &http::Bounds) -> String {
-    let fix = |found: String| {
-        format!(
-            "the URL has no pin in [pins], so a render from it could not be made again; {found}"
-        )
-    };
+fn unpinned(url: &WebUrl, cache: &cache::Cache, bounds: &http::Bounds) -> FetchProblem {
     let name = format!("url-{}", &blake3::hash(url.to_string().as_bytes()).to_hex()[..32]);
-    let outcome = cache.partial(&name).map_err(|e| e.to_string()).and_then(|mut partial| {
-        partial.file.set_len(0).map_err(|e| e.to_string())?;
-        http::download(url, &mut partial.file, bounds).map_err(|f| f.problem)?;
-        let bytes = std::fs::read(&partial.path).map_err(|e| e.to_string())?;
+    let cache_problem = |e: std::io::Error| cache_problem(cache, e);
+    let outcome = cache.partial(&name).map_err(cache_problem).and_then(|mut partial| {
+        partial.file.set_len(0).map_err(cache_problem)?;
+        http::download(url, &mut partial.file, bounds)
+            .map_err(|f| FetchProblem::Download(f.problem))?;
+        let bytes = std::fs::read(&partial.path).map_err(cache_problem)?;
         let hash = ContentHash {
             algorithm: Algorithm::Sha256,
             hex: digest_hex(Algorithm::Sha256, &bytes),
         };
-        cache.store(partial, &hash).map_err(|e| e.to_string())?;
+        cache.store(partial, &hash).map_err(cache_problem)?;
         Ok(hash)
     });
-    match outcome {
-        Ok(hash) => fix(format!(
+    FetchProblem::Unpinned(match outcome {
+        Ok(hash) => format!(
             "it serves a file with {hash}: check that file, then add under [pins] the line \
              \"{url}\" = {{ {hash} }}"
-        )),
-        Err(problem) => fix(format!("and it cannot be fetched either: {problem}")),
+        ),
+        Err(problem) => format!("and it cannot be fetched either: {}", unpinned_cause(&problem)),
+    })
+}
+
+/// What stopped the fetch of an unpinned URL, in the words the refusal used before it was typed:
+/// an I/O error of the cache as the system words it, a download's problem as it is.
+fn unpinned_cause(problem: &FetchProblem) -> String {
+    match problem {
+        FetchProblem::Cache { message, .. } => message.clone(),
+        other => other.to_string(),
     }
+}
+
+/// A PEM file of `RESTAURO_CA_FILE` that cannot be read or holds a bad certificate.
+fn ca_file(path: &Path, e: impl std::fmt::Display) -> FetchProblem {
+    FetchProblem::CaFile { path: path.to_owned(), message: e.to_string() }
+}
+
+/// The download cache's trouble (a lock, a partial file, storing).
+fn cache_problem(cache: &cache::Cache, e: std::io::Error) -> FetchProblem {
+    FetchProblem::Cache { dir: cache.dir.clone(), message: e.to_string() }
 }

@@ -54,7 +54,7 @@ pub fn assemble(farm: &Arc<Farm>, id: &JobId) {
 
 enum Outcome {
     /// The job ended (cancelled) during assembly.
-    Ended(crate::error::CoordinatorError),
+    Ended(crate::error::FarmError),
     /// Assembly itself failed: the job fails with this reason.
     Failed(String),
 }
@@ -72,7 +72,7 @@ fn files(farm: &Arc<Farm>, record: &JobRecord) -> Result<Vec<String>, Outcome> {
             // A job cancelled meanwhile has had its tiles dropped: that is not a failure.
             match farm.transition(id, |_| Ok(())) {
                 Ok((_, r)) if r.state().is_final() => {
-                    Outcome::Ended(crate::error::CoordinatorError::IllegalTransition {
+                    Outcome::Ended(crate::error::FarmError::IllegalTransition {
                         job: id.clone(),
                         from: r.state(),
                         to: crate::job::JobState::PostProcessing,

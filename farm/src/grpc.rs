@@ -3,7 +3,7 @@
 //! and converts the answer back. No decision is made here.
 
 use crate::callers::next_within;
-use crate::error::{CoordinatorError, Result};
+use crate::error::{FarmError, Result};
 use crate::farm::{Expected, Farm, Reported, WorkerStatus};
 use crate::ids::{JobId, Session};
 use crate::job::{JobState, JobStatus};
@@ -83,7 +83,7 @@ fn job_id(text: &str) -> Result<JobId> {
 fn check_version(version: u32, role: &'static str) -> Result<()> {
     if version != PROTOCOL_VERSION {
         let theirs = version.to_string();
-        return Err(CoordinatorError::ProtocolVersion { theirs, ours: PROTOCOL_VERSION, role });
+        return Err(FarmError::ProtocolVersion { theirs, ours: PROTOCOL_VERSION, role });
     }
     Ok(())
 }
@@ -112,7 +112,7 @@ impl pb::render_server::Render for RenderService {
     ) -> Result<Response<pb::AssetList>, Status> {
         let mut stream = request.into_inner();
         let first = stream.message().await?.ok_or_else(|| {
-            CoordinatorError::from(WireError::new("chunk", "an upload needs at least one chunk"))
+            FarmError::from(WireError::new("chunk", "an upload needs at least one chunk"))
         })?;
         let reference = first.name.clone();
         let mut upload = self.0.begin_upload(&reference, first.total_bytes).await?;
@@ -133,7 +133,7 @@ impl pb::render_server::Render for RenderService {
     ) -> Result<Response<pb::JobStatus>, Status> {
         let req = request.into_inner();
         check_version(req.protocol_version, "client")?;
-        let spec = JobSpec::try_from(&req).map_err(CoordinatorError::from)?;
+        let spec = JobSpec::try_from(&req).map_err(FarmError::from)?;
         let status = self.0.submit(req.manifest_json, spec).await?;
         Ok(Response::new(status.into()))
     }
@@ -239,7 +239,7 @@ impl pb::work_server::Work for WorkService {
         let header = match stream.message().await?.and_then(|c| c.part) {
             Some(pb::tile_chunk::Part::Header(h)) => h,
             _ => {
-                return Err(CoordinatorError::from(WireError::new(
+                return Err(FarmError::from(WireError::new(
                     "header",
                     "a tile report starts with its header",
                 ))
@@ -259,7 +259,7 @@ impl pb::work_server::Work for WorkService {
             Expected::Tile { rect, layout } => (rect, layout),
         };
         let (image_bytes, spectral_bytes) = restauro_image::framebuffer::tile_sizes(&rect, layout);
-        let tile_error = |problem: String| CoordinatorError::TileData {
+        let tile_error = |problem: String| FarmError::TileData {
             job: claim.job.clone(),
             tile: claim.tile,
             problem,

@@ -14,7 +14,7 @@
 //! stands, and the assembly that finishes afterwards is refused instead of overturning it. A job
 //! resumed with all its tiles stored goes from queued straight to assembling.
 
-use crate::error::{CoordinatorError, Result};
+use crate::error::{FarmError, Result};
 use crate::ids::JobId;
 use restauro_scene::job::JobSpec;
 use restauro_scene::plan::Plan;
@@ -111,7 +111,7 @@ impl JobRecord {
 
     fn advance(&mut self, to: JobState) -> Result<()> {
         if !self.state.allows(to) {
-            return Err(CoordinatorError::IllegalTransition {
+            return Err(FarmError::IllegalTransition {
                 job: self.id.clone(),
                 from: self.state,
                 to,
@@ -191,14 +191,15 @@ impl JobRecord {
 
     /// A stored record. One of an earlier release's layout cannot be resumed: it comes back
     /// failed, with its id and name and the reason, so it stays listed and nothing is silent.
-    pub fn from_bytes(id: &str, bytes: &[u8]) -> std::result::Result<Self, String> {
+    pub fn from_bytes(id: &str, bytes: &[u8]) -> Result<Self> {
         if let Ok(record) = serde_json::from_slice::<JobRecord>(bytes)
             && record.format == RECORD_FORMAT
         {
             return Ok(record);
         }
-        let old: serde_json::Value =
-            serde_json::from_slice(bytes).map_err(|e| format!("job {id}: unreadable: {e}"))?;
+        let old: serde_json::Value = serde_json::from_slice(bytes).map_err(|e| {
+            FarmError::UnreadableRecord { job: id.to_owned(), problem: e.to_string() }
+        })?;
         let name = old.get("name").and_then(|n| n.as_str()).unwrap_or_default();
         let spec = JobSpec {
             name: restauro_scene::job::JobName::new(name).unwrap_or_default(),
@@ -289,10 +290,7 @@ mod tests {
         r.finish(vec!["a.exr".into()]).unwrap();
         assert_eq!(r.state(), JobState::Done);
         for e in [r.cancel(0), r.fail("x".into(), 0), r.begin_assembly()] {
-            assert!(matches!(
-                e,
-                Err(CoordinatorError::IllegalTransition { from: JobState::Done, .. })
-            ));
+            assert!(matches!(e, Err(FarmError::IllegalTransition { from: JobState::Done, .. })));
         }
     }
 

@@ -3,8 +3,8 @@
 //! scene's lights and D65 ([`appearance`]), and the scene's camera, in the GLB's coordinates. Kept for the few scenes opened last, by bundle identity.
 
 use super::appearance::{self, appearance};
+use crate::error::Result;
 use crate::gltf_export::{self, Preview};
-use restauro_farm::error::Result;
 use restauro_farm::farm::Farm;
 use restauro_scene::load::LoadedScene;
 use serde::Serialize;
@@ -508,7 +508,7 @@ impl Previews {
         let id = id.to_owned();
         let preview = tokio::task::spawn_blocking(move || Arc::new(build(&id, number, &scene)))
             .await
-            .map_err(|e| restauro_farm::error::CoordinatorError::Internal(e.to_string()))?;
+            .map_err(|e| crate::error::StudioError::Internal(e.to_string()))?;
         self.kept.keep(key, preview.clone());
         Ok(preview)
     }

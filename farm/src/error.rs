@@ -4,7 +4,7 @@
 //! the scheduler's own errors ([`StoreError`], [`AddJobError`]) reach callers only inside it.
 
 use crate::ids::JobId;
-use crate::job::JobState;
+use crate::job::{IllegalTransition, JobState};
 use crate::scheduler::AddJobError;
 use crate::store::StoreError;
 use restauro_proto::convert::WireError;
@@ -55,8 +55,8 @@ pub enum FarmError {
     NotDone { job: JobId, state: JobState },
 
     /// A lifecycle move the job's state does not allow (e.g. finishing a cancelled job).
-    #[error("job {job} is {from}; it cannot become {to}")]
-    IllegalTransition { job: JobId, from: JobState, to: JobState },
+    #[error(transparent)]
+    IllegalTransition(#[from] IllegalTransition),
 
     /// A limit of the coordinator's, with the flag that raises it.
     #[error("{what} is {value}, over the limit of {limit} ({flag}); {fix}")]
@@ -146,7 +146,7 @@ impl FarmError {
         use FarmError as E;
         use tonic::Code;
         match self {
-            E::ProtocolVersion { .. } | E::NotDone { .. } | E::IllegalTransition { .. } => {
+            E::ProtocolVersion { .. } | E::NotDone { .. } | E::IllegalTransition(_) => {
                 Code::FailedPrecondition
             }
             E::AssetMissing { .. } => Code::FailedPrecondition,

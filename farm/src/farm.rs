@@ -11,13 +11,16 @@
 //!
 //! Record writes go through `Farm::persist`, which writes the record as it is at the time of
 //! writing, one write at a time: a slow write of an older state can never land after a newer one.
+//!
+//! Two parts of the farm live in modules of their own: `assembly`, which turns a job whose tiles
+//! are all stored into its result files, and `scenes`, the studio's scenes and their revisions.
 
 use crate::asset_store::{AssetStore, Upload, asset_hash};
 use crate::auth::Tokens;
 use crate::error::{FarmError, Result};
 use crate::group_commit::TileCommits;
 use crate::ids::{JobId, Session, SessionKey, WorkerId};
-use crate::job::{JobRecord, JobState, JobStatus};
+use crate::job::{IllegalTransition, JobRecord, JobState, JobStatus};
 use crate::lease::{LeaseClaim, LeaseSigner};
 use crate::metrics::Metrics;
 use crate::scheduler::{self, Completion, Failure, Scheduler};
@@ -35,6 +38,7 @@ use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 use tokio::sync::{Notify, mpsc, watch};
 use tracing::{debug, info, warn};
 
+mod assembly;
 mod scenes;
 pub use scenes::{
     MAX_FOLDER_BYTES, PhotometryInfo, RevisionInfo, SceneEntry, scene_identity, sent_file,
@@ -240,7 +244,7 @@ impl Farm {
         farm.resume_scenes()?;
         for id in to_assemble {
             let farm = farm.clone();
-            std::thread::spawn(move || crate::assembly::assemble(&farm, &id));
+            std::thread::spawn(move || assembly::assemble(&farm, &id));
         }
         info!(epoch, "coordinator run started");
         Ok(farm)
@@ -252,7 +256,9 @@ impl Farm {
         let store = |e| FarmError::StoreAtStart(e);
         let mut to_assemble = Vec::new();
         for (id, bytes) in self.store.jobs().map_err(store)? {
-            let mut record = JobRecord::from_bytes(&id, &bytes)?;
+            let mut record = JobRecord::from_bytes(&id, &bytes).map_err(|e| {
+                FarmError::UnreadableRecord { job: id.clone(), problem: e.to_string() }
+            })?;
             let id = record.id.clone();
             if record.format != crate::job::RECORD_FORMAT {
                 // An earlier release's record: listed as failed, stored anew, its tiles dropped.
@@ -344,7 +350,7 @@ impl Farm {
     pub(crate) fn transition<T>(
         &self,
         id: &JobId,
-        change: impl FnOnce(&mut JobRecord) -> Result<T>,
+        change: impl FnOnce(&mut JobRecord) -> Result<T, IllegalTransition>,
     ) -> Result<(T, JobRecord)> {
         let (value, record) = {
             let mut st = self.lock();
@@ -362,7 +368,7 @@ impl Farm {
         &self,
         st: &mut FarmState,
         id: &JobId,
-        end: impl FnOnce(&mut JobRecord, u32) -> Result<()>,
+        end: impl FnOnce(&mut JobRecord, u32) -> Result<(), IllegalTransition>,
     ) -> Result<()> {
         let progress = st.scheduler.progress(id);
         let r = st.jobs.get_mut(id).ok_or_else(|| FarmError::NoSuchJob(id.clone()))?;
@@ -853,7 +859,7 @@ impl Farm {
                 if finished {
                     self.persist(&claim.job);
                     let (farm, id) = (self.clone(), claim.job.clone());
-                    tokio::task::spawn_blocking(move || crate::assembly::assemble(&farm, &id));
+                    tokio::task::spawn_blocking(move || assembly::assemble(&farm, &id));
                 }
                 self.bump();
                 Ok(Reported::Accepted)

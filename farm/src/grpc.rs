@@ -76,7 +76,7 @@ impl From<WorkerStatus> for pb::WorkerStatus {
 
 /// A job id from the wire.
 fn job_id(text: &str) -> Result<JobId> {
-    JobId::parse(text)
+    Ok(JobId::parse(text)?)
 }
 
 /// The version a request carries in its body (the interceptor checked the header's).

@@ -14,7 +14,6 @@
 //! stands, and the assembly that finishes afterwards is refused instead of overturning it. A job
 //! resumed with all its tiles stored goes from queued straight to assembling.
 
-use crate::error::{FarmError, Result};
 use crate::ids::JobId;
 use restauro_scene::job::JobSpec;
 use restauro_scene::plan::Plan;
@@ -64,6 +63,17 @@ impl fmt::Display for JobState {
     }
 }
 
+/// A lifecycle move the job's state does not allow (e.g. finishing a cancelled job).
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("job {job} is {from}; it cannot become {to}")]
+pub struct IllegalTransition {
+    pub job: JobId,
+    pub from: JobState,
+    pub to: JobState,
+}
+
+type Moved<T = ()> = std::result::Result<T, IllegalTransition>;
+
 /// The record's layout in the store; a record of another layout was written by an earlier
 /// release.
 pub const RECORD_FORMAT: u32 = 2;
@@ -109,13 +119,9 @@ impl JobRecord {
         self.state
     }
 
-    fn advance(&mut self, to: JobState) -> Result<()> {
+    fn advance(&mut self, to: JobState) -> Moved {
         if !self.state.allows(to) {
-            return Err(FarmError::IllegalTransition {
-                job: self.id.clone(),
-                from: self.state,
-                to,
-            });
+            return Err(IllegalTransition { job: self.id.clone(), from: self.state, to });
         }
         self.state = to;
         Ok(())
@@ -127,7 +133,7 @@ impl JobRecord {
     }
 
     /// Every tile is stored: queued or running → assembling.
-    pub fn begin_assembly(&mut self) -> Result<()> {
+    pub fn begin_assembly(&mut self) -> Moved {
         self.advance(JobState::Assembling)
     }
 
@@ -148,25 +154,25 @@ impl JobRecord {
     }
 
     /// The framebuffer is whole: assembling → post-processing (the Retinex, the files).
-    pub fn begin_post_processing(&mut self) -> Result<()> {
+    pub fn begin_post_processing(&mut self) -> Moved {
         self.advance(JobState::PostProcessing)
     }
 
     /// The result files are written: post-processing → done.
-    pub fn finish(&mut self, results: Vec<String>) -> Result<()> {
+    pub fn finish(&mut self, results: Vec<String>) -> Moved {
         self.advance(JobState::Done)?;
         self.results = results;
         Ok(())
     }
 
-    pub fn fail(&mut self, reason: String, tiles_done: u32) -> Result<()> {
+    pub fn fail(&mut self, reason: String, tiles_done: u32) -> Moved {
         self.advance(JobState::Failed)?;
         self.error = reason;
         self.tiles_done_at_end = tiles_done;
         Ok(())
     }
 
-    pub fn cancel(&mut self, tiles_done: u32) -> Result<()> {
+    pub fn cancel(&mut self, tiles_done: u32) -> Moved {
         self.advance(JobState::Cancelled)?;
         self.tiles_done_at_end = tiles_done;
         Ok(())
@@ -191,15 +197,14 @@ impl JobRecord {
 
     /// A stored record. One of an earlier release's layout cannot be resumed: it comes back
     /// failed, with its id and name and the reason, so it stays listed and nothing is silent.
-    pub fn from_bytes(id: &str, bytes: &[u8]) -> Result<Self> {
+    /// Refused only when it is not JSON at all.
+    pub fn from_bytes(id: &str, bytes: &[u8]) -> Result<Self, serde_json::Error> {
         if let Ok(record) = serde_json::from_slice::<JobRecord>(bytes)
             && record.format == RECORD_FORMAT
         {
             return Ok(record);
         }
-        let old: serde_json::Value = serde_json::from_slice(bytes).map_err(|e| {
-            FarmError::UnreadableRecord { job: id.to_owned(), problem: e.to_string() }
-        })?;
+        let old: serde_json::Value = serde_json::from_slice(bytes)?;
         let name = old.get("name").and_then(|n| n.as_str()).unwrap_or_default();
         let spec = JobSpec {
             name: restauro_scene::job::JobName::new(name).unwrap_or_default(),
@@ -290,7 +295,7 @@ mod tests {
         r.finish(vec!["a.exr".into()]).unwrap();
         assert_eq!(r.state(), JobState::Done);
         for e in [r.cancel(0), r.fail("x".into(), 0), r.begin_assembly()] {
-            assert!(matches!(e, Err(FarmError::IllegalTransition { from: JobState::Done, .. })));
+            assert!(matches!(e, Err(IllegalTransition { from: JobState::Done, .. })));
         }
     }
 

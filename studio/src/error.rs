@@ -73,6 +73,13 @@ impl From<SceneError> for StudioError {
     }
 }
 
+/// A request field the farm's types cannot hold (a job id that is not one).
+impl From<restauro_proto::convert::WireError> for StudioError {
+    fn from(e: restauro_proto::convert::WireError) -> Self {
+        StudioError::Farm(e.into())
+    }
+}
+
 /// A blocking task that panicked or was cancelled: the studio's own fault, said as such.
 impl From<tokio::task::JoinError> for StudioError {
     fn from(e: tokio::task::JoinError) -> Self {

@@ -41,7 +41,7 @@ use tracing::{debug, info, warn};
 mod assembly;
 mod scenes;
 pub use scenes::{
-    MAX_FOLDER_BYTES, PhotometryInfo, RevisionInfo, SceneEntry, scene_identity, sent_file,
+    MAX_FOLDER_BYTES, PhotometryInfo, Revised, RevisionInfo, SceneEntry, scene_identity, sent_file,
 };
 
 /// How the coordinator runs.

@@ -6,7 +6,6 @@ use crate::callers::next_within;
 use crate::error::{FarmError, Result};
 use crate::farm::{Expected, Farm, Reported, WorkerStatus};
 use crate::ids::{JobId, Session};
-use crate::job::{JobState, JobStatus};
 use crate::lease::LeaseClaim;
 use restauro_proto::convert::WireError;
 use restauro_proto::{self as pb, PROTOCOL_VERSION};
@@ -24,40 +23,6 @@ type ReplyStream<T> = Pin<Box<dyn Stream<Item = Result<T, Status>> + Send + 'sta
 pub struct RenderService(pub Arc<Farm>);
 /// The worker-facing service.
 pub struct WorkService(pub Arc<Farm>);
-
-impl From<JobState> for pb::JobState {
-    fn from(s: JobState) -> Self {
-        match s {
-            JobState::Queued => pb::JobState::Queued,
-            JobState::Running => pb::JobState::Running,
-            JobState::Assembling => pb::JobState::Assembling,
-            JobState::PostProcessing => pb::JobState::PostProcessing,
-            JobState::Done => pb::JobState::Done,
-            JobState::Failed => pb::JobState::Failed,
-            JobState::Cancelled => pb::JobState::Cancelled,
-        }
-    }
-}
-
-impl From<JobStatus> for pb::JobStatus {
-    fn from(s: JobStatus) -> Self {
-        pb::JobStatus {
-            job_id: s.id.to_string(),
-            name: s.name,
-            state: pb::JobState::from(s.state) as i32,
-            tiles_total: s.tiles_total,
-            tiles_done: s.tiles_done,
-            tiles_leased: s.tiles_leased,
-            tiles_requeued: s.tiles_requeued,
-            error: s.error,
-            priority: s.priority,
-            width: s.width,
-            height: s.height,
-            elapsed_s: s.elapsed_s,
-            results: s.results,
-        }
-    }
-}
 
 impl From<WorkerStatus> for pb::WorkerStatus {
     fn from(w: WorkerStatus) -> Self {

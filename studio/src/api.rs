@@ -4,7 +4,7 @@
 
 use super::Studio;
 use super::events::Start;
-use super::views::{JobView, WorkerView};
+use super::views::WorkerView;
 use crate::error::{Result, StudioError};
 use axum::Json;
 use axum::body::{Body, Bytes};
@@ -14,6 +14,7 @@ use axum::response::sse::{Event as SseEvent, KeepAlive, Sse};
 use axum::response::{IntoResponse, Response};
 use restauro_farm::error::FarmError;
 use restauro_farm::ids::JobId;
+use restauro_farm::job::JobStatus;
 use serde::{Deserialize, Serialize};
 use std::convert::Infallible;
 use std::sync::Arc;
@@ -67,24 +68,24 @@ pub async fn whoami(State(studio): State<Arc<Studio>>) -> Json<Whoami> {
 }
 
 /// `GET /api/jobs`
-pub async fn jobs(State(studio): State<Arc<Studio>>) -> Json<Vec<JobView>> {
-    Json(studio.farm.jobs().into_iter().map(JobView::from).collect())
+pub async fn jobs(State(studio): State<Arc<Studio>>) -> Json<Vec<JobStatus>> {
+    Json(studio.farm.jobs())
 }
 
 /// `GET /api/jobs/{id}`
 pub async fn job(
     State(studio): State<Arc<Studio>>,
     Path(id): Path<String>,
-) -> Result<Json<JobView>> {
-    Ok(Json(studio.farm.job(&JobId::parse(&id)?)?.into()))
+) -> Result<Json<JobStatus>> {
+    Ok(Json(studio.farm.job(&JobId::parse(&id)?)?))
 }
 
 /// `POST /api/jobs/{id}/cancel`
 pub async fn cancel(
     State(studio): State<Arc<Studio>>,
     Path(id): Path<String>,
-) -> Result<Json<JobView>> {
-    Ok(Json(studio.farm.cancel(&JobId::parse(&id)?)?.into()))
+) -> Result<Json<JobStatus>> {
+    Ok(Json(studio.farm.cancel(&JobId::parse(&id)?)?))
 }
 
 /// `GET /api/jobs/{id}/results/{name}`: one result file of a finished job (an EXR is
@@ -242,11 +243,11 @@ pub async fn take_snapshot(
     State(studio): State<Arc<Studio>>,
     Path(id): Path<String>,
     body: Bytes,
-) -> Result<Json<JobView>> {
+) -> Result<Json<JobStatus>> {
     let id = scene_id(&id)?;
     let request: super::snapshot::SnapshotRequest = parse(&body, "the snapshot request")?;
     let preview = studio.previews.get(&studio.farm, id, request.revision).await?;
-    Ok(Json(super::snapshot::take(&studio.farm, id, &preview, request).await?.into()))
+    Ok(Json(super::snapshot::take(&studio.farm, id, &preview, request).await?))
 }
 
 /// A JSON body, refused naming the field that does not parse (`width: invalid value: …`).

@@ -1,6 +1,8 @@
 //! Editing a scene from the page: each edit (`restauro_scene::edit::Edit`) makes a new revision
 //! through [`Farm::edit_scene`], checked as a scene file is and refused with the same messages;
-//! the answer is the new revision's view, so the page redraws from what the server keeps. The
+//! the answer is the new revision's view, so the page redraws from what the server keeps. That
+//! view is built from the scene the farm loaded to check the revision
+//! ([`Revised`](restauro_farm::farm::Revised)): an edit loads the whole scene once. The
 //! shipped spectra are listed for the material panel's library.
 //!
 //! The page holds positions in the preview's frame (Y up, offset removed): a saved view's
@@ -34,7 +36,7 @@ pub async fn edit(
         to_world_edit(&mut edit, offset);
     }
     let made = studio.farm.edit_scene(id, &edit).await?;
-    let preview = studio.previews.get(&studio.farm, id, Some(made.number)).await?;
+    let preview = studio.previews.revised(&studio.farm, id, made).await?;
     Ok(Json(&preview.view).into_response())
 }
 
@@ -119,13 +121,13 @@ pub async fn open_folder(
     let name = super::api::query_value(query.as_deref(), "name").unwrap_or_else(|| "scene".into());
     let chosen = super::api::query_value(query.as_deref(), "scene");
     let (job, scene) = studio.farm.open_folder(&name, chosen, body.to_vec()).await?;
-    Ok(Json(OpenedFolder { job: job.into(), scene }))
+    Ok(Json(OpenedFolder { job, scene }))
 }
 
 /// A scene folder taken: its preview job and the scene's id.
 #[derive(Serialize)]
 pub struct OpenedFolder {
-    pub job: super::views::JobView,
+    pub job: restauro_farm::job::JobStatus,
     pub scene: String,
 }
 
@@ -195,7 +197,7 @@ pub async fn revert(
     let id = scene_id(&id)?;
     let Revert { revision } = parse(&body, "the revert request")?;
     let made = studio.farm.revert_scene(id, revision).await?;
-    let preview = studio.previews.get(&studio.farm, id, Some(made.number)).await?;
+    let preview = studio.previews.revised(&studio.farm, id, made).await?;
     Ok(Json(&preview.view).into_response())
 }
 

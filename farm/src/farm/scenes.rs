@@ -43,6 +43,14 @@ pub struct SceneEntry {
     pub revision: u32,
 }
 
+/// What an edit made: the new revision (or the latest, when the edit changed nothing), and,
+/// when one was made, its scene as loaded to check it, so that the caller shows it without
+/// loading the whole scene again.
+pub struct Revised {
+    pub revision: RevisionInfo,
+    pub scene: Option<LoadedScene>,
+}
+
 /// A revision as the store keeps it.
 #[derive(Clone, Serialize, Deserialize)]
 struct Revision {
@@ -246,8 +254,9 @@ impl Farm {
 
     /// Applies `edit` to the latest revision of scene `id`, making the next revision: checked
     /// as any scene is (the same messages as `scene check`), then kept. When the edit changes
-    /// nothing, no revision is made and the latest is returned.
-    pub async fn edit_scene(self: &Arc<Self>, id: &str, edit: &Edit) -> Result<RevisionInfo> {
+    /// nothing, no revision is made and the latest is returned. The scene is parsed, not loaded,
+    /// to apply the edit; the new revision is loaded once, to check it, and handed back.
+    pub async fn edit_scene(self: &Arc<Self>, id: &str, edit: &Edit) -> Result<Revised> {
         let _one_at_a_time = self.editing.lock().await;
         let (_, manifest) = self.scene_revision(id, None)?;
         let mut scene = Bundle::parse_manifest(&manifest)?;
@@ -256,7 +265,7 @@ impl Farm {
     }
 
     /// Makes revision `number` of scene `id` its latest again, as a new revision.
-    pub async fn revert_scene(self: &Arc<Self>, id: &str, number: u32) -> Result<RevisionInfo> {
+    pub async fn revert_scene(self: &Arc<Self>, id: &str, number: u32) -> Result<Revised> {
         let _one_at_a_time = self.editing.lock().await;
         let (_, manifest) = self.scene_revision(id, Some(number))?;
         let scene = Bundle::parse_manifest(&manifest)?;
@@ -268,18 +277,18 @@ impl Farm {
         id: &str,
         scene: SceneFile,
         summary: String,
-    ) -> Result<RevisionInfo> {
+    ) -> Result<Revised> {
         let manifest_json = serde_json::to_string(&scene)
             .map_err(|e| FarmError::Internal(format!("the scene does not serialise: {e}")))?;
         let (latest, current) = self.scene_revision(id, None)?;
         if manifest_json == current {
-            return Ok(self.revisions(id)?.swap_remove(latest as usize));
+            let revision = self.revisions(id)?.swap_remove(latest as usize);
+            return Ok(Revised { revision, scene: None });
         }
         let farm = self.clone();
         let checked = manifest_json.clone();
-        tokio::task::spawn_blocking(move || -> Result<()> {
-            farm.bundle(&checked)?.load(&farm.config.limits)?;
-            Ok(())
+        let loaded = tokio::task::spawn_blocking(move || -> Result<LoadedScene> {
+            Ok(farm.bundle(&checked)?.load(&farm.config.limits)?)
         })
         .await??;
         let revision = Revision { manifest_json, summary, created_unix_ms: now_unix_ms() };
@@ -296,7 +305,7 @@ impl Farm {
         };
         self.lock().scenes.add(id, revision);
         self.bump();
-        Ok(made)
+        Ok(Revised { revision: made, scene: Some(loaded) })
     }
 }
 

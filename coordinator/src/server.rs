@@ -17,6 +17,7 @@ use restauro_scene::limits::{LimitArgs, Limits};
 use std::io::Write as _;
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Duration;
 use tokio::net::TcpListener;
 use tonic::service::interceptor::InterceptedService;
@@ -220,7 +221,8 @@ pub struct Endpoints {
     pub studio: Option<SocketAddr>,
 }
 
-/// Serves until `stop` resolves.
+/// Serves until `stop` resolves: opens the farm, binds the gRPC address and the side doors
+/// (metrics, studio), prints where each listens, then serves the gRPC services until the stop.
 pub async fn serve(
     config: Config,
     endpoints: Endpoints,
@@ -234,12 +236,39 @@ pub async fn serve(
         stop.await;
         let _ = stop_tx.send(true);
     });
-    let has_tls = tls.is_some();
     let callers = config.callers;
-    // Every call in a span named by its method, so a log line says which call it belongs to;
-    // calls about one tile record its job, tile and worker in the span. HTTP/2 pings a quiet
-    // connection, so that one whose peer has gone (or will not answer) is closed, and an honest
-    // one is never silent long enough for the idle timeout.
+    let server = grpc_server(callers, tls.as_ref())?;
+    let tokens = config.tokens.clone();
+    let data = config.data_dir.clone();
+    let farm = tokio::task::spawn_blocking(move || Farm::open(config)).await??;
+    let listener =
+        TcpListener::bind(listen).await.with_context(|| format!("listening on {listen}"))?;
+    let addr = listener.local_addr()?;
+    info!(%addr, data = %data.display(), tls = tls.is_some(), "coordinator listening");
+    let doors = SideDoors::open(&endpoints, &farm, &tokens, tls, callers, &stop_rx).await?;
+    doors.print(addr)?;
+    let listener = GuardedListener::new(listener, callers.connections);
+    let incoming = restauro_ops::connections::incoming(listener, Connection);
+    let timer = tokio::spawn(farm.clone().run_timer());
+    let services = grpc_services(server, farm, &tokens).await?;
+    services.serve_with_incoming_shutdown(incoming, stopped(stop_rx)).await?;
+    timer.abort();
+    for (_, task) in doors.metrics.into_iter().chain(doors.studio) {
+        let _ = task.await;
+    }
+    info!("coordinator stopped");
+    Ok(())
+}
+
+/// The gRPC server within the caller limits, over TLS when `tls` is given. Every call is in a
+/// span named by its method, so a log line says which call it belongs to; calls about one tile
+/// record its job, tile and worker in the span. HTTP/2 pings a quiet connection, so that one
+/// whose peer has gone (or will not answer) is closed, and an honest one is never silent long
+/// enough for the idle timeout.
+fn grpc_server(
+    callers: CallerLimits,
+    tls: Option<&restauro_studio::TlsPem>,
+) -> Result<tonic::transport::Server> {
     let ping = callers.idle().min(Duration::from_secs(30)) / 2;
     let mut server = tonic::transport::Server::builder()
         .max_concurrent_streams(callers.max_streams_per_connection)
@@ -254,52 +283,78 @@ pub async fn serve(
                 worker = tracing::field::Empty,
             )
         });
-    if let Some(pem) = &tls {
+    if let Some(pem) = tls {
         let identity = tonic::transport::Identity::from_pem(&pem.cert, &pem.key);
         server = server
             .tls_config(tonic::transport::ServerTlsConfig::new().identity(identity))
             .context("configuring TLS")?;
     }
-    let tokens = config.tokens.clone();
-    let data = config.data_dir.clone();
-    let farm = tokio::task::spawn_blocking(move || Farm::open(config)).await??;
-    let listener =
-        TcpListener::bind(listen).await.with_context(|| format!("listening on {listen}"))?;
-    let addr = listener.local_addr()?;
-    info!(%addr, data = %data.display(), tls = has_tls, "coordinator listening");
-    let metrics = match endpoints.metrics {
-        Some((at, access)) => {
-            let probe: std::sync::Arc<dyn restauro_ops::endpoint::Probe> = farm.clone();
-            let (limits, stop) = (callers.connections, stopped(stop_rx.clone()));
-            Some(restauro_ops::endpoint::serve(at, probe, access, limits, stop).await?)
-        }
-        None => None,
-    };
-    let studio = match endpoints.studio {
-        Some(at) => {
-            let tokens = tokens.clone();
-            let stop = stop_rx.clone();
-            let (limits, tls) = (callers.connections, tls.clone());
-            Some(restauro_studio::serve(at, farm.clone(), tokens, stop, tls, limits).await?)
-        }
-        None => None,
-    };
-    {
-        // The embedded cluster and the tests read the addresses from here.
+    Ok(server)
+}
+
+/// A side door's bound address and its serving task.
+type Door = (SocketAddr, tokio::task::JoinHandle<()>);
+
+/// The listeners beside the gRPC one: the operations endpoint and the studio, when asked for.
+struct SideDoors {
+    metrics: Option<Door>,
+    studio: Option<Door>,
+    tls: bool,
+}
+
+impl SideDoors {
+    async fn open(
+        endpoints: &Endpoints,
+        farm: &Arc<Farm>,
+        tokens: &Tokens,
+        tls: Option<restauro_studio::TlsPem>,
+        callers: CallerLimits,
+        stop: &tokio::sync::watch::Receiver<bool>,
+    ) -> Result<SideDoors> {
+        let has_tls = tls.is_some();
+        let metrics = match endpoints.metrics {
+            Some((at, access)) => {
+                let probe: Arc<dyn restauro_ops::endpoint::Probe> = farm.clone();
+                let (limits, stop) = (callers.connections, stopped(stop.clone()));
+                Some(restauro_ops::endpoint::serve(at, probe, access, limits, stop).await?)
+            }
+            None => None,
+        };
+        let studio = match endpoints.studio {
+            Some(at) => {
+                let (tokens, stop, limits) = (tokens.clone(), stop.clone(), callers.connections);
+                Some(restauro_studio::serve(at, farm.clone(), tokens, stop, tls, limits).await?)
+            }
+            None => None,
+        };
+        Ok(SideDoors { metrics, studio, tls: has_tls })
+    }
+
+    /// Where each listens, on standard output: the embedded cluster and the tests read the
+    /// addresses from here.
+    fn print(&self, grpc: SocketAddr) -> Result<()> {
         let mut out = std::io::stdout().lock();
-        writeln!(out, "listening on {addr}")?;
-        if let Some((at, _)) = &metrics {
+        writeln!(out, "listening on {grpc}")?;
+        if let Some((at, _)) = &self.metrics {
             writeln!(out, "metrics on {at}")?;
         }
-        if let Some((at, _)) = &studio {
-            let scheme = if has_tls { "https" } else { "http" };
+        if let Some((at, _)) = &self.studio {
+            let scheme = if self.tls { "https" } else { "http" };
             writeln!(out, "studio on {scheme}://{at}/")?;
         }
         out.flush()?;
+        Ok(())
     }
-    let listener = GuardedListener::new(listener, callers.connections);
-    let incoming = restauro_ops::connections::incoming(listener, Connection);
-    let timer = tokio::spawn(farm.clone().run_timer());
+}
+
+/// The services on the gRPC address: `Render` for clients and `Work` for workers, each behind
+/// its role's token; the standard gRPC health service, without a token (probes carry none); and
+/// reflection, so that `grpcurl` lists and calls the services without the .proto file.
+async fn grpc_services(
+    mut server: tonic::transport::Server,
+    farm: Arc<Farm>,
+    tokens: &Tokens,
+) -> Result<tonic::transport::server::Router> {
     let render = InterceptedService::new(
         RenderServer::new(RenderService(farm.clone())).max_decoding_message_size(MAX_MESSAGE_BYTES),
         tokens.interceptor(Role::Client),
@@ -308,8 +363,6 @@ pub async fn serve(
         WorkServer::new(WorkService(farm)).max_decoding_message_size(MAX_MESSAGE_BYTES),
         tokens.interceptor(Role::Worker),
     );
-    // The standard gRPC health service, without a token (probes carry none), and reflection,
-    // so that `grpcurl` lists and calls the services without the .proto file.
     let (health, health_service) = tonic_health::server::health_reporter();
     health.set_serving::<RenderServer<RenderService>>().await;
     health.set_serving::<WorkServer<WorkService>>().await;
@@ -322,20 +375,12 @@ pub async fn serve(
     let reflection_v1 = reflection().build_v1().context("building the reflection service")?;
     let reflection_v1alpha =
         reflection().build_v1alpha().context("building the reflection service")?;
-    server
+    Ok(server
         .add_service(health_service)
         .add_service(reflection_v1)
         .add_service(reflection_v1alpha)
         .add_service(render)
-        .add_service(work)
-        .serve_with_incoming_shutdown(incoming, stopped(stop_rx))
-        .await?;
-    timer.abort();
-    for (_, task) in metrics.into_iter().chain(studio) {
-        let _ = task.await;
-    }
-    info!("coordinator stopped");
-    Ok(())
+        .add_service(work))
 }
 
 /// An accepted gRPC connection, within the caller limits, as tonic takes it.

@@ -6,7 +6,7 @@
 //! client named, and is deleted otherwise. Uploads in progress at once share a budget of bytes
 //! (`--max-upload-mb`): an upload waits for room, and is refused when none comes.
 
-use crate::error::{CoordinatorError, Result};
+use crate::error::{FarmError, Result};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Duration;
@@ -19,7 +19,7 @@ pub fn asset_hash(reference: &str) -> Result<&str> {
         .strip_prefix("blake3:")
         .and_then(|r| r.split_once('.').map(|(h, _)| h))
         .filter(|h| h.len() == 64 && h.bytes().all(|b| b.is_ascii_hexdigit()))
-        .ok_or_else(|| CoordinatorError::AssetReference { reference: reference.to_owned() })
+        .ok_or_else(|| FarmError::AssetReference { reference: reference.to_owned() })
 }
 
 pub struct AssetStore {
@@ -39,11 +39,11 @@ impl AssetStore {
     /// The asset folder `dir` (created when new; temporary files of interrupted uploads are
     /// removed).
     pub fn open(dir: &Path, max_file_bytes: u64, budget_bytes: u64) -> Result<Self> {
-        std::fs::create_dir_all(dir).map_err(|e| CoordinatorError::io(dir, e))?;
-        for entry in std::fs::read_dir(dir).map_err(|e| CoordinatorError::io(dir, e))? {
-            let path = entry.map_err(|e| CoordinatorError::io(dir, e))?.path();
+        std::fs::create_dir_all(dir).map_err(|e| FarmError::io(dir, e))?;
+        for entry in std::fs::read_dir(dir).map_err(|e| FarmError::io(dir, e))? {
+            let path = entry.map_err(|e| FarmError::io(dir, e))?.path();
             if path.to_string_lossy().ends_with(PARTIAL) {
-                std::fs::remove_file(&path).map_err(|e| CoordinatorError::io(&path, e))?;
+                std::fs::remove_file(&path).map_err(|e| FarmError::io(&path, e))?;
             }
         }
         let budget_mib = u32::try_from(budget_bytes.div_ceil(MIB).max(1)).unwrap_or(u32::MAX >> 3);
@@ -79,7 +79,7 @@ impl AssetStore {
                 Ok(None)
             }
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
-            Err(e) => Err(CoordinatorError::io(&path, e)),
+            Err(e) => Err(FarmError::io(&path, e)),
         }
     }
 
@@ -92,12 +92,10 @@ impl AssetStore {
     /// upload budget.
     pub async fn begin(&self, reference: &str, declared_bytes: u64) -> Result<Upload> {
         let hash = asset_hash(reference)?.to_ascii_lowercase();
-        let refuse = |problem: String| CoordinatorError::AssetUpload {
-            reference: reference.to_owned(),
-            problem,
-        };
+        let refuse =
+            |problem: String| FarmError::AssetUpload { reference: reference.to_owned(), problem };
         if declared_bytes > self.max_file_bytes {
-            return Err(CoordinatorError::Limit {
+            return Err(FarmError::Limit {
                 what: format!("asset {reference}"),
                 value: declared_bytes,
                 limit: self.max_file_bytes,
@@ -107,7 +105,7 @@ impl AssetStore {
         }
         let mib = u32::try_from(declared_bytes.div_ceil(MIB).max(1)).unwrap_or(u32::MAX);
         if mib > self.budget_mib {
-            return Err(CoordinatorError::Limit {
+            return Err(FarmError::Limit {
                 what: format!("the upload of {reference} (MiB)"),
                 value: mib.into(),
                 limit: self.budget_mib.into(),
@@ -117,7 +115,7 @@ impl AssetStore {
         }
         let permit = tokio::time::timeout(self.wait, self.budget.clone().acquire_many_owned(mib))
             .await
-            .map_err(|_| CoordinatorError::Limit {
+            .map_err(|_| FarmError::Limit {
                 what: "uploads in progress (MiB)".into(),
                 value: u64::from(self.budget_mib - self.budget.available_permits() as u32),
                 limit: self.budget_mib.into(),
@@ -126,9 +124,8 @@ impl AssetStore {
             })?
             .map_err(|_| refuse("the coordinator is stopping".into()))?;
         let temporary = self.dir.join(format!("{}{PARTIAL}", uuid::Uuid::new_v4().simple()));
-        let file = tokio::fs::File::create(&temporary)
-            .await
-            .map_err(|e| CoordinatorError::io(&temporary, e))?;
+        let file =
+            tokio::fs::File::create(&temporary).await.map_err(|e| FarmError::io(&temporary, e))?;
         Ok(Upload {
             reference: reference.to_owned(),
             target: self.path(&hash),
@@ -157,8 +154,8 @@ pub struct Upload {
 }
 
 impl Upload {
-    fn refuse(&self, problem: String) -> CoordinatorError {
-        CoordinatorError::AssetUpload { reference: self.reference.clone(), problem }
+    fn refuse(&self, problem: String) -> FarmError {
+        FarmError::AssetUpload { reference: self.reference.clone(), problem }
     }
 
     pub async fn write(&mut self, chunk: &[u8]) -> Result<()> {
@@ -171,7 +168,7 @@ impl Upload {
         }
         self.hasher.update(chunk);
         let file = self.file.as_mut().expect("open until finished");
-        file.write_all(chunk).await.map_err(|e| CoordinatorError::io(&self.temporary, e))?;
+        file.write_all(chunk).await.map_err(|e| FarmError::io(&self.temporary, e))?;
         self.written = written;
         Ok(())
     }
@@ -190,12 +187,12 @@ impl Upload {
             );
         }
         let mut file = self.file.take().expect("open until finished");
-        file.flush().await.map_err(|e| CoordinatorError::io(&self.temporary, e))?;
-        file.sync_all().await.map_err(|e| CoordinatorError::io(&self.temporary, e))?;
+        file.flush().await.map_err(|e| FarmError::io(&self.temporary, e))?;
+        file.sync_all().await.map_err(|e| FarmError::io(&self.temporary, e))?;
         drop(file);
         tokio::fs::rename(&self.temporary, &self.target)
             .await
-            .map_err(|e| CoordinatorError::io(&self.target, e))?;
+            .map_err(|e| FarmError::io(&self.target, e))?;
         Ok(self.written)
     }
 }
@@ -260,7 +257,7 @@ mod tests {
         drop(first);
         assert!(store.begin(&r, 1).await.is_ok());
         let e = store.begin("blake3:xyz.obj", 1).await.err().unwrap();
-        assert!(matches!(e, CoordinatorError::AssetReference { .. }));
+        assert!(matches!(e, FarmError::AssetReference { .. }));
     }
 
     #[test]

@@ -5,7 +5,7 @@
 //! role's token is PERMISSION_DENIED (authenticated, but forbidden). Tokens are compared in
 //! constant time (through their BLAKE3 hashes), so timing tells nothing of them.
 
-use crate::error::CoordinatorError;
+use crate::error::FarmError;
 use restauro_proto::{PROTOCOL_HEADER, PROTOCOL_VERSION};
 use tonic::{Request, Status};
 
@@ -65,22 +65,22 @@ impl Tokens {
         role: Role,
         version: Option<&str>,
         bearer: Option<&str>,
-    ) -> Result<(), CoordinatorError> {
+    ) -> Result<(), FarmError> {
         let version = version.and_then(|v| v.parse::<u32>().ok());
         if version != Some(PROTOCOL_VERSION) {
             let theirs = version.map_or("none".to_owned(), |v| v.to_string());
-            return Err(CoordinatorError::ProtocolVersion {
+            return Err(FarmError::ProtocolVersion {
                 theirs,
                 ours: PROTOCOL_VERSION,
                 role: role.name(),
             });
         }
-        let token = bearer.ok_or(CoordinatorError::NoToken { role: role.name() })?;
+        let token = bearer.ok_or(FarmError::NoToken { role: role.name() })?;
         self.authorize_token(role, token)
     }
 
     /// Checks a bearer token for `role`'s door (the studio's, which has no protocol header).
-    pub fn authorize_token(&self, role: Role, token: &str) -> Result<(), CoordinatorError> {
+    pub fn authorize_token(&self, role: Role, token: &str) -> Result<(), FarmError> {
         let hash = blake3::hash(token.as_bytes());
         let (mine, other) = match role {
             Role::Client => (self.client, self.worker),
@@ -94,9 +94,9 @@ impl Tokens {
                 Role::Client => Role::Worker,
                 Role::Worker => Role::Client,
             };
-            Err(CoordinatorError::WrongRole { held: other_role.name(), needed: role.name() })
+            Err(FarmError::WrongRole { held: other_role.name(), needed: role.name() })
         } else {
-            Err(CoordinatorError::BadToken { role: role.name() })
+            Err(FarmError::BadToken { role: role.name() })
         }
     }
 

@@ -15,7 +15,7 @@
 //! * **Uploads** (a scene's assets, a worker's tile) — a message must come every
 //!   `--idle-timeout-s`, or the upload is refused and its share of the upload budget given back.
 
-use crate::error::{CoordinatorError, Result};
+use crate::error::{FarmError, Result};
 use restauro_ops::connections::ConnectionLimits;
 use restauro_proto as pb;
 use std::path::PathBuf;
@@ -85,14 +85,13 @@ impl Downloads {
         on_bytes: impl Fn(u64) + Send + 'static,
     ) -> Result<ChunkStream> {
         let max = self.limits.max_downloads.max(1);
-        let permit =
-            self.permits.clone().try_acquire_owned().map_err(|_| CoordinatorError::Limit {
-                what: "files being sent at once".into(),
-                value: max as u64,
-                limit: max as u64,
-                flag: "--max-downloads",
-                fix: "try again in a moment",
-            })?;
+        let permit = self.permits.clone().try_acquire_owned().map_err(|_| FarmError::Limit {
+            what: "files being sent at once".into(),
+            value: max as u64,
+            limit: max as u64,
+            flag: "--max-downloads",
+            fix: "try again in a moment",
+        })?;
         let idle = self.limits.idle();
         // One chunk waits in the channel; the reading task reads the next only when it is
         // taken, so nothing is read ahead of the reader.
@@ -152,7 +151,7 @@ impl Sender {
             Ok(Ok(())) => Ok(()),
             Ok(Err(_)) => Err(None),
             Err(_) => Err(Some(
-                CoordinatorError::Stalled {
+                FarmError::Stalled {
                     what: format!("the download of {}", self.name),
                     seconds: self.idle.as_secs(),
                     flag: "--idle-timeout-s",
@@ -173,7 +172,7 @@ async fn read_into(
     on_bytes: impl Fn(u64),
     sender: &Sender,
 ) -> Result<(), Option<Status>> {
-    let io_error = |e| Err::<pb::Chunk, Status>(CoordinatorError::io(path, e).into());
+    let io_error = |e| Err::<pb::Chunk, Status>(FarmError::io(path, e).into());
     let mut file = match tokio::fs::File::open(path).await {
         Ok(f) => f,
         Err(e) => return sender.send(io_error(e)).await,
@@ -209,7 +208,7 @@ pub async fn next_within<T>(
     match tokio::time::timeout(idle, stream.next()).await {
         Ok(None) => Ok(None),
         Ok(Some(message)) => message.map(Some),
-        Err(_) => Err(CoordinatorError::Stalled {
+        Err(_) => Err(FarmError::Stalled {
             what: what(),
             seconds: idle.as_secs(),
             flag: "--idle-timeout-s",

@@ -1,14 +1,17 @@
-//! The coordinator's one error type, and its one mapping to a gRPC status. Every refusal says
-//! what was refused and what to do; the gRPC code tells a program whether to retry.
+//! The farm's one error type, [`FarmError`], and its one mapping to a gRPC status (the
+//! studio maps the same codes to HTTP statuses in its own error type). Every refusal says what
+//! was refused and what to do; the gRPC code tells a program whether to retry. The store's and
+//! the scheduler's own errors ([`StoreError`], [`AddJobError`]) reach callers only inside it.
 
 use crate::ids::JobId;
-use crate::job::JobState;
+use crate::job::{IllegalTransition, JobState};
+use crate::scheduler::AddJobError;
 use crate::store::StoreError;
 use restauro_proto::convert::WireError;
 use restauro_scene::SceneError;
 
 #[derive(Debug, thiserror::Error)]
-pub enum CoordinatorError {
+pub enum FarmError {
     /// A caller of another protocol version.
     #[error(
         "protocol version {theirs} refused: this coordinator speaks protocol {ours}; run a \
@@ -52,8 +55,8 @@ pub enum CoordinatorError {
     NotDone { job: JobId, state: JobState },
 
     /// A lifecycle move the job's state does not allow (e.g. finishing a cancelled job).
-    #[error("job {job} is {from}; it cannot become {to}")]
-    IllegalTransition { job: JobId, from: JobState, to: JobState },
+    #[error(transparent)]
+    IllegalTransition(#[from] IllegalTransition),
 
     /// A limit of the coordinator's, with the flag that raises it.
     #[error("{what} is {value}, over the limit of {limit} ({flag}); {fix}")]
@@ -90,38 +93,41 @@ pub enum CoordinatorError {
     #[error("{path}: {source}")]
     Io { path: String, source: std::io::Error },
 
-    /// A studio request without a valid client token or session.
-    #[error(
-        "not signed in: give the client token (the page asks for it; a program sends \
-         `authorization: Bearer <token>`)"
-    )]
-    NotSignedIn,
-
-    /// A change sent to the studio from another site's page (cross-site request forgery).
-    #[error(
-        "refused: this change comes from a page at {origin}, not from the studio at {expected}; \
-         open the studio's own address"
-    )]
-    CrossOrigin { origin: String, expected: String },
-
-    /// A studio request whose body or path does not say what it must.
+    /// An argument of the studio's scene calls (a revision, a file sent) the farm cannot take.
     #[error("invalid request: {0}")]
     Request(String),
 
     #[error("no scene {0}: the coordinator holds the scenes of its jobs")]
     NoSuchScene(String),
 
-    #[error("no such page `{0}` in the studio")]
-    NoSuchPage(String),
-
-    #[error("no image {0} is kept by this coordinator; attach it to the note again")]
-    NoSuchImage(String),
-
     #[error("internal error: {0}")]
     Internal(String),
+
+    // What stops the farm from opening its data folder: the coordinator does not start. Each
+    // says what it was doing, and keeps the failure beneath as its source, as the log shows it.
+    #[error("creating {path}")]
+    CreateDir { path: String, source: std::io::Error },
+
+    /// The store cannot be opened or read at start (no retry: the coordinator stops).
+    #[error(transparent)]
+    StoreAtStart(StoreError),
+
+    #[error("starting the store's committer")]
+    Committer(#[source] std::io::Error),
+
+    /// A job record in the store that is not JSON.
+    #[error("job {job}: unreadable: {problem}")]
+    UnreadableRecord { job: String, problem: String },
+
+    /// A stored job the scheduler cannot take back.
+    #[error("job {job}: {problem}")]
+    Resume { job: JobId, problem: AddJobError },
+
+    #[error("revision {number} of scene {scene} in the store: {problem}")]
+    UnreadableRevision { scene: String, number: u32, problem: String },
 }
 
-pub type Result<T, E = CoordinatorError> = std::result::Result<T, E>;
+pub type Result<T, E = FarmError> = std::result::Result<T, E>;
 
 /// A scene folder or bundle the assets crate refuses: a scene error as the scene model words it
 /// (an asset refusal is worded as an invalid file), mapped to a status as any scene error is.
@@ -132,23 +138,23 @@ impl From<restauro_assets::AssetsError> for CoordinatorError {
 }
 
 /// A blocking task that panicked or was cancelled: the coordinator's own fault, said as such.
-impl From<tokio::task::JoinError> for CoordinatorError {
+impl From<tokio::task::JoinError> for FarmError {
     fn from(e: tokio::task::JoinError) -> Self {
-        CoordinatorError::Internal(e.to_string())
+        FarmError::Internal(e.to_string())
     }
 }
 
-impl CoordinatorError {
+impl FarmError {
     pub fn io(path: &std::path::Path, source: std::io::Error) -> Self {
         Self::Io { path: path.display().to_string(), source }
     }
 
     /// The gRPC code: what a client or worker should do about it.
     pub fn code(&self) -> tonic::Code {
-        use CoordinatorError as E;
+        use FarmError as E;
         use tonic::Code;
         match self {
-            E::ProtocolVersion { .. } | E::NotDone { .. } | E::IllegalTransition { .. } => {
+            E::ProtocolVersion { .. } | E::NotDone { .. } | E::IllegalTransition(_) => {
                 Code::FailedPrecondition
             }
             E::AssetMissing { .. } => Code::FailedPrecondition,
@@ -166,50 +172,22 @@ impl CoordinatorError {
             E::Stalled { .. } => Code::DeadlineExceeded,
             E::Store(_) => Code::Unavailable,
             E::Io { .. } | E::Internal(_) => Code::Internal,
-            E::NotSignedIn => Code::Unauthenticated,
-            E::CrossOrigin { .. } => Code::PermissionDenied,
             E::Request(_) => Code::InvalidArgument,
-            E::NoSuchPage(_) | E::NoSuchScene(_) | E::NoSuchImage(_) => Code::NotFound,
-        }
-    }
-
-    /// The HTTP status of the studio's answer: the gRPC code's counterpart (as in Google's
-    /// HTTP mapping of gRPC codes), so both doors refuse the same thing the same way.
-    pub fn http_status(&self) -> axum::http::StatusCode {
-        use axum::http::StatusCode as S;
-        use tonic::Code;
-        match self.code() {
-            // A job that is not done yet has no result to give: that is a conflict of state.
-            Code::FailedPrecondition => S::CONFLICT,
-            Code::Aborted => S::CONFLICT,
-            Code::Unauthenticated => S::UNAUTHORIZED,
-            Code::PermissionDenied => S::FORBIDDEN,
-            Code::InvalidArgument => S::BAD_REQUEST,
-            Code::NotFound => S::NOT_FOUND,
-            Code::ResourceExhausted => S::TOO_MANY_REQUESTS,
-            Code::Unavailable => S::SERVICE_UNAVAILABLE,
-            Code::DeadlineExceeded => S::REQUEST_TIMEOUT,
-            _ => S::INTERNAL_SERVER_ERROR,
+            E::NoSuchScene(_) => Code::NotFound,
+            E::CreateDir { .. }
+            | E::StoreAtStart(_)
+            | E::Committer(_)
+            | E::UnreadableRecord { .. }
+            | E::Resume { .. }
+            | E::UnreadableRevision { .. } => Code::Internal,
         }
     }
 }
 
 /// The one conversion to a gRPC status.
-impl From<CoordinatorError> for tonic::Status {
-    fn from(e: CoordinatorError) -> Self {
+impl From<FarmError> for tonic::Status {
+    fn from(e: FarmError) -> Self {
         tonic::Status::new(e.code(), e.to_string())
-    }
-}
-
-/// The one conversion of the coordinator's errors to an HTTP answer (the studio's): the status
-/// of [`CoordinatorError::http_status`] and the message as `{"error": "…"}`.
-impl axum::response::IntoResponse for CoordinatorError {
-    fn into_response(self) -> axum::response::Response {
-        #[derive(serde::Serialize)]
-        struct Body {
-            error: String,
-        }
-        (self.http_status(), axum::Json(Body { error: self.to_string() })).into_response()
     }
 }
 
@@ -219,17 +197,17 @@ mod tests {
 
     #[test]
     fn each_error_maps_to_the_code_that_tells_the_caller_what_to_do() {
-        let status = |e: CoordinatorError| tonic::Status::from(e);
-        let s = status(CoordinatorError::TooManyJobs { open: 3 });
+        let status = |e: FarmError| tonic::Status::from(e);
+        let s = status(FarmError::TooManyJobs { open: 3 });
         assert_eq!(s.code(), tonic::Code::ResourceExhausted);
         assert!(s.message().contains("--max-jobs"), "{}", s.message());
-        let s = status(CoordinatorError::Store(StoreError::Store {
+        let s = status(FarmError::Store(StoreError::Store {
             path: "/x/store.redb".into(),
             message: "No space left on device".into(),
         }));
         assert_eq!(s.code(), tonic::Code::Unavailable);
         assert!(s.message().contains("No space left") && s.message().contains("/x/store.redb"));
-        let s = status(CoordinatorError::UnknownSession { worker: 7 });
+        let s = status(FarmError::UnknownSession { worker: 7 });
         assert_eq!(s.code(), tonic::Code::Aborted);
         assert!(s.message().contains("register again"));
     }

@@ -11,13 +11,16 @@
 //!
 //! Record writes go through `Farm::persist`, which writes the record as it is at the time of
 //! writing, one write at a time: a slow write of an older state can never land after a newer one.
+//!
+//! Two parts of the farm live in modules of their own: `assembly`, which turns a job whose tiles
+//! are all stored into its result files, and `scenes`, the studio's scenes and their revisions.
 
 use crate::asset_store::{AssetStore, Upload, asset_hash};
 use crate::auth::Tokens;
-use crate::error::{CoordinatorError, Result};
+use crate::error::{FarmError, Result};
 use crate::group_commit::TileCommits;
 use crate::ids::{JobId, Session, SessionKey, WorkerId};
-use crate::job::{JobRecord, JobState, JobStatus};
+use crate::job::{IllegalTransition, JobRecord, JobState, JobStatus};
 use crate::lease::{LeaseClaim, LeaseSigner};
 use crate::metrics::Metrics;
 use crate::scheduler::{self, Completion, Failure, Scheduler};
@@ -35,9 +38,10 @@ use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 use tokio::sync::{Notify, mpsc, watch};
 use tracing::{debug, info, warn};
 
+mod assembly;
 mod scenes;
 pub use scenes::{
-    MAX_FOLDER_BYTES, PhotometryInfo, RevisionInfo, SceneEntry, scene_identity, sent_file,
+    MAX_FOLDER_BYTES, PhotometryInfo, Revised, RevisionInfo, SceneEntry, scene_identity, sent_file,
 };
 
 /// How the coordinator runs.
@@ -187,25 +191,31 @@ impl Drop for Admission<'_> {
 
 impl Farm {
     /// Opens the store in `config.data_dir` and resumes every unfinished job in it.
-    pub fn open(config: Config) -> anyhow::Result<Arc<Farm>> {
-        use anyhow::Context;
+    pub fn open(config: Config) -> Result<Arc<Farm>> {
         let jobs_dir = config.data_dir.join("jobs");
-        std::fs::create_dir_all(&jobs_dir)
-            .with_context(|| format!("creating {}", jobs_dir.display()))?;
-        let store = Arc::new(Store::open(&config.data_dir.join("store.redb"))?);
-        let (secret, epoch) = store.begin_run(crate::ids::random_secret())?;
+        std::fs::create_dir_all(&jobs_dir).map_err(|source| FarmError::CreateDir {
+            path: jobs_dir.display().to_string(),
+            source,
+        })?;
+        let store = Arc::new(
+            Store::open(&config.data_dir.join("store.redb")).map_err(FarmError::StoreAtStart)?,
+        );
+        let (secret, epoch) =
+            store.begin_run(crate::ids::random_secret()).map_err(FarmError::StoreAtStart)?;
         let assets = AssetStore::open(
             &config.data_dir.join("assets"),
             config.limits.max_file_bytes,
             config.max_upload_bytes,
         )?;
-        let moved = store.drain_legacy_assets(|hash, bytes| assets.keep(hash, bytes))?;
+        let moved = store
+            .drain_legacy_assets(|hash, bytes| assets.keep(hash, bytes))
+            .map_err(FarmError::StoreAtStart)?;
         if moved > 0 {
             info!(assets = moved, "moved the assets of an earlier release out of the store");
         }
         remove_leftover_results(&jobs_dir);
-        let commits = TileCommits::start(store.clone(), config.commit_delay)
-            .context("starting the store's committer")?;
+        let commits =
+            TileCommits::start(store.clone(), config.commit_delay).map_err(FarmError::Committer)?;
         let farm = Arc::new(Farm {
             store,
             assets,
@@ -234,7 +244,7 @@ impl Farm {
         farm.resume_scenes()?;
         for id in to_assemble {
             let farm = farm.clone();
-            std::thread::spawn(move || crate::assembly::assemble(&farm, &id));
+            std::thread::spawn(move || assembly::assemble(&farm, &id));
         }
         info!(epoch, "coordinator run started");
         Ok(farm)
@@ -242,29 +252,32 @@ impl Farm {
 
     /// Loads every job of the store; the unfinished ones go back to the scheduler with their
     /// finished tiles. The jobs to assemble (every tile stored).
-    fn resume(&self) -> anyhow::Result<Vec<JobId>> {
+    fn resume(&self) -> Result<Vec<JobId>> {
+        let store = |e| FarmError::StoreAtStart(e);
         let mut to_assemble = Vec::new();
-        for (id, bytes) in self.store.jobs()? {
-            let mut record = JobRecord::from_bytes(&id, &bytes).map_err(anyhow::Error::msg)?;
+        for (id, bytes) in self.store.jobs().map_err(store)? {
+            let mut record = JobRecord::from_bytes(&id, &bytes).map_err(|e| {
+                FarmError::UnreadableRecord { job: id.clone(), problem: e.to_string() }
+            })?;
             let id = record.id.clone();
             if record.format != crate::job::RECORD_FORMAT {
                 // An earlier release's record: listed as failed, stored anew, its tiles dropped.
                 record.format = crate::job::RECORD_FORMAT;
-                self.store.remove_tiles(&id)?;
-                self.store.put_job(&id, &record.to_bytes())?;
+                self.store.remove_tiles(&id).map_err(store)?;
+                self.store.put_job(&id, &record.to_bytes()).map_err(store)?;
             } else if record.state().is_final() {
                 // Ended before its tiles were dropped (the coordinator stopped in between).
-                if !self.store.finished_tiles(&id)?.is_empty() {
-                    self.store.remove_tiles(&id)?;
+                if !self.store.finished_tiles(&id).map_err(store)?.is_empty() {
+                    self.store.remove_tiles(&id).map_err(store)?;
                 }
             } else {
-                let done = self.store.finished_tiles(&id)?;
+                let done = self.store.finished_tiles(&id).map_err(store)?;
                 let total = record.plan.tile_count();
                 info!(job = %id, done = done.len(), total, "resuming job");
                 let mut st = self.lock();
                 st.scheduler
                     .add_job(id.clone(), record.spec.priority, total, &done, Instant::now())
-                    .map_err(|e| anyhow::anyhow!("job {id}: {e}"))?;
+                    .map_err(|problem| FarmError::Resume { job: id.clone(), problem })?;
                 if record.resume_assembly(done.len() as u32 == total) {
                     to_assemble.push(id.clone());
                 }
@@ -337,11 +350,11 @@ impl Farm {
     pub(crate) fn transition<T>(
         &self,
         id: &JobId,
-        change: impl FnOnce(&mut JobRecord) -> Result<T>,
+        change: impl FnOnce(&mut JobRecord) -> Result<T, IllegalTransition>,
     ) -> Result<(T, JobRecord)> {
         let (value, record) = {
             let mut st = self.lock();
-            let r = st.jobs.get_mut(id).ok_or_else(|| CoordinatorError::NoSuchJob(id.clone()))?;
+            let r = st.jobs.get_mut(id).ok_or_else(|| FarmError::NoSuchJob(id.clone()))?;
             (change(r)?, r.clone())
         };
         self.persist(id);
@@ -355,10 +368,10 @@ impl Farm {
         &self,
         st: &mut FarmState,
         id: &JobId,
-        end: impl FnOnce(&mut JobRecord, u32) -> Result<()>,
+        end: impl FnOnce(&mut JobRecord, u32) -> Result<(), IllegalTransition>,
     ) -> Result<()> {
         let progress = st.scheduler.progress(id);
-        let r = st.jobs.get_mut(id).ok_or_else(|| CoordinatorError::NoSuchJob(id.clone()))?;
+        let r = st.jobs.get_mut(id).ok_or_else(|| FarmError::NoSuchJob(id.clone()))?;
         end(r, progress.as_ref().map_or(0, |p| p.done))?;
         r.tiles_requeued_at_end = progress.map_or(0, |p| p.requeued);
         st.scheduler.remove_job(id);
@@ -388,7 +401,7 @@ impl Farm {
         {
             let mut st = self.lock();
             let requeued = st.scheduler.progress(id).map_or(0, |p| p.requeued);
-            let r = st.jobs.get_mut(id).ok_or_else(|| CoordinatorError::NoSuchJob(id.clone()))?;
+            let r = st.jobs.get_mut(id).ok_or_else(|| FarmError::NoSuchJob(id.clone()))?;
             r.finish(files)?;
             r.tiles_requeued_at_end = requeued;
             st.scheduler.remove_job(id);
@@ -408,7 +421,7 @@ impl Farm {
     /// missing.
     fn bundle(&self, manifest_json: &str) -> Result<Bundle> {
         let scene = Bundle::parse_manifest(manifest_json).map_err(|e| {
-            CoordinatorError::Wire(pb::convert::WireError::new(
+            FarmError::Wire(pb::convert::WireError::new(
                 "manifest_json",
                 format!("not a scene bundle: {e}"),
             ))
@@ -420,7 +433,7 @@ impl Farm {
             let bytes = self
                 .assets
                 .read(hash)?
-                .ok_or_else(|| CoordinatorError::AssetMissing { reference: reference.clone() })?;
+                .ok_or_else(|| FarmError::AssetMissing { reference: reference.clone() })?;
             files.insert(hash.to_owned(), bytes);
         }
         Ok(Bundle::from_parts(manifest_json, files)?)
@@ -448,7 +461,7 @@ impl Farm {
         let mut st = self.lock();
         let open = st.jobs.values().filter(|r| !r.state().is_final()).count() + st.admitting;
         if open >= self.config.max_jobs {
-            return Err(CoordinatorError::TooManyJobs { open });
+            return Err(FarmError::TooManyJobs { open });
         }
         st.admitting += 1;
         Ok(Admission { farm: self, armed: true })
@@ -465,7 +478,7 @@ impl Farm {
             .scene_loads
             .acquire()
             .await
-            .map_err(|e| CoordinatorError::Internal(format!("the scene loads: {e}")))?;
+            .map_err(|e| FarmError::Internal(format!("the scene loads: {e}")))?;
         tokio::task::spawn_blocking(load).await?
     }
 
@@ -508,7 +521,7 @@ impl Farm {
             st.admitting -= 1;
             st.scheduler
                 .add_job(id.clone(), record.spec.priority, tiles, &[], Instant::now())
-                .map_err(|e| CoordinatorError::Internal(e.to_string()))?;
+                .map_err(|e| FarmError::Internal(e.to_string()))?;
             let status = Self::status(&st, &record);
             st.jobs.insert(id.clone(), record);
             status
@@ -523,7 +536,7 @@ impl Farm {
     /// status is taken, so no change between the two is lost.
     pub fn watch(self: &Arc<Self>, id: &JobId) -> Result<mpsc::Receiver<JobStatus>> {
         let mut changes = self.changed.subscribe();
-        let first = self.snapshot(id).ok_or_else(|| CoordinatorError::NoSuchJob(id.clone()))?;
+        let first = self.snapshot(id).ok_or_else(|| FarmError::NoSuchJob(id.clone()))?;
         let (tx, rx) = mpsc::channel(16);
         let (farm, id) = (self.clone(), id.clone());
         tokio::spawn(async move {
@@ -555,12 +568,12 @@ impl Farm {
     /// The path of one result file of a finished job.
     pub fn result_path(&self, id: &JobId, name: &str) -> Result<PathBuf> {
         let st = self.lock();
-        let r = st.jobs.get(id).ok_or_else(|| CoordinatorError::NoSuchJob(id.clone()))?;
+        let r = st.jobs.get(id).ok_or_else(|| FarmError::NoSuchJob(id.clone()))?;
         if r.state() != JobState::Done {
-            return Err(CoordinatorError::NotDone { job: id.clone(), state: r.state() });
+            return Err(FarmError::NotDone { job: id.clone(), state: r.state() });
         }
         if !r.results.iter().any(|f| f == name) {
-            return Err(CoordinatorError::NoSuchResult { job: id.clone(), name: name.to_owned() });
+            return Err(FarmError::NoSuchResult { job: id.clone(), name: name.to_owned() });
         }
         Ok(self.results_dir(id).join(name))
     }
@@ -571,7 +584,7 @@ impl Farm {
             let mut st = self.lock();
             let state = st.jobs.get(id).map(JobRecord::state);
             match state {
-                None => return Err(CoordinatorError::NoSuchJob(id.clone())),
+                None => return Err(FarmError::NoSuchJob(id.clone())),
                 Some(s) if !s.is_final() => self.end_job(&mut st, id, |r, done| r.cancel(done))?,
                 Some(_) => {}
             }
@@ -587,6 +600,11 @@ impl Farm {
     /// The coordinator's own trouble, when it has any (the store cannot be written).
     pub fn problem(&self) -> Option<String> {
         self.store.problem()
+    }
+
+    /// Job `id` as a client sees it.
+    pub fn job(&self, id: &JobId) -> Result<JobStatus> {
+        self.snapshot(id).ok_or_else(|| FarmError::NoSuchJob(id.clone()))
     }
 
     pub fn jobs(&self) -> Vec<JobStatus> {
@@ -721,7 +739,7 @@ impl Farm {
     /// deliverable by its own worker, registered again, and by nobody else), and in this run it
     /// names the session's worker id.
     fn check_claim(&self, st: &FarmState, session: &Session, claim: &LeaseClaim) -> Result<()> {
-        let foreign = |problem| CoordinatorError::ForeignLease {
+        let foreign = |problem| FarmError::ForeignLease {
             job: claim.job.to_string(),
             tile: claim.tile,
             problem,
@@ -787,11 +805,7 @@ impl Farm {
             let reason = format!("sent pixels no tracer produces: {e}");
             warn!(job = %claim.job, tile, worker = %session.worker, "{reason}");
             self.fail(session, claim, &reason, false)?;
-            return Err(CoordinatorError::TileData {
-                job: claim.job.clone(),
-                tile,
-                problem: e.problem,
-            });
+            return Err(FarmError::TileData { job: claim.job.clone(), tile, problem: e.problem });
         }
         self.metrics.tile_bytes_received.inc_by(data.len() as u64);
         if render_s.is_finite() && render_s >= 0.0 {
@@ -820,7 +834,7 @@ impl Farm {
         let (farm, claim, worker) = (self.clone(), claim.clone(), session.worker);
         tokio::spawn(async move { farm.settle(committed, &claim, worker, render_s).await })
             .await
-            .map_err(|e| CoordinatorError::Internal(format!("settling a tile: {e}")))?
+            .map_err(|e| FarmError::Internal(format!("settling a tile: {e}")))?
     }
 
     /// The end of a report: once the store has the tile (or could not take it), the scheduler
@@ -845,7 +859,7 @@ impl Farm {
                 if finished {
                     self.persist(&claim.job);
                     let (farm, id) = (self.clone(), claim.job.clone());
-                    tokio::task::spawn_blocking(move || crate::assembly::assemble(&farm, &id));
+                    tokio::task::spawn_blocking(move || assembly::assemble(&farm, &id));
                 }
                 self.bump();
                 Ok(Reported::Accepted)
@@ -955,9 +969,9 @@ impl Farm {
     pub fn worker_job(&self, session: &Session, id: &JobId) -> Result<WorkerJob> {
         let mut st = self.lock();
         if !Self::known(&mut st, session) {
-            return Err(CoordinatorError::UnknownSession { worker: session.worker.0 });
+            return Err(FarmError::UnknownSession { worker: session.worker.0 });
         }
-        let r = st.jobs.get(id).ok_or_else(|| CoordinatorError::NoSuchJob(id.clone()))?;
+        let r = st.jobs.get(id).ok_or_else(|| FarmError::NoSuchJob(id.clone()))?;
         Ok(WorkerJob {
             manifest_json: r.manifest_json.clone(),
             plan: r.plan.clone(),
@@ -968,11 +982,11 @@ impl Farm {
     /// The file of an asset, for a worker.
     pub fn asset_path(&self, session: &Session, reference: &str) -> Result<PathBuf> {
         if !Self::known(&mut self.lock(), session) {
-            return Err(CoordinatorError::UnknownSession { worker: session.worker.0 });
+            return Err(FarmError::UnknownSession { worker: session.worker.0 });
         }
         let hash = asset_hash(reference)?;
         if !self.assets.has(hash) {
-            return Err(CoordinatorError::AssetMissing { reference: reference.to_owned() });
+            return Err(FarmError::AssetMissing { reference: reference.to_owned() });
         }
         Ok(self.assets.path(hash))
     }

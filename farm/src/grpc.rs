@@ -3,10 +3,9 @@
 //! and converts the answer back. No decision is made here.
 
 use crate::callers::next_within;
-use crate::error::{CoordinatorError, Result};
+use crate::error::{FarmError, Result};
 use crate::farm::{Expected, Farm, Reported, WorkerStatus};
 use crate::ids::{JobId, Session};
-use crate::job::{JobState, JobStatus};
 use crate::lease::LeaseClaim;
 use restauro_proto::convert::WireError;
 use restauro_proto::{self as pb, PROTOCOL_VERSION};
@@ -25,40 +24,6 @@ pub struct RenderService(pub Arc<Farm>);
 /// The worker-facing service.
 pub struct WorkService(pub Arc<Farm>);
 
-impl From<JobState> for pb::JobState {
-    fn from(s: JobState) -> Self {
-        match s {
-            JobState::Queued => pb::JobState::Queued,
-            JobState::Running => pb::JobState::Running,
-            JobState::Assembling => pb::JobState::Assembling,
-            JobState::PostProcessing => pb::JobState::PostProcessing,
-            JobState::Done => pb::JobState::Done,
-            JobState::Failed => pb::JobState::Failed,
-            JobState::Cancelled => pb::JobState::Cancelled,
-        }
-    }
-}
-
-impl From<JobStatus> for pb::JobStatus {
-    fn from(s: JobStatus) -> Self {
-        pb::JobStatus {
-            job_id: s.id.to_string(),
-            name: s.name,
-            state: pb::JobState::from(s.state) as i32,
-            tiles_total: s.tiles_total,
-            tiles_done: s.tiles_done,
-            tiles_leased: s.tiles_leased,
-            tiles_requeued: s.tiles_requeued,
-            error: s.error,
-            priority: s.priority,
-            width: s.width,
-            height: s.height,
-            elapsed_s: s.elapsed_s,
-            results: s.results,
-        }
-    }
-}
-
 impl From<WorkerStatus> for pb::WorkerStatus {
     fn from(w: WorkerStatus) -> Self {
         pb::WorkerStatus {
@@ -76,14 +41,14 @@ impl From<WorkerStatus> for pb::WorkerStatus {
 
 /// A job id from the wire.
 fn job_id(text: &str) -> Result<JobId> {
-    JobId::parse(text)
+    Ok(JobId::parse(text)?)
 }
 
 /// The version a request carries in its body (the interceptor checked the header's).
 fn check_version(version: u32, role: &'static str) -> Result<()> {
     if version != PROTOCOL_VERSION {
         let theirs = version.to_string();
-        return Err(CoordinatorError::ProtocolVersion { theirs, ours: PROTOCOL_VERSION, role });
+        return Err(FarmError::ProtocolVersion { theirs, ours: PROTOCOL_VERSION, role });
     }
     Ok(())
 }
@@ -112,7 +77,7 @@ impl pb::render_server::Render for RenderService {
     ) -> Result<Response<pb::AssetList>, Status> {
         let mut stream = request.into_inner();
         let first = stream.message().await?.ok_or_else(|| {
-            CoordinatorError::from(WireError::new("chunk", "an upload needs at least one chunk"))
+            FarmError::from(WireError::new("chunk", "an upload needs at least one chunk"))
         })?;
         let reference = first.name.clone();
         let mut upload = self.0.begin_upload(&reference, first.total_bytes).await?;
@@ -133,7 +98,7 @@ impl pb::render_server::Render for RenderService {
     ) -> Result<Response<pb::JobStatus>, Status> {
         let req = request.into_inner();
         check_version(req.protocol_version, "client")?;
-        let spec = JobSpec::try_from(&req).map_err(CoordinatorError::from)?;
+        let spec = JobSpec::try_from(&req).map_err(FarmError::from)?;
         let status = self.0.submit(req.manifest_json, spec).await?;
         Ok(Response::new(status.into()))
     }
@@ -239,7 +204,7 @@ impl pb::work_server::Work for WorkService {
         let header = match stream.message().await?.and_then(|c| c.part) {
             Some(pb::tile_chunk::Part::Header(h)) => h,
             _ => {
-                return Err(CoordinatorError::from(WireError::new(
+                return Err(FarmError::from(WireError::new(
                     "header",
                     "a tile report starts with its header",
                 ))
@@ -259,7 +224,7 @@ impl pb::work_server::Work for WorkService {
             Expected::Tile { rect, layout } => (rect, layout),
         };
         let (image_bytes, spectral_bytes) = restauro_image::framebuffer::tile_sizes(&rect, layout);
-        let tile_error = |problem: String| CoordinatorError::TileData {
+        let tile_error = |problem: String| FarmError::TileData {
             job: claim.job.clone(),
             tile: claim.tile,
             problem,

@@ -24,10 +24,10 @@ impl JobId {
     }
 
     /// A job id from a caller: the coordinator's ids are UUIDs, and nothing else names a job.
-    pub fn parse(text: &str) -> Result<Self, crate::error::CoordinatorError> {
+    pub fn parse(text: &str) -> Result<Self, restauro_proto::convert::WireError> {
         if uuid::Uuid::parse_str(text).is_err() {
             let problem = format!("`{}` is not a job id", text.escape_debug());
-            return Err(restauro_proto::convert::WireError::new("job_id", problem).into());
+            return Err(restauro_proto::convert::WireError::new("job_id", problem));
         }
         Ok(JobId::from(text))
     }

@@ -14,8 +14,9 @@
 //! stands, and the assembly that finishes afterwards is refused instead of overturning it. A job
 //! resumed with all its tiles stored goes from queued straight to assembling.
 
-use crate::error::{CoordinatorError, Result};
 use crate::ids::JobId;
+use restauro_proto as pb;
+use restauro_proto::convert::WireError;
 use restauro_scene::job::JobSpec;
 use restauro_scene::plan::Plan;
 use serde::{Deserialize, Serialize};
@@ -64,6 +65,17 @@ impl fmt::Display for JobState {
     }
 }
 
+/// A lifecycle move the job's state does not allow (e.g. finishing a cancelled job).
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("job {job} is {from}; it cannot become {to}")]
+pub struct IllegalTransition {
+    pub job: JobId,
+    pub from: JobState,
+    pub to: JobState,
+}
+
+type Moved<T = ()> = std::result::Result<T, IllegalTransition>;
+
 /// The record's layout in the store; a record of another layout was written by an earlier
 /// release.
 pub const RECORD_FORMAT: u32 = 2;
@@ -109,13 +121,9 @@ impl JobRecord {
         self.state
     }
 
-    fn advance(&mut self, to: JobState) -> Result<()> {
+    fn advance(&mut self, to: JobState) -> Moved {
         if !self.state.allows(to) {
-            return Err(CoordinatorError::IllegalTransition {
-                job: self.id.clone(),
-                from: self.state,
-                to,
-            });
+            return Err(IllegalTransition { job: self.id.clone(), from: self.state, to });
         }
         self.state = to;
         Ok(())
@@ -127,7 +135,7 @@ impl JobRecord {
     }
 
     /// Every tile is stored: queued or running → assembling.
-    pub fn begin_assembly(&mut self) -> Result<()> {
+    pub fn begin_assembly(&mut self) -> Moved {
         self.advance(JobState::Assembling)
     }
 
@@ -148,25 +156,25 @@ impl JobRecord {
     }
 
     /// The framebuffer is whole: assembling → post-processing (the Retinex, the files).
-    pub fn begin_post_processing(&mut self) -> Result<()> {
+    pub fn begin_post_processing(&mut self) -> Moved {
         self.advance(JobState::PostProcessing)
     }
 
     /// The result files are written: post-processing → done.
-    pub fn finish(&mut self, results: Vec<String>) -> Result<()> {
+    pub fn finish(&mut self, results: Vec<String>) -> Moved {
         self.advance(JobState::Done)?;
         self.results = results;
         Ok(())
     }
 
-    pub fn fail(&mut self, reason: String, tiles_done: u32) -> Result<()> {
+    pub fn fail(&mut self, reason: String, tiles_done: u32) -> Moved {
         self.advance(JobState::Failed)?;
         self.error = reason;
         self.tiles_done_at_end = tiles_done;
         Ok(())
     }
 
-    pub fn cancel(&mut self, tiles_done: u32) -> Result<()> {
+    pub fn cancel(&mut self, tiles_done: u32) -> Moved {
         self.advance(JobState::Cancelled)?;
         self.tiles_done_at_end = tiles_done;
         Ok(())
@@ -191,14 +199,14 @@ impl JobRecord {
 
     /// A stored record. One of an earlier release's layout cannot be resumed: it comes back
     /// failed, with its id and name and the reason, so it stays listed and nothing is silent.
-    pub fn from_bytes(id: &str, bytes: &[u8]) -> std::result::Result<Self, String> {
+    /// Refused only when it is not JSON at all.
+    pub fn from_bytes(id: &str, bytes: &[u8]) -> Result<Self, serde_json::Error> {
         if let Ok(record) = serde_json::from_slice::<JobRecord>(bytes)
             && record.format == RECORD_FORMAT
         {
             return Ok(record);
         }
-        let old: serde_json::Value =
-            serde_json::from_slice(bytes).map_err(|e| format!("job {id}: unreadable: {e}"))?;
+        let old: serde_json::Value = serde_json::from_slice(bytes)?;
         let name = old.get("name").and_then(|n| n.as_str()).unwrap_or_default();
         let spec = JobSpec {
             name: restauro_scene::job::JobName::new(name).unwrap_or_default(),
@@ -238,7 +246,8 @@ impl JobRecord {
     }
 }
 
-/// A job as a client sees it.
+/// A job as a client sees it, through either door: the studio sends it as JSON (its
+/// [`Serialize`], below), the gRPC services as `pb::JobStatus` (the `From`/`TryFrom` below).
 #[derive(Clone, Debug, PartialEq)]
 pub struct JobStatus {
     pub id: JobId,
@@ -254,6 +263,106 @@ pub struct JobStatus {
     pub height: u32,
     pub elapsed_s: f64,
     pub results: Vec<String>,
+}
+
+/// The studio's JSON of a job: every field, the id as a string, the state in words (`queued`,
+/// `running`, `assembling`, `post-processing`, `done`, `failed` or `cancelled`), and `finished`,
+/// whether the state is final (the page stops following the job then).
+impl Serialize for JobStatus {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct;
+        let mut out = s.serialize_struct("JobStatus", 14)?;
+        out.serialize_field("id", &self.id)?;
+        out.serialize_field("name", &self.name)?;
+        out.serialize_field("state", &self.state)?;
+        out.serialize_field("finished", &self.state.is_final())?;
+        out.serialize_field("tiles_total", &self.tiles_total)?;
+        out.serialize_field("tiles_done", &self.tiles_done)?;
+        out.serialize_field("tiles_leased", &self.tiles_leased)?;
+        out.serialize_field("tiles_requeued", &self.tiles_requeued)?;
+        out.serialize_field("error", &self.error)?;
+        out.serialize_field("priority", &self.priority)?;
+        out.serialize_field("width", &self.width)?;
+        out.serialize_field("height", &self.height)?;
+        out.serialize_field("elapsed_s", &self.elapsed_s)?;
+        out.serialize_field("results", &self.results)?;
+        out.end()
+    }
+}
+
+// The wire's job state and status: converted here, once, each way.
+
+impl From<JobState> for pb::JobState {
+    fn from(s: JobState) -> Self {
+        match s {
+            JobState::Queued => pb::JobState::Queued,
+            JobState::Running => pb::JobState::Running,
+            JobState::Assembling => pb::JobState::Assembling,
+            JobState::PostProcessing => pb::JobState::PostProcessing,
+            JobState::Done => pb::JobState::Done,
+            JobState::Failed => pb::JobState::Failed,
+            JobState::Cancelled => pb::JobState::Cancelled,
+        }
+    }
+}
+
+impl TryFrom<pb::JobState> for JobState {
+    type Error = WireError;
+    fn try_from(s: pb::JobState) -> std::result::Result<Self, WireError> {
+        Ok(match s {
+            pb::JobState::Queued => JobState::Queued,
+            pb::JobState::Running => JobState::Running,
+            pb::JobState::Assembling => JobState::Assembling,
+            pb::JobState::PostProcessing => JobState::PostProcessing,
+            pb::JobState::Done => JobState::Done,
+            pb::JobState::Failed => JobState::Failed,
+            pb::JobState::Cancelled => JobState::Cancelled,
+            pb::JobState::Unspecified => return Err(WireError::missing("state")),
+        })
+    }
+}
+
+impl From<JobStatus> for pb::JobStatus {
+    fn from(s: JobStatus) -> Self {
+        pb::JobStatus {
+            job_id: s.id.to_string(),
+            name: s.name,
+            state: pb::JobState::from(s.state) as i32,
+            tiles_total: s.tiles_total,
+            tiles_done: s.tiles_done,
+            tiles_leased: s.tiles_leased,
+            tiles_requeued: s.tiles_requeued,
+            error: s.error,
+            priority: s.priority,
+            width: s.width,
+            height: s.height,
+            elapsed_s: s.elapsed_s,
+            results: s.results,
+        }
+    }
+}
+
+impl TryFrom<pb::JobStatus> for JobStatus {
+    type Error = WireError;
+    fn try_from(s: pb::JobStatus) -> std::result::Result<Self, WireError> {
+        let state = pb::JobState::try_from(s.state)
+            .map_err(|_| WireError::new("state", format!("{} is not a job state", s.state)))?;
+        Ok(JobStatus {
+            id: JobId::parse(&s.job_id)?,
+            name: s.name,
+            state: JobState::try_from(state)?,
+            tiles_total: s.tiles_total,
+            tiles_done: s.tiles_done,
+            tiles_leased: s.tiles_leased,
+            tiles_requeued: s.tiles_requeued,
+            error: s.error,
+            priority: s.priority,
+            width: s.width,
+            height: s.height,
+            elapsed_s: s.elapsed_s,
+            results: s.results,
+        })
+    }
 }
 
 #[cfg(test)]
@@ -289,10 +398,7 @@ mod tests {
         r.finish(vec!["a.exr".into()]).unwrap();
         assert_eq!(r.state(), JobState::Done);
         for e in [r.cancel(0), r.fail("x".into(), 0), r.begin_assembly()] {
-            assert!(matches!(
-                e,
-                Err(CoordinatorError::IllegalTransition { from: JobState::Done, .. })
-            ));
+            assert!(matches!(e, Err(IllegalTransition { from: JobState::Done, .. })));
         }
     }
 
@@ -317,6 +423,55 @@ mod tests {
         assert!(r.finish(Vec::new()).is_err());
         r.begin_assembly().unwrap();
         assert!(!r.start(), "no way back to running");
+    }
+
+    fn status(state: JobState) -> JobStatus {
+        JobStatus {
+            id: JobId::from("0b7e7c5c-7b1e-4a43-9c8e-4f3f5f2b9a10"),
+            name: "aosta".into(),
+            state,
+            tiles_total: 4,
+            tiles_done: 2,
+            tiles_leased: 1,
+            tiles_requeued: 0,
+            error: String::new(),
+            priority: 3,
+            width: 64,
+            height: 48,
+            elapsed_s: 1.5,
+            results: vec!["aosta.exr".into()],
+        }
+    }
+
+    /// The studio's page reads these fields by name (studio/web/farm.js): the state in words,
+    /// and whether it is final.
+    #[test]
+    fn a_status_is_the_json_the_studio_page_reads() {
+        let json = serde_json::to_value(status(JobState::PostProcessing)).unwrap();
+        let keys: Vec<&str> = json.as_object().unwrap().keys().map(String::as_str).collect();
+        assert_eq!(keys.len(), 14, "{keys:?}");
+        assert_eq!(json["id"], "0b7e7c5c-7b1e-4a43-9c8e-4f3f5f2b9a10");
+        assert_eq!(
+            (json["state"].as_str(), json["finished"].as_bool()),
+            (Some("post-processing"), Some(false))
+        );
+        let done = serde_json::to_value(status(JobState::Cancelled)).unwrap();
+        assert_eq!(
+            (done["state"].as_str(), done["finished"].as_bool()),
+            (Some("cancelled"), Some(true))
+        );
+        assert_eq!(json["elapsed_s"], 1.5);
+        assert_eq!(json["results"][0], "aosta.exr");
+    }
+
+    #[test]
+    fn a_status_goes_over_the_wire_and_back_unchanged() {
+        for state in [JobState::Queued, JobState::PostProcessing, JobState::Done] {
+            let wire = pb::JobStatus::from(status(state));
+            assert_eq!(JobStatus::try_from(wire).unwrap(), status(state));
+        }
+        let unknown = pb::JobStatus { state: 99, ..pb::JobStatus::from(status(JobState::Done)) };
+        assert!(JobStatus::try_from(unknown).is_err());
     }
 
     #[test]

@@ -5,7 +5,6 @@
 //! The domain layer is [`farm`]; [`grpc`] is one door to it, the studio's HTTP API
 //! (restauro-studio) another. The process that opens both doors is restauro-coordinator.
 
-pub mod assembly;
 pub mod asset_store;
 pub mod auth;
 pub mod callers;

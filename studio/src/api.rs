@@ -1,18 +1,20 @@
 //! The studio's JSON API under `/api/`: the same domain calls the gRPC `Render` service makes
-//! ([`Farm`]), and the same refusals, with HTTP statuses (`CoordinatorError::http_status`) and
+//! ([`Farm`]), and the same refusals, with HTTP statuses (`StudioError::http_status`) and
 //! a body `{"error": "<the message>"}` the page shows as it is.
 
 use super::Studio;
 use super::events::Start;
-use super::views::{JobView, WorkerView};
+use super::views::WorkerView;
+use crate::error::{Result, StudioError};
 use axum::Json;
 use axum::body::{Body, Bytes};
 use axum::extract::{Path, RawQuery, State};
 use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
 use axum::response::sse::{Event as SseEvent, KeepAlive, Sse};
 use axum::response::{IntoResponse, Response};
-use restauro_farm::error::{CoordinatorError, Result};
+use restauro_farm::error::FarmError;
 use restauro_farm::ids::JobId;
+use restauro_farm::job::JobStatus;
 use serde::{Deserialize, Serialize};
 use std::convert::Infallible;
 use std::sync::Arc;
@@ -34,9 +36,7 @@ pub async fn sign_in(
 ) -> Result<Response> {
     super::session::same_origin(&headers)?;
     let SignIn { token } = serde_json::from_slice(&body).map_err(|e| {
-        CoordinatorError::Request(format!(
-            "the body must be {{\"token\": \"<client token>\"}} ({e})"
-        ))
+        StudioError::Request(format!("the body must be {{\"token\": \"<client token>\"}} ({e})"))
     })?;
     let cookie = studio.gate.sign_in(token.trim())?;
     Ok(with_cookie(StatusCode::NO_CONTENT, &cookie))
@@ -68,26 +68,24 @@ pub async fn whoami(State(studio): State<Arc<Studio>>) -> Json<Whoami> {
 }
 
 /// `GET /api/jobs`
-pub async fn jobs(State(studio): State<Arc<Studio>>) -> Json<Vec<JobView>> {
-    Json(studio.farm.jobs().into_iter().map(JobView::from).collect())
+pub async fn jobs(State(studio): State<Arc<Studio>>) -> Json<Vec<JobStatus>> {
+    Json(studio.farm.jobs())
 }
 
 /// `GET /api/jobs/{id}`
 pub async fn job(
     State(studio): State<Arc<Studio>>,
     Path(id): Path<String>,
-) -> Result<Json<JobView>> {
-    let id = JobId::parse(&id)?;
-    let job = studio.farm.jobs().into_iter().find(|j| j.id == id);
-    job.map(|j| Json(j.into())).ok_or(CoordinatorError::NoSuchJob(id))
+) -> Result<Json<JobStatus>> {
+    Ok(Json(studio.farm.job(&JobId::parse(&id)?)?))
 }
 
 /// `POST /api/jobs/{id}/cancel`
 pub async fn cancel(
     State(studio): State<Arc<Studio>>,
     Path(id): Path<String>,
-) -> Result<Json<JobView>> {
-    Ok(Json(studio.farm.cancel(&JobId::parse(&id)?)?.into()))
+) -> Result<Json<JobStatus>> {
+    Ok(Json(studio.farm.cancel(&JobId::parse(&id)?)?))
 }
 
 /// `GET /api/jobs/{id}/results/{name}`: one result file of a finished job (an EXR is
@@ -97,8 +95,8 @@ pub async fn result(
     Path((id, name)): Path<(String, String)>,
 ) -> Result<Response> {
     let path = studio.farm.result_path(&JobId::parse(&id)?, &name)?;
-    let file = tokio::fs::File::open(&path).await.map_err(|e| CoordinatorError::io(&path, e))?;
-    let length = file.metadata().await.map_err(|e| CoordinatorError::io(&path, e))?.len();
+    let file = tokio::fs::File::open(&path).await.map_err(|e| FarmError::io(&path, e))?;
+    let length = file.metadata().await.map_err(|e| FarmError::io(&path, e))?.len();
     let kind = match name.rsplit('.').next() {
         Some("png") => "image/png",
         Some("exr") => "image/x-exr",
@@ -187,7 +185,7 @@ pub(super) fn query_value(query: Option<&str>, name: &str) -> Option<String> {
 pub(super) fn revision(query: Option<&str>) -> Result<Option<u32>> {
     let Some(value) = query_value(query, "revision") else { return Ok(None) };
     value.parse::<u32>().map(Some).map_err(|_| {
-        CoordinatorError::Request(format!(
+        StudioError::Request(format!(
             "revision: `{}` is not a revision number (0, 1, 2, …)",
             value.chars().take(40).collect::<String>().escape_debug()
         ))
@@ -199,7 +197,7 @@ pub(super) fn scene_id(text: &str) -> Result<&str> {
     if text.len() == 64 && text.bytes().all(|b| b.is_ascii_hexdigit()) {
         Ok(text)
     } else {
-        Err(CoordinatorError::Request(format!(
+        Err(StudioError::Request(format!(
             "`{}` is not a scene id (64 hexadecimal digits, as /api/scenes lists them)",
             text.chars().take(80).collect::<String>().escape_debug()
         )))
@@ -245,11 +243,11 @@ pub async fn take_snapshot(
     State(studio): State<Arc<Studio>>,
     Path(id): Path<String>,
     body: Bytes,
-) -> Result<Json<JobView>> {
+) -> Result<Json<JobStatus>> {
     let id = scene_id(&id)?;
     let request: super::snapshot::SnapshotRequest = parse(&body, "the snapshot request")?;
     let preview = studio.previews.get(&studio.farm, id, request.revision).await?;
-    Ok(Json(super::snapshot::take(&studio.farm, id, &preview, request).await?.into()))
+    Ok(Json(super::snapshot::take(&studio.farm, id, &preview, request).await?))
 }
 
 /// A JSON body, refused naming the field that does not parse (`width: invalid value: …`).
@@ -258,6 +256,6 @@ pub(super) fn parse<T: serde::de::DeserializeOwned>(body: &[u8], what: &str) -> 
     serde_path_to_error::deserialize(&mut json).map_err(|e| {
         let path = e.path().to_string();
         let field = if path == "." { String::new() } else { format!("{path}: ") };
-        CoordinatorError::Request(format!("{what}: {field}{}", e.inner()))
+        StudioError::Request(format!("{what}: {field}{}", e.inner()))
     })
 }

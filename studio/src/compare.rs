@@ -5,11 +5,11 @@
 
 use super::Studio;
 use super::api::query_value;
+use crate::error::{Result, StudioError};
 use axum::Json;
 use axum::extract::{RawQuery, State};
 use axum::http::header;
 use axum::response::{IntoResponse, Response};
-use restauro_farm::error::{CoordinatorError, Result};
 use restauro_farm::ids::JobId;
 use restauro_image::delta_e::{
     DeltaEMap, DeltaEStats, delta_e_map, map_rgb, scale_max, white_luminance,
@@ -47,9 +47,9 @@ struct Compared {
 fn pair(query: Option<&str>) -> Result<(JobId, JobId)> {
     let job = |name: &str| -> Result<JobId> {
         let text = query_value(query, name).ok_or_else(|| {
-            CoordinatorError::Request(format!("{name}: give the job to compare (?a=JOB&b=JOB)"))
+            StudioError::Request(format!("{name}: give the job to compare (?a=JOB&b=JOB)"))
         })?;
-        JobId::parse(&text)
+        Ok(JobId::parse(&text)?)
     };
     Ok((job("a")?, job("b")?))
 }
@@ -61,7 +61,7 @@ async fn compared(studio: &Arc<Studio>, query: Option<&str>) -> Result<Compared>
         let ((a_name, a), (b_name, b)) =
             (super::display::rendered(&studio, &a)?, super::display::rendered(&studio, &b)?);
         if (a.width, a.height) != (b.width, b.height) {
-            return Err(CoordinatorError::Request(format!(
+            return Err(StudioError::Request(format!(
                 "b: {b_name} is {}×{} px and {a_name} {}×{} px; compare snapshots of one size",
                 b.width, b.height, a.width, a.height
             )));
@@ -99,6 +99,6 @@ pub async fn picture(
     let Compared { view, map } = compared(&studio, query.as_deref()).await?;
     let pixels = PngPixels::Eight(map_rgb(&map, view.scale_max));
     let png = encode_png(view.width, view.height, &pixels, RgbSpace::Srgb)
-        .map_err(|e| CoordinatorError::Internal(format!("the ΔE00 picture: {e}")))?;
+        .map_err(|e| StudioError::Internal(format!("the ΔE00 picture: {e}")))?;
     Ok(([(header::CONTENT_TYPE, "image/png")], png).into_response())
 }

@@ -5,11 +5,11 @@
 
 use super::Studio;
 use super::api::query_value;
+use crate::error::{Result, StudioError};
 use axum::Json;
 use axum::extract::{Path, RawQuery, State};
 use axum::http::header;
 use axum::response::{IntoResponse, Response};
-use restauro_farm::error::{CoordinatorError, Result};
 use restauro_farm::ids::JobId;
 use restauro_image::delta_e::viridis;
 use restauro_image::false_colour;
@@ -21,11 +21,10 @@ use std::sync::Arc;
 
 /// The rendered image (absolute XYZ, cd/m² in Y) of a finished job.
 pub(super) fn rendered(studio: &Studio, id: &JobId) -> Result<(String, XyzImage)> {
-    let job = studio.farm.jobs().into_iter().find(|j| j.id == *id);
-    let job = job.ok_or_else(|| CoordinatorError::NoSuchJob(id.clone()))?;
+    let job = studio.farm.job(id)?;
     let path = studio.farm.result_path(id, &format!("{}.exr", job.name))?;
     let image = read_exr(&path, MAX_PIXELS)
-        .map_err(|e| CoordinatorError::Internal(format!("{}: {e}", path.display())))?;
+        .map_err(|e| StudioError::Internal(format!("{}: {e}", path.display())))?;
     Ok((job.name, image))
 }
 
@@ -36,7 +35,7 @@ async fn image_of(studio: &Arc<Studio>, id: &str) -> Result<XyzImage> {
 
 fn png(width: usize, height: usize, rgb: Vec<u8>) -> Result<Response> {
     let bytes = encode_png(width, height, &PngPixels::Eight(rgb), RgbSpace::Srgb)
-        .map_err(|e| CoordinatorError::Internal(format!("the PNG: {e}")))?;
+        .map_err(|e| StudioError::Internal(format!("the PNG: {e}")))?;
     Ok(([(header::CONTENT_TYPE, "image/png")], bytes).into_response())
 }
 
@@ -49,7 +48,7 @@ pub async fn display(
 ) -> Result<Response> {
     let text = query_value(query.as_deref(), "exposure").unwrap_or_else(|| "auto".into());
     let exposure: Exposure =
-        text.parse().map_err(|e| CoordinatorError::Request(format!("exposure: {e}")))?;
+        text.parse().map_err(|e| StudioError::Request(format!("exposure: {e}")))?;
     let image = image_of(&studio, &id).await?;
     let encoded = encode(&image.pixels, &DisplayParams { space: RgbSpace::Srgb, exposure });
     png(image.width, image.height, to_u8(&encoded))
@@ -96,15 +95,15 @@ pub async fn false_colour(
 ) -> Result<Response> {
     let bound = |name: &str| -> Result<f64> {
         let text = query_value(query.as_deref(), name)
-            .ok_or_else(|| CoordinatorError::Request(format!("{name}: missing from the query")))?;
+            .ok_or_else(|| StudioError::Request(format!("{name}: missing from the query")))?;
         text.parse::<f64>().ok().filter(|v| v.is_finite() && *v > 0.0).ok_or_else(|| {
-            CoordinatorError::Request(format!("{name}: `{text}` is not a luminance above 0 cd/m²"))
+            StudioError::Request(format!("{name}: `{text}` is not a luminance above 0 cd/m²"))
         })
     };
     let (min, max) = (bound("min_cd_m2")?, bound("max_cd_m2")?);
     let scale = false_colour::Scale::Log;
     let range = false_colour::Range::new(min, max, scale)
-        .map_err(|e| CoordinatorError::Request(format!("min_cd_m2, max_cd_m2: {e}")))?;
+        .map_err(|e| StudioError::Request(format!("min_cd_m2, max_cd_m2: {e}")))?;
     let image = image_of(&studio, &id).await?;
     let rgb = image
         .pixels

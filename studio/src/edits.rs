@@ -1,6 +1,8 @@
 //! Editing a scene from the page: each edit (`restauro_scene::edit::Edit`) makes a new revision
 //! through [`Farm::edit_scene`], checked as a scene file is and refused with the same messages;
-//! the answer is the new revision's view, so the page redraws from what the server keeps. The
+//! the answer is the new revision's view, so the page redraws from what the server keeps. That
+//! view is built from the scene the farm loaded to check the revision
+//! ([`Revised`](restauro_farm::farm::Revised)): an edit loads the whole scene once. The
 //! shipped spectra are listed for the material panel's library.
 //!
 //! The page holds positions in the preview's frame (Y up, offset removed): a saved view's
@@ -10,11 +12,11 @@ use super::Studio;
 use super::api::{parse, revision, scene_id};
 use super::appearance::appearance;
 use super::preview::to_world;
+use crate::error::{Result, StudioError};
 use axum::Json;
 use axum::body::Bytes;
 use axum::extract::{Path, RawQuery, State};
 use axum::response::{IntoResponse, Response};
-use restauro_farm::error::{CoordinatorError, Result};
 use restauro_farm::farm::RevisionInfo;
 use restauro_scene::edit::{self, Edit, SaveAnnotation, SaveView};
 use restauro_spectral::library;
@@ -34,7 +36,7 @@ pub async fn edit(
         to_world_edit(&mut edit, offset);
     }
     let made = studio.farm.edit_scene(id, &edit).await?;
-    let preview = studio.previews.get(&studio.farm, id, Some(made.number)).await?;
+    let preview = studio.previews.revised(&studio.farm, id, made).await?;
     Ok(Json(&preview.view).into_response())
 }
 
@@ -63,7 +65,7 @@ fn to_world_edit(edit: &mut Edit, offset: [f64; 3]) {
 /// internally tagged enum through a buffer that loses the path, so the kind is read first and
 /// its fields then parsed as the kind's own type.
 fn parse_edit(body: &[u8]) -> Result<Edit> {
-    let refuse = |problem: String| CoordinatorError::Request(format!("the edit: {problem}"));
+    let refuse = |problem: String| StudioError::Request(format!("the edit: {problem}"));
     let mut json: serde_json::Value =
         serde_json::from_slice(body).map_err(|e| refuse(e.to_string()))?;
     let kinds = edit::KINDS.join(", ");
@@ -119,13 +121,13 @@ pub async fn open_folder(
     let name = super::api::query_value(query.as_deref(), "name").unwrap_or_else(|| "scene".into());
     let chosen = super::api::query_value(query.as_deref(), "scene");
     let (job, scene) = studio.farm.open_folder(&name, chosen, body.to_vec()).await?;
-    Ok(Json(OpenedFolder { job: job.into(), scene }))
+    Ok(Json(OpenedFolder { job, scene }))
 }
 
 /// A scene folder taken: its preview job and the scene's id.
 #[derive(Serialize)]
 pub struct OpenedFolder {
-    pub job: super::views::JobView,
+    pub job: restauro_farm::job::JobStatus,
     pub scene: String,
 }
 
@@ -163,10 +165,10 @@ pub async fn spectrum(
         super::api::query_value(query.as_deref(), "extrapolate").as_deref() == Some("true");
     restauro_farm::farm::sent_file(&name, &body, &["csv", "txt"], MAX_SPECTRUM_BYTES)?;
     let text = std::str::from_utf8(&body)
-        .map_err(|_| CoordinatorError::Request(format!("{name}: not UTF-8 text")))?;
+        .map_err(|_| StudioError::Request(format!("{name}: not UTF-8 text")))?;
     let coverage = if extrapolate { Coverage::HoldEnds } else { Coverage::Require };
     let loaded = load(text, &name, Quantity::Reflectance, coverage)
-        .map_err(|e| CoordinatorError::Request(e.to_string()))?;
+        .map_err(|e| StudioError::Request(e.to_string()))?;
     let reference = studio.farm.keep_file(&name, &body, "csv")?;
     let (lab, colour_linear_srgb) = appearance(&loaded.spectrum);
     Ok(Json(SpectrumInfo {
@@ -195,7 +197,7 @@ pub async fn revert(
     let id = scene_id(&id)?;
     let Revert { revision } = parse(&body, "the revert request")?;
     let made = studio.farm.revert_scene(id, revision).await?;
-    let preview = studio.previews.get(&studio.farm, id, Some(made.number)).await?;
+    let preview = studio.previews.revised(&studio.farm, id, made).await?;
     Ok(Json(&preview.view).into_response())
 }
 
@@ -289,17 +291,18 @@ pub struct SunPathPoint {
 pub async fn sun_path(RawQuery(query): RawQuery) -> Result<Json<Vec<SunPathPoint>>> {
     let field = |name: &str| -> Result<String> {
         super::api::query_value(query.as_deref(), name)
-            .ok_or_else(|| CoordinatorError::Request(format!("{name}: missing from the query")))
+            .ok_or_else(|| StudioError::Request(format!("{name}: missing from the query")))
     };
-    let number =
-        |name: &str| -> Result<f64> {
-            field(name)?.parse::<f64>().ok().filter(|v| v.is_finite()).ok_or_else(|| {
-                CoordinatorError::Request(format!("{name}: not a number of degrees"))
-            })
-        };
+    let number = |name: &str| -> Result<f64> {
+        field(name)?
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| StudioError::Request(format!("{name}: not a number of degrees")))
+    };
     let (latitude, longitude) = (number("latitude_deg")?, number("longitude_deg")?);
     if !(-90.0..=90.0).contains(&latitude) || !(-180.0..=180.0).contains(&longitude) {
-        return Err(CoordinatorError::Request(
+        return Err(StudioError::Request(
             "latitude_deg must be within ±90 and longitude_deg within ±180".into(),
         ));
     }
@@ -310,7 +313,7 @@ pub async fn sun_path(RawQuery(query): RawQuery) -> Result<Json<Vec<SunPathPoint
         let time = format!("{:02}:{:02}", quarter / 4, quarter % 4 * 15);
         let at = format!("{date}T{time}:00{offset}");
         let p = restauro_scene::sun::sun_position(site, &at, None)
-            .map_err(|e| CoordinatorError::Request(format!("date, utc_offset: {e}")))?;
+            .map_err(|e| StudioError::Request(format!("date, utc_offset: {e}")))?;
         out.push(SunPathPoint { time, azimuth_deg: p.azimuth_deg, elevation_deg: p.elevation_deg });
     }
     Ok(Json(out))

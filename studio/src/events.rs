@@ -8,8 +8,9 @@
 //! process: a page that reconnects with `Last-Event-ID` is sent what it missed while that is still
 //! in the ring and the coordinator is the same, else a fresh `snapshot`.
 
-use super::views::{JobView, WorkerView};
+use super::views::WorkerView;
 use restauro_farm::farm::Farm;
+use restauro_farm::job::JobStatus;
 use serde::Serialize;
 use std::collections::{BTreeMap, VecDeque};
 use std::sync::{Arc, Mutex};
@@ -32,13 +33,13 @@ pub struct Event {
 struct Log {
     ring: VecDeque<Arc<Event>>,
     next: u64,
-    jobs: BTreeMap<String, JobView>,
+    jobs: BTreeMap<String, JobStatus>,
     workers: BTreeMap<String, WorkerView>,
 }
 
 #[derive(Serialize)]
 struct Snapshot<'a> {
-    jobs: Vec<&'a JobView>,
+    jobs: Vec<&'a JobStatus>,
     workers: Vec<&'a WorkerView>,
 }
 
@@ -107,8 +108,8 @@ impl Events {
 
     /// Brings the log up to date with the farm, appending an event for each change.
     pub fn update(&self, farm: &Farm) {
-        let jobs: BTreeMap<String, JobView> =
-            farm.jobs().into_iter().map(|s| (s.id.to_string(), JobView::from(s))).collect();
+        let jobs: BTreeMap<String, JobStatus> =
+            farm.jobs().into_iter().map(|s| (s.id.to_string(), s)).collect();
         let workers: BTreeMap<String, WorkerView> =
             farm.workers().into_iter().map(|w| (w.id.to_string(), WorkerView::from(w))).collect();
         let mut log = self.lock();

@@ -23,7 +23,7 @@
 //! [`vertex_clustering`]).
 
 use crate::vertex_clustering;
-use restauro_scene::load::LoadedScene;
+use restauro_scene::load::{LoadedObject, LoadedScene};
 use restauro_scene::scene_file::{Detail, Material};
 use restauro_scene::texture::{Texture, luminance};
 use restauro_spectral::rgb_space::Transfer;
@@ -148,9 +148,35 @@ impl Writer {
 
 /// The scene as GLB; `colour` gives each scene material's linear-sRGB base colour (0–1).
 pub fn scene_glb(scene: &LoadedScene, colour: impl Fn(&str) -> [f32; 3]) -> Preview {
-    let offset = centre(scene);
     let names: Vec<&String> = scene.file.materials.keys().collect();
-    let materials: Vec<Value> = names
+    let mut glb = Glb {
+        scene,
+        offset: centre(scene),
+        materials: base_materials(scene, &names, colour),
+        names,
+        cell_m: vertex_clustering::cell_size_m(scene, vertex_clustering::TARGET_TRIANGLES),
+        w: Writer::default(),
+        details: Details::default(),
+        meshes: Vec::new(),
+        nodes: Vec::new(),
+        coarse_nodes: Vec::new(),
+        triangles: 0,
+        coarse_triangles: 0,
+    };
+    for o in &scene.objects {
+        glb.object(o);
+    }
+    glb.finish()
+}
+
+/// One glTF material per scene material, in the order of `names`: its colour, no metal, its
+/// roughness, double-sided.
+fn base_materials(
+    scene: &LoadedScene,
+    names: &[&String],
+    colour: impl Fn(&str) -> [f32; 3],
+) -> Vec<Value> {
+    names
         .iter()
         .map(|name| {
             let m = &scene.file.materials[*name];
@@ -165,16 +191,45 @@ pub fn scene_glb(scene: &LoadedScene, colour: impl Fn(&str) -> [f32; 3]) -> Prev
                 }
             })
         })
-        .collect();
-    let mut materials = materials;
-    let mut w = Writer::default();
-    let mut details = Details::default();
-    let (mut meshes, mut nodes, mut triangles) = (Vec::new(), Vec::new(), 0);
-    let cell_m = vertex_clustering::cell_size_m(scene, vertex_clustering::TARGET_TRIANGLES);
-    let (mut coarse_nodes, mut coarse_triangles) = (Vec::new(), 0);
-    for o in &scene.objects {
+        .collect()
+}
+
+/// The GLB being written: the binary chunk, and the document's materials, meshes and nodes as
+/// the objects are added.
+struct Glb<'a> {
+    scene: &'a LoadedScene,
+    /// World coordinates of the GLB's origin (see the module doc).
+    offset: [f64; 3],
+    /// The scene's materials, in the order of the first glTF materials.
+    names: Vec<&'a String>,
+    materials: Vec<Value>,
+    /// The cell of the vertex clustering, when the model gets a coarse copy.
+    cell_m: Option<f64>,
+    w: Writer,
+    details: Details,
+    meshes: Vec<Value>,
+    nodes: Vec<Value>,
+    coarse_nodes: Vec<Value>,
+    triangles: usize,
+    coarse_triangles: usize,
+}
+
+/// What one object writes once for all its parts: its positions and normals (accessors), its
+/// vertices' cluster representatives, and which parts are coloured per vertex.
+struct ObjectData {
+    position: usize,
+    normal: Option<usize>,
+    representative: Option<Vec<u32>>,
+    coloured: Vec<bool>,
+    carried: Carried,
+}
+
+impl Glb<'_> {
+    /// Adds object `o`: one node and mesh of its visible parts, and one of their coarse copy.
+    fn object(&mut self, o: &LoadedObject) {
         let positions: Vec<[f32; 3]> =
-            o.mesh.positions.iter().map(|&p| to_gltf(p, offset)).collect();
+            o.mesh.positions.iter().map(|&p| to_gltf(p, self.offset)).collect();
+        let w = &mut self.w;
         let position = w.vec3s(&positions, true);
         // glTF normals must be unit vectors: a mesh with flat parts (zero normals) goes
         // without, and the viewer shades it flat, as it does a mesh that has none.
@@ -183,96 +238,131 @@ pub fn scene_glb(scene: &LoadedScene, colour: impl Fn(&str) -> [f32; 3]) -> Prev
                 let turned: Vec<[f32; 3]> = n.iter().map(|v| [v[0], v[2], -v[1]]).collect();
                 w.vec3s(&turned, false)
             });
-        let representative =
-            cell_m.map(|c| vertex_clustering::representatives(&o.mesh.positions, c));
-        let coloured = o.mesh.coloured_groups();
-        let mut carried = Carried::default();
+        let mut data = ObjectData {
+            position,
+            normal,
+            representative: self
+                .cell_m
+                .map(|c| vertex_clustering::representatives(&o.mesh.positions, c)),
+            coloured: o.mesh.coloured_groups(),
+            carried: Carried::default(),
+        };
         let (mut primitives, mut coarse) = (Vec::new(), Vec::new());
         // The levels of detail the scene's camera shows, as a render does.
-        let shown = o.mesh.levels.shown(&scene.viewer());
-        for (g, group) in o.mesh.groups.iter().enumerate() {
+        let shown = o.mesh.levels.shown(&self.scene.viewer());
+        for g in 0..o.mesh.groups.len() {
             if o.hidden_groups[g] {
                 continue;
             }
-            let tris: Vec<u32> = o
-                .mesh
-                .triangles
-                .iter()
-                .zip(&o.mesh.triangle_group)
-                .enumerate()
-                .filter(|(k, (_, tg))| **tg as usize == g && shown.as_ref().is_none_or(|s| s[*k]))
-                .flat_map(|(_, (t, _))| *t)
-                .collect();
+            let tris = part_triangles(o, g, shown.as_deref());
             if tris.is_empty() {
                 continue;
             }
-            triangles += tris.len() / 3;
-            let indices = w.indices(&tris);
-            let mut material = names.iter().position(|n| **n == o.group_materials[g]);
-            let mut attributes = json!({ "POSITION": position });
-            if let Some(normal) = normal {
-                attributes["NORMAL"] = json!(normal);
-            }
-            let mut extras =
-                json!({ "object": o.name, "part": group.name, "material": o.group_materials[g] });
-            let m = &scene.file.materials[&o.group_materials[g]];
-            let part = Part { scene, object: &o.name, material: m, group, coloured: coloured[g] };
-            let ours = (&mut w, &mut materials, &mut details, &mut carried);
-            if let Some(mean) = part.carry(ours, &o.mesh, &tris, &mut attributes, &mut material) {
-                extras["detail_mean"] = json!(mean);
-            }
-            if let Some(r) = &representative {
-                let fewer = vertex_clustering::coarse_indices(&tris, r);
-                if !fewer.is_empty() {
-                    coarse_triangles += fewer.len() / 3;
-                    let indices = w.indices(&fewer);
-                    coarse.push(json!({
-                        "attributes": attributes.clone(), "indices": indices, "material": material,
-                        "extras": extras.clone()
-                    }));
-                }
-            }
-            primitives.push(json!({
-                "attributes": attributes, "indices": indices, "material": material,
-                "extras": extras
-            }));
+            let (primitive, coarse_primitive) = self.part(o, g, &tris, &mut data);
+            primitives.push(primitive);
+            coarse.extend(coarse_primitive);
         }
-        meshes.push(json!({ "name": o.name, "primitives": primitives }));
-        nodes.push(json!({ "name": o.name, "mesh": meshes.len() - 1 }));
+        self.meshes.push(json!({ "name": o.name, "primitives": primitives }));
+        self.nodes.push(json!({ "name": o.name, "mesh": self.meshes.len() - 1 }));
         if !coarse.is_empty() {
-            meshes.push(json!({ "name": format!("{} (coarse)", o.name), "primitives": coarse }));
-            coarse_nodes.push(json!({
-                "name": format!("{} (coarse)", o.name), "mesh": meshes.len() - 1,
+            let name = format!("{} (coarse)", o.name);
+            self.meshes.push(json!({ "name": name, "primitives": coarse }));
+            self.coarse_nodes.push(json!({
+                "name": name, "mesh": self.meshes.len() - 1,
                 "extras": { "restauro_coarse": true }
             }));
         }
     }
-    nodes.extend(coarse_nodes);
-    while !w.bin.len().is_multiple_of(4) {
-        w.bin.push(0);
+
+    /// The primitive of part `g` of object `o`, whose triangles are `tris` (vertex indices),
+    /// and of its coarse copy when it has one left.
+    fn part(
+        &mut self,
+        o: &LoadedObject,
+        g: usize,
+        tris: &[u32],
+        data: &mut ObjectData,
+    ) -> (Value, Option<Value>) {
+        let scene = self.scene;
+        let group = &o.mesh.groups[g];
+        self.triangles += tris.len() / 3;
+        let indices = self.w.indices(tris);
+        let mut material = self.names.iter().position(|n| **n == o.group_materials[g]);
+        let mut attributes = json!({ "POSITION": data.position });
+        if let Some(normal) = data.normal {
+            attributes["NORMAL"] = json!(normal);
+        }
+        let mut extras =
+            json!({ "object": o.name, "part": group.name, "material": o.group_materials[g] });
+        let m = &scene.file.materials[&o.group_materials[g]];
+        let part = Part { scene, object: &o.name, material: m, group, coloured: data.coloured[g] };
+        let ours = (&mut self.w, &mut self.materials, &mut self.details, &mut data.carried);
+        if let Some(mean) = part.carry(ours, &o.mesh, tris, &mut attributes, &mut material) {
+            extras["detail_mean"] = json!(mean);
+        }
+        let coarse = data.representative.as_ref().and_then(|r| {
+            let fewer = vertex_clustering::coarse_indices(tris, r);
+            if fewer.is_empty() {
+                return None;
+            }
+            self.coarse_triangles += fewer.len() / 3;
+            let indices = self.w.indices(&fewer);
+            Some(json!({
+                "attributes": attributes.clone(), "indices": indices, "material": material,
+                "extras": extras.clone()
+            }))
+        });
+        let primitive = json!({
+            "attributes": attributes, "indices": indices, "material": material, "extras": extras
+        });
+        (primitive, coarse)
     }
-    let mut document = json!({
-        "asset": {
-            "version": "2.0",
-            "generator": concat!("restauro ", env!("CARGO_PKG_VERSION")),
-            "extras": { "restauro": { "offset_m": offset, "world": "x east, y north, z up" } }
-        },
-        "scene": 0,
-        "scenes": [{ "nodes": (0..nodes.len()).collect::<Vec<_>>() }],
-        "nodes": nodes,
-        "meshes": meshes,
-        "materials": materials,
-        "accessors": w.accessors,
-        "bufferViews": w.views,
-        "buffers": [{ "byteLength": w.bin.len() }],
-    });
-    // glTF's arrays, when present, hold at least one item (§5: `minItems` 1).
-    if !w.images.is_empty() {
-        let textures: Vec<Value> = (0..w.images.len()).map(|i| json!({ "source": i })).collect();
-        document["textures"] = json!(textures);
-        document["images"] = json!(w.images);
+
+    /// The document around what was written, and the GLB of both.
+    fn finish(self) -> Preview {
+        let Glb { offset, mut nodes, coarse_nodes, meshes, materials, mut w, .. } = self;
+        let (triangles, coarse_triangles) = (self.triangles, self.coarse_triangles);
+        nodes.extend(coarse_nodes);
+        while !w.bin.len().is_multiple_of(4) {
+            w.bin.push(0);
+        }
+        let mut document = json!({
+            "asset": {
+                "version": "2.0",
+                "generator": concat!("restauro ", env!("CARGO_PKG_VERSION")),
+                "extras": { "restauro": { "offset_m": offset, "world": "x east, y north, z up" } }
+            },
+            "scene": 0,
+            "scenes": [{ "nodes": (0..nodes.len()).collect::<Vec<_>>() }],
+            "nodes": nodes,
+            "meshes": meshes,
+            "materials": materials,
+            "accessors": w.accessors,
+            "bufferViews": w.views,
+            "buffers": [{ "byteLength": w.bin.len() }],
+        });
+        // glTF's arrays, when present, hold at least one item (§5: `minItems` 1).
+        if !w.images.is_empty() {
+            let textures: Vec<Value> =
+                (0..w.images.len()).map(|i| json!({ "source": i })).collect();
+            document["textures"] = json!(textures);
+            document["images"] = json!(w.images);
+        }
+        Preview { glb: glb(&document, &w.bin), offset_m: offset, triangles, coarse_triangles }
     }
-    Preview { glb: glb(&document, &w.bin), offset_m: offset, triangles, coarse_triangles }
+}
+
+/// The vertex indices of the triangles of part `g` of `o` that the levels of detail show
+/// (`shown`, per triangle; `None`: all).
+fn part_triangles(o: &LoadedObject, g: usize, shown: Option<&[bool]>) -> Vec<u32> {
+    o.mesh
+        .triangles
+        .iter()
+        .zip(&o.mesh.triangle_group)
+        .enumerate()
+        .filter(|(k, (_, tg))| **tg as usize == g && shown.is_none_or(|s| s[*k]))
+        .flat_map(|(_, (t, _))| *t)
+        .collect()
 }
 
 /// The photos written so far, each once per key and grey or not: its texture and linear

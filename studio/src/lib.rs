@@ -9,6 +9,7 @@ pub mod appearance;
 pub mod compare;
 pub mod display;
 pub mod edits;
+pub mod error;
 pub mod events;
 pub mod gltf_export;
 pub mod note_images;
@@ -20,7 +21,7 @@ pub mod snapshot;
 pub mod vertex_clustering;
 pub mod views;
 
-use anyhow::{Context, Result};
+use crate::error::{Result, StudioError};
 use axum::Router;
 use axum::extract::connect_info::{ConnectInfo, Connected};
 use axum::extract::{Request, State};
@@ -29,7 +30,6 @@ use axum::middleware::{self, Next};
 use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post};
 use restauro_farm::auth::Tokens;
-use restauro_farm::error::CoordinatorError;
 use restauro_farm::farm::Farm;
 use restauro_ops::connections::{Busy, ConnectionLimits, GuardedListener};
 use restauro_ops::signal::stopped;
@@ -85,8 +85,8 @@ async fn working(
     next.run(request).await
 }
 
-async fn no_such_route(request: Request) -> CoordinatorError {
-    CoordinatorError::NoSuchPage(request.uri().path().chars().take(200).collect())
+async fn no_such_route(request: Request) -> StudioError {
+    StudioError::NoSuchPage(request.uri().path().chars().take(200).collect())
 }
 
 fn router(studio: Arc<Studio>) -> Router {
@@ -151,15 +151,15 @@ fn acceptor(pem: &TlsPem) -> Result<tokio_rustls::TlsAcceptor> {
     use tokio_rustls::rustls::pki_types::{CertificateDer, PrivateKeyDer};
     let chain = CertificateDer::pem_slice_iter(&pem.cert)
         .collect::<std::result::Result<Vec<_>, _>>()
-        .context("reading the TLS certificate chain")?;
-    let key = PrivateKeyDer::from_pem_slice(&pem.key).context("reading the TLS private key")?;
+        .map_err(StudioError::TlsChain)?;
+    let key = PrivateKeyDer::from_pem_slice(&pem.key).map_err(StudioError::TlsKey)?;
     let provider = Arc::new(tokio_rustls::rustls::crypto::ring::default_provider());
     let config = tokio_rustls::rustls::ServerConfig::builder_with_provider(provider)
         .with_safe_default_protocol_versions()
-        .context("the TLS protocol versions")?
+        .map_err(StudioError::TlsVersions)?
         .with_no_client_auth()
         .with_single_cert(chain, key)
-        .context("the TLS certificate and key do not go together")?;
+        .map_err(StudioError::TlsPair)?;
     Ok(tokio_rustls::TlsAcceptor::from(Arc::new(config)))
 }
 
@@ -176,8 +176,8 @@ pub async fn serve(
     let acceptor = tls.as_ref().map(acceptor).transpose()?;
     let listener = TcpListener::bind(listen)
         .await
-        .with_context(|| format!("listening for the studio on {listen}"))?;
-    let addr = listener.local_addr()?;
+        .map_err(|source| StudioError::Listen { addr: listen, source })?;
+    let addr = listener.local_addr().map_err(StudioError::LocalAddr)?;
     let listener = GuardedListener::new(listener, limits);
     let events = events::Events::new();
     let studio = Arc::new(Studio {

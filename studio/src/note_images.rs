@@ -5,6 +5,7 @@
 
 use super::Studio;
 use super::api::{query_value, scene_id};
+use crate::error::{Result, StudioError};
 use axum::Json;
 use axum::body::Bytes;
 use axum::extract::rejection::BytesRejection;
@@ -12,7 +13,6 @@ use axum::extract::{Path, RawQuery, State};
 use axum::http::header;
 use axum::response::{IntoResponse, Response};
 use restauro_farm::asset_store::asset_hash;
-use restauro_farm::error::{CoordinatorError, Result};
 use restauro_scene::assets::extension;
 use restauro_scene::note_image;
 use serde::Serialize;
@@ -40,7 +40,7 @@ pub async fn upload(
     let name = query_value(query.as_deref(), "name").unwrap_or_default();
     // A body over the route's limit is cut off before it is read: said in the studio's words.
     let body = body.map_err(|e| {
-        CoordinatorError::Request(format!(
+        StudioError::Request(format!(
             "{name}: {}; a note's image may have at most {} bytes, send a smaller copy",
             e.body_text(),
             note_image::MAX_BYTES
@@ -53,7 +53,7 @@ pub async fn upload(
         note_image::MAX_BYTES,
     )?;
     let media_type = note_image::media_type(&kind, &body).ok_or_else(|| {
-        CoordinatorError::Request(format!("{name}: {}", note_image::not_an_image(&kind)))
+        StudioError::Request(format!("{name}: {}", note_image::not_an_image(&kind)))
     })?;
     let farm = studio.farm.clone();
     let file_name = name.clone();
@@ -72,7 +72,7 @@ pub async fn image(
 ) -> Result<Response> {
     let hash = asset_hash(&reference)?.to_owned();
     let kind = extension(&reference);
-    let missing = || CoordinatorError::NoSuchImage(reference.chars().take(120).collect());
+    let missing = || StudioError::NoSuchImage(reference.chars().take(120).collect());
     if !note_image::EXTENSIONS.contains(&kind.as_str()) {
         return Err(missing());
     }

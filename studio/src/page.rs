@@ -1,10 +1,10 @@
 //! The page's files, embedded in the binary: `studio/web/` in the source tree. Plain
 //! ES modules, so nothing is built; a change to a file is in the next `cargo build`.
 
+use crate::error::StudioError;
 use axum::extract::Path;
 use axum::http::{HeaderValue, header};
 use axum::response::{IntoResponse, Response};
-use restauro_farm::error::CoordinatorError;
 
 /// A file of the page: its path under `/static/` (and under `studio/web/`), as
 /// JavaScript.
@@ -68,12 +68,12 @@ pub async fn index() -> Response {
 }
 
 /// `GET /static/{file}`
-pub async fn file(Path(name): Path<String>) -> Result<Response, CoordinatorError> {
+pub async fn file(Path(name): Path<String>) -> Result<Response, StudioError> {
     FILES
         .iter()
         .find(|(path, _, _)| *path == name)
         .map(|(_, kind, text)| page(kind, text))
-        .ok_or_else(|| CoordinatorError::NoSuchPage(format!("/static/{}", name.escape_debug())))
+        .ok_or_else(|| StudioError::NoSuchPage(format!("/static/{}", name.escape_debug())))
 }
 
 #[cfg(test)]

@@ -4,10 +4,11 @@
 //! are transparent, so that the page shows its real-time view through them.
 
 use super::Studio;
+use crate::error::{Result, StudioError};
 use axum::extract::{Path, State};
 use axum::http::header;
 use axum::response::{IntoResponse, Response};
-use restauro_farm::error::{CoordinatorError, Result};
+use restauro_farm::error::FarmError;
 use restauro_farm::farm::Farm;
 use restauro_farm::ids::JobId;
 use restauro_image::framebuffer::{Framebuffer, TileLayout};
@@ -30,7 +31,7 @@ pub async fn painting(
 
 /// The PNG of job `id`'s tiles in the store.
 fn paint(farm: &Farm, id: &JobId) -> Result<Vec<u8>> {
-    let record = farm.jobs_record(id).ok_or_else(|| CoordinatorError::NoSuchJob(id.clone()))?;
+    let record = farm.jobs_record(id).ok_or_else(|| FarmError::NoSuchJob(id.clone()))?;
     let plan = &record.plan;
     let mut frame = Framebuffer::new(plan.width, plan.height, TileLayout::from(plan));
     let mut rendered = vec![false; frame.xyz.len()];
@@ -38,7 +39,7 @@ fn paint(farm: &Farm, id: &JobId) -> Result<Vec<u8>> {
         let Some(data) = farm.stored_tile(id, index as u32)? else { continue };
         frame
             .place(index as u32, &rect, &data)
-            .map_err(|e| CoordinatorError::Internal(e.to_string()))?;
+            .map_err(|e| StudioError::Internal(e.to_string()))?;
         for y in rect.y..rect.y + rect.height {
             let row = (y * plan.width) as usize;
             rendered[row + rect.x as usize..row + (rect.x + rect.width) as usize].fill(true);
@@ -61,5 +62,5 @@ fn paint(farm: &Farm, id: &JobId) -> Result<Vec<u8>> {
         .collect();
     let (w, h) = (plan.width as usize, plan.height as usize);
     encode_png(w, h, &PngPixels::EightWithAlpha(rgba), RgbSpace::Srgb)
-        .map_err(|e| CoordinatorError::Internal(format!("the PNG: {e}")))
+        .map_err(|e| StudioError::Internal(format!("the PNG: {e}")))
 }

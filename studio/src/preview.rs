@@ -3,9 +3,9 @@
 //! scene's lights and D65 ([`appearance`]), and the scene's camera, in the GLB's coordinates. Kept for the few scenes opened last, by bundle identity.
 
 use super::appearance::{self, appearance};
+use crate::error::Result;
 use crate::gltf_export::{self, Preview};
-use restauro_farm::error::Result;
-use restauro_farm::farm::Farm;
+use restauro_farm::farm::{Farm, Revised};
 use restauro_scene::load::LoadedScene;
 use serde::Serialize;
 use std::sync::Arc;
@@ -505,10 +505,34 @@ impl Previews {
             return Ok(p);
         }
         let (number, scene) = farm.load_scene(id, Some(number)).await?;
+        self.build_and_keep(id, number, scene).await
+    }
+
+    /// The preview of what an edit made: built from the scene the farm loaded to check the new
+    /// revision, so that the edit loads it once; when the edit made none, the latest's.
+    pub async fn revised(
+        &self,
+        farm: &Arc<Farm>,
+        id: &str,
+        revised: Revised,
+    ) -> Result<Arc<ScenePreview>> {
+        let number = revised.revision.number;
+        match revised.scene {
+            Some(scene) => self.build_and_keep(id, number, scene).await,
+            None => self.get(farm, id, Some(number)).await,
+        }
+    }
+
+    async fn build_and_keep(
+        &self,
+        id: &str,
+        number: u32,
+        scene: LoadedScene,
+    ) -> Result<Arc<ScenePreview>> {
+        let key = format!("{id}@{number}");
         let id = id.to_owned();
-        let preview = tokio::task::spawn_blocking(move || Arc::new(build(&id, number, &scene)))
-            .await
-            .map_err(|e| restauro_farm::error::CoordinatorError::Internal(e.to_string()))?;
+        let preview =
+            tokio::task::spawn_blocking(move || Arc::new(build(&id, number, &scene))).await?;
         self.kept.keep(key, preview.clone());
         Ok(preview)
     }

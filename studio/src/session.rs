@@ -9,9 +9,9 @@
 //! authorised by the cookie must also come with an `Origin` that is the studio's own, against
 //! cross-site request forgery (OWASP's "verifying origin with standard headers").
 
+use crate::error::{Result, StudioError};
 use axum::http::{HeaderMap, Method, header};
 use restauro_farm::auth::{Role, Tokens};
-use restauro_farm::error::{CoordinatorError, Result};
 use std::time::{SystemTime, UNIX_EPOCH};
 
 /// The cookie's name.
@@ -65,10 +65,10 @@ impl Gate {
     /// (and, for a change, the studio's own `Origin`).
     pub fn check(&self, method: &Method, headers: &HeaderMap) -> Result<()> {
         if let Some(token) = bearer(headers) {
-            return self.tokens.authorize_token(Role::Client, token);
+            return Ok(self.tokens.authorize_token(Role::Client, token)?);
         }
         if !self.valid_cookie(headers) {
-            return Err(CoordinatorError::NotSignedIn);
+            return Err(StudioError::NotSignedIn);
         }
         if method != Method::GET && method != Method::HEAD {
             same_origin(headers)?;
@@ -116,7 +116,7 @@ pub fn same_origin(headers: &HeaderMap) -> Result<()> {
     if own {
         Ok(())
     } else {
-        Err(CoordinatorError::CrossOrigin { origin: origin.to_owned(), expected: host.to_owned() })
+        Err(StudioError::CrossOrigin { origin: origin.to_owned(), expected: host.to_owned() })
     }
 }
 
@@ -124,6 +124,7 @@ pub fn same_origin(headers: &HeaderMap) -> Result<()> {
 mod tests {
     use super::*;
     use axum::http::HeaderValue;
+    use restauro_farm::error::FarmError;
 
     fn gate() -> Gate {
         Gate::new(Tokens::new("client-secret", "worker-secret"), false)
@@ -158,10 +159,7 @@ mod tests {
             format!("{COOKIE}=garbage"),
         ] {
             let h = headers(&[(header::COOKIE, &forged)]);
-            assert!(
-                matches!(g.check(&Method::GET, &h), Err(CoordinatorError::NotSignedIn)),
-                "{forged}"
-            );
+            assert!(matches!(g.check(&Method::GET, &h), Err(StudioError::NotSignedIn)), "{forged}");
         }
         // Another token's key makes other cookies.
         let other = Gate::new(Tokens::new("another-client", "worker-secret"), false);
@@ -172,8 +170,11 @@ mod tests {
     #[test]
     fn the_worker_token_and_a_guess_are_refused() {
         let g = gate();
-        assert!(matches!(g.sign_in("worker-secret"), Err(CoordinatorError::WrongRole { .. })));
-        assert!(matches!(g.sign_in("guess"), Err(CoordinatorError::BadToken { .. })));
+        assert!(matches!(
+            g.sign_in("worker-secret"),
+            Err(StudioError::Farm(FarmError::WrongRole { .. }))
+        ));
+        assert!(matches!(g.sign_in("guess"), Err(StudioError::Farm(FarmError::BadToken { .. }))));
         let h = headers(&[(header::AUTHORIZATION, "Bearer worker-secret")]);
         assert_eq!(g.check(&Method::GET, &h).unwrap_err().http_status(), 403);
         let h = headers(&[(header::AUTHORIZATION, "Bearer client-secret")]);

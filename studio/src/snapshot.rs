@@ -4,7 +4,7 @@
 //! by the same code and refused with the same messages.
 
 use super::preview::{ScenePreview, to_world};
-use restauro_farm::error::{CoordinatorError, Result};
+use crate::error::{Result, StudioError};
 use restauro_farm::farm::Farm;
 use restauro_farm::job::JobStatus;
 use restauro_scene::bundle::Bundle;
@@ -42,8 +42,8 @@ pub struct SnapshotRequest {
     pub revision: Option<u32>,
 }
 
-fn refuse(field: &str, problem: impl std::fmt::Display) -> CoordinatorError {
-    CoordinatorError::Request(format!("{field}: {problem}"))
+fn refuse(field: &str, problem: impl std::fmt::Display) -> StudioError {
+    StudioError::Request(format!("{field}: {problem}"))
 }
 
 /// Submits the snapshot `request` of scene `id`; the job's first status.
@@ -99,8 +99,8 @@ pub async fn take(
     .checked()
     .map_err(|e| refuse(e.field, e.problem))?;
     let manifest = serde_json::to_string(&scene)
-        .map_err(|e| CoordinatorError::Internal(format!("the scene does not serialise: {e}")))?;
-    farm.submit(manifest, spec).await
+        .map_err(|e| StudioError::Internal(format!("the scene does not serialise: {e}")))?;
+    Ok(farm.submit(manifest, spec).await?)
 }
 
 /// The name of the scene's latest job.

@@ -1,49 +1,9 @@
-//! What the studio's JSON says of a job and a worker: converted once, here, from the domain's
-//! types (the gRPC door converts the same types to its messages in `grpc.rs`).
+//! What the studio's JSON says of a worker: converted once, here, from the domain's type (the
+//! gRPC door converts the same type to its message in `grpc.rs`). A job needs no view: the
+//! farm's `JobStatus` is sent as it is (its `Serialize` is the page's JSON).
 
 use restauro_farm::farm::WorkerStatus;
-use restauro_farm::job::JobStatus;
 use serde::Serialize;
-
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct JobView {
-    pub id: String,
-    pub name: String,
-    /// `queued`, `running`, `assembling`, `post-processing`, `done`, `failed` or `cancelled`.
-    pub state: String,
-    pub finished: bool,
-    pub tiles_total: u32,
-    pub tiles_done: u32,
-    pub tiles_leased: u32,
-    pub tiles_requeued: u32,
-    pub error: String,
-    pub priority: i32,
-    pub width: u32,
-    pub height: u32,
-    pub elapsed_s: f64,
-    pub results: Vec<String>,
-}
-
-impl From<JobStatus> for JobView {
-    fn from(s: JobStatus) -> Self {
-        Self {
-            id: s.id.to_string(),
-            name: s.name,
-            state: s.state.to_string(),
-            finished: s.state.is_final(),
-            tiles_total: s.tiles_total,
-            tiles_done: s.tiles_done,
-            tiles_leased: s.tiles_leased,
-            tiles_requeued: s.tiles_requeued,
-            error: s.error,
-            priority: s.priority,
-            width: s.width,
-            height: s.height,
-            elapsed_s: s.elapsed_s,
-            results: s.results,
-        }
-    }
-}
 
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct WorkerView {

@@ -6,7 +6,7 @@
 //! earlier revision can be opened again. Jobs submitted from a revision belong to its scene.
 
 use super::{Farm, FarmState, now_unix_ms};
-use crate::error::{CoordinatorError, Result};
+use crate::error::{FarmError, Result};
 use crate::ids::JobId;
 use restauro_scene::bundle::Bundle;
 use restauro_scene::edit::Edit;
@@ -43,6 +43,14 @@ pub struct SceneEntry {
     pub revision: u32,
 }
 
+/// What an edit made: the new revision (or the latest, when the edit changed nothing), and,
+/// when one was made, its scene as loaded to check it, so that the caller shows it without
+/// loading the whole scene again.
+pub struct Revised {
+    pub revision: RevisionInfo,
+    pub scene: Option<LoadedScene>,
+}
+
 /// A revision as the store keeps it.
 #[derive(Clone, Serialize, Deserialize)]
 struct Revision {
@@ -77,8 +85,8 @@ impl Scenes {
 }
 
 /// The scene id `id` as a message may quote it (at most 80 characters).
-fn no_such_scene(id: &str) -> CoordinatorError {
-    CoordinatorError::NoSuchScene(id.chars().take(80).collect())
+fn no_such_scene(id: &str) -> FarmError {
+    FarmError::NoSuchScene(id.chars().take(80).collect())
 }
 
 impl FarmState {
@@ -103,7 +111,7 @@ impl FarmState {
         let latest = self.scenes.revisions.get(id).map_or(0, |r| r.len() as u32);
         let number = number.unwrap_or(latest);
         if number > latest {
-            return Err(CoordinatorError::Request(format!(
+            return Err(FarmError::Request(format!(
                 "scene {}… has no revision {number}; its latest is {latest}",
                 &id[..id.len().min(12)]
             )));
@@ -126,13 +134,16 @@ impl FarmState {
 
 impl Farm {
     /// Takes the scene revisions kept in the store.
-    pub(super) fn resume_scenes(&self) -> anyhow::Result<()> {
-        let kept = self.store.revisions()?;
+    pub(super) fn resume_scenes(&self) -> Result<()> {
+        let kept = self.store.revisions().map_err(FarmError::StoreAtStart)?;
         let mut st = self.lock();
         for (scene, number, bytes) in kept {
-            let revision: Revision = serde_json::from_slice(&bytes).map_err(|e| {
-                anyhow::anyhow!("revision {number} of scene {scene} in the store: {e}")
-            })?;
+            let revision: Revision =
+                serde_json::from_slice(&bytes).map_err(|e| FarmError::UnreadableRevision {
+                    scene: scene.clone(),
+                    number,
+                    problem: e.to_string(),
+                })?;
             st.scenes.add(&scene, revision);
         }
         Ok(())
@@ -243,8 +254,9 @@ impl Farm {
 
     /// Applies `edit` to the latest revision of scene `id`, making the next revision: checked
     /// as any scene is (the same messages as `scene check`), then kept. When the edit changes
-    /// nothing, no revision is made and the latest is returned.
-    pub async fn edit_scene(self: &Arc<Self>, id: &str, edit: &Edit) -> Result<RevisionInfo> {
+    /// nothing, no revision is made and the latest is returned. The scene is parsed, not loaded,
+    /// to apply the edit; the new revision is loaded once, to check it, and handed back.
+    pub async fn edit_scene(self: &Arc<Self>, id: &str, edit: &Edit) -> Result<Revised> {
         let _one_at_a_time = self.editing.lock().await;
         let (_, manifest) = self.scene_revision(id, None)?;
         let mut scene = Bundle::parse_manifest(&manifest)?;
@@ -253,7 +265,7 @@ impl Farm {
     }
 
     /// Makes revision `number` of scene `id` its latest again, as a new revision.
-    pub async fn revert_scene(self: &Arc<Self>, id: &str, number: u32) -> Result<RevisionInfo> {
+    pub async fn revert_scene(self: &Arc<Self>, id: &str, number: u32) -> Result<Revised> {
         let _one_at_a_time = self.editing.lock().await;
         let (_, manifest) = self.scene_revision(id, Some(number))?;
         let scene = Bundle::parse_manifest(&manifest)?;
@@ -265,26 +277,24 @@ impl Farm {
         id: &str,
         scene: SceneFile,
         summary: String,
-    ) -> Result<RevisionInfo> {
-        let manifest_json = serde_json::to_string(&scene).map_err(|e| {
-            CoordinatorError::Internal(format!("the scene does not serialise: {e}"))
-        })?;
+    ) -> Result<Revised> {
+        let manifest_json = serde_json::to_string(&scene)
+            .map_err(|e| FarmError::Internal(format!("the scene does not serialise: {e}")))?;
         let (latest, current) = self.scene_revision(id, None)?;
         if manifest_json == current {
-            return Ok(self.revisions(id)?.swap_remove(latest as usize));
+            let revision = self.revisions(id)?.swap_remove(latest as usize);
+            return Ok(Revised { revision, scene: None });
         }
         let farm = self.clone();
         let checked = manifest_json.clone();
-        tokio::task::spawn_blocking(move || -> Result<()> {
-            farm.bundle(&checked)?.load(&farm.config.limits)?;
-            Ok(())
+        let loaded = tokio::task::spawn_blocking(move || -> Result<LoadedScene> {
+            Ok(farm.bundle(&checked)?.load(&farm.config.limits)?)
         })
         .await??;
         let revision = Revision { manifest_json, summary, created_unix_ms: now_unix_ms() };
         let number = latest + 1;
-        let bytes = serde_json::to_vec(&revision).map_err(|e| {
-            CoordinatorError::Internal(format!("a revision does not serialise: {e}"))
-        })?;
+        let bytes = serde_json::to_vec(&revision)
+            .map_err(|e| FarmError::Internal(format!("a revision does not serialise: {e}")))?;
         let (store, key) = (self.store.clone(), id.to_owned());
         tokio::task::spawn_blocking(move || store.put_revision(&key, number, &bytes)).await??;
         info!(scene = %&id[..id.len().min(12)], number, summary = %revision.summary, "scene revised");
@@ -295,7 +305,7 @@ impl Farm {
         };
         self.lock().scenes.add(id, revision);
         self.bump();
-        Ok(made)
+        Ok(Revised { revision: made, scene: Some(loaded) })
     }
 }
 
@@ -354,13 +364,13 @@ pub fn sent_file(
         && extensions.contains(&extension.as_str());
     if !sane {
         let endings: Vec<String> = extensions.iter().map(|e| format!(".{e}")).collect();
-        return Err(CoordinatorError::Request(format!(
+        return Err(FarmError::Request(format!(
             "name: give the file's name, ending in {}, in letters, digits, `.`, `_` and `-`",
             endings.join(" or ")
         )));
     }
     if bytes.len() > max_bytes {
-        return Err(CoordinatorError::Request(format!(
+        return Err(FarmError::Request(format!(
             "{name}: {} bytes; a file of this kind may have at most {max_bytes}",
             bytes.len()
         )));
@@ -380,7 +390,7 @@ impl Farm {
         let hash = blake3::hash(bytes).to_hex().to_string();
         self.assets
             .keep(&hash, bytes)
-            .map_err(|e| CoordinatorError::Internal(format!("keeping {file_name}: {e}")))?;
+            .map_err(|e| FarmError::Internal(format!("keeping {file_name}: {e}")))?;
         info!(file = file_name, hash = %&hash[..12], "file kept");
         Ok(format!("blake3:{hash}.{extension}"))
     }
@@ -402,8 +412,8 @@ impl Farm {
     ) -> Result<(crate::job::JobStatus, String)> {
         use restauro_scene::job::{JobName, JobSpec};
         use restauro_scene::plan::RenderOptions;
-        let name = JobName::new(name)
-            .map_err(|e| CoordinatorError::Request(format!("name: {}", e.problem)))?;
+        let name =
+            JobName::new(name).map_err(|e| FarmError::Request(format!("name: {}", e.problem)))?;
         let farm = self.clone();
         let bundle = tokio::task::spawn_blocking(move || -> Result<Bundle> {
             let limits = &farm.config.limits;
@@ -411,9 +421,9 @@ impl Farm {
                 restauro_assets::folder::bundle_folder_archive(&archive, scene.as_deref(), limits)?;
             for (hash, bytes) in &bundle.files {
                 if !farm.assets.has(hash) {
-                    farm.assets.keep(hash, bytes).map_err(|e| {
-                        CoordinatorError::Internal(format!("keeping file {hash}: {e}"))
-                    })?;
+                    farm.assets
+                        .keep(hash, bytes)
+                        .map_err(|e| FarmError::Internal(format!("keeping file {hash}: {e}")))?;
                 }
             }
             Ok(bundle)

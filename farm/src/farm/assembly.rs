@@ -3,9 +3,10 @@
 //! move of the job's lifecycle, so a job cancelled meanwhile stops at the next step, and its
 //! partial files are removed rather than left for a client to find.
 
-use crate::farm::Farm;
+use super::Farm;
+use crate::error::FarmError;
 use crate::ids::JobId;
-use crate::job::JobRecord;
+use crate::job::{IllegalTransition, JobRecord, JobState};
 use restauro_image::framebuffer::{Framebuffer, TileLayout};
 use restauro_image::results::{ResultOptions, write_grid_results, write_results};
 use restauro_spectral::retinex::RetinexParams;
@@ -14,7 +15,7 @@ use std::time::Instant;
 use tracing::{info, warn};
 
 /// Assembles job `id`, which is in the assembling state. Runs on a blocking thread.
-pub fn assemble(farm: &Arc<Farm>, id: &JobId) {
+pub(super) fn assemble(farm: &Arc<Farm>, id: &JobId) {
     let _span = tracing::info_span!("assemble", job = %id).entered();
     let started = Instant::now();
     let Some(record) = farm.jobs_record(id) else { return };
@@ -54,7 +55,7 @@ pub fn assemble(farm: &Arc<Farm>, id: &JobId) {
 
 enum Outcome {
     /// The job ended (cancelled) during assembly.
-    Ended(crate::error::CoordinatorError),
+    Ended(FarmError),
     /// Assembly itself failed: the job fails with this reason.
     Failed(String),
 }
@@ -72,11 +73,11 @@ fn files(farm: &Arc<Farm>, record: &JobRecord) -> Result<Vec<String>, Outcome> {
             // A job cancelled meanwhile has had its tiles dropped: that is not a failure.
             match farm.transition(id, |_| Ok(())) {
                 Ok((_, r)) if r.state().is_final() => {
-                    Outcome::Ended(crate::error::CoordinatorError::IllegalTransition {
+                    Outcome::Ended(FarmError::from(IllegalTransition {
                         job: id.clone(),
                         from: r.state(),
-                        to: crate::job::JobState::PostProcessing,
-                    })
+                        to: JobState::PostProcessing,
+                    }))
                 }
                 _ => Outcome::Failed(format!("tile {index} is missing from the store")),
             }

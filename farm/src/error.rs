@@ -131,9 +131,9 @@ pub type Result<T, E = FarmError> = std::result::Result<T, E>;
 
 /// A scene folder or bundle the assets crate refuses: a scene error as the scene model words it
 /// (an asset refusal is worded as an invalid file), mapped to a status as any scene error is.
-impl From<restauro_assets::AssetsError> for CoordinatorError {
+impl From<restauro_assets::AssetsError> for FarmError {
     fn from(e: restauro_assets::AssetsError) -> Self {
-        CoordinatorError::Scene(e.into_scene_error())
+        FarmError::Scene(e.into_scene_error())
     }
 }
 

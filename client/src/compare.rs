@@ -18,29 +18,17 @@
 //! sources (its `emitter` channel: the sky) are left out.
 
 use crate::cli::CompareArgs;
-use crate::sheet::{BACKGROUND, Grid, INK, Rgb8, colour_bar};
 use anyhow::{Context, Result, bail};
-use restauro_image::delta_e::{
-    DeltaEMap, DeltaEStats, delta_e_map, map_rgb, scale_max, white_luminance,
-};
+use restauro_demo::picture::{map_picture, picture};
+use restauro_demo::sheet::{Grid, INK, Rgb8, beside_colour_bar, colour_bar};
+use restauro_image::delta_e::{DeltaEMap, DeltaEStats, delta_e_map, scale_max, white_luminance};
 use restauro_image::image_files::{MAX_PIXELS, PngPixels, XyzImage, read_exr, write_png};
 use restauro_spectral::appearance::d65_white;
-use restauro_spectral::display::{DisplayParams, Exposure, encode, to_u8};
+use restauro_spectral::display::Exposure;
 use restauro_spectral::rgb_space::RgbSpace;
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::Path;
-
-/// The map as an image: viridis up to `scale_max`, light sources grey.
-pub fn map_picture(map: &DeltaEMap, width: usize, height: usize, scale_max: f64) -> Rgb8 {
-    Rgb8 { width: width as u32, height: height as u32, data: map_rgb(map, scale_max) }
-}
-
-/// An image as the display shows it (sRGB, 8 bits) with `exposure`.
-pub fn picture(image: &XyzImage, exposure: Exposure) -> Rgb8 {
-    let encoded = encode(&image.pixels, &DisplayParams { space: RgbSpace::Srgb, exposure });
-    Rgb8 { width: image.width as u32, height: image.height as u32, data: to_u8(&encoded) }
-}
 
 fn write(dir: &Path, name: &str, image: &Rgb8) -> Result<()> {
     let path = dir.join(name);
@@ -63,6 +51,9 @@ struct Summary<'a> {
     files: Vec<&'static str>,
 }
 
+/// The files [`compare_images`] writes, in the order it lists them.
+const FILES: [&str; 4] = ["delta-e.png", "side-by-side.png", "split.png", "compare.json"];
+
 /// Compares two images already read; writes the files into `out` and returns the summary text.
 pub fn compare_images(
     (a, a_name): (&XyzImage, &str),
@@ -71,26 +62,11 @@ pub fn compare_images(
     threshold: f64,
     out: &Path,
 ) -> Result<String> {
-    if (a.width, a.height) != (b.width, b.height) {
-        bail!(
-            "{a_name} is {}×{} and {b_name} {}×{}: compare images of one size (render both \
-             with the same --width and --height)",
-            a.width,
-            a.height,
-            b.width,
-            b.height
-        );
-    }
-    if !(threshold.is_finite() && threshold >= 0.0) {
-        bail!(
-            "--threshold {threshold}: use a ΔE00 of 0 or more (2 is about a just noticeable difference)"
-        );
-    }
+    check_comparable((a, a_name), (b, b_name), threshold)?;
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let luminance = white_luminance(a, white);
     let map = delta_e_map(a, b, d65_white().scale(luminance), threshold);
     let s = &map.stats;
-    let top = scale_max(&map.values);
     let caption = format!(
         "mean {:.2}, median {:.2}, 95th percentile {:.2}, max {:.1}; {:.1} % above {}",
         s.mean,
@@ -101,26 +77,16 @@ pub fn compare_images(
         s.threshold
     );
     let cell = (a.width as u32).clamp(240, 960);
-    let grid = Grid {
-        title: "CIEDE2000 between A and B, pixel by pixel",
-        column_labels: vec![format!("A: {a_name}; B: {b_name}")],
-        row_labels: vec!["ΔE00".into()],
-        cells: vec![vec![Some(map_picture(&map, a.width, a.height, top).resized_to_width(cell))]],
-        captions: vec![vec![caption.clone()]],
-        cell_width: cell,
-        footer: vec![format!(
-            "CIELAB relative to a D65 white of luminance {luminance:.4} ({white_text}); light \
-             sources in grey."
-        )],
-    }
-    .render();
-    let cell_h = (f64::from(cell) * a.height as f64 / a.width as f64).round() as u32;
-    let bar = colour_bar(top, 6, 0, "ΔE00", cell_h);
-    let mut sheet =
-        Rgb8::new(grid.width + bar.width + 24, grid.height.max(bar.height + 60), BACKGROUND);
-    sheet.blit(0, 0, &grid);
-    sheet.blit(i64::from(grid.width), 56, &bar);
-    write(out, "delta-e.png", &sheet)?;
+    let footer = format!(
+        "CIELAB relative to a D65 white of luminance {luminance:.4} ({white_text}); light \
+         sources in grey."
+    );
+    let names = format!("A: {a_name}; B: {b_name}");
+    write(
+        out,
+        "delta-e.png",
+        &delta_e_sheet(&map, (a.width, a.height), cell, names, &caption, footer),
+    )?;
 
     // One exposure for both: the white.
     let exposure = Exposure::Absolute { white_cd_m2: luminance };
@@ -136,17 +102,8 @@ pub fn compare_images(
     }
     .render();
     write(out, "side-by-side.png", &side)?;
-    let mut split = pa.clone();
-    let half = split.width / 2;
-    for y in 0..split.height {
-        for x in half..split.width {
-            split.put(x, y, pb.get(x, y));
-        }
-        split.put(half, y, INK);
-    }
-    write(out, "split.png", &split)?;
+    write(out, "split.png", &split(&pa, &pb))?;
 
-    let files = vec!["delta-e.png", "side-by-side.png", "split.png", "compare.json"];
     let summary = Summary {
         schema: "restauro.compare/1",
         a: a_name.to_owned(),
@@ -156,16 +113,78 @@ pub fn compare_images(
         white_luminance: luminance,
         white: white_text,
         delta_e00: s,
-        files: files.clone(),
+        files: FILES.to_vec(),
     };
     let json = out.join("compare.json");
     std::fs::write(&json, serde_json::to_string_pretty(&summary)? + "\n")
         .with_context(|| format!("writing {}", json.display()))?;
     let mut text = format!("ΔE00 between {a_name} and {b_name}: {caption}\n");
-    for f in files {
+    for f in FILES {
         let _ = writeln!(text, "wrote {}", out.join(f).display());
     }
     Ok(text)
+}
+
+/// The images are compared pixel by pixel, so they must be of one size; the threshold is a ΔE00.
+fn check_comparable(
+    (a, a_name): (&XyzImage, &str),
+    (b, b_name): (&XyzImage, &str),
+    threshold: f64,
+) -> Result<()> {
+    if (a.width, a.height) != (b.width, b.height) {
+        bail!(
+            "{a_name} is {}×{} and {b_name} {}×{}: compare images of one size (render both \
+             with the same --width and --height)",
+            a.width,
+            a.height,
+            b.width,
+            b.height
+        );
+    }
+    if !(threshold.is_finite() && threshold >= 0.0) {
+        bail!(
+            "--threshold {threshold}: use a ΔE00 of 0 or more (2 is about a just noticeable difference)"
+        );
+    }
+    Ok(())
+}
+
+/// `delta-e.png`: the map, `cell` pixels wide, with its statistics and its colour scale.
+fn delta_e_sheet(
+    map: &DeltaEMap,
+    (width, height): (usize, usize),
+    cell: u32,
+    names: String,
+    caption: &str,
+    footer: String,
+) -> Rgb8 {
+    let top = scale_max(&map.values);
+    let grid = Grid {
+        title: "CIEDE2000 between A and B, pixel by pixel",
+        column_labels: vec![names],
+        row_labels: vec!["ΔE00".into()],
+        cells: vec![vec![Some(map_picture(map, width, height, top).resized_to_width(cell))]],
+        captions: vec![vec![caption.to_owned()]],
+        cell_width: cell,
+        footer: vec![footer],
+    }
+    .render();
+    let cell_h = (f64::from(cell) * height as f64 / width as f64).round() as u32;
+    let bar = colour_bar(top, 6, 0, "ΔE00", cell_h);
+    beside_colour_bar(&grid, &bar)
+}
+
+/// `split.png`: A on the left and B on the right of a line down the middle.
+fn split(pa: &Rgb8, pb: &Rgb8) -> Rgb8 {
+    let mut split = pa.clone();
+    let half = split.width / 2;
+    for y in 0..split.height {
+        for x in half..split.width {
+            split.put(x, y, pb.get(x, y));
+        }
+        split.put(half, y, INK);
+    }
+    split
 }
 
 pub fn run(args: &CompareArgs) -> Result<String> {

@@ -1,26 +1,12 @@
 //! `submit`, `watch`, `fetch`, `cancel`, `jobs`, `workers`: a client of a running coordinator.
 
 use crate::cli::{ConnectArgs, FetchArgs, JobArgs, SubmitArgs};
+use crate::connect::{client_token, shown};
 use crate::render::{checked_bundle, job_spec};
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use restauro_cluster::{self as cluster, Client, refused};
 use restauro_proto as pb;
 use std::fmt::Write as _;
-use std::path::Path;
-
-/// The client token from a file, else RESTAURO_TOKEN.
-pub fn client_token(file: Option<&Path>) -> Result<String> {
-    let token = match file {
-        Some(path) => std::fs::read_to_string(path)
-            .with_context(|| format!("reading the token file {}", path.display()))?,
-        None => std::env::var("RESTAURO_TOKEN").unwrap_or_default(),
-    };
-    let token = token.trim().to_owned();
-    if token.is_empty() {
-        bail!("no client token: give --token-file FILE or set RESTAURO_TOKEN");
-    }
-    Ok(token)
-}
 
 fn with_client<T>(c: &ConnectArgs, f: impl AsyncFnOnce(&mut Client) -> Result<T>) -> Result<T> {
     let token = client_token(c.token_file.as_deref())?;
@@ -30,14 +16,6 @@ fn with_client<T>(c: &ConnectArgs, f: impl AsyncFnOnce(&mut Client) -> Result<T>
                 .await?;
         f(&mut client).await
     })
-}
-
-/// A text from the coordinator as a terminal may show it: control characters escaped, so no
-/// name can move the cursor, clear the screen or begin a new line.
-pub fn shown(text: &str) -> String {
-    text.chars()
-        .map(|c| if c.is_control() { c.escape_default().to_string() } else { c.to_string() })
-        .collect()
 }
 
 fn state_name(state: i32) -> String {
@@ -183,16 +161,4 @@ pub fn workers(args: &ConnectArgs) -> Result<String> {
         }
         Ok(s)
     })
-}
-
-#[cfg(test)]
-mod tests {
-    /// Defect 6: a name with terminal escapes and newlines was printed raw by `restauro jobs`.
-    #[test]
-    fn texts_from_the_coordinator_cannot_drive_the_terminal() {
-        let shown = super::shown("evil\u{1b}[2J\nname\r\u{7}");
-        assert!(!shown.chars().any(char::is_control), "{shown:?}");
-        assert_eq!(shown, "evil\\u{1b}[2J\\nname\\r\\u{7}");
-        assert_eq!(super::shown("façade sud"), "façade sud");
-    }
 }

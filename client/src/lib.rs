@@ -3,6 +3,7 @@
 pub mod cli;
 pub mod color;
 pub mod compare;
+pub mod connect;
 pub mod demo;
 pub mod illuminance;
 pub mod jobs_cmd;
@@ -10,5 +11,4 @@ pub mod render;
 pub mod retinex;
 pub mod scene_cmd;
 pub mod scene_new;
-pub mod sheet;
 pub mod studio_cmd;

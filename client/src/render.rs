@@ -89,7 +89,7 @@ pub fn run(args: &RenderArgs) -> Result<String> {
     let tls_ca = args.run.connect.tls_ca.as_deref();
     let (url, token, _cluster) = match &args.run.connect.coordinator {
         Some(url) => {
-            let token = crate::jobs_cmd::client_token(args.run.connect.token_file.as_deref())?;
+            let token = crate::connect::client_token(args.run.connect.token_file.as_deref())?;
             (url.clone(), token, None)
         }
         None => {
@@ -117,7 +117,7 @@ pub fn run(args: &RenderArgs) -> Result<String> {
             anyhow::bail!(
                 "job {} ended without results: {}",
                 status.job_id,
-                crate::jobs_cmd::shown(&status.error)
+                crate::connect::shown(&status.error)
             );
         }
         let files = cluster::fetch(&client, &status, &args.out).await?;

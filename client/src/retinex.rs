@@ -10,7 +10,7 @@ use restauro_image::image_files::{
 use restauro_spectral::appearance::ChannelSpace;
 use restauro_spectral::display::{DisplayParams, Exposure, encode, to_u8, to_u16};
 use restauro_spectral::retinex::{RetinexParams, WhiteReference};
-use restauro_spectral::seen::{Adaptation, SeenParams, seen_image};
+use restauro_spectral::seen::{Adaptation, SeenParams, SeenReport, seen_image};
 use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
@@ -82,22 +82,7 @@ pub fn parse_adaptation(text: &str, space: ChannelSpace, image: &XyzImage) -> Re
 
 pub fn run(args: &RetinexArgs) -> Result<String> {
     let image = read_exr(&args.input, MAX_PIXELS)?;
-    let params = SeenParams {
-        retinex: RetinexParams {
-            paths: args.paths,
-            reach: args.reach,
-            length: args.length,
-            threshold: args.threshold,
-            seed: args.seed,
-            white: parse_white(&args.white)?,
-            emitters: parse_light_sources(&args.light_sources, &image)?,
-            frameworks: parse_frameworks(&args.frameworks, &image)?,
-            framework_weight: args.framework_weight,
-            ..RetinexParams::default()
-        },
-        plane_weight: args.plane_weight,
-        mesopic: !args.no_mesopic,
-    };
+    let params = seen_params(args, &image)?;
     let adaptation = parse_adaptation(&args.adaptation, args.space, &image)?;
     let bar = if image.pixels.len() >= PROGRESS_FROM_PIXELS {
         Progress::new("retinex", "paths", Some(0), "retinex {bar:40} {percent}% paths, eta {eta}")?
@@ -128,6 +113,60 @@ pub fn run(args: &RetinexArgs) -> Result<String> {
         &args.display,
         Exposure::Relative,
     )?;
+    let mut text = seen_summary(args, &image, adaptation, &report, seconds);
+    let _ = writeln!(text, "wrote {}", args.out.display());
+    if let Some(exr) = &args.exr {
+        let settings = report.settings(&params);
+        let result = XyzImage {
+            width: image.width,
+            height: image.height,
+            pixels: out,
+            emitter: image.emitter,
+            lit_by: image.lit_by,
+            white: None,
+        };
+        write_xyz_exr(
+            exr,
+            &result,
+            &[
+                ("restauroRetinex", settings.as_str()),
+                ("restauroXyzScale", "relative: Y = 1 is the reference white, D65"),
+            ],
+        )?;
+        let _ = writeln!(text, "wrote {}", exr.display());
+    }
+    Ok(text)
+}
+
+/// The seen image's parameters from the command line, checked in the order of its options.
+fn seen_params(args: &RetinexArgs, image: &XyzImage) -> Result<SeenParams> {
+    Ok(SeenParams {
+        retinex: RetinexParams {
+            paths: args.paths,
+            reach: args.reach,
+            length: args.length,
+            threshold: args.threshold,
+            seed: args.seed,
+            white: parse_white(&args.white)?,
+            emitters: parse_light_sources(&args.light_sources, image)?,
+            frameworks: parse_frameworks(&args.frameworks, image)?,
+            framework_weight: args.framework_weight,
+            ..RetinexParams::default()
+        },
+        plane_weight: args.plane_weight,
+        mesopic: !args.no_mesopic,
+    })
+}
+
+/// What the seen image took: its paths and frameworks, and the light it adapted to (or a note
+/// that the file carried none).
+fn seen_summary(
+    args: &RetinexArgs,
+    image: &XyzImage,
+    adaptation: Adaptation,
+    report: &SeenReport,
+    seconds: f64,
+) -> String {
     let mut text = String::new();
     let stats = &report.retinex;
     let _ = writeln!(
@@ -168,28 +207,7 @@ pub fn run(args: &RetinexArgs) -> Result<String> {
             args.input.display()
         );
     }
-    let _ = writeln!(text, "wrote {}", args.out.display());
-    if let Some(exr) = &args.exr {
-        let settings = report.settings(&params);
-        let result = XyzImage {
-            width: image.width,
-            height: image.height,
-            pixels: out,
-            emitter: image.emitter,
-            lit_by: image.lit_by,
-            white: None,
-        };
-        write_xyz_exr(
-            exr,
-            &result,
-            &[
-                ("restauroRetinex", settings.as_str()),
-                ("restauroXyzScale", "relative: Y = 1 is the reference white, D65"),
-            ],
-        )?;
-        let _ = writeln!(text, "wrote {}", exr.display());
-    }
-    Ok(text)
+    text
 }
 
 /// `restauro display --false-colour luminance`: the luminance map with its isolines and legend.

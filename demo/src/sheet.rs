@@ -1,4 +1,4 @@
-//! Labelled "contact sheets" for the renderer's demo output.
+//! Labelled "contact sheets" for the demo's output and `restauro compare`.
 //!
 //! A sheet is a grid of images with text drawn straight into the pixels (title, row and column
 //! labels, captions, footer), so one PNG explains itself without a viewer or HTML page. Text uses
@@ -412,6 +412,16 @@ pub fn colour_bar(max_value: f64, ticks: usize, decimals: usize, label: &str, he
         img.text(i64::from(text_x), ty - 4, text, 1, INK);
     }
     img
+}
+
+/// `grid` with a colour bar to its right, the bar's top a little below the grid's title so that
+/// its scale stands beside the first row of cells.
+pub fn beside_colour_bar(grid: &Rgb8, bar: &Rgb8) -> Rgb8 {
+    let mut sheet =
+        Rgb8::new(grid.width + bar.width + 24, grid.height.max(bar.height + 60), BACKGROUND);
+    sheet.blit(0, 0, grid);
+    sheet.blit(i64::from(grid.width), 56, bar);
+    sheet
 }
 
 #[cfg(test)]

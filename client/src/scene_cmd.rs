@@ -17,7 +17,7 @@ pub fn summary(path: &Path, scene: &LoadedScene) -> String {
     let _ = writeln!(
         s,
         "  camera {}×{} at {:?} looking at {:?}, vertical field {:.1}°",
-        c.width, c.height, c.position, c.target, c.vertical_fov_deg
+        c.width, c.height, c.pose.position, c.pose.target, c.pose.vertical_fov_deg
     );
     let _ =
         writeln!(s, "  {} triangles in {} objects", scene.triangle_count(), scene.objects.len());

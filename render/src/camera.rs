@@ -22,11 +22,12 @@ pub struct Camera {
 
 impl Camera {
     pub fn new(c: &ResolvedCamera) -> Self {
-        let origin = Vec3A::from(c.position.map(|v| v as f32));
-        let forward = (Vec3A::from(c.target.map(|v| v as f32)) - origin).normalize();
-        let right = forward.cross(Vec3A::from(c.up.map(|v| v as f32))).normalize();
+        let p = &c.pose;
+        let origin = Vec3A::from(p.position.map(|v| v as f32));
+        let forward = (Vec3A::from(p.target.map(|v| v as f32)) - origin).normalize();
+        let right = forward.cross(Vec3A::from(p.up.map(|v| v as f32))).normalize();
         let up = right.cross(forward);
-        let tan_half = (c.vertical_fov_deg.to_radians() / 2.0).tan() as f32;
+        let tan_half = (p.vertical_fov_deg.to_radians() / 2.0).tan() as f32;
         let (w, h) = (c.width as f32, c.height as f32);
         let x_half = tan_half * w / h;
         Self {

@@ -6,7 +6,7 @@
 //!
 //! [`Plan`]: crate::plan::Plan
 
-use crate::plan::RenderOptions;
+use crate::plan::{RenderOptions, ZERO_COUNT};
 use restauro_spectral::display::Exposure;
 use restauro_spectral::retinex::MAX_PATHS;
 use serde::{Deserialize, Serialize};
@@ -29,8 +29,7 @@ fn refuse(field: &'static str, problem: impl Into<String>) -> JobSpecError {
 /// [`RenderOptions`] holds: a zero is refused, naming `field`. Each edge where an option enters
 /// (the wire, the studio's request, the command line) calls it once.
 pub fn option_count(field: &'static str, value: u32) -> Result<NonZeroU32, JobSpecError> {
-    NonZeroU32::new(value)
-        .ok_or_else(|| refuse(field, "0; use at least 1, or leave it out for the scene's"))
+    NonZeroU32::new(value).ok_or_else(|| refuse(field, ZERO_COUNT))
 }
 
 /// A job's name, as lists show it and as its result files are called: at most

@@ -20,23 +20,44 @@ pub struct Rect {
 }
 
 /// What a render may change of the scene's own settings; `None` keeps the scene's. The counts
-/// cannot be zero: each edge that makes one (the command line, the wire, the studio's request)
-/// refuses a zero there, naming its own field, so that past it they are checked values.
+/// cannot be zero: each edge that makes one (the command line, the wire, the studio's request
+/// as JSON) refuses a zero there, naming its own field, so that past it they are checked values.
+/// Any field may be left out; an unknown one is refused (a misspelt option would otherwise be
+/// silently the scene's).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct RenderOptions {
     pub variant: Option<String>,
     pub integrator: Option<Integrator>,
+    #[serde(deserialize_with = "count")]
     pub samples_per_pixel: Option<NonZeroU32>,
+    #[serde(deserialize_with = "count")]
     pub width: Option<NonZeroU32>,
+    #[serde(deserialize_with = "count")]
     pub height: Option<NonZeroU32>,
     /// Keep the 81-band spectral radiance of every pixel.
     pub spectral: bool,
     /// The tile edge in pixels; `None` chooses one (see [`auto_tile`]).
+    #[serde(deserialize_with = "count")]
     pub tile: Option<NonZeroU32>,
     /// Compute the illuminance at the scene's calculation grids instead of the camera's image
     /// (see [`Plan::grids`]). Absent in jobs stored before grids existed.
-    #[serde(default)]
     pub grids: bool,
+}
+
+/// Why a count of [`RenderOptions`] cannot be 0, and what to give instead.
+pub const ZERO_COUNT: &str = "0; use at least 1, or leave it out for the scene's";
+
+/// A count of [`RenderOptions`] read from JSON: a zero is refused in [`ZERO_COUNT`]'s words, as
+/// every other edge refuses it (the reader names the field).
+fn count<'de, D>(d: D) -> std::result::Result<Option<NonZeroU32>, D::Error>
+where
+    D: serde::Deserializer<'de>,
+{
+    let value: Option<u32> = Option::deserialize(d)?;
+    value
+        .map(|v| NonZeroU32::new(v).ok_or_else(|| serde::de::Error::custom(ZERO_COUNT)))
+        .transpose()
 }
 
 impl RenderOptions {

@@ -256,16 +256,20 @@ pub struct Annotation {
     pub pose: Option<Pose>,
 }
 
-/// A camera pose without a name (see [`View`]).
+/// Where an eye stands and where it looks: the one pose of the camera, a saved view, a note's
+/// viewpoint and the studio's page (which sends its own, in the preview's coordinates).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Pose {
+    /// Where the eye is (m).
     #[serde(deserialize_with = "vec3::position")]
     pub position: [f64; 3],
+    /// The point looked at (m).
     #[serde(deserialize_with = "vec3::target")]
     pub target: [f64; 3],
     #[serde(default = "default_up", deserialize_with = "vec3::up")]
     pub up: [f64; 3],
+    /// The vertical field of view, degrees.
     #[serde(default = "default_fov")]
     pub vertical_fov_deg: f64,
 }
@@ -273,6 +277,9 @@ pub struct Pose {
 /// A named pose of the camera: where a restorer stood to look at something. The studio lists
 /// these beside the scene's camera and the meshes' viewpoints, and flies to one when chosen; a
 /// snapshot taken there renders from that pose.
+///
+/// Its fields are a [`Pose`]'s written out beside the name, not a nested pose, because the file
+/// refuses unknown keys and serde cannot do that through a flattened struct.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct View {
@@ -288,6 +295,24 @@ pub struct View {
     /// The vertical field of view, degrees.
     #[serde(default = "default_fov")]
     pub vertical_fov_deg: f64,
+}
+
+impl View {
+    /// The view's pose.
+    pub fn pose(&self) -> Pose {
+        Pose {
+            position: self.position,
+            target: self.target,
+            up: self.up,
+            vertical_fov_deg: self.vertical_fov_deg,
+        }
+    }
+
+    /// A view named `name` at `pose`.
+    pub fn at(name: String, pose: Pose) -> Self {
+        let Pose { position, target, up, vertical_fov_deg } = pose;
+        Self { name, position, target, up, vertical_fov_deg }
+    }
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -46,7 +46,7 @@ fn assert_millimetre(scene: &LoadedScene, format: &str) {
     let step = step_m(scene);
     assert!((step - 0.001).abs() < 1e-6, "{format}: a step of {step} m, not 1 mm");
     // The camera moved with the mesh.
-    let c = scene.camera.position;
+    let c = scene.camera.pose.position;
     assert!((c[0] - 0.3).abs() < 1e-9 && (c[1] + 9.3).abs() < 1e-9, "{format}: camera at {c:?}");
 }
 

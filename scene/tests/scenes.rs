@@ -289,7 +289,7 @@ fn a_gltf_camera_is_a_viewpoint_by_name() {
         1,
     );
     let loaded = load(&f, &toml).unwrap();
-    let c = &loaded.camera;
+    let c = &loaded.camera.pose;
     let close = |a: [f64; 3], b: [f64; 3]| a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-5);
     assert!(close(c.position, [0.0, -10.0, 1.7]), "{:?}", c.position);
     assert!(close(c.target, [0.0, -9.0, 1.7]), "looks north: {:?}", c.target);

@@ -11,7 +11,7 @@
 use super::Studio;
 use super::api::{parse, revision, scene_id};
 use super::appearance::appearance;
-use super::preview::to_world;
+use super::preview::{pose_to_world, to_world};
 use crate::error::{Result, StudioError};
 use axum::Json;
 use axum::body::Bytes;
@@ -19,6 +19,7 @@ use axum::extract::{Path, RawQuery, State};
 use axum::response::{IntoResponse, Response};
 use restauro_farm::farm::RevisionInfo;
 use restauro_scene::edit::{self, Edit, SaveAnnotation, SaveView};
+use restauro_scene::scene_file::View;
 use restauro_spectral::library;
 use serde::{Deserialize, Serialize};
 use std::sync::{Arc, OnceLock};
@@ -42,20 +43,13 @@ pub async fn edit(
 
 /// The positions of a view or a note, sent in the preview's frame, in the world's.
 fn to_world_edit(edit: &mut Edit, offset: [f64; 3]) {
-    let pose = |p: &mut [f64; 3], t: &mut [f64; 3], up: &mut [f64; 3]| {
-        *p = to_world(*p, offset);
-        *t = to_world(*t, offset);
-        *up = to_world(*up, [0.0; 3]);
-    };
     match edit {
         Edit::SaveView(SaveView { view }) => {
-            pose(&mut view.position, &mut view.target, &mut view.up)
+            *view = View::at(std::mem::take(&mut view.name), pose_to_world(&view.pose(), offset));
         }
         Edit::SaveAnnotation(SaveAnnotation { annotation }) => {
             annotation.position = to_world(annotation.position, offset);
-            if let Some(p) = &mut annotation.pose {
-                pose(&mut p.position, &mut p.target, &mut p.up);
-            }
+            annotation.pose = annotation.pose.take().map(|p| pose_to_world(&p, offset));
         }
         _ => {}
     }

@@ -1,12 +1,14 @@
 //! What the page draws in real time: a scene's geometry as GLB ([`gltf_export`]), each
 //! material coloured as restauro computes it from its reflectance spectrum under each of the
-//! scene's lights and D65 ([`appearance`]), and the scene's camera, in the GLB's coordinates. Kept for the few scenes opened last, by bundle identity.
+//! scene's lights and D65 ([`appearance`]), and the scene's camera, in the GLB's coordinates. Kept for the few scenes opened last, by
+//! bundle identity.
 
 use super::appearance::{self, appearance};
 use crate::error::Result;
 use crate::gltf_export::{self, Preview};
 use restauro_farm::farm::{Farm, Revised};
-use restauro_scene::load::LoadedScene;
+use restauro_scene::load::{LoadedScene, ResolvedCamera};
+use restauro_scene::scene_file::{Pose, View};
 use serde::Serialize;
 use std::sync::Arc;
 
@@ -77,27 +79,6 @@ fn state_view(
         colour_linear_srgb,
         under,
     })
-}
-
-#[derive(Serialize)]
-pub struct CameraView {
-    /// In the GLB's coordinates (Y up, offset removed).
-    pub position: [f64; 3],
-    pub target: [f64; 3],
-    pub up: [f64; 3],
-    pub vertical_fov_deg: f64,
-    pub width: u32,
-    pub height: u32,
-}
-
-/// A saved view, in the GLB's coordinates.
-#[derive(Serialize)]
-pub struct NamedView {
-    pub name: String,
-    pub position: [f64; 3],
-    pub target: [f64; 3],
-    pub up: [f64; 3],
-    pub vertical_fov_deg: f64,
 }
 
 /// The scene's sun: where it is (as the render places it) and the site and time it was put
@@ -302,12 +283,13 @@ pub struct SceneView {
     pub triangles: usize,
     /// The triangles of the coarser copy the page draws while the view moves (0: none).
     pub coarse_triangles: usize,
-    pub camera: CameraView,
+    /// The scene's camera, in the GLB's coordinates.
+    pub camera: ResolvedCamera,
     pub materials: Vec<MaterialView>,
     /// The scene's hypotheses (variants).
     pub variants: Vec<VariantView>,
-    /// The scene's saved views (`[[views]]`).
-    pub views: Vec<NamedView>,
+    /// The scene's saved views (`[[views]]`), in the GLB's coordinates.
+    pub views: Vec<View>,
     /// Its notes (`[[annotations]]`), positions and poses in the GLB's coordinates.
     pub annotations: Vec<restauro_scene::scene_file::Annotation>,
     pub sun: Option<SunView>,
@@ -366,9 +348,29 @@ fn to_glb(p: [f64; 3], offset: [f64; 3]) -> [f64; 3] {
     [x, z, -y]
 }
 
+/// A pose in the GLB's frame (Y up, `offset` removed); `up` is a direction, not moved.
+fn pose_to_glb(pose: &Pose, offset: [f64; 3]) -> Pose {
+    Pose {
+        position: to_glb(pose.position, offset),
+        target: to_glb(pose.target, offset),
+        up: to_glb(pose.up, [0.0; 3]),
+        vertical_fov_deg: pose.vertical_fov_deg,
+    }
+}
+
 /// The GLB's frame back to the world: the inverse of [`to_glb`].
 pub fn to_world(p: [f64; 3], offset: [f64; 3]) -> [f64; 3] {
     [p[0] + offset[0], -p[2] + offset[1], p[1] + offset[2]]
+}
+
+/// A pose the page sends, in the world: the inverse of [`pose_to_glb`].
+pub fn pose_to_world(pose: &Pose, offset: [f64; 3]) -> Pose {
+    Pose {
+        position: to_world(pose.position, offset),
+        target: to_world(pose.target, offset),
+        up: to_world(pose.up, [0.0; 3]),
+        vertical_fov_deg: pose.vertical_fov_deg,
+    }
 }
 
 /// The spectrum a state of `m` reflects with, when the state changes it.
@@ -420,26 +422,12 @@ fn build(id: &str, revision: u32, scene: &LoadedScene) -> ScenePreview {
         gltf_export::scene_glb(scene, |name| {
             materials.iter().find(|m| m.name == name).map_or([0.5; 3], |m| m.colour_linear_srgb)
         });
-    let c = &scene.camera;
-    let camera = CameraView {
-        position: to_glb(c.position, offset_m),
-        target: to_glb(c.target, offset_m),
-        up: to_glb(c.up, [0.0; 3]),
-        vertical_fov_deg: c.vertical_fov_deg,
-        width: c.width,
-        height: c.height,
-    };
+    let camera = ResolvedCamera { pose: pose_to_glb(&scene.camera.pose, offset_m), ..scene.camera };
     let views = scene
         .file
         .views
         .iter()
-        .map(|v| NamedView {
-            name: v.name.clone(),
-            position: to_glb(v.position, offset_m),
-            target: to_glb(v.target, offset_m),
-            up: to_glb(v.up, [0.0; 3]),
-            vertical_fov_deg: v.vertical_fov_deg,
-        })
+        .map(|v| View::at(v.name.clone(), pose_to_glb(&v.pose(), offset_m)))
         .collect();
     let annotations = scene
         .file
@@ -448,11 +436,7 @@ fn build(id: &str, revision: u32, scene: &LoadedScene) -> ScenePreview {
         .map(|a| {
             let mut a = a.clone();
             a.position = to_glb(a.position, offset_m);
-            if let Some(p) = &mut a.pose {
-                p.position = to_glb(p.position, offset_m);
-                p.target = to_glb(p.target, offset_m);
-                p.up = to_glb(p.up, [0.0; 3]);
-            }
+            a.pose = a.pose.map(|p| pose_to_glb(&p, offset_m));
             a
         })
         .collect();

@@ -3,38 +3,25 @@
 //! that camera, and the job is submitted exactly as the gRPC door submits one, so it is checked
 //! by the same code and refused with the same messages.
 
-use super::preview::{ScenePreview, to_world};
+use super::preview::{ScenePreview, pose_to_world};
 use crate::error::{Result, StudioError};
 use restauro_farm::farm::Farm;
 use restauro_farm::job::JobStatus;
 use restauro_scene::bundle::Bundle;
-use restauro_scene::job::{JobName, JobSpec, option_count};
+use restauro_scene::job::{JobName, JobSpec};
 use restauro_scene::plan::RenderOptions;
-use restauro_scene::scene_file::Integrator;
+use restauro_scene::scene_file::Pose;
 use serde::Deserialize;
 use std::sync::Arc;
 
-/// The camera as the page holds it: Y up, relative to the preview's offset.
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ViewCamera {
-    pub position: [f64; 3],
-    pub target: [f64; 3],
-    pub up: [f64; 3],
-    pub vertical_fov_deg: f64,
-}
-
+/// A snapshot as the page asks for it: its camera (Y up, relative to the preview's offset) and
+/// the render's options, read as a job's options are, so that a zero count or an unknown option
+/// is refused naming its field (`render.samples_per_pixel`, …).
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SnapshotRequest {
-    pub camera: ViewCamera,
-    pub width: u32,
-    pub height: u32,
-    pub samples_per_pixel: u32,
-    /// `path` or `whitted`.
-    pub integrator: String,
-    #[serde(default)]
-    pub variant: Option<String>,
+    pub camera: Pose,
+    pub render: RenderOptions,
     #[serde(default)]
     pub name: Option<String>,
     /// The scene's revision the page shows (the latest when absent).
@@ -55,45 +42,24 @@ pub async fn take(
 ) -> Result<JobStatus> {
     let mut scene =
         Bundle::parse_manifest(&farm.scene_revision(id, Some(preview.view.revision))?.1)?;
-    let offset = preview.view.offset_m;
-    let c = &request.camera;
+    let c = pose_to_world(&request.camera, preview.view.offset_m);
     let finite = |v: &[f64; 3]| v.iter().all(|x| x.is_finite());
     if !(finite(&c.position) && finite(&c.target) && finite(&c.up)) {
         return Err(refuse("camera", "every coordinate must be a finite number"));
     }
-    scene.camera.position = Some(to_world(c.position, offset));
-    scene.camera.target = Some(to_world(c.target, offset));
-    scene.camera.up = to_world(c.up, [0.0; 3]);
+    scene.camera.position = Some(c.position);
+    scene.camera.target = Some(c.target);
+    scene.camera.up = c.up;
     scene.camera.vertical_fov_deg = c.vertical_fov_deg;
     scene.camera.viewpoint = None;
-    let integrator = match request.integrator.as_str() {
-        "path" => Integrator::Path,
-        "whitted" => Integrator::Whitted,
-        other => {
-            return Err(refuse(
-                "integrator",
-                format!("`{}`: use path or whitted", other.escape_debug()),
-            ));
-        }
-    };
     let stem = scene_name(farm, id);
-    let name = request.name.unwrap_or_else(|| match &request.variant {
+    let name = request.name.unwrap_or_else(|| match &request.render.variant {
         Some(v) => format!("{stem}-{v}"),
         None => stem,
     });
-    let count = |field, value| option_count(field, value).map_err(|e| refuse(e.field, e.problem));
     let spec = JobSpec {
         name: JobName::new(&name).map_err(|e| refuse("name", e.problem))?,
-        render: RenderOptions {
-            variant: request.variant,
-            integrator: Some(integrator),
-            samples_per_pixel: Some(count("render.samples_per_pixel", request.samples_per_pixel)?),
-            width: Some(count("render.width", request.width)?),
-            height: Some(count("render.height", request.height)?),
-            spectral: false,
-            tile: None,
-            grids: false,
-        },
+        render: request.render,
         ..JobSpec::default()
     }
     .checked()

@@ -32,11 +32,13 @@ async function takeSnapshot() {
   const number = (id) => Number($(id).value);
   const request = {
     camera: viewer.pose(),
-    width: number('snap-width'),
-    height: number('snap-height'),
-    samples_per_pixel: number('snap-spp'),
-    integrator: $('snap-integrator').value,
-    variant: $('snap-variant').value || null,
+    render: {
+      width: number('snap-width'),
+      height: number('snap-height'),
+      samples_per_pixel: number('snap-spp'),
+      integrator: $('snap-integrator').value,
+      variant: $('snap-variant').value || null,
+    },
     revision: viewer.view.revision,
   };
   try {

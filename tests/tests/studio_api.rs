@@ -263,25 +263,34 @@ fn events_follow_a_job_to_its_end_and_resume_after_the_last_event_seen() {
                 "position": view["camera"]["position"], "target": view["camera"]["target"],
                 "up": view["camera"]["up"], "vertical_fov_deg": view["camera"]["vertical_fov_deg"]
             },
-            "width": 32, "height": 18,
-            "samples_per_pixel": 1, "integrator": "whitted", "variant": "cleaned"
+            "render": {
+                "width": 32, "height": 18,
+                "samples_per_pixel": 1, "integrator": "whitted", "variant": "cleaned"
+            }
         });
         for (k, v) in patch.as_object().unwrap() {
-            body[k] = v.clone();
+            match k.strip_prefix("render.") {
+                Some(option) => body["render"][option] = v.clone(),
+                None => body[k] = v.clone(),
+            }
         }
-        body.as_object_mut().unwrap().retain(|_, v| !v.is_null());
+        body["render"].as_object_mut().unwrap().retain(|_, v| !v.is_null());
         let path = format!("/api/scenes/{scene_id}/snapshots");
         request(&s, "POST", &path, &auth, body.to_string().as_bytes())
     };
     for (patch, words) in [
         (
-            serde_json::json!({ "integrator": "raymarch" }),
-            "integrator: `raymarch`: use path or whitted",
+            serde_json::json!({ "render.integrator": "raymarch" }),
+            "render.integrator: unknown variant `raymarch`, expected `whitted` or `path`",
         ),
-        (serde_json::json!({ "variant": "restored" }), "restored"),
-        (serde_json::json!({ "samples_per_pixel": 0 }), "samples"),
+        (serde_json::json!({ "render.variant": "restored" }), "restored"),
+        (
+            serde_json::json!({ "render.samples_per_pixel": 0 }),
+            "render.samples_per_pixel: 0; use at least 1",
+        ),
         (serde_json::json!({ "colour": "red" }), "unknown field `colour`"),
-        (serde_json::json!({ "width": -3 }), "width"),
+        (serde_json::json!({ "render.colour": "red" }), "render.colour: unknown field `colour`"),
+        (serde_json::json!({ "render.width": -3 }), "render.width"),
     ] {
         let r = snapshot(patch.clone());
         assert_eq!(r.status, 400, "{patch}: {}", r.text());
@@ -547,7 +556,8 @@ fn edits_make_revisions_checked_as_scene_files_and_kept_across_a_restart() {
     let body = serde_json::json!({
         "camera": {"position": camera["position"], "target": camera["target"], "up": camera["up"],
             "vertical_fov_deg": camera["vertical_fov_deg"]},
-        "width": 16, "height": 9, "samples_per_pixel": 1, "integrator": "whitted", "revision": 1
+        "render": {"width": 16, "height": 9, "samples_per_pixel": 1, "integrator": "whitted"},
+        "revision": 1
     });
     let r = request(
         &s,

@@ -3,7 +3,7 @@
 //! its pose one the camera can take, and its images PNG or JPEG files that are what their names
 //! say. Also [`check_part`], which the variants use too.
 
-use super::camera::{check_pose, pose_camera};
+use super::camera::check_pose;
 use super::{Ctx, LoadedObject, check_point, unknown};
 use crate::assets::extension;
 use crate::error::{Result, SceneError};
@@ -74,9 +74,8 @@ pub(super) fn check_annotations(
                 ));
             }
         }
-        if let Some(p) = &a.pose {
-            let pose = pose_camera(p.position, p.target, p.up, p.vertical_fov_deg);
-            check_pose(ctx, &format!("{place}.pose"), &pose)?;
+        if let Some(pose) = &a.pose {
+            check_pose(ctx, &format!("{place}.pose"), pose)?;
         }
         check_note_images(ctx, &place, &a.images)?;
     }

@@ -6,16 +6,16 @@
 use super::objects::Viewpoints;
 use super::{Ctx, Limits, check_point, unknown};
 use crate::error::Result;
-use crate::scene_file;
+use crate::scene_file::{self, Pose};
 use glam::{DMat3, DVec3};
+use serde::Serialize;
 
-/// The camera in world coordinates.
-#[derive(Clone, Debug, PartialEq)]
+/// The camera: a [`Pose`] in world coordinates and the image it takes. The studio sends it to
+/// the page in the preview's coordinates, the same fields side by side.
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct ResolvedCamera {
-    pub position: [f64; 3],
-    pub target: [f64; 3],
-    pub up: [f64; 3],
-    pub vertical_fov_deg: f64,
+    #[serde(flatten)]
+    pub pose: Pose,
     pub width: u32,
     pub height: u32,
 }
@@ -47,16 +47,13 @@ pub(super) fn resolve_camera(
                 return Err(ctx.invalid("camera", "give position and target, or a viewpoint"));
             };
             ResolvedCamera {
-                position,
-                target,
-                up: c.up,
-                vertical_fov_deg: c.vertical_fov_deg,
+                pose: Pose { position, target, up: c.up, vertical_fov_deg: c.vertical_fov_deg },
                 width: c.width,
                 height: c.height,
             }
         }
     };
-    check_pose(ctx, "camera", &camera)?;
+    check_pose(ctx, "camera", &camera.pose)?;
     Ok(camera)
 }
 
@@ -106,10 +103,12 @@ fn viewpoint_camera(
     let to_world = |p: DVec3| matrix.transform_point3(p);
     let position = to_world(pos);
     Ok(ResolvedCamera {
-        position: position.to_array(),
-        target: to_world(pos + look).to_array(),
-        up: matrix.transform_vector3(up).normalize_or(DVec3::Z).to_array(),
-        vertical_fov_deg: f64::from(v.field_of_view).to_degrees(),
+        pose: Pose {
+            position: position.to_array(),
+            target: to_world(pos + look).to_array(),
+            up: matrix.transform_vector3(up).normalize_or(DVec3::Z).to_array(),
+            vertical_fov_deg: f64::from(v.field_of_view).to_degrees(),
+        },
         width: c.width,
         height: c.height,
     })
@@ -117,7 +116,7 @@ fn viewpoint_camera(
 
 /// A pose (the camera's, a view's) the tracer can look from: every point in range, the target
 /// away from the eye, up not along the line of sight, a field of view between 0° and 180°.
-pub(super) fn check_pose(ctx: &Ctx, place: &str, pose: &ResolvedCamera) -> Result<()> {
+pub(super) fn check_pose(ctx: &Ctx, place: &str, pose: &Pose) -> Result<()> {
     check_point(ctx, &format!("{place}.position"), pose.position)?;
     check_point(ctx, &format!("{place}.target"), pose.target)?;
     check_point(ctx, &format!("{place}.up"), pose.up)?;
@@ -145,16 +144,6 @@ pub(super) fn check_pose(ctx: &Ctx, place: &str, pose: &ResolvedCamera) -> Resul
     Ok(())
 }
 
-/// A pose as a camera, for [`check_pose`] (its image size is not a pose's).
-pub(super) fn pose_camera(
-    position: [f64; 3],
-    target: [f64; 3],
-    up: [f64; 3],
-    fov: f64,
-) -> ResolvedCamera {
-    ResolvedCamera { position, target, up, vertical_fov_deg: fov, width: 1, height: 1 }
-}
-
 /// Every saved view: a name of its own, and a pose [`check_pose`] accepts.
 pub(super) fn check_views(ctx: &Ctx, views: &[scene_file::View]) -> Result<()> {
     let mut seen = std::collections::BTreeSet::new();
@@ -169,7 +158,7 @@ pub(super) fn check_views(ctx: &Ctx, views: &[scene_file::View]) -> Result<()> {
                 format!("a second view named `{}`; give each view its own name", v.name),
             ));
         }
-        check_pose(ctx, &place, &pose_camera(v.position, v.target, v.up, v.vertical_fov_deg))?;
+        check_pose(ctx, &place, &v.pose())?;
     }
     Ok(())
 }

@@ -64,8 +64,8 @@ impl LoadedScene {
     /// The camera as the levels of detail see it ([`crate::lod`]).
     pub fn viewer(&self) -> crate::lod::Viewer {
         crate::lod::Viewer {
-            position_m: self.camera.position,
-            vertical_fov_deg: self.camera.vertical_fov_deg,
+            position_m: self.camera.pose.position,
+            vertical_fov_deg: self.camera.pose.vertical_fov_deg,
             height_px: self.camera.height,
         }
     }

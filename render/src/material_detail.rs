@@ -84,7 +84,7 @@ impl MaterialDetails {
         let kind = m.detail.unwrap_or_default();
         let photo = match m.texture_of(state) {
             Some(reference) => {
-                scene.textures.get(reference).map(|t| (reference.clone(), t.clone()))
+                scene.textures.get(reference).map(|t| (reference.to_owned(), t.clone()))
             }
             None => match own {
                 Some((key, Own::Photo(texture))) => Some((key, texture)),

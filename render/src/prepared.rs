@@ -675,9 +675,9 @@ fn class_maps(
 /// The BSDF of material `name` in `state`: the state's fields over the base ones.
 fn bsdf(scene: &LoadedScene, name: &str, state: &str) -> Bsdf {
     let m = &scene.file.materials[name];
-    let o = m.state(state);
+    let surface = m.surface(state);
     if m.model == MaterialModel::Glass {
-        let ior = o.and_then(|o| o.ior).or(m.ior).unwrap_or(crate::glass::DEFAULT_IOR);
+        let ior = surface.ior.unwrap_or(crate::glass::DEFAULT_IOR);
         let thickness = m.thickness_mm.unwrap_or(crate::glass::DEFAULT_THICKNESS_MM);
         let transmittance = m.transmittance.as_ref().map(|t| match t {
             Transmittance::Neutral(t) => Spectrum([*t as f32; BANDS]),
@@ -685,15 +685,13 @@ fn bsdf(scene: &LoadedScene, name: &str, state: &str) -> Bsdf {
         });
         return Bsdf::Glass(crate::glass::Glass::new(ior, thickness, transmittance.as_ref()));
     }
-    let reflectance = o.and_then(|o| o.reflectance.as_ref()).unwrap_or(&m.reflectance);
-    let rho = scene.spectra[reflectance];
+    let rho = scene.spectra[surface.reflectance.unwrap_or_default()];
     match m.model {
         MaterialModel::Glass => unreachable!("returned above"),
         MaterialModel::Lambert => Bsdf::Lambert { rho },
         MaterialModel::CookTorrance => {
-            let roughness = o.and_then(|o| o.roughness).or(m.roughness).unwrap_or(0.3) as f32;
-            let specular = o.and_then(|o| o.specular).or(m.specular);
-            let ior = o.and_then(|o| o.ior).or(m.ior);
+            let roughness = surface.roughness.unwrap_or(0.3) as f32;
+            let (specular, ior) = (surface.specular, surface.ior);
             // F0 = ((n − 1)/(n + 1))², 0.04 (n = 1.5) when neither is given.
             let f0 = specular.unwrap_or_else(|| {
                 let n = ior.unwrap_or(1.5);

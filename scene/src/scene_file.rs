@@ -527,9 +527,29 @@ pub struct Material {
 }
 
 impl Material {
+    /// The surface of the base state: its own fields. Glass names no reflectance, so an empty
+    /// one is absent there (and only there: elsewhere the check names the missing spectrum).
+    pub fn base_surface(&self) -> Surface<'_> {
+        Surface {
+            reflectance: Some(self.reflectance.as_str())
+                .filter(|r| self.model != MaterialModel::Glass || !r.is_empty()),
+            roughness: self.roughness,
+            specular: self.specular,
+            ior: self.ior,
+            texture: self.texture.as_deref(),
+            white_patch: self.white_patch,
+        }
+    }
+
+    /// The surface in `state`: the state's fields over the base ones.
+    pub fn surface(&self, state: &str) -> Surface<'_> {
+        let base = self.base_surface();
+        self.state(state).map_or(base, |o| o.surface().over(base))
+    }
+
     /// The photo texture of `state`: the state's own, or the base one.
-    pub fn texture_of(&self, state: &str) -> Option<&String> {
-        self.state(state).and_then(|o| o.texture.as_ref()).or(self.texture.as_ref())
+    pub fn texture_of(&self, state: &str) -> Option<&str> {
+        self.surface(state).texture
     }
 
     /// Whether a part bound to this material in `state` shows what its mesh file lays on it
@@ -542,10 +562,7 @@ impl Material {
     /// The grey patch of the photo `state` shows: beside the texture it lies in (a state with
     /// its own photo gives its own patch, if any).
     pub fn white_patch_of(&self, state: &str) -> Option<PixelRect> {
-        match self.state(state) {
-            Some(o) if o.texture.is_some() => o.white_patch,
-            _ => self.white_patch,
-        }
+        self.surface(state).white_patch
     }
 
     /// The fields that `state` changes: `None` for `base`, and for a state the material does
@@ -606,6 +623,56 @@ pub struct SurfaceOverride {
     pub specular: Option<f64>,
     #[serde(default)]
     pub ior: Option<f64>,
+}
+
+impl SurfaceOverride {
+    /// The fields of the surface this state gives (those it leaves out are the base's).
+    pub fn surface(&self) -> Surface<'_> {
+        Surface {
+            reflectance: self.reflectance.as_deref(),
+            roughness: self.roughness,
+            specular: self.specular,
+            ior: self.ior,
+            texture: self.texture.as_deref(),
+            white_patch: self.white_patch,
+        }
+    }
+}
+
+/// A material's surface: the one set of fields that its base state (a `[materials.X]` table)
+/// and each other state (`[materials.X.degraded]`, …) give, read through [`Material::surface`]
+/// and [`SurfaceOverride::surface`] by the scene's checks, the tracer and the studio alike. The
+/// file's tables spell the fields out rather than nest this struct because the file refuses
+/// unknown keys, which serde cannot do through a flattened struct.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Surface<'a> {
+    /// The spectral reflectance ρ(λ), by spectrum name.
+    pub reflectance: Option<&'a str>,
+    /// Cook–Torrance: Beckmann roughness m.
+    pub roughness: Option<f64>,
+    /// Cook–Torrance: F0, or …
+    pub specular: Option<f64>,
+    /// … the index of refraction n.
+    pub ior: Option<f64>,
+    /// The surface's photo.
+    pub texture: Option<&'a str>,
+    /// The grey patch in `texture`.
+    pub white_patch: Option<PixelRect>,
+}
+
+impl<'a> Surface<'a> {
+    /// These fields over `base`'s: each one given wins, and a grey patch goes with its photo
+    /// (a state with a photo of its own takes only its own patch).
+    pub fn over(self, base: Surface<'a>) -> Surface<'a> {
+        Surface {
+            reflectance: self.reflectance.or(base.reflectance),
+            roughness: self.roughness.or(base.roughness),
+            specular: self.specular.or(base.specular),
+            ior: self.ior.or(base.ior),
+            texture: self.texture.or(base.texture),
+            white_patch: if self.texture.is_some() { self.white_patch } else { base.white_patch },
+        }
+    }
 }
 
 #[derive(Clone, Debug, PartialEq, Default, Serialize, Deserialize)]

@@ -5,7 +5,7 @@
 
 use super::Ctx;
 use crate::error::Result;
-use crate::scene_file::{MaterialModel, Transmittance};
+use crate::scene_file::{MaterialModel, Surface, Transmittance};
 
 /// Every material and its states.
 pub(super) fn check_materials(ctx: &mut Ctx) -> Result<()> {
@@ -13,27 +13,11 @@ pub(super) fn check_materials(ctx: &mut Ctx) -> Result<()> {
     for (name, m) in &file.materials {
         let place = format!("materials.{name}");
         check_glazing(ctx, &place, m)?;
-        check_surface(
-            ctx,
-            &place,
-            m.model,
-            (m.model != MaterialModel::Glass).then_some(m.reflectance.as_str()),
-            m.roughness,
-            m.specular,
-            m.ior,
-        )?;
+        check_surface(ctx, &place, m.model, &m.base_surface())?;
         for (state, o) in [("degraded", &m.degraded), ("cleaned", &m.cleaned)] {
             if let Some(o) = o {
                 let p = format!("{place}.{state}");
-                check_surface(
-                    ctx,
-                    &p,
-                    m.model,
-                    o.reflectance.as_deref(),
-                    o.roughness,
-                    o.specular,
-                    o.ior,
-                )?;
+                check_surface(ctx, &p, m.model, &o.surface())?;
                 if let Some(soiling) = &o.soiling {
                     check_soiling(ctx, &format!("{p}.soiling"), soiling)?;
                 }
@@ -43,16 +27,14 @@ pub(super) fn check_materials(ctx: &mut Ctx) -> Result<()> {
     Ok(())
 }
 
-/// Check a material's optical numbers.
+/// Check the optical numbers a state of a material gives (its base, or a state's own).
 fn check_surface(
     ctx: &mut Ctx,
     place: &str,
     model: MaterialModel,
-    reflectance: Option<&str>,
-    roughness: Option<f64>,
-    specular: Option<f64>,
-    ior: Option<f64>,
+    surface: &Surface,
 ) -> Result<()> {
+    let Surface { reflectance, roughness, specular, ior, .. } = *surface;
     if let Some(r) = reflectance {
         ctx.reflectance(r, &format!("{place}.reflectance"))?;
     }

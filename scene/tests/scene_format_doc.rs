@@ -165,21 +165,31 @@ fn attribute<'a>(first: &str, lines: &mut impl Iterator<Item = &'a str>) -> Stri
     attribute
 }
 
+/// What the schema reader gathers as it reads: the schema, every type defined, and (the type
+/// that has the key, the key's type) pairs, checked once every type is known.
+#[derive(Default)]
+struct Reading {
+    schema: Schema,
+    defined: BTreeSet<String>,
+    key_types: Vec<(String, String)>,
+}
+
+impl Reading {
+    /// Adds the key of `key_and_type` (a member's line, `pub name: Type,`) to `owner`'s keys,
+    /// spelt as serde spells it.
+    fn add_key(&mut self, owner: &str, key_and_type: &str, spelling: &dyn Fn(&str) -> String) {
+        let (key, ty) = without_visibility(key_and_type).split_once(':').expect("a key");
+        let key = key.trim().trim_start_matches("r#");
+        self.schema.keys.entry(owner.to_owned()).or_default().insert(spelling(key));
+        self.key_types.push((owner.to_owned(), ty.trim().trim_end_matches([',', '{']).to_owned()));
+    }
+}
+
 /// Reads the serde items of `source` (scene_file.rs): every struct and enum deriving
 /// `Deserialize`, outside the test module. Members are one a line, as rustfmt writes them.
 fn schema(source: &str) -> Schema {
     let source = source.split("#[cfg(test)]").next().expect("the text before the tests");
-    let mut schema = Schema::default();
-    let mut defined = BTreeSet::new();
-    // (the type that has the key, the key's type), checked once every type is known.
-    let mut key_types: Vec<(String, String)> = Vec::new();
-    let mut add_key = |owner: &str, key_and_type: &str, spelling: &dyn Fn(&str) -> String| {
-        let (key, ty) = without_visibility(key_and_type).split_once(':').expect("a key");
-        let key = key.trim().trim_start_matches("r#");
-        schema.keys.entry(owner.to_owned()).or_default().insert(spelling(key));
-        key_types.push((owner.to_owned(), ty.trim().trim_end_matches([',', '{']).to_owned()));
-    };
-    let mut keywords: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    let mut reading = Reading::default();
 
     // Comments dropped (doc comments say `key: value` too), blank lines skipped.
     let mut lines =
@@ -198,7 +208,7 @@ fn schema(source: &str) -> Schema {
             }
             _ => continue,
         };
-        defined.insert(name.clone());
+        reading.defined.insert(name.clone());
         let derives_deserialize =
             item.iter().any(|a| a.starts_with("#[derive(") && a.contains("Deserialize"));
         if !derives_deserialize || !line.ends_with('{') {
@@ -206,77 +216,87 @@ fn schema(source: &str) -> Schema {
         }
         let container = Serde::from(&item);
         if let Some(tag) = &container.tag {
-            add_key(&name, &format!("{tag}: String"), &|key: &str| key.to_owned());
+            reading.add_key(&name, &format!("{tag}: String"), &|key: &str| key.to_owned());
         }
-        // The body: members at depth 1, a struct variant's keys at depth 2.
-        let mut depth = 1;
-        let mut member_attributes: Vec<String> = Vec::new();
-        let mut variant: Option<String> = None;
-        while let Some(line) = lines.next() {
-            if line.starts_with("#[") {
-                member_attributes.push(attribute(line, &mut lines));
-                continue;
-            }
-            let member = Serde::from(&std::mem::take(&mut member_attributes));
-            let (opens, closes) = (line.matches('{').count(), line.matches('}').count());
-            let word: String =
-                line.chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect();
-            let key_spelling = |key: &str| match (&member.rename, &container.rename_all) {
-                (Some(r), _) => r.clone(),
-                (None, Some(rule)) if kind == "struct" => renamed(key, rule, true),
-                _ => key.to_owned(),
-            };
-            match (kind, depth) {
-                _ if member.skip => {}
-                ("struct", 1) if line.contains(':') => add_key(&name, line, &key_spelling),
-                ("enum", 2) if line.contains(':') => {
-                    let owner = format!("{name}::{}", variant.as_deref().unwrap_or("?"));
-                    add_key(&owner, line, &key_spelling);
-                }
-                ("enum", 1) if !word.is_empty() => {
-                    assert!(
-                        member.rename_all.is_none(),
-                        "{name}::{word}: a variant's own rename_all is not followed by this test"
-                    );
-                    // An untagged enum's variants are told apart by their keys, not by a word.
-                    if !container.untagged {
-                        let spelt = match (&member.rename, &container.rename_all) {
-                            (Some(r), _) => r.clone(),
-                            (None, Some(rule)) => renamed(&word, rule, false),
-                            (None, None) => word.clone(),
-                        };
-                        keywords.entry(name.clone()).or_default().insert(spelt);
-                    }
-                    // `Mix { mix: Vec<MixPart> },`: a struct variant on one line.
-                    if let (Some(a), Some(b)) = (line.find('{'), line.rfind('}')) {
-                        let owner = format!("{name}::{word}");
-                        for pair in top_level_commas(&line[a + 1..b]) {
-                            add_key(&owner, pair, &|key: &str| key.to_owned());
-                        }
-                    }
-                    variant = Some(word.clone());
-                }
-                _ => {}
-            }
-            depth = depth + opens - closes;
-            if depth == 0 {
-                break;
-            }
-        }
+        read_body(&mut reading, &mut lines, kind, &name, &container);
     }
     // A key whose type comes from elsewhere would hide that type's keys from this reader.
     let known = ["Option", "Vec", "BTreeMap", "String"];
-    for (owner, ty) in &key_types {
+    for (owner, ty) in &reading.key_types {
         for t in type_names(ty) {
             assert!(
-                known.contains(&t) || defined.contains(t),
+                known.contains(&t) || reading.defined.contains(t),
                 "{owner} has a key of type `{ty}`, and `{t}` is not defined in scene_file.rs; \
                  this test reads only that file, so teach it where `{t}` is"
             );
         }
     }
-    schema.keywords = keywords;
-    schema
+    reading.schema
+}
+
+/// Reads the body of the serde item `name` (a `kind`, struct or enum, whose container
+/// attributes are `container`) up to its closing brace: members at depth 1, a struct variant's
+/// keys at depth 2.
+fn read_body<'a>(
+    reading: &mut Reading,
+    lines: &mut impl Iterator<Item = &'a str>,
+    kind: &str,
+    name: &str,
+    container: &Serde,
+) {
+    let mut depth = 1;
+    let mut member_attributes: Vec<String> = Vec::new();
+    let mut variant: Option<String> = None;
+    while let Some(line) = lines.next() {
+        if line.starts_with("#[") {
+            member_attributes.push(attribute(line, lines));
+            continue;
+        }
+        let member = Serde::from(&std::mem::take(&mut member_attributes));
+        let (opens, closes) = (line.matches('{').count(), line.matches('}').count());
+        let word: String = line.chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect();
+        let key_spelling = |key: &str| match (&member.rename, &container.rename_all) {
+            (Some(r), _) => r.clone(),
+            (None, Some(rule)) if kind == "struct" => renamed(key, rule, true),
+            _ => key.to_owned(),
+        };
+        match (kind, depth) {
+            _ if member.skip => {}
+            ("struct", 1) if line.contains(':') => reading.add_key(name, line, &key_spelling),
+            ("enum", 2) if line.contains(':') => {
+                let owner = format!("{name}::{}", variant.as_deref().unwrap_or("?"));
+                reading.add_key(&owner, line, &key_spelling);
+            }
+            ("enum", 1) if !word.is_empty() => {
+                assert!(
+                    member.rename_all.is_none(),
+                    "{name}::{word}: a variant's own rename_all is not followed by this test"
+                );
+                // An untagged enum's variants are told apart by their keys, not by a word.
+                if !container.untagged {
+                    let spelt = match (&member.rename, &container.rename_all) {
+                        (Some(r), _) => r.clone(),
+                        (None, Some(rule)) => renamed(&word, rule, false),
+                        (None, None) => word.clone(),
+                    };
+                    reading.schema.keywords.entry(name.to_owned()).or_default().insert(spelt);
+                }
+                // `Mix { mix: Vec<MixPart> },`: a struct variant on one line.
+                if let (Some(a), Some(b)) = (line.find('{'), line.rfind('}')) {
+                    let owner = format!("{name}::{word}");
+                    for pair in top_level_commas(&line[a + 1..b]) {
+                        reading.add_key(&owner, pair, &|key: &str| key.to_owned());
+                    }
+                }
+                variant = Some(word.clone());
+            }
+            _ => {}
+        }
+        depth = depth + opens - closes;
+        if depth == 0 {
+            break;
+        }
+    }
 }
 
 fn the_schema() -> Schema {

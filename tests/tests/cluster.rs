@@ -23,32 +23,37 @@ fn assert_identical(a: &[[f32; 3]], b: &[[f32; 3]]) {
     assert_eq!(differ, 0, "{differ} of {} pixels differ", a.len());
 }
 
+/// `restauro render` of `scene` in one process, `spp` samples a pixel in 16-px tiles, into
+/// `out`.
+fn render_in_process(scene: &str, spp: &str, out: &Path) {
+    let o = restauro(&[
+        "render",
+        scene,
+        "--in-process",
+        "--spp",
+        spp,
+        "--tile",
+        "16",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+}
+
 #[test]
 fn two_workers_render_what_one_process_renders_and_survive_a_killed_worker() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let scene = aosta(d);
     let local = d.join("local");
-    let o = restauro(&[
-        "render",
-        &scene,
-        "--in-process",
-        "--spp",
-        "2",
-        "--tile",
-        "16",
-        "--out",
-        local.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", text(&o));
+    render_in_process(&scene, "2", &local);
     let reference = pixels(&local.join("aosta.exr"));
 
     let coordinator =
         Coordinator::start(d, &d.join("data"), "127.0.0.1:0", &["--heartbeat-timeout-s", "1"]);
     let _w1 = Worker::start(d, &coordinator.url, "w1", &[]);
     let w2_log = d.join("w2-tiles.log");
-    let mut w2 =
-        Worker::start(d, &coordinator.url, "w2", &["--tile-log", w2_log.to_str().unwrap()]);
+    let w2 = Worker::start(d, &coordinator.url, "w2", &["--tile-log", w2_log.to_str().unwrap()]);
     let (client_token, _) = token_files(d);
     let out = d.join("cluster");
     let o = restauro(&[
@@ -70,20 +75,36 @@ fn two_workers_render_what_one_process_renders_and_survive_a_killed_worker() {
     assert_identical(&pixels(&out.join("aosta.exr")), &reference);
     let retinex = pixels(&out.join("aosta-retinex.exr"));
     assert_identical(&retinex, &pixels(&local.join("aosta-retinex.exr")));
+    a_killed_workers_tiles_are_requeued_and_the_image_is_the_same(
+        d,
+        &scene,
+        &coordinator.url,
+        &client_token,
+        (w2, &w2_log),
+    );
+}
 
-    // A worker killed mid-job (SIGKILL): its tiles go back to the queue, the job completes and
-    // the image is the same.
+/// A worker (`w2`, logging the tiles it starts to `w2_log`) killed mid-job (SIGKILL): its tiles
+/// go back to the queue of the coordinator at `url`, the job completes and the image is the
+/// same as one process renders.
+fn a_killed_workers_tiles_are_requeued_and_the_image_is_the_same(
+    d: &Path,
+    scene: &str,
+    url: &str,
+    client_token: &Path,
+    (mut w2, w2_log): (Worker, &Path),
+) {
     // 64 samples a pixel: a tile takes long enough to be killed in the middle of (at 8, under
     // a loaded machine, the worker sometimes delivered it between the log line and the kill).
     let job = restauro(&[
         "submit",
-        &scene,
+        scene,
         "--spp",
         "64",
         "--tile",
         "16",
         "--coordinator",
-        &coordinator.url,
+        url,
         "--token-file",
         client_token.to_str().unwrap(),
     ]);
@@ -91,7 +112,7 @@ fn two_workers_render_what_one_process_renders_and_survive_a_killed_worker() {
     let id = String::from_utf8_lossy(&job.stdout).trim().to_owned();
     // Killed as soon as it has a tile of this job in hand (it logs a tile as it starts it).
     restauro_tests::wait_for("w2 to start a tile of the job", Duration::from_secs(60), || {
-        lines(&w2_log).iter().any(|l| l.starts_with(&id))
+        lines(w2_log).iter().any(|l| l.starts_with(&id))
     });
     w2.0.kill().unwrap();
     let out8 = d.join("cluster8");
@@ -99,15 +120,15 @@ fn two_workers_render_what_one_process_renders_and_survive_a_killed_worker() {
         "watch",
         &id,
         "--coordinator",
-        &coordinator.url,
+        url,
         "--token-file",
         client_token.to_str().unwrap(),
     ]);
     assert!(text(&o).contains("done"), "{}", text(&o));
     // The tile it held went back to the queue when its heartbeat stopped.
-    let status = tokio::runtime::Runtime::new().unwrap().block_on(async {
-        wire::status(&mut wire::render_client(&coordinator.url).await, &id).await
-    });
+    let status = tokio::runtime::Runtime::new()
+        .unwrap()
+        .block_on(async { wire::status(&mut wire::render_client(url).await, &id).await });
     assert!(status.tiles_requeued >= 1, "no tile was requeued: {status:?}");
     let o = restauro(&[
         "fetch",
@@ -115,24 +136,13 @@ fn two_workers_render_what_one_process_renders_and_survive_a_killed_worker() {
         "--out",
         out8.to_str().unwrap(),
         "--coordinator",
-        &coordinator.url,
+        url,
         "--token-file",
         client_token.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", text(&o));
     let local8 = d.join("local8");
-    let o = restauro(&[
-        "render",
-        &scene,
-        "--in-process",
-        "--spp",
-        "64",
-        "--tile",
-        "16",
-        "--out",
-        local8.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", text(&o));
+    render_in_process(scene, "64", &local8);
     assert_identical(&pixels(&out8.join("aosta.exr")), &pixels(&local8.join("aosta.exr")));
 }
 
@@ -207,6 +217,58 @@ fn lines(path: &Path) -> Vec<String> {
     std::fs::read_to_string(path).unwrap_or_default().lines().map(str::to_owned).collect()
 }
 
+/// Waits (up to a minute) until the workers' tile logs hold twelve tiles between them.
+fn wait_for_twelve_tiles_rendered(d: &Path, logs: &[std::path::PathBuf]) {
+    let deadline = Instant::now() + Duration::from_secs(60);
+    loop {
+        let rendered: usize = logs.iter().map(|l| lines(l).len()).sum();
+        if rendered >= 12 {
+            break;
+        }
+        assert!(
+            Instant::now() < deadline,
+            "no progress; worker 1: {}\ncoordinator: {}",
+            std::fs::read_to_string(d.join("w1.log")).unwrap_or_default(),
+            std::fs::read_to_string(d.join("coordinator.log")).unwrap_or_default()
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
+/// No tile `finished` before the restart was rendered `after` it; after the restart only
+/// unfinished tiles are rendered, and every unfinished tile was rendered, after the restart or
+/// before it (a result rendered under the first run and delivered to the second is taken, not
+/// rendered again). The tile logs up to `offsets` are what was rendered before.
+fn only_unfinished_tiles_are_rendered_after_the_restart(
+    logs: &[std::path::PathBuf],
+    offsets: &[usize],
+    id: &str,
+    after: &[u32],
+    finished: &[u32],
+) {
+    let total = 12 * 7;
+    for tile in after {
+        assert!(
+            !finished.contains(tile),
+            "tile {tile} was finished before the restart and rendered again"
+        );
+    }
+    let rendered_after: std::collections::BTreeSet<u32> = after.iter().copied().collect();
+    let rendered_before: std::collections::BTreeSet<u32> = logs
+        .iter()
+        .zip(offsets)
+        .flat_map(|(l, &upto)| lines(l).into_iter().take(upto))
+        .filter(|line| line.starts_with(id))
+        .map(|line| line.split(' ').nth(1).unwrap().parse().unwrap())
+        .collect();
+    let unfinished: std::collections::BTreeSet<u32> =
+        (0..total).filter(|t| !finished.contains(t)).collect();
+    assert!(rendered_after.is_subset(&unfinished), "tiles rendered after the restart");
+    let rendered: std::collections::BTreeSet<u32> =
+        rendered_after.union(&rendered_before).copied().collect();
+    assert!(unfinished.is_subset(&rendered), "every unfinished tile was rendered");
+}
+
 #[test]
 fn a_restarted_coordinator_resumes_without_rendering_finished_tiles_again() {
     let dir = tempfile::tempdir().unwrap();
@@ -234,20 +296,7 @@ fn a_restarted_coordinator_resumes_without_rendering_finished_tiles_again() {
     let id = String::from_utf8_lossy(&o.stdout).trim().to_owned();
     let total = 12 * 7;
     // Kill the coordinator (SIGKILL) once some tiles, not all, are finished.
-    let deadline = Instant::now() + Duration::from_secs(60);
-    loop {
-        let rendered: usize = logs.iter().map(|l| lines(l).len()).sum();
-        if rendered >= 12 {
-            break;
-        }
-        assert!(
-            Instant::now() < deadline,
-            "no progress; worker 1: {}\ncoordinator: {}",
-            std::fs::read_to_string(d.join("w1.log")).unwrap_or_default(),
-            std::fs::read_to_string(d.join("coordinator.log")).unwrap_or_default()
-        );
-        std::thread::sleep(Duration::from_millis(5));
-    }
+    wait_for_twelve_tiles_rendered(d, &logs);
     coordinator.child.kill().unwrap();
     coordinator.child.wait().unwrap();
     let finished = {
@@ -271,29 +320,7 @@ fn a_restarted_coordinator_resumes_without_rendering_finished_tiles_again() {
         .filter(|line| line.starts_with(&id))
         .map(|line| line.split(' ').nth(1).unwrap().parse().unwrap())
         .collect();
-    for tile in &after {
-        assert!(
-            !finished.contains(tile),
-            "tile {tile} was finished before the restart and rendered again"
-        );
-    }
-    // After the restart only unfinished tiles are rendered, and every unfinished tile was
-    // rendered, after the restart or before it (a result rendered under the first run and
-    // delivered to the second is taken, not rendered again).
-    let rendered_after: std::collections::BTreeSet<u32> = after.iter().copied().collect();
-    let rendered_before: std::collections::BTreeSet<u32> = logs
-        .iter()
-        .zip(&offsets)
-        .flat_map(|(l, &upto)| lines(l).into_iter().take(upto))
-        .filter(|line| line.starts_with(&id))
-        .map(|line| line.split(' ').nth(1).unwrap().parse().unwrap())
-        .collect();
-    let unfinished: std::collections::BTreeSet<u32> =
-        (0..total as u32).filter(|t| !finished.contains(t)).collect();
-    assert!(rendered_after.is_subset(&unfinished), "tiles rendered after the restart");
-    let rendered: std::collections::BTreeSet<u32> =
-        rendered_after.union(&rendered_before).copied().collect();
-    assert!(unfinished.is_subset(&rendered), "every unfinished tile was rendered");
+    only_unfinished_tiles_are_rendered_after_the_restart(&logs, &offsets, &id, &after, &finished);
     let out = d.join("resumed");
     let o = restauro(&[
         "fetch",

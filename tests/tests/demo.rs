@@ -76,7 +76,30 @@ fn the_quick_demo_writes_what_it_lists_and_the_retinex_adapts() {
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
     let markdown = std::fs::read_to_string(out.join("report.md")).unwrap();
 
-    // Every listed image exists and decodes; every render's files are listed; four sheets.
+    let listed = every_listed_image_decodes(&out, &report, &markdown);
+    let renders = report["renders"].as_array().unwrap();
+    // The facade under three lights, as found and cleaned; the stones under four illuminants;
+    // the facade floodlit at night, and its grid; the photo block.
+    assert_eq!(renders.len(), 13);
+    the_floodlit_bays_figures_are_its_grids(&out, &report, &markdown, &listed);
+    for r in renders {
+        for f in r["files"].as_array().unwrap() {
+            assert!(listed.contains(&f.as_str().unwrap()), "{f} is not listed");
+        }
+        assert!(r["render_s"].as_f64().unwrap() > 0.0, "{r}");
+    }
+    for sheet in ["facade.png", "cleaning-delta-e.png", "stones.png", "boards.png", "block.png"] {
+        assert!(listed.contains(&format!("sheets/{sheet}").as_str()), "{sheet}");
+    }
+    nothing_half_written_is_left(&out);
+    the_retinex_brings_each_stone_closer_to_d65(&out, &report);
+    after_is_measured_against_the_d65_render_as_rendered_and_as_seen(&out, &report, &markdown);
+    names_are_for_people(&markdown, &text(&o), renders);
+}
+
+/// Every image the report lists exists and decodes, and report.md lists it too: the files
+/// listed.
+fn every_listed_image_decodes<'a>(out: &Path, report: &'a Value, markdown: &str) -> Vec<&'a str> {
     let images = report["images"].as_array().unwrap();
     let listed: Vec<&str> = images.iter().map(|i| i["file"].as_str().unwrap()).collect();
     for file in &listed {
@@ -92,11 +115,16 @@ fn the_quick_demo_writes_what_it_lists_and_the_retinex_adapts() {
         }
         assert!(markdown.contains(file), "report.md does not list {file}");
     }
-    let renders = report["renders"].as_array().unwrap();
-    // The facade under three lights, as found and cleaned; the stones under four illuminants;
-    // the facade floodlit at night, and its grid; the photo block.
-    assert_eq!(renders.len(), 13);
-    // The floodlit bay: its figures are its grid's, and its map is listed.
+    listed
+}
+
+/// The floodlit bay: its figures are its grid's, and its map is listed.
+fn the_floodlit_bays_figures_are_its_grids(
+    out: &Path,
+    report: &Value,
+    markdown: &str,
+    listed: &[&str],
+) {
     let f = &report["floodlighting"];
     let document: Value = serde_json::from_str(
         &std::fs::read_to_string(out.join(f["document"].as_str().unwrap())).unwrap(),
@@ -114,17 +142,11 @@ fn the_quick_demo_writes_what_it_lists_and_the_retinex_adapts() {
     assert!((u - min / average).abs() < 1e-9, "uniformity {u} against {}", min / average);
     assert!(listed.contains(&f["map"].as_str().unwrap()), "the map is not listed");
     assert!(markdown.contains("## The facade floodlit at night"));
-    for r in renders {
-        for f in r["files"].as_array().unwrap() {
-            assert!(listed.contains(&f.as_str().unwrap()), "{f} is not listed");
-        }
-        assert!(r["render_s"].as_f64().unwrap() > 0.0, "{r}");
-    }
-    for sheet in ["facade.png", "cleaning-delta-e.png", "stones.png", "boards.png", "block.png"] {
-        assert!(listed.contains(&format!("sheets/{sheet}").as_str()), "{sheet}");
-    }
-    // Nothing half-written is left: every file was written under a temporary name and renamed.
-    let mut folders = vec![out.clone()];
+}
+
+/// Nothing half-written is left: every file was written under a temporary name and renamed.
+fn nothing_half_written_is_left(out: &Path) {
+    let mut folders = vec![out.to_path_buf()];
     while let Some(folder) = folders.pop() {
         for entry in std::fs::read_dir(&folder).unwrap() {
             let path = entry.unwrap().path();
@@ -135,17 +157,30 @@ fn the_quick_demo_writes_what_it_lists_and_the_retinex_adapts() {
             }
         }
     }
+}
 
-    // The stone experiment, from the files.
-    let read = |name: &str| {
-        let path = out.join(format!("renders/{name}/{name}.exr"));
-        read_exr(&path, usize::MAX).unwrap()
-    };
-    let seen = |name: &str| {
-        let path = out.join(format!("renders/{name}/{name}-retinex.exr"));
-        read_exr(&path, usize::MAX).unwrap()
-    };
-    let (d65, a, a_seen) = (read("samples-D65"), read("samples-A"), seen("samples-A"));
+/// The render `name`'s EXR, as rendered.
+fn rendered(out: &Path, name: &str) -> XyzImage {
+    let path = out.join(format!("renders/{name}/{name}.exr"));
+    read_exr(&path, usize::MAX).unwrap()
+}
+
+/// The render `name`'s EXR as seen (its Retinex output).
+fn seen(out: &Path, name: &str) -> XyzImage {
+    let path = out.join(format!("renders/{name}/{name}-retinex.exr"));
+    read_exr(&path, usize::MAX).unwrap()
+}
+
+/// CIELAB of `xyz` against a white of luminance `white_y` at D65's chromaticity.
+fn lab(xyz: Xyz, white_y: f64) -> Lab {
+    Lab::from_xyz(xyz.scale(1.0 / white_y), d65_white())
+}
+
+/// The stone experiment, from the files: the white tile obeys ρ·E/π, and under CIE A the
+/// Retinex brings each of the four stones closer to its D65 render than the unfiltered render.
+fn the_retinex_brings_each_stone_closer_to_d65(out: &Path, report: &Value) {
+    let (d65, a, a_seen) =
+        (rendered(out, "samples-D65"), rendered(out, "samples-A"), seen(out, "samples-A"));
     let samples = report["samples"].as_array().unwrap();
     let white = samples.iter().find(|s| s["state"] == "reference").unwrap();
     let (white_d65, cv) = mean(&d65, &white["rect"]);
@@ -155,7 +190,6 @@ fn the_quick_demo_writes_what_it_lists_and_the_retinex_adapts() {
     assert!((white_d65.y / expect - 1.0).abs() < 0.005, "{} vs {expect}", white_d65.y);
     assert!(cv < 1e-3, "the white tile is not uniform: {cv}");
     let (white_a, _) = mean(&a, &white["rect"]);
-    let lab = |xyz: Xyz, white_y: f64| Lab::from_xyz(xyz.scale(1.0 / white_y), d65_white());
     let mut checked = 0;
     for s in samples.iter().filter(|s| s["state"] != "reference") {
         let (reference, cv) = mean(&d65, &s["rect"]);
@@ -172,12 +206,19 @@ fn the_quick_demo_writes_what_it_lists_and_the_retinex_adapts() {
         checked += 1;
     }
     assert_eq!(checked, 4);
+}
 
-    // "After" is measured against the D65 render as rendered and as seen (its seen image),
-    // in both forms of the report. Under D65 the seen square is compared with itself: 0.
+/// "After" is measured against the D65 render as rendered and as seen (its seen image),
+/// in both forms of the report. Under D65 the seen square is compared with itself: 0.
+fn after_is_measured_against_the_d65_render_as_rendered_and_as_seen(
+    out: &Path,
+    report: &Value,
+    markdown: &str,
+) {
     assert!(markdown.contains("| after: ΔE00 to D65 rendered |"), "{markdown}");
     assert!(markdown.contains("| after: ΔE00 to D65 seen |"), "{markdown}");
-    let d65_seen = seen("samples-D65");
+    let (d65_seen, a_seen) = (seen(out, "samples-D65"), seen(out, "samples-A"));
+    let samples = report["samples"].as_array().unwrap();
     let stones = report["stones"].as_array().unwrap();
     assert_eq!(stones.len(), 4 * samples.len());
     for c in stones {
@@ -201,8 +242,11 @@ fn the_quick_demo_writes_what_it_lists_and_the_retinex_adapts() {
             assert!((after - expect).abs() < 1e-6, "{c}: {after} vs {expect} from the files");
         }
     }
+}
 
-    // Names for people: the integrators and skies by their names, no Debug names anywhere.
+/// Names for people, in report.md and the command's `output`: the integrators and skies by
+/// their names, no Debug names anywhere.
+fn names_are_for_people(markdown: &str, output: &str, renders: &[Value]) {
     let single: Vec<String> = [Integrator::Whitted, Integrator::Path]
         .iter()
         .map(|i| format!("{i:?}"))
@@ -211,8 +255,7 @@ fn the_quick_demo_writes_what_it_lists_and_the_retinex_adapts() {
         .filter(|name| name != "Whitted")
         .collect();
     assert!(single.contains(&"Path".to_string()) && single.contains(&"Uniform".to_string()));
-    let output = text(&o);
-    for (what, body) in [("report.md", &markdown), ("the output", &output)] {
+    for (what, body) in [("report.md", markdown), ("the output", output)] {
         let found = debug_names(body, &single);
         assert!(found.is_empty(), "{what} names {found:?}");
     }

@@ -176,115 +176,138 @@ fn mutate(bytes: &mut Vec<u8>, rng: &mut Rng) -> Vec<String> {
             10 | 11 => 5,
             op => op,
         };
-        match op {
-            0 => {
-                let n = 1 + rng.below(8);
-                for _ in 0..n {
-                    if len > 0 {
-                        let i = rng.below(len);
-                        bytes[i] ^= 1 << rng.below(8);
-                    }
-                }
-                done.push(format!("flip {n} bits"));
-            }
+        // A mutation that finds nothing to change (no number, no line, too short) says nothing.
+        let did = match op {
+            0 => Some(flip_bits(bytes, rng)),
             1 => {
                 bytes.truncate(at);
-                done.push(format!("truncate at {at}"));
+                Some(format!("truncate at {at}"))
             }
-            2 => {
-                let n = 1 + rng.below(16);
-                let insert: Vec<u8> = (0..n).map(|_| rng.next() as u8).collect();
-                bytes.splice(at..at, insert);
-                done.push(format!("insert {n} random bytes at {at}"));
-            }
-            3 if len > 0 => {
-                let start = rng.below(len);
-                let n = 1 + rng.below((len - start).min(256));
-                let most = if rng.below(8) == 0 { 4096 } else { 16 };
-                let times = 1 + rng.below(most);
-                let block = bytes[start..start + n].to_vec();
-                let insert: Vec<u8> = block.iter().copied().cycle().take(n * times).collect();
-                bytes.splice(at..at, insert);
-                done.push(format!("repeat bytes {start}..{} {times} times at {at}", start + n));
-            }
+            2 => Some(insert_random_bytes(bytes, rng, at)),
+            3 if len > 0 => Some(repeat_a_block(bytes, rng, at)),
             4 if len > 0 => {
                 let i = rng.below(len);
                 let b = INTERESTING_BYTES[rng.below(INTERESTING_BYTES.len())];
                 bytes[i] = b;
-                done.push(format!("byte {i} = {b:#04x}"));
+                Some(format!("byte {i} = {b:#04x}"))
             }
-            5 => {
-                // A run of digits (with its sign and decimals) replaced by an interesting number.
-                let starts: Vec<usize> = (0..len)
-                    .filter(|&i| {
-                        bytes[i].is_ascii_digit() && (i == 0 || !bytes[i - 1].is_ascii_digit())
-                    })
-                    .collect();
-                if starts.is_empty() {
-                    continue;
-                }
-                let start = starts[rng.below(starts.len())];
-                let mut end = start;
-                while end < len
-                    && (bytes[end].is_ascii_digit() || bytes[end] == b'.' || bytes[end] == b'e')
-                {
-                    end += 1;
-                }
-                let number = INTERESTING_NUMBERS[rng.below(INTERESTING_NUMBERS.len())];
-                bytes.splice(start..end, number.bytes());
-                done.push(format!("number at {start} = `{number}`"));
-            }
-            6 if len >= 8 => {
-                let i = rng.below(len - 7);
-                let v = INTERESTING_INTEGERS[rng.below(INTERESTING_INTEGERS.len())];
-                let width = [1, 2, 4, 8][rng.below(4)];
-                let big = rng.below(2) == 0;
-                let b = if big { v.to_be_bytes() } else { v.to_le_bytes() };
-                let b = if big { &b[8 - width..] } else { &b[..width] };
-                bytes[i..i + width].copy_from_slice(b);
-                done.push(format!(
-                    "{width} bytes at {i} = {v:#x} ({})",
-                    if big { "BE" } else { "LE" }
-                ));
-            }
+            5 => replace_a_number(bytes, rng),
+            6 if len >= 8 => Some(replace_an_integer(bytes, rng)),
             7 if len > 0 => {
                 let start = rng.below(len);
                 let n = 1 + rng.below((len - start).min(64));
                 bytes.drain(start..start + n);
-                done.push(format!("delete bytes {start}..{}", start + n));
+                Some(format!("delete bytes {start}..{}", start + n))
             }
-            8 => {
-                // A whole line repeated.
-                let starts: Vec<usize> = std::iter::once(0)
-                    .chain((0..len).filter(|&i| bytes[i] == b'\n').map(|i| i + 1))
-                    .filter(|&i| i < len)
-                    .collect();
-                if starts.is_empty() {
-                    continue;
-                }
-                let start = starts[rng.below(starts.len())];
-                let end =
-                    bytes[start..].iter().position(|&b| b == b'\n').map_or(len, |i| start + i + 1);
-                let times = 1 + rng.below(8);
-                let line: Vec<u8> = bytes[start..end].repeat(times);
-                bytes.splice(end..end, line);
-                done.push(format!("repeat line at {start} {times} times"));
-            }
-            _ => {
-                // Splice in a piece of the file itself elsewhere (a moved block).
-                if len > 1 {
-                    let start = rng.below(len);
-                    let n = 1 + rng.below((len - start).min(128));
-                    let block = bytes[start..start + n].to_vec();
-                    let to = rng.below(len);
-                    let end = (to + n).min(bytes.len());
-                    bytes.splice(to..end, block);
-                    done.push(format!("copy {start}..{} over {to}", start + n));
-                }
-            }
-        }
+            8 => repeat_a_line(bytes, rng),
+            _ => copy_a_block_elsewhere(bytes, rng),
+        };
+        done.extend(did);
     }
     done
+}
+
+/// One to eight bits flipped, anywhere.
+fn flip_bits(bytes: &mut [u8], rng: &mut Rng) -> String {
+    let len = bytes.len();
+    let n = 1 + rng.below(8);
+    for _ in 0..n {
+        if len > 0 {
+            let i = rng.below(len);
+            bytes[i] ^= 1 << rng.below(8);
+        }
+    }
+    format!("flip {n} bits")
+}
+
+/// One to sixteen random bytes inserted at `at`.
+fn insert_random_bytes(bytes: &mut Vec<u8>, rng: &mut Rng, at: usize) -> String {
+    let n = 1 + rng.below(16);
+    let insert: Vec<u8> = (0..n).map(|_| rng.next() as u8).collect();
+    bytes.splice(at..at, insert);
+    format!("insert {n} random bytes at {at}")
+}
+
+/// A block of the input (up to 256 bytes) repeated at `at`, up to 16 times (one time in eight
+/// up to 4096 times). `bytes` is not empty.
+fn repeat_a_block(bytes: &mut Vec<u8>, rng: &mut Rng, at: usize) -> String {
+    let len = bytes.len();
+    let start = rng.below(len);
+    let n = 1 + rng.below((len - start).min(256));
+    let most = if rng.below(8) == 0 { 4096 } else { 16 };
+    let times = 1 + rng.below(most);
+    let block = bytes[start..start + n].to_vec();
+    let insert: Vec<u8> = block.iter().copied().cycle().take(n * times).collect();
+    bytes.splice(at..at, insert);
+    format!("repeat bytes {start}..{} {times} times at {at}", start + n)
+}
+
+/// A run of digits (with its sign and decimals) replaced by an interesting number; nothing
+/// when the input has no digit.
+fn replace_a_number(bytes: &mut Vec<u8>, rng: &mut Rng) -> Option<String> {
+    let len = bytes.len();
+    let starts: Vec<usize> = (0..len)
+        .filter(|&i| bytes[i].is_ascii_digit() && (i == 0 || !bytes[i - 1].is_ascii_digit()))
+        .collect();
+    if starts.is_empty() {
+        return None;
+    }
+    let start = starts[rng.below(starts.len())];
+    let mut end = start;
+    while end < len && (bytes[end].is_ascii_digit() || bytes[end] == b'.' || bytes[end] == b'e') {
+        end += 1;
+    }
+    let number = INTERESTING_NUMBERS[rng.below(INTERESTING_NUMBERS.len())];
+    bytes.splice(start..end, number.bytes());
+    Some(format!("number at {start} = `{number}`"))
+}
+
+/// 1, 2, 4 or 8 bytes replaced by an interesting integer, big- or little-endian. `bytes` holds
+/// at least 8.
+fn replace_an_integer(bytes: &mut [u8], rng: &mut Rng) -> String {
+    let len = bytes.len();
+    let i = rng.below(len - 7);
+    let v = INTERESTING_INTEGERS[rng.below(INTERESTING_INTEGERS.len())];
+    let width = [1, 2, 4, 8][rng.below(4)];
+    let big = rng.below(2) == 0;
+    let b = if big { v.to_be_bytes() } else { v.to_le_bytes() };
+    let b = if big { &b[8 - width..] } else { &b[..width] };
+    bytes[i..i + width].copy_from_slice(b);
+    format!("{width} bytes at {i} = {v:#x} ({})", if big { "BE" } else { "LE" })
+}
+
+/// A whole line repeated one to eight times; nothing when the input is empty.
+fn repeat_a_line(bytes: &mut Vec<u8>, rng: &mut Rng) -> Option<String> {
+    let len = bytes.len();
+    let starts: Vec<usize> = std::iter::once(0)
+        .chain((0..len).filter(|&i| bytes[i] == b'\n').map(|i| i + 1))
+        .filter(|&i| i < len)
+        .collect();
+    if starts.is_empty() {
+        return None;
+    }
+    let start = starts[rng.below(starts.len())];
+    let end = bytes[start..].iter().position(|&b| b == b'\n').map_or(len, |i| start + i + 1);
+    let times = 1 + rng.below(8);
+    let line: Vec<u8> = bytes[start..end].repeat(times);
+    bytes.splice(end..end, line);
+    Some(format!("repeat line at {start} {times} times"))
+}
+
+/// A piece of the file itself spliced in elsewhere (a moved block); nothing when the input is
+/// shorter than two bytes.
+fn copy_a_block_elsewhere(bytes: &mut Vec<u8>, rng: &mut Rng) -> Option<String> {
+    let len = bytes.len();
+    if len <= 1 {
+        return None;
+    }
+    let start = rng.below(len);
+    let n = 1 + rng.below((len - start).min(128));
+    let block = bytes[start..start + n].to_vec();
+    let to = rng.below(len);
+    let end = (to + n).min(bytes.len());
+    bytes.splice(to..end, block);
+    Some(format!("copy {start}..{} over {to}", start + n))
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -757,20 +780,70 @@ fn names_own_file(_: &Path, message: &str) -> bool {
     message.contains("input.")
 }
 
+/// Every reader fuzzed, in the order they run: the scene file, the meshes and their material
+/// libraries, textures, photometric files, spectrum CSV, archives and zipped folders, EXR.
 fn readers() -> Vec<Reader> {
+    let mut all = vec![scene_reader()];
+    all.extend(mesh_readers());
+    all.extend(texture_and_light_readers());
+    all.push(csv_reader());
+    all.extend(archive_and_exr_readers());
+    all
+}
+
+/// A mesh reader: the mesh `file` of a grey scene, loaded and traced.
+fn mesh_reader(name: &'static str, file: &'static str, seeds: Vec<(String, Vec<u8>)>) -> Reader {
+    Reader {
+        name,
+        file,
+        seeds,
+        bench: Bench::new(&[
+            ("grey.csv", GREY_CSV.as_bytes()),
+            ("scene.toml", scene_around(file, "").as_bytes()),
+        ]),
+        run: |folder| load_and_trace(&folder.join("scene.toml")),
+        names_file: names_own_file,
+    }
+}
+
+/// The readers of meshes (OBJ, PLY, glTF, GLB, VRML97) and of OBJ's material libraries.
+fn mesh_readers() -> Vec<Reader> {
     let grey = GREY_CSV.as_bytes();
-    let mesh_reader =
-        |name: &'static str, file: &'static str, seeds: Vec<(String, Vec<u8>)>| Reader {
-            name,
-            file,
-            seeds,
+    vec![
+        mesh_reader("obj", "input.obj", obj_seeds()),
+        mesh_reader("ply-ascii", "input.ply", ply_ascii_seeds()),
+        mesh_reader("ply-binary", "input.ply", ply_binary_seeds()),
+        mesh_reader("gltf", "input.gltf", gltf_seeds()),
+        mesh_reader("glb", "input.glb", glb_seeds()),
+        Reader {
+            // A world beside the fuzzed one, for its Inline to draw.
             bench: Bench::new(&[
                 ("grey.csv", grey),
-                ("scene.toml", scene_around(file, "").as_bytes()),
+                ("other.wrl", b"#VRML V2.0 utf8\nShape { geometry Box { size 0.2 0.2 0.2 } }\n"),
+                ("scene.toml", scene_around("input.wrl", "").as_bytes()),
+            ]),
+            ..mesh_reader("vrml", "input.wrl", vrml_seeds())
+        },
+        Reader {
+            name: "mtl",
+            file: "input.mtl",
+            seeds: mtl_seeds(),
+            bench: Bench::new(&[
+                ("grey.csv", grey),
+                ("quad.obj", LIBRARY_QUAD_OBJ.as_bytes()),
+                ("photo.png", texture_seeds("png").remove(0).1.as_slice()),
+                ("scene.toml", scene_around("quad.obj", "").as_bytes()),
             ]),
             run: |folder| load_and_trace(&folder.join("scene.toml")),
             names_file: names_own_file,
-        };
+        },
+    ]
+}
+
+/// The readers of a material's texture (PNG, JPEG) and of a luminaire's photometric file (IES
+/// LM-63, EULUMDAT), each in a grey scene around a quad.
+fn texture_and_light_readers() -> Vec<Reader> {
+    let grey = GREY_CSV.as_bytes();
     let lamp = |file: &str| {
         format!(
             "[[lights]]\nkind = \"point\"\nposition = [0.5, -2.0, 2.0]\nintensity_cd = 500.0\nspectrum = \"light\"\nies = \"{file}\"\naim = [0.5, 0.0, 0.5]\n"
@@ -811,8 +884,17 @@ fn readers() -> Vec<Reader> {
         run: |folder| load_and_trace(&folder.join("scene.toml")),
         names_file: names_own_file,
     };
+    vec![
+        texture_reader("png", "input.png", "luminance"),
+        texture_reader("jpeg", "input.jpg", "chromatic"),
+        light_reader("ies", "input.ies", ".ies"),
+        light_reader("ldt", "input.ldt", ".ldt"),
+    ]
+}
 
-    // The scene TOML itself: the demo's scenes and one that uses every kind of file and light.
+/// The scene TOML itself: the demo's scenes and one that uses every kind of file and light.
+fn scene_reader() -> Reader {
+    let grey = GREY_CSV.as_bytes();
     let aosta = restauro_demo::scenes::aosta::generate(16, 9, 1);
     let samples = restauro_demo::scenes::samples::generate("A", 16, 12, 1);
     let facade = "g travertine\nv 0 0 0\nv 1 0 0\nv 1 0 1\nf 1 2 3\ng puddinga\nf 1 3 2\ng mortar\nf 2 3 1\ng paving\nf 1 2 3\ng ground\nf 3 2 1\ng interior\nf 2 1 3\n";
@@ -840,106 +922,72 @@ fn readers() -> Vec<Reader> {
     ];
     let scene_bench = Bench::new(&scene_files);
 
+    Reader {
+        name: "scene",
+        file: "input.toml",
+        seeds: vec![
+            ("aosta.toml".into(), aosta.scene_toml.into_bytes()),
+            ("aosta-overcast.toml".into(), aosta.overcast_toml.into_bytes()),
+            ("aosta-clear.toml".into(), aosta.clear_toml.into_bytes()),
+            ("samples.toml".into(), samples.scene_toml.into_bytes()),
+            ("everything.toml".into(), everything.into_bytes()),
+        ],
+        bench: scene_bench,
+        run: |folder| load_and_trace(&folder.join("input.toml")),
+        // The scene file, or a file in its folder (named by its path).
+        names_file: |folder, m| m.contains(&folder.display().to_string()),
+    }
+}
+
+/// The reader of spectrum CSV files.
+fn csv_reader() -> Reader {
+    Reader {
+        name: "csv",
+        file: "input.csv",
+        seeds: csv_seeds(),
+        bench: Bench::new(&[]),
+        run: read_csv_as_reflectance_and_light,
+        names_file: names_own_file,
+    }
+}
+
+/// A spectrum CSV read as a reflectance, when it is one (a refusal must still name the file),
+/// and as a light, which is what decides: nothing infinite or NaN once accepted.
+fn read_csv_as_reflectance_and_light(folder: &Path) -> Outcome {
+    let path = folder.join("input.csv");
+    let bytes = std::fs::read(&path).unwrap();
+    let shown = path.display().to_string();
+    let text = restauro_scene::assets::utf8_text(bytes, &path).map_err(|e| e.to_string())?;
+    let d65 = restauro_spectral::Illuminant::D65.spd().unwrap();
+    // As a reflectance, when it is one (a refusal must still name the file) …
+    match load_csv(&text, &shown, Quantity::Reflectance, Coverage::HoldEnds) {
+        Ok(loaded) => {
+            let xyz = relative_xyz(&loaded.spectrum, &d65, Observer::Cie1931TwoDegree);
+            assert!(xyz.to_array().iter().all(|v| v.is_finite()), "reflectance XYZ {xyz:?}");
+        }
+        Err(e) => assert!(e.to_string().contains("input.csv"), "refused without the file: {e}"),
+    }
+    // … and as a light, which is what decides.
+    let loaded = load_csv(&text, &shown, Quantity::RelativePower, Coverage::HoldEnds)
+        .map_err(|e| e.to_string())?;
+    let s = loaded.spectrum;
+    assert!(s.is_finite(), "accepted, but the spectrum is {s:?}");
+    if !s.is_black() {
+        let white = relative_xyz(&restauro_spectral::Spectrum::ONE, &s, Observer::Cie1931TwoDegree);
+        assert!(white.to_array().iter().all(|v| v.is_finite()), "as an illuminant: XYZ {white:?}");
+    }
+    if let Ok(light) = LuminousSpectrum::new(&s, &shown) {
+        assert!(light.per_lumen.is_finite(), "as a light: {:?}", light.per_lumen);
+    }
+    Ok(())
+}
+
+/// The readers of bundle archives, scene folders sent as a zip, and OpenEXR images.
+fn archive_and_exr_readers() -> Vec<Reader> {
     let exr_dir = tempfile::tempdir().unwrap();
     let exr = exr_seeds(exr_dir.path());
     let archive = archive_seeds(exr_dir.path());
-
     vec![
-        Reader {
-            name: "scene",
-            file: "input.toml",
-            seeds: vec![
-                ("aosta.toml".into(), aosta.scene_toml.into_bytes()),
-                ("aosta-overcast.toml".into(), aosta.overcast_toml.into_bytes()),
-                ("aosta-clear.toml".into(), aosta.clear_toml.into_bytes()),
-                ("samples.toml".into(), samples.scene_toml.into_bytes()),
-                ("everything.toml".into(), everything.into_bytes()),
-            ],
-            bench: scene_bench,
-            run: |folder| load_and_trace(&folder.join("input.toml")),
-            // The scene file, or a file in its folder (named by its path).
-            names_file: |folder, m| m.contains(&folder.display().to_string()),
-        },
-        mesh_reader("obj", "input.obj", obj_seeds()),
-        mesh_reader("ply-ascii", "input.ply", ply_ascii_seeds()),
-        mesh_reader("ply-binary", "input.ply", ply_binary_seeds()),
-        mesh_reader("gltf", "input.gltf", gltf_seeds()),
-        mesh_reader("glb", "input.glb", glb_seeds()),
-        Reader {
-            // A world beside the fuzzed one, for its Inline to draw.
-            bench: Bench::new(&[
-                ("grey.csv", grey),
-                ("other.wrl", b"#VRML V2.0 utf8\nShape { geometry Box { size 0.2 0.2 0.2 } }\n"),
-                ("scene.toml", scene_around("input.wrl", "").as_bytes()),
-            ]),
-            ..mesh_reader("vrml", "input.wrl", vrml_seeds())
-        },
-        Reader {
-            name: "mtl",
-            file: "input.mtl",
-            seeds: mtl_seeds(),
-            bench: Bench::new(&[
-                ("grey.csv", grey),
-                ("quad.obj", LIBRARY_QUAD_OBJ.as_bytes()),
-                ("photo.png", texture_seeds("png").remove(0).1.as_slice()),
-                ("scene.toml", scene_around("quad.obj", "").as_bytes()),
-            ]),
-            run: |folder| load_and_trace(&folder.join("scene.toml")),
-            names_file: names_own_file,
-        },
-        texture_reader("png", "input.png", "luminance"),
-        texture_reader("jpeg", "input.jpg", "chromatic"),
-        light_reader("ies", "input.ies", ".ies"),
-        light_reader("ldt", "input.ldt", ".ldt"),
-        Reader {
-            name: "csv",
-            file: "input.csv",
-            seeds: csv_seeds(),
-            bench: Bench::new(&[]),
-            run: |folder| {
-                let path = folder.join("input.csv");
-                let bytes = std::fs::read(&path).unwrap();
-                let shown = path.display().to_string();
-                let text =
-                    restauro_scene::assets::utf8_text(bytes, &path).map_err(|e| e.to_string())?;
-                let d65 = restauro_spectral::Illuminant::D65.spd().unwrap();
-                // As a reflectance, when it is one (a refusal must still name the file) …
-                match load_csv(&text, &shown, Quantity::Reflectance, Coverage::HoldEnds) {
-                    Ok(loaded) => {
-                        let xyz = relative_xyz(&loaded.spectrum, &d65, Observer::Cie1931TwoDegree);
-                        assert!(
-                            xyz.to_array().iter().all(|v| v.is_finite()),
-                            "reflectance XYZ {xyz:?}"
-                        );
-                    }
-                    Err(e) => assert!(
-                        e.to_string().contains("input.csv"),
-                        "refused without the file: {e}"
-                    ),
-                }
-                // … and as a light, which is what decides.
-                let loaded = load_csv(&text, &shown, Quantity::RelativePower, Coverage::HoldEnds)
-                    .map_err(|e| e.to_string())?;
-                let s = loaded.spectrum;
-                assert!(s.is_finite(), "accepted, but the spectrum is {s:?}");
-                if !s.is_black() {
-                    let white = relative_xyz(
-                        &restauro_spectral::Spectrum::ONE,
-                        &s,
-                        Observer::Cie1931TwoDegree,
-                    );
-                    assert!(
-                        white.to_array().iter().all(|v| v.is_finite()),
-                        "as an illuminant: XYZ {white:?}"
-                    );
-                }
-                if let Ok(light) = LuminousSpectrum::new(&s, &shown) {
-                    assert!(light.per_lumen.is_finite(), "as a light: {:?}", light.per_lumen);
-                }
-                Ok(())
-            },
-            names_file: names_own_file,
-        },
         Reader {
             name: "archive",
             file: "input.tar",

@@ -96,9 +96,22 @@ fn metrics_are_scraped_and_move_when_jobs_run_and_leases_expire() {
         out.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", text(&o));
-    let after = get(&c, "/metrics").1;
+    the_job_moved_the_counters(&c, &wm, &before, &worker_before);
+
+    // A second job, long enough to freeze the worker in the middle of.
+    let o = client(&["submit", &scene, "--spp", "64", "--tile", "16"]);
+    assert!(o.status.success(), "{}", text(&o));
+    a_frozen_workers_lease_expires_and_its_tile_is_requeued(&c, &w);
+    let _ = w.0.kill();
+    let _ = w.0.wait();
+}
+
+/// The first job (24 tiles) moved the coordinator's counters at `c` from `before` and the
+/// worker's at `wm` from `worker_before`, and left nothing queued, leased or unfinished.
+fn the_job_moved_the_counters(c: &str, wm: &str, before: &str, worker_before: &str) {
+    let after = get(c, "/metrics").1;
     let tiles = 6.0 * 4.0; // 192×108 in tiles of 32
-    let moved = |name: &str| value(&after, name) - value(&before, name);
+    let moved = |name: &str| value(&after, name) - value(before, name);
     assert_eq!(moved("restauro_tiles_done_total"), tiles, "{after}");
     assert!(moved("restauro_leases_total") >= tiles);
     assert_eq!(moved("restauro_tile_render_seconds_count"), tiles);
@@ -114,36 +127,36 @@ fn metrics_are_scraped_and_move_when_jobs_run_and_leases_expire() {
     assert_eq!(value(&after, "restauro_tiles_queued"), 0.0);
     assert_eq!(value(&after, "restauro_tiles_leased"), 0.0);
     assert_eq!(value(&after, "restauro_jobs_unfinished"), 0.0);
-    let worker_after = get(&wm, "/metrics").1;
-    let worker_moved = |name: &str| value(&worker_after, name) - value(&worker_before, name);
+    let worker_after = get(wm, "/metrics").1;
+    let worker_moved = |name: &str| value(&worker_after, name) - value(worker_before, name);
     assert_eq!(worker_moved("restauro_worker_tiles_rendered_total"), tiles);
     assert_eq!(worker_moved("restauro_worker_tile_render_seconds_count"), tiles);
     for name in ["restauro_worker_sent_bytes_total", "restauro_worker_asset_received_bytes_total"] {
         assert!(worker_moved(name) > 0.0, "{name} did not move");
     }
     wait_for("the last delivery to count", Duration::from_secs(5), || {
-        value(&get(&wm, "/metrics").1, "restauro_worker_tiles_delivered_total") >= tiles
+        value(&get(wm, "/metrics").1, "restauro_worker_tiles_delivered_total") >= tiles
     });
+}
 
-    // A second job, with the worker frozen (SIGSTOP) while it holds a lease: tiles are queued
-    // and leased meanwhile, the lease expires and its tile is requeued; thawed, the worker
-    // finishes the job.
-    let o = client(&["submit", &scene, "--spp", "64", "--tile", "16"]);
-    assert!(o.status.success(), "{}", text(&o));
+/// A second job, with the worker `w` frozen (SIGSTOP) while it holds a lease: tiles are queued
+/// and leased meanwhile (as the coordinator's metrics at `c` show), the lease expires and its
+/// tile is requeued; thawed, the worker finishes the job.
+fn a_frozen_workers_lease_expires_and_its_tile_is_requeued(c: &str, w: &Worker) {
     let mut seen_queued = false;
     let mut seen_leased = false;
     let mut expired = false;
     for _ in 0..5 {
         wait_for("the second job to start", Duration::from_secs(20), || {
-            value(&get(&c, "/metrics").1, "restauro_tiles_leased") >= 1.0
+            value(&get(c, "/metrics").1, "restauro_tiles_leased") >= 1.0
         });
         signal(&w.0, "-STOP");
-        let frozen = get(&c, "/metrics").1;
+        let frozen = get(c, "/metrics").1;
         seen_queued |= value(&frozen, "restauro_tiles_queued") > 0.0;
         seen_leased |= value(&frozen, "restauro_tiles_leased") > 0.0;
         let deadline = Instant::now() + Duration::from_secs(4);
         while Instant::now() < deadline && !expired {
-            expired = value(&get(&c, "/metrics").1, "restauro_lease_expiries_total") >= 1.0;
+            expired = value(&get(c, "/metrics").1, "restauro_lease_expiries_total") >= 1.0;
             std::thread::sleep(Duration::from_millis(100));
         }
         signal(&w.0, "-CONT");
@@ -152,10 +165,8 @@ fn metrics_are_scraped_and_move_when_jobs_run_and_leases_expire() {
         }
     }
     assert!(seen_queued && seen_leased && expired, "{seen_queued} {seen_leased} {expired}");
-    let now = get(&c, "/metrics").1;
+    let now = get(c, "/metrics").1;
     assert!(value(&now, "restauro_tiles_requeued_total") >= 1.0, "{now}");
-    let _ = w.0.kill();
-    let _ = w.0.wait();
 }
 
 /// The standard gRPC health service answers without a token; reflection lists the services.

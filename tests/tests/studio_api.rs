@@ -188,7 +188,27 @@ fn events_follow_a_job_to_its_end_and_resume_after_the_last_event_seen() {
     let scene = aosta_scene(d, 64, 36);
     let token = d.join("client.token");
     let id = submit(&scene, &["--spp", "1", "--tile", "16"], &c.url, &token);
-    // Job events until it is done; the tiles done never go back.
+    let (last, seen) = follow_the_job_to_its_end(&mut events, &id);
+    results_are_the_files_the_cli_fetches(&c, d, &token, &id, &last);
+    let (scene_id, view) = the_scene_is_viewed_as_restauro_colours_it(&s);
+    snapshots_are_checked_as_a_submission_is(&s, &scene_id, &view);
+    reconnecting_resumes_after_the_event_seen(&s, &seen, &id);
+
+    // Cancelling: a job too large to finish first.
+    let long = submit(&scene, &["--spp", "4096", "--tile", "8"], &c.url, &token);
+    let r = request(&s, "POST", &format!("/api/jobs/{long}/cancel"), &auth, b"");
+    assert_eq!((r.status, r.json()["state"].as_str()), (200, Some("cancelled")));
+    let r = get(&s, &format!("/api/jobs/{long}/results/aosta.png"), &auth);
+    assert_eq!(r.status, 409, "{}", r.text());
+    assert!(error_of(&r).contains("is cancelled, not done"), "{}", error_of(&r));
+}
+
+/// Job events until job `id` is done; the tiles done never go back. The last job event's JSON,
+/// and every event seen.
+fn follow_the_job_to_its_end(
+    events: &mut Events,
+    id: &str,
+) -> (serde_json::Value, Vec<restauro_tests::http::Event>) {
     let (mut done_seen, mut seen) = (0, Vec::new());
     let last = loop {
         let e = events.next_event();
@@ -197,7 +217,7 @@ fn events_follow_a_job_to_its_end_and_resume_after_the_last_event_seen() {
             continue;
         }
         let j = e.json();
-        assert_eq!(j["id"], id.as_str());
+        assert_eq!(j["id"], id);
         let done = j["tiles_done"].as_u64().unwrap();
         assert!(done >= done_seen, "tiles done went from {done_seen} to {done}");
         done_seen = done;
@@ -207,8 +227,20 @@ fn events_follow_a_job_to_its_end_and_resume_after_the_last_event_seen() {
     };
     assert_eq!(last["tiles_total"], 12, "64 × 36 px in 16-px tiles");
     assert!(seen.iter().filter(|e| e.kind == "job").count() >= 2, "{seen:?}");
+    (last, seen)
+}
 
-    // The result as the studio gives it is the file the CLI fetches.
+/// The result of job `id` as the studio gives it is the file the CLI fetches; a result the job
+/// has not is refused.
+fn results_are_the_files_the_cli_fetches(
+    c: &Coordinator,
+    d: &std::path::Path,
+    token: &std::path::Path,
+    id: &str,
+    last: &serde_json::Value,
+) {
+    let s = c.studio.clone().unwrap();
+    let auth = [("Authorization", BEARER)];
     let png = last["results"]
         .as_array()
         .unwrap()
@@ -221,7 +253,7 @@ fn events_follow_a_job_to_its_end_and_resume_after_the_last_event_seen() {
     let r = get(&s, &format!("/api/jobs/{id}/results/{png}"), &auth);
     assert_eq!((r.status, r.header("content-type")), (200, Some("image/png")));
     let out = d.join("fetched");
-    let o = client(&["fetch", &id, "--out", out.to_str().unwrap()], &c.url, &token);
+    let o = client(&["fetch", id, "--out", out.to_str().unwrap()], &c.url, token);
     assert!(o.status.success(), "{}", text(&o));
     assert!(r.body == std::fs::read(out.join(&png)).unwrap(), "the studio's PNG differs");
     let exr = get(&s, &format!("/api/jobs/{id}/results/aosta.exr"), &auth);
@@ -230,14 +262,17 @@ fn events_follow_a_job_to_its_end_and_resume_after_the_last_event_seen() {
     assert_eq!(r.status, 404);
     assert!(error_of(&r).contains("has no result `secret.txt`"));
     assert_eq!(get(&s, &format!("/api/jobs/{id}"), &auth).json()["state"], "done");
+}
 
-    // The job's scene, for the real-time view: its camera, its materials coloured from their
-    // spectra as `restauro color` computes them, and its geometry as GLB.
-    let scenes = get(&s, "/api/scenes", &auth).json();
+/// The job's scene, for the real-time view: its camera, its materials coloured from their
+/// spectra as `restauro color` computes them, and its geometry as GLB. The scene's id and view.
+fn the_scene_is_viewed_as_restauro_colours_it(s: &str) -> (String, serde_json::Value) {
+    let auth = [("Authorization", BEARER)];
+    let scenes = get(s, "/api/scenes", &auth).json();
     assert_eq!(scenes.as_array().unwrap().len(), 1, "{scenes}");
     assert_eq!((scenes[0]["name"].as_str(), scenes[0]["jobs"].as_u64()), (Some("aosta"), Some(1)));
     let scene_id = scenes[0]["id"].as_str().unwrap().to_owned();
-    let view = get(&s, &format!("/api/scenes/{scene_id}"), &auth).json();
+    let view = get(s, &format!("/api/scenes/{scene_id}"), &auth).json();
     assert!(view["triangles"].as_u64().unwrap() > 1000, "{}", view["triangles"]);
     assert_eq!(view["camera"]["width"], 64);
     let travertine =
@@ -251,12 +286,17 @@ fn events_follow_a_job_to_its_end_and_resume_after_the_last_event_seen() {
         );
         assert!((got - want).abs() < 1e-4, "channel {k}: {got} vs {want}");
     }
-    let glb = get(&s, &format!("/api/scenes/{scene_id}/preview.glb"), &auth);
+    let glb = get(s, &format!("/api/scenes/{scene_id}/preview.glb"), &auth);
     assert_eq!((glb.status, glb.header("content-type")), (200, Some("model/gltf-binary")));
     assert_eq!(&glb.body[..4], b"glTF");
     assert_eq!(u32::from_le_bytes(glb.body[8..12].try_into().unwrap()) as usize, glb.body.len());
+    (scene_id, view)
+}
 
-    // Snapshots: checked as a submission is, refused in the same words.
+/// Snapshots: checked as a submission is, refused in the same words; one accepted is a second
+/// job of the same scene.
+fn snapshots_are_checked_as_a_submission_is(s: &str, scene_id: &str, view: &serde_json::Value) {
+    let auth = [("Authorization", BEARER)];
     let snapshot = |patch: serde_json::Value| {
         let mut body = serde_json::json!({
             "camera": {
@@ -276,7 +316,7 @@ fn events_follow_a_job_to_its_end_and_resume_after_the_last_event_seen() {
         }
         body["render"].as_object_mut().unwrap().retain(|_, v| !v.is_null());
         let path = format!("/api/scenes/{scene_id}/snapshots");
-        request(&s, "POST", &path, &auth, body.to_string().as_bytes())
+        request(s, "POST", &path, &auth, body.to_string().as_bytes())
     };
     for (patch, words) in [
         (
@@ -301,36 +341,31 @@ fn events_follow_a_job_to_its_end_and_resume_after_the_last_event_seen() {
     let job = r.json();
     assert_eq!((job["name"].as_str(), job["width"].as_u64()), (Some("aosta-cleaned"), Some(32)));
     // The snapshot's scene differs only by its camera: still one scene, with two jobs.
-    let scenes = get(&s, "/api/scenes", &auth).json();
-    assert_eq!(
-        (scenes[0]["id"].as_str(), scenes[0]["jobs"].as_u64()),
-        (Some(scene_id.as_str()), Some(2))
-    );
+    let scenes = get(s, "/api/scenes", &auth).json();
+    assert_eq!((scenes[0]["id"].as_str(), scenes[0]["jobs"].as_u64()), (Some(scene_id), Some(2)));
+}
 
-    // Reconnecting after an event: what came after it, not a snapshot.
+/// Reconnecting after an event: what came after it, not a snapshot. With an id of another
+/// coordinator's run (or none): a snapshot, with job `id` done.
+fn reconnecting_resumes_after_the_event_seen(
+    s: &str,
+    seen: &[restauro_tests::http::Event],
+    id: &str,
+) {
+    let auth = [("Authorization", BEARER)];
     let middle = &seen[0];
-    let mut resumed = Events::open(&s, "/api/events", &[auth[0], ("Last-Event-ID", &middle.id)]);
+    let mut resumed = Events::open(s, "/api/events", &[auth[0], ("Last-Event-ID", &middle.id)]);
     let next = resumed.next_event();
     assert_eq!(
         (next.kind.as_str(), next.id.as_str()),
         (seen[1].kind.as_str(), seen[1].id.as_str())
     );
-    // An id of another coordinator's run (or none): a snapshot, with the job done.
-    let mut fresh =
-        Events::open(&s, "/api/events", &[auth[0], ("Last-Event-ID", "0123456789ab-3")]);
+    let mut fresh = Events::open(s, "/api/events", &[auth[0], ("Last-Event-ID", "0123456789ab-3")]);
     let snap = fresh.next_event();
     assert_eq!(snap.kind, "snapshot");
     let jobs = snap.json()["jobs"].clone();
-    let first = jobs.as_array().unwrap().iter().find(|j| j["id"] == id.as_str()).unwrap();
+    let first = jobs.as_array().unwrap().iter().find(|j| j["id"] == id).unwrap();
     assert_eq!(first["state"], "done", "{jobs}");
-
-    // Cancelling: a job too large to finish first.
-    let long = submit(&scene, &["--spp", "4096", "--tile", "8"], &c.url, &token);
-    let r = request(&s, "POST", &format!("/api/jobs/{long}/cancel"), &auth, b"");
-    assert_eq!((r.status, r.json()["state"].as_str()), (200, Some("cancelled")));
-    let r = get(&s, &format!("/api/jobs/{long}/results/aosta.png"), &auth);
-    assert_eq!(r.status, 409, "{}", r.text());
-    assert!(error_of(&r).contains("is cancelled, not done"), "{}", error_of(&r));
 }
 
 /// `restauro studio` starts an embedded cluster whose coordinator serves the studio, and prints
@@ -384,6 +419,12 @@ fn material<'a>(view: &'a serde_json::Value, name: &str) -> &'a serde_json::Valu
     view["materials"].as_array().unwrap().iter().find(|m| m["name"] == name).unwrap()
 }
 
+/// Sends `body` as an edit of scene `id` to the studio at `s`.
+fn edit_scene(s: &str, id: &str, body: &serde_json::Value) -> restauro_tests::http::Response {
+    let auth = [("Authorization", BEARER)];
+    request(s, "POST", &format!("/api/scenes/{id}/edits"), &auth, body.to_string().as_bytes())
+}
+
 /// Edits from the page make revisions of the scene: each checked as a scene file is (the same
 /// messages), refused edits leave no revision, earlier revisions stay readable and can be made
 /// the latest again, and every revision survives a restart of the coordinator.
@@ -399,16 +440,43 @@ fn edits_make_revisions_checked_as_scene_files_and_kept_across_a_restart() {
     let token = d.join("client.token");
     submit(&scene, &["--spp", "1", "--tile", "32"], &c.url, &token);
     let id = get(&s, "/api/scenes", &auth).json()[0]["id"].as_str().unwrap().to_owned();
-    let edit = |body: serde_json::Value| {
-        request(&s, "POST", &format!("/api/scenes/{id}/edits"), &auth, body.to_string().as_bytes())
-    };
     let first = get(&s, &format!("/api/scenes/{id}"), &auth).json();
     assert_eq!(first["revision"], 0);
 
-    // Another shipped travertine for the stone: its colour is restauro's own for that spectrum.
     let other = "travertine_particulate_fine__eco_travertine1";
-    let r =
-        edit(serde_json::json!({"edit": "material", "material": "travertine", "spectrum": other}));
+    let old = another_travertine_is_coloured_as_restauro_colours_it(&s, &id, &first, other);
+    refused_edits_make_no_revision(&s, &id);
+    let v2 = the_sun_after_sunset_is_on_its_days_path(&s, &id);
+    a_saved_view_is_kept_in_the_worlds_frame(&s, &id, &v2);
+    earlier_revisions_stay_and_one_is_made_the_latest(&s, &id, &old, other);
+    a_snapshot_of_revision_1_belongs_to_the_same_scene(&s, &id, &first);
+
+    // Restarted on the same store: every revision is there.
+    let addr = c.url.strip_prefix("http://").unwrap().to_owned();
+    drop(c);
+    let c = Coordinator::start(d, &data, &addr, &["--studio-listen", "127.0.0.1:0"]);
+    let s = c.studio.clone().unwrap();
+    let list = get(&s, &format!("/api/scenes/{id}/revisions"), &auth).json();
+    assert_eq!(list.as_array().unwrap().len(), 5, "{list}");
+    let v1 = get(&s, &format!("/api/scenes/{id}?revision=1"), &auth).json();
+    assert_eq!(material(&v1, "travertine")["states"][0]["spectrum"], other);
+    a_note_is_kept_in_the_worlds_frame_its_links_checked(&s, &id);
+    revisions_download_as_scene_folders(&s, &id, other);
+}
+
+/// Another shipped travertine (`other`) for the stone: its colour is restauro's own for that
+/// spectrum, and no longer that of revision 0 (`first`). The colour the stone had.
+fn another_travertine_is_coloured_as_restauro_colours_it(
+    s: &str,
+    id: &str,
+    first: &serde_json::Value,
+    other: &str,
+) -> serde_json::Value {
+    let r = edit_scene(
+        s,
+        id,
+        &serde_json::json!({"edit": "material", "material": "travertine", "spectrum": other}),
+    );
     assert_eq!(r.status, 200, "{}", r.text());
     let v1 = r.json();
     assert_eq!(v1["revision"], 1);
@@ -421,10 +489,14 @@ fn edits_make_revisions_checked_as_scene_files_and_kept_across_a_restart() {
         let got = stone["colour_linear_srgb"][k].as_f64().unwrap();
         assert!((got - want).abs() < 1e-3, "channel {k}: {got} vs {want}");
     }
-    let old = material(&first, "travertine")["colour_linear_srgb"].clone();
+    let old = material(first, "travertine")["colour_linear_srgb"].clone();
     assert_ne!(stone["colour_linear_srgb"], old, "the preview's colour changed");
+    old
+}
 
-    // Refusals, in the words `scene check` uses; none makes a revision.
+/// Refusals, in the words `scene check` uses; none makes a revision.
+fn refused_edits_make_no_revision(s: &str, id: &str) {
+    let auth = [("Authorization", BEARER)];
     for (body, status, words) in [
         (
             serde_json::json!({"edit": "material", "material": "travertin", "roughness": 0.2}),
@@ -454,14 +526,14 @@ fn edits_make_revisions_checked_as_scene_files_and_kept_across_a_restart() {
         (serde_json::json!({"edit": "delete-view", "name": "portal"}), 400, "view"),
         (serde_json::json!({"edit": "sun", "latitude_deg": "north"}), 400, "latitude_deg"),
     ] {
-        let r = edit(body.clone());
+        let r = edit_scene(s, id, &body);
         assert_eq!(r.status, status, "{body}: {}", r.text());
         assert!(error_of(&r).contains(words), "{body}: {}", error_of(&r));
     }
-    let r = request(&s, "POST", &format!("/api/scenes/{}/edits", "0".repeat(64)), &auth, b"{}");
+    let r = request(s, "POST", &format!("/api/scenes/{}/edits", "0".repeat(64)), &auth, b"{}");
     assert_eq!(r.status, 400, "{}", r.text());
     let r = request(
-        &s,
+        s,
         "POST",
         &format!("/api/scenes/{}/edits", "0".repeat(64)),
         &auth,
@@ -469,21 +541,28 @@ fn edits_make_revisions_checked_as_scene_files_and_kept_across_a_restart() {
     );
     assert_eq!(r.status, 404, "{}", r.text());
     assert_eq!(
-        get(&s, &format!("/api/scenes/{id}/revisions"), &auth).json().as_array().unwrap().len(),
+        get(s, &format!("/api/scenes/{id}/revisions"), &auth).json().as_array().unwrap().len(),
         2
     );
+}
 
-    // The sun at 17:00 on 21 December at the theatre: after sunset. Its path that day peaks
-    // at the solstice's noon altitude, 90° − 45.74° − 23.44° = 20.8° (plus refraction).
-    let r =
-        edit(serde_json::json!({"edit": "sun", "latitude_deg": 45.7371, "longitude_deg": 7.3228,
-        "datetime": "2026-12-21T17:00:00+01:00"}));
+/// The sun at 17:00 on 21 December at the theatre: after sunset. Its path that day peaks
+/// at the solstice's noon altitude, 90° − 45.74° − 23.44° = 20.8° (plus refraction). The view
+/// of revision 2.
+fn the_sun_after_sunset_is_on_its_days_path(s: &str, id: &str) -> serde_json::Value {
+    let auth = [("Authorization", BEARER)];
+    let r = edit_scene(
+        s,
+        id,
+        &serde_json::json!({"edit": "sun", "latitude_deg": 45.7371, "longitude_deg": 7.3228,
+        "datetime": "2026-12-21T17:00:00+01:00"}),
+    );
     assert_eq!(r.status, 200, "{}", r.text());
     let v2 = r.json();
     let sun = &v2["sun"];
     assert_eq!(sun["site"]["datetime"], "2026-12-21T17:00:00+01:00");
     let path = get(
-        &s,
+        s,
         "/api/sun-path?latitude_deg=45.7371&longitude_deg=7.3228&date=2026-12-21&utc_offset=%2B01:00",
         &auth,
     );
@@ -501,44 +580,62 @@ fn edits_make_revisions_checked_as_scene_files_and_kept_across_a_restart() {
         points.iter().map(|p| p["elevation_deg"].as_f64().unwrap()).fold(f64::MIN, f64::max);
     assert!((highest - 20.8).abs() < 0.3, "noon altitude {highest}");
     let r = get(
-        &s,
+        s,
         "/api/sun-path?latitude_deg=100&longitude_deg=7&date=2026-12-21&utc_offset=%2B01:00",
         &auth,
     );
     assert_eq!(r.status, 400);
     assert!(error_of(&r).contains("latitude_deg"), "{}", error_of(&r));
+    v2
+}
 
-    // A view saved in the preview's frame (Y up, offset removed) is kept in the world's.
+/// A view saved in the preview's frame (Y up, offset removed; `v2` gives the offset) is kept
+/// in the world's.
+fn a_saved_view_is_kept_in_the_worlds_frame(s: &str, id: &str, v2: &serde_json::Value) {
+    let auth = [("Authorization", BEARER)];
     let offset: Vec<f64> = serde_json::from_value(v2["offset_m"].clone()).unwrap();
-    let r = edit(serde_json::json!({"edit": "save-view", "view": {"name": "portal",
-        "position": [1.0, 1.6, 8.0], "target": [1.0, 3.0, 0.0], "up": [0.0, 1.0, 0.0]}}));
+    let r = edit_scene(
+        s,
+        id,
+        &serde_json::json!({"edit": "save-view", "view": {"name": "portal",
+        "position": [1.0, 1.6, 8.0], "target": [1.0, 3.0, 0.0], "up": [0.0, 1.0, 0.0]}}),
+    );
     assert_eq!(r.status, 200, "{}", r.text());
     let shown = r.json()["views"][0]["position"].clone();
     for (k, want) in [1.0, 1.6, 8.0].iter().enumerate() {
         assert!((shown[k].as_f64().unwrap() - want).abs() < 1e-9, "{shown}");
     }
-    let manifest = get(&s, &format!("/api/scenes/{id}/scene.json"), &auth).json();
+    let manifest = get(s, &format!("/api/scenes/{id}/scene.json"), &auth).json();
     let kept = &manifest["views"][0];
     let want = [1.0 + offset[0], -8.0 + offset[1], 1.6 + offset[2]];
     for (k, want) in want.iter().enumerate() {
         assert!((kept["position"][k].as_f64().unwrap() - want).abs() < 1e-9, "{kept}");
     }
     assert_eq!(kept["up"], serde_json::json!([0.0, 0.0, 1.0]));
+}
 
-    // Earlier revisions stay as they were; one is made the latest again as a new revision.
-    let zero = get(&s, &format!("/api/scenes/{id}?revision=0"), &auth).json();
-    assert_eq!(material(&zero, "travertine")["colour_linear_srgb"], old);
-    let r = get(&s, &format!("/api/scenes/{id}?revision=9"), &auth);
+/// Earlier revisions stay as they were (revision 0's stone coloured `old`); one is made the
+/// latest again as a new revision, and the summaries say so (the first naming `other`).
+fn earlier_revisions_stay_and_one_is_made_the_latest(
+    s: &str,
+    id: &str,
+    old: &serde_json::Value,
+    other: &str,
+) {
+    let auth = [("Authorization", BEARER)];
+    let zero = get(s, &format!("/api/scenes/{id}?revision=0"), &auth).json();
+    assert_eq!(&material(&zero, "travertine")["colour_linear_srgb"], old);
+    let r = get(s, &format!("/api/scenes/{id}?revision=9"), &auth);
     assert_eq!(r.status, 400);
     assert!(error_of(&r).contains("has no revision 9; its latest is 3"), "{}", error_of(&r));
-    let r = get(&s, &format!("/api/scenes/{id}?revision=last"), &auth);
+    let r = get(s, &format!("/api/scenes/{id}?revision=last"), &auth);
     assert!(error_of(&r).contains("`last` is not a revision number"), "{}", error_of(&r));
-    let r = request(&s, "POST", &format!("/api/scenes/{id}/revert"), &auth, br#"{"revision": 0}"#);
+    let r = request(s, "POST", &format!("/api/scenes/{id}/revert"), &auth, br#"{"revision": 0}"#);
     assert_eq!(r.status, 200, "{}", r.text());
     assert_eq!(r.json()["revision"], 4);
-    let at = |n: u32| get(&s, &format!("/api/scenes/{id}/scene.json?revision={n}"), &auth).text();
+    let at = |n: u32| get(s, &format!("/api/scenes/{id}/scene.json?revision={n}"), &auth).text();
     assert_eq!(at(4), at(0), "revision 4 is revision 0 again");
-    let summaries: Vec<String> = get(&s, &format!("/api/scenes/{id}/revisions"), &auth)
+    let summaries: Vec<String> = get(s, &format!("/api/scenes/{id}/revisions"), &auth)
         .json()
         .as_array()
         .unwrap()
@@ -550,8 +647,15 @@ fn edits_make_revisions_checked_as_scene_files_and_kept_across_a_restart() {
         summaries[1].contains(other) && summaries[4].contains("back to revision 0"),
         "{summaries:?}"
     );
+}
 
-    // A snapshot of revision 1 belongs to the same scene.
+/// A snapshot of revision 1, from revision 0's (`first`) camera, belongs to the same scene.
+fn a_snapshot_of_revision_1_belongs_to_the_same_scene(
+    s: &str,
+    id: &str,
+    first: &serde_json::Value,
+) {
+    let auth = [("Authorization", BEARER)];
     let camera = &first["camera"];
     let body = serde_json::json!({
         "camera": {"position": camera["position"], "target": camera["target"], "up": camera["up"],
@@ -560,40 +664,34 @@ fn edits_make_revisions_checked_as_scene_files_and_kept_across_a_restart() {
         "revision": 1
     });
     let r = request(
-        &s,
+        s,
         "POST",
         &format!("/api/scenes/{id}/snapshots"),
         &auth,
         body.to_string().as_bytes(),
     );
     assert_eq!(r.status, 200, "{}", r.text());
-    let scenes = get(&s, "/api/scenes", &auth).json();
+    let scenes = get(s, "/api/scenes", &auth).json();
     assert_eq!(scenes.as_array().unwrap().len(), 1, "{scenes}");
     assert_eq!((scenes[0]["jobs"].as_u64(), scenes[0]["revision"].as_u64()), (Some(2), Some(4)));
+}
 
-    // Restarted on the same store: every revision is there.
-    let addr = c.url.strip_prefix("http://").unwrap().to_owned();
-    drop(c);
-    let c = Coordinator::start(d, &data, &addr, &["--studio-listen", "127.0.0.1:0"]);
-    let s = c.studio.clone().unwrap();
-    let list = get(&s, &format!("/api/scenes/{id}/revisions"), &auth).json();
-    assert_eq!(list.as_array().unwrap().len(), 5, "{list}");
-    let v1 = get(&s, &format!("/api/scenes/{id}?revision=1"), &auth).json();
-    assert_eq!(material(&v1, "travertine")["states"][0]["spectrum"], other);
-    // A note pinned in the preview's frame is kept in the world's, its links checked.
+/// A note pinned in the preview's frame is kept in the world's, its links checked; a note
+/// deleted by a title misspelt is refused with the title meant.
+fn a_note_is_kept_in_the_worlds_frame_its_links_checked(s: &str, id: &str) {
+    let auth = [("Authorization", BEARER)];
     let note = |links: serde_json::Value| {
         let body = serde_json::json!({"edit": "save-annotation", "annotation": {
             "title": "crack", "text": "2 mm", "position": [1.0, 2.0, 3.0], "part": "facade/travertine",
             "links": links, "pose": {"position": [1.0, 1.6, 9.0], "target": [1.0, 2.0, 3.0], "up": [0.0, 1.0, 0.0]}}});
-        let path = format!("/api/scenes/{id}/edits");
-        request(&s, "POST", &path, &auth, body.to_string().as_bytes())
+        edit_scene(s, id, &body)
     };
     let r = note(serde_json::json!(["javascript:alert(1)"]));
     assert_eq!(r.status, 400, "{}", r.text());
     assert!(error_of(&r).contains("annotations[0].links[0]"), "{}", error_of(&r));
     let r = note(serde_json::json!(["https://example.org/a.pdf"]));
     assert_eq!((r.status, r.json()["revision"].as_u64()), (200, Some(5)), "{}", r.text());
-    let manifest = get(&s, &format!("/api/scenes/{id}/scene.json"), &auth).json();
+    let manifest = get(s, &format!("/api/scenes/{id}/scene.json"), &auth).json();
     let kept = &manifest["annotations"][0];
     let offset: Vec<f64> = serde_json::from_value(r.json()["offset_m"].clone()).unwrap();
     let want = [1.0 + offset[0], -3.0 + offset[1], 2.0 + offset[2]];
@@ -602,16 +700,20 @@ fn edits_make_revisions_checked_as_scene_files_and_kept_across_a_restart() {
     }
     assert_eq!(kept["pose"]["up"], serde_json::json!([0.0, 0.0, 1.0]));
     let r = request(
-        &s,
+        s,
         "POST",
         &format!("/api/scenes/{id}/edits"),
         &auth,
         br#"{"edit": "delete-annotation", "title": "crak"}"#,
     );
     assert!(error_of(&r).contains("did you mean `crack`"), "{}", error_of(&r));
+}
 
-    // Any revision downloads as a scene folder; one that does not exist is refused.
-    let r = get(&s, &format!("/api/scenes/{id}/download?revision=2"), &auth);
+/// Any revision downloads as a scene folder; one that does not exist is refused. The shipped
+/// spectrum `other` is in the studio's library.
+fn revisions_download_as_scene_folders(s: &str, id: &str, other: &str) {
+    let auth = [("Authorization", BEARER)];
+    let r = get(s, &format!("/api/scenes/{id}/download?revision=2"), &auth);
     assert_eq!((r.status, r.header("content-type")), (200, Some("application/x-tar")));
     let mut archive = tar::Archive::new(std::io::Cursor::new(r.body));
     let names: Vec<String> = archive
@@ -621,9 +723,9 @@ fn edits_make_revisions_checked_as_scene_files_and_kept_across_a_restart() {
         .collect();
     assert_eq!(names[0], "aosta-revision-2/scene.toml", "{names:?}");
     assert!(names.iter().any(|n| n.starts_with("aosta-revision-2/files/") && n.ends_with(".obj")));
-    let r = get(&s, &format!("/api/scenes/{id}/download?revision=9"), &auth);
+    let r = get(s, &format!("/api/scenes/{id}/download?revision=9"), &auth);
     assert_eq!(r.status, 400);
-    let library = get(&s, "/api/spectra", &auth).json();
+    let library = get(s, "/api/spectra", &auth).json();
     let shipped = library.as_array().unwrap().iter().find(|x| x["name"] == other).unwrap();
     assert_eq!(shipped["reflectance"].as_array().unwrap().len(), 81);
     assert!(shipped["material"].as_str().unwrap().contains("travertine"), "{shipped}");
@@ -725,38 +827,7 @@ fn lights_and_photometric_files_are_checked_as_the_scene_file_is() {
     let d = dir.path();
     let (_c, s, id) = studio_with_scene(d);
     let auth = [("Authorization", BEARER)];
-    let upload = |name: &str, bytes: &[u8]| {
-        let path = format!("/api/scenes/{id}/photometry?name={name}");
-        request(&s, "POST", &path, &auth, bytes)
-    };
-    let ldt = std::fs::read(
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../scene/tests/data/photometric/ldt_isym1_absolute.ldt"),
-    )
-    .unwrap();
-    for (name, bytes, words) in [
-        ("lamp.txt", &ldt[..], "ending in .ies or .ldt"),
-        ("../lamp.ldt", &ldt[..], "ending in .ies"),
-        ("lamp.ies", b"not a photometric file".as_slice(), "lamp.ies"),
-        ("lamp.ldt", &vec![b'1'; (1 << 20) + 1][..], "at most 1048576"),
-    ] {
-        let r = upload(name, bytes);
-        assert_eq!(r.status, 400, "{name}: {}", r.text());
-        assert!(error_of(&r).contains(words), "{name}: {}", error_of(&r));
-    }
-    let r = request(
-        &s,
-        "POST",
-        &format!("/api/scenes/{}/photometry?name=a.ldt", "0".repeat(64)),
-        &auth,
-        &ldt,
-    );
-    assert_eq!(r.status, 404, "{}", r.text());
-    let r = upload("wallwasher.ldt", &ldt);
-    assert_eq!(r.status, 200, "{}", r.text());
-    let file = r.json();
-    let reference = file["reference"].as_str().unwrap().to_owned();
-    assert!(reference.starts_with("blake3:") && reference.ends_with(".ldt"), "{file}");
+    let (file, reference) = upload_the_photometric_file(&s, &id);
 
     let edit = |body: serde_json::Value| {
         request(&s, "POST", &format!("/api/scenes/{id}/edits"), &auth, body.to_string().as_bytes())
@@ -840,6 +911,46 @@ fn lights_and_photometric_files_are_checked_as_the_scene_file_is() {
         let got = lights[0]["white_linear_srgb"][k].as_f64().unwrap();
         assert!((got - a[k]).abs() < 5e-3, "{lights}");
     }
+}
+
+/// A photometric file read and kept: refused, naming it, when it is not one (or is too large,
+/// or is sent to a scene that does not exist). The file's figures as the studio reads them,
+/// and the reference it is kept by.
+fn upload_the_photometric_file(s: &str, id: &str) -> (serde_json::Value, String) {
+    let auth = [("Authorization", BEARER)];
+    let upload = |name: &str, bytes: &[u8]| {
+        let path = format!("/api/scenes/{id}/photometry?name={name}");
+        request(s, "POST", &path, &auth, bytes)
+    };
+    let ldt = std::fs::read(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../scene/tests/data/photometric/ldt_isym1_absolute.ldt"),
+    )
+    .unwrap();
+    for (name, bytes, words) in [
+        ("lamp.txt", &ldt[..], "ending in .ies or .ldt"),
+        ("../lamp.ldt", &ldt[..], "ending in .ies"),
+        ("lamp.ies", b"not a photometric file".as_slice(), "lamp.ies"),
+        ("lamp.ldt", &vec![b'1'; (1 << 20) + 1][..], "at most 1048576"),
+    ] {
+        let r = upload(name, bytes);
+        assert_eq!(r.status, 400, "{name}: {}", r.text());
+        assert!(error_of(&r).contains(words), "{name}: {}", error_of(&r));
+    }
+    let r = request(
+        s,
+        "POST",
+        &format!("/api/scenes/{}/photometry?name=a.ldt", "0".repeat(64)),
+        &auth,
+        &ldt,
+    );
+    assert_eq!(r.status, 404, "{}", r.text());
+    let r = upload("wallwasher.ldt", &ldt);
+    assert_eq!(r.status, 200, "{}", r.text());
+    let file = r.json();
+    let reference = file["reference"].as_str().unwrap().to_owned();
+    assert!(reference.starts_with("blake3:") && reference.ends_with(".ldt"), "{file}");
+    (file, reference)
 }
 
 /// A measured reflectance sent as CSV: read as `[spectra]` files are (refusals name the file and

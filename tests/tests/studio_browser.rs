@@ -39,9 +39,33 @@ fn a_restorer_signs_in_follows_a_render_and_sees_its_image() {
     let _workers =
         [Worker::start(d, &c.url, "local-1", &[]), Worker::start(d, &c.url, "local-2", &[])];
     let mut b = Browser::launch(1280, 720);
+    sign_in_refused_then_accepted(&mut b, &studio);
 
-    // Without a session the page asks for the token.
-    b.goto(&studio);
+    // A render sent from the command line appears, progresses and ends done.
+    let scene = aosta_scene(d, 320, 180);
+    let token = d.join("client.token");
+    let id = submit(&scene, &["--spp", "2", "--tile", "32"], &c.url, &token);
+    let row = format!("document.querySelector('#jobs tr[data-job=\"{id}\"]')");
+    b.wait_for("the job's row", &row);
+    b.wait_for("the job to finish", &format!("{row}.children[1].textContent === 'done'"));
+    let o =
+        client(&["fetch", &id, "--out", d.join("fetched-first").to_str().unwrap()], &c.url, &token);
+    assert!(o.status.success(), "{}", text(&o));
+    let progress = b.eval(&format!("{row}.children[2].textContent"));
+    assert_eq!(progress, " 60/60 tiles", "{progress}");
+    the_model_fills_the_view_below_the_sky(&mut b);
+    the_clicked_stone_is_coloured_as_restauro_colours_it(&mut b, &scene);
+    a_snapshot_is_the_cli_render_bit_for_bit(&mut b, &c, d, &token, &id);
+    the_page_shows_the_png_the_farm_wrote(&mut b, &c, d, &token, &id);
+    // `?` lists the keyboard shortcuts.
+    b.press("?");
+    b.wait_for("the shortcuts", "document.getElementById('shortcuts').open");
+}
+
+/// Without a session the page asks for the token; a wrong token is refused, in the server's
+/// words; the right one opens the studio, where the farm's two workers are listed, live.
+fn sign_in_refused_then_accepted(b: &mut Browser, studio: &str) {
+    b.goto(studio);
     b.wait_for("the sign-in dialog", "document.getElementById('sign-in').open");
     b.screenshot(&shots().join("01-sign-in.png"));
     // A wrong token is refused, in the server's words.
@@ -65,21 +89,11 @@ fn a_restorer_signs_in_follows_a_render_and_sees_its_image() {
     b.wait_for("the live status", "document.getElementById('connection').textContent === 'live'");
     assert_eq!(b.eval("document.getElementById('no-jobs').hidden"), false);
     b.screenshot(&shots().join("03-farm.png"));
+}
 
-    // A render sent from the command line appears, progresses and ends done.
-    let scene = aosta_scene(d, 320, 180);
-    let token = d.join("client.token");
-    let id = submit(&scene, &["--spp", "2", "--tile", "32"], &c.url, &token);
-    let row = format!("document.querySelector('#jobs tr[data-job=\"{id}\"]')");
-    b.wait_for("the job's row", &row);
-    b.wait_for("the job to finish", &format!("{row}.children[1].textContent === 'done'"));
-    let o =
-        client(&["fetch", &id, "--out", d.join("fetched-first").to_str().unwrap()], &c.url, &token);
-    assert!(o.status.success(), "{}", text(&o));
-    let progress = b.eval(&format!("{row}.children[2].textContent"));
-    assert_eq!(progress, " 60/60 tiles", "{progress}");
-    // Its scene is listed and drawn in real time from the scene's camera: the model fills the
-    // middle of the view, the sky is above it.
+/// The rendered scene is listed and drawn in real time from the scene's camera: the model
+/// fills the middle of the view, the sky is above it.
+fn the_model_fills_the_view_below_the_sky(b: &mut Browser) {
     b.wait_for("the scene in the picker", "document.getElementById('scene-picker').selectedOptions[0].textContent.startsWith('aosta')");
     b.wait_for("the model", "document.getElementById('view').dataset.scene");
     let shot = b.screenshot(&shots().join("04-scene.png"));
@@ -97,8 +111,12 @@ fn a_restorer_signs_in_follows_a_render_and_sees_its_image() {
         })
         .count();
     assert!(model > 400, "the model covers only {model} of 1600 samples of the view");
+}
 
-    // A click on the facade names what is there and what it is made of.
+/// A click on the facade names what is there and what it is made of; its base state's
+/// L*a*b* under the sky's light alone (CIE daylight at 12 000 K in the `scene`) is the one
+/// `restauro color` gives for the spectrum the scene binds it to.
+fn the_clicked_stone_is_coloured_as_restauro_colours_it(b: &mut Browser, scene: &str) {
     b.click("#view");
     b.wait_for("the material panel", "!document.getElementById('material').hidden");
     let facts = b.eval(
@@ -115,9 +133,7 @@ fn a_restorer_signs_in_follows_a_render_and_sees_its_image() {
     assert_eq!(fact("Object").as_deref(), Some("facade"), "{facts}");
     let stone = fact("Material").unwrap();
     assert!(["travertine", "puddinga", "mortar"].contains(&stone.as_str()), "{facts}");
-    // Its base state's L*a*b* under the sky's light alone (CIE daylight at 12 000 K in this
-    // scene) is the one `restauro color` gives for the spectrum the scene binds it to.
-    let toml: toml::Table = toml::from_str(&std::fs::read_to_string(&scene).unwrap()).unwrap();
+    let toml: toml::Table = toml::from_str(&std::fs::read_to_string(scene).unwrap()).unwrap();
     let alias = toml["materials"][stone.as_str()]["reflectance"].as_str().unwrap().to_owned();
     let library = toml["spectra"][alias.as_str()].as_str().unwrap().to_owned();
     b.eval(
@@ -137,13 +153,22 @@ fn a_restorer_signs_in_follows_a_render_and_sees_its_image() {
     }
     assert_eq!(
         b.eval("document.querySelectorAll('#material svg.spectrum polyline').length"),
-        row_count(&mut b)
+        row_count(b)
     );
     b.screenshot(&shots().join("05-material.png"));
+}
 
-    // A snapshot of the view as it stands (the scene's camera) renders on the farm and is shown
-    // when done: the image the command line rendered of the scene, bit for bit (the camera's trip
-    // through the preview's coordinates is exact).
+/// A snapshot of the view as it stands (the scene's camera) renders on the farm and is shown
+/// when done: the image the command line rendered of the scene (job `id`, fetched to
+/// `d/fetched-first`), bit for bit (the camera's trip through the preview's coordinates is
+/// exact).
+fn a_snapshot_is_the_cli_render_bit_for_bit(
+    b: &mut Browser,
+    c: &Coordinator,
+    d: &std::path::Path,
+    token: &std::path::Path,
+    id: &str,
+) {
     b.eval("document.getElementById('snap-spp').value = 2");
     assert_eq!(b.eval("document.getElementById('snap-width').value"), "320");
     assert_eq!(
@@ -160,7 +185,7 @@ fn a_restorer_signs_in_follows_a_render_and_sees_its_image() {
     );
     b.screenshot(&shots().join("06-snapshot-taken.png"));
     let taken = d.join("taken");
-    let o = client(&["fetch", &snap, "--out", taken.to_str().unwrap()], &c.url, &token);
+    let o = client(&["fetch", &snap, "--out", taken.to_str().unwrap()], &c.url, token);
     assert!(o.status.success(), "{}", text(&o));
     let exr = |dir: &std::path::Path| {
         restauro_image::image_files::read_exr(
@@ -174,6 +199,17 @@ fn a_restorer_signs_in_follows_a_render_and_sees_its_image() {
     assert_eq!(a.len(), r.len());
     let differing = a.iter().zip(&r).filter(|(p, q)| p != q).count();
     assert_eq!(differing, 0, "{differing} of {} pixels differ from the CLI render", a.len());
+}
+
+/// Job `id`'s image opened in the page is the PNG the farm wrote: the same mean colour, read
+/// back from the image the page decoded. Then, as seen: the Retinex image.
+fn the_page_shows_the_png_the_farm_wrote(
+    b: &mut Browser,
+    c: &Coordinator,
+    d: &std::path::Path,
+    token: &std::path::Path,
+    id: &str,
+) {
     b.click(&format!("#jobs tr[data-job=\"{id}\"] button"));
     b.wait_for(
         "the image",
@@ -191,7 +227,7 @@ fn a_restorer_signs_in_follows_a_render_and_sees_its_image() {
          return s.map(v => v / (c.width * c.height)); })()",
     );
     let out = d.join("fetched");
-    let o = client(&["fetch", &id, "--out", out.to_str().unwrap()], &c.url, &token);
+    let o = client(&["fetch", id, "--out", out.to_str().unwrap()], &c.url, token);
     assert!(o.status.success(), "{}", text(&o));
     let expected = png_mean(&std::fs::read(out.join("aosta.png")).unwrap());
     for k in 0..3 {
@@ -208,9 +244,6 @@ fn a_restorer_signs_in_follows_a_render_and_sees_its_image() {
     );
     assert_eq!(b.eval("document.getElementById('as-seen').getAttribute('aria-pressed')"), "true");
     b.screenshot(&shots().join("08-as-seen.png"));
-    // `?` lists the keyboard shortcuts.
-    b.press("?");
-    b.wait_for("the shortcuts", "document.getElementById('shortcuts').open");
 }
 
 /// The states listed in the material panel, as the number of rows.
@@ -226,6 +259,13 @@ fn pixels_in(shot: &[u8], rect: [f64; 4]) -> Vec<[u8; 3]> {
         .flat_map(|py| (x..x + w).map(move |px| (py, px)))
         .map(|(py, px)| rgb[py * width + px])
         .collect()
+}
+
+/// Moves the comparison's slider to `v` (100: all A, 0: all B).
+fn slide(b: &mut Browser, v: u32) {
+    b.eval(&format!(
+        "(() => {{ const s = document.getElementById('compare-slider'); s.value = {v}; s.dispatchEvent(new Event('input')); }})()"
+    ));
 }
 
 /// The mean absolute difference of two pictures of one size, 0–255.
@@ -285,11 +325,6 @@ fn a_restorer_compares_two_hypotheses_on_the_slider_and_the_delta_e_layer() {
     b.eval("document.getElementById('compare-stage').scrollIntoView({ block: 'center' })");
     let rect = b.rect("#compare-img-a");
     assert_eq!((rect[2], rect[3]), (160.0, 90.0), "shown at its own size");
-    let slide = |b: &mut Browser, v: u32| {
-        b.eval(&format!(
-            "(() => {{ const s = document.getElementById('compare-slider'); s.value = {v}; s.dispatchEvent(new Event('input')); }})()"
-        ));
-    };
     slide(&mut b, 100);
     let shown = pixels_in(&b.screenshot(&shots().join("21-compare-all-a.png")), rect);
     assert!(difference(&shown, &a_png) < 0.5, "slider at A: {}", difference(&shown, &a_png));
@@ -299,9 +334,21 @@ fn a_restorer_compares_two_hypotheses_on_the_slider_and_the_delta_e_layer() {
     slide(&mut b, 50);
     b.screenshot(&shots().join("23-compare-half.png"));
 
-    // The ΔE00 layer in place of B: the server's map, its scale and its numbers.
+    the_delta_e_layer_is_the_servers_map(&mut b, c, &found, &cleaned, rect);
+    one_stop_brighter_then_in_false_colour(&mut b, c, &found, &a_png);
+}
+
+/// The ΔE00 layer in place of B (jobs `found` and `cleaned`), over `rect` of the page: the
+/// server's map, its scale and its numbers.
+fn the_delta_e_layer_is_the_servers_map(
+    b: &mut Browser,
+    c: &Coordinator,
+    found: &str,
+    cleaned: &str,
+    rect: [f64; 4],
+) {
     b.click("#compare-delta");
-    slide(&mut b, 0);
+    slide(b, 0);
     let shown = pixels_in(&b.screenshot(&shots().join("24-compare-delta-e.png")), rect);
     let auth = [("Authorization", "Bearer client-token-for-tests")];
     let server = restauro_tests::http::request(
@@ -329,41 +376,6 @@ fn a_restorer_compares_two_hypotheses_on_the_slider_and_the_delta_e_layer() {
         "[...document.querySelectorAll('#compare-scale text')].map(t => t.textContent).pop()",
     );
     assert_eq!(label, format!("{top} ΔE00"), "the scale's top");
-
-    // One snapshot shown one stop brighter: the server's picture at half the automatic white,
-    // as the page shows it; then in false colour, with its scale in cd/m².
-    b.click(&format!("#jobs tr[data-job=\"{found}\"] button"));
-    b.wait_for("the snapshot's luminances", "document.getElementById('fc-max').value !== ''");
-    b.eval("(() => { const e = document.getElementById('exposure-ev'); e.value = 1; e.dispatchEvent(new Event('input')); })()");
-    b.wait_for(
-        "one stop brighter",
-        "(() => { const i = document.getElementById('result-image'); return i.src.includes('display.png') && i.complete && i.naturalWidth === 160; })()",
-    );
-    assert_eq!(b.eval("document.getElementById('exposure-shown').textContent"), "+1 EV");
-    let src = b.eval("new URL(document.getElementById('result-image').src).pathname + new URL(document.getElementById('result-image').src).search");
-    b.eval("document.getElementById('result-image').scrollIntoView({ block: 'center' })");
-    // (Inside its 1-px border.)
-    let [x, y, w, h] = b.rect("#result-image");
-    let rect = [x + 1.0, y + 1.0, w - 2.0, h - 2.0];
-    let shown = pixels_in(&b.screenshot(&shots().join("25-one-stop-brighter.png")), rect);
-    let served = restauro_tests::http::request(
-        c.studio.as_deref().unwrap(),
-        "GET",
-        src.as_str().unwrap(),
-        &auth,
-        b"",
-    );
-    assert!(difference(&shown, &png_rgb(&served.body).0) < 0.5, "the page shows another picture");
-    assert!(difference(&shown, &a_png) > 2.0, "no brighter than the farm's PNG");
-    b.click("#false-colour");
-    b.wait_for(
-        "false colour",
-        "(() => { const i = document.getElementById('result-image'); return i.src.includes('luminance.png') && i.complete && i.naturalWidth === 160; })()",
-    );
-    let unit =
-        b.eval("[...document.querySelectorAll('#fc-scale text')].map(t => t.textContent).pop()");
-    assert_eq!(unit, "cd/m²");
-    b.screenshot(&shots().join("26-false-colour.png"));
 }
 
 /// A snapshot paints into the view as the farm renders it: while it runs, the picture over the
@@ -428,6 +440,50 @@ fn a_snapshot_paints_into_the_view_tile_by_tile() {
         "document.getElementById('painting').hidden && !document.getElementById('result').hidden",
     );
     assert_eq!(b.eval("document.getElementById('painting-progress').hidden"), true);
+}
+
+/// One snapshot (job `found`) shown one stop brighter: the server's picture at half the
+/// automatic white, as the page shows it (brighter than the farm's PNG, `a_png`); then in
+/// false colour, with its scale in cd/m².
+fn one_stop_brighter_then_in_false_colour(
+    b: &mut Browser,
+    c: &Coordinator,
+    found: &str,
+    a_png: &[[u8; 3]],
+) {
+    let auth = [("Authorization", "Bearer client-token-for-tests")];
+    b.click(&format!("#jobs tr[data-job=\"{found}\"] button"));
+    b.wait_for("the snapshot's luminances", "document.getElementById('fc-max').value !== ''");
+    b.eval("(() => { const e = document.getElementById('exposure-ev'); e.value = 1; e.dispatchEvent(new Event('input')); })()");
+    b.wait_for(
+        "one stop brighter",
+        "(() => { const i = document.getElementById('result-image'); return i.src.includes('display.png') && i.complete && i.naturalWidth === 160; })()",
+    );
+    assert_eq!(b.eval("document.getElementById('exposure-shown').textContent"), "+1 EV");
+    let src = b.eval("new URL(document.getElementById('result-image').src).pathname + new URL(document.getElementById('result-image').src).search");
+    b.eval("document.getElementById('result-image').scrollIntoView({ block: 'center' })");
+    // (Inside its 1-px border.)
+    let [x, y, w, h] = b.rect("#result-image");
+    let rect = [x + 1.0, y + 1.0, w - 2.0, h - 2.0];
+    let shown = pixels_in(&b.screenshot(&shots().join("25-one-stop-brighter.png")), rect);
+    let served = restauro_tests::http::request(
+        c.studio.as_deref().unwrap(),
+        "GET",
+        src.as_str().unwrap(),
+        &auth,
+        b"",
+    );
+    assert!(difference(&shown, &png_rgb(&served.body).0) < 0.5, "the page shows another picture");
+    assert!(difference(&shown, a_png) > 2.0, "no brighter than the farm's PNG");
+    b.click("#false-colour");
+    b.wait_for(
+        "false colour",
+        "(() => { const i = document.getElementById('result-image'); return i.src.includes('luminance.png') && i.complete && i.naturalWidth === 160; })()",
+    );
+    let unit =
+        b.eval("[...document.querySelectorAll('#fc-scale text')].map(t => t.textContent).pop()");
+    assert_eq!(unit, "cd/m²");
+    b.screenshot(&shots().join("26-false-colour.png"));
 }
 
 /// A scene folder opened from the page: a `.tar` of it chosen in the dialog is sent, checked and

@@ -25,9 +25,8 @@ pub struct Bundle {
 /// Bundle the scene file at `path` with the files of its folder; files named by URL are
 /// refused (restauro-assets's `bundle_scene` fetches them, and reads archives too).
 pub fn bundle_folder(path: &Path, limits: &Limits) -> Result<Bundle> {
-    let scene = crate::load::read_scene_file(path, limits)?;
-    crate::pins::check_pins(path, &scene.pins)?;
-    bundle_files(scene, &crate::assets::FolderAssets::new(path, limits.max_file_bytes)?, limits)
+    let (scene, assets) = crate::load::open_folder(path, limits)?;
+    bundle_files(scene, &assets, limits)
 }
 
 /// Bundle `scene` with the files `assets` holds (a folder, whose URLs are fetched once; see

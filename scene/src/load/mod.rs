@@ -31,7 +31,9 @@ use std::path::PathBuf;
 pub use self::camera::ResolvedCamera;
 pub use self::lights::ResolvedLight;
 pub use self::objects::LoadedObject;
-pub use self::scene_text::{MAX_TOML_NESTING, load_folder, parse_scene, read_scene_file};
+pub use self::scene_text::{
+    MAX_TOML_NESTING, load_folder, open_folder, parse_scene, read_scene_file,
+};
 pub use self::spectra::DEFAULT_SKY_SPECTRUM;
 pub use crate::limits::{
     Limits, MAX_COORDINATE_M, MAX_ILLUMINANCE_LUX, MAX_INTENSITY_CD, MAX_MAP_CLASSES,

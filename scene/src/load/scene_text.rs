@@ -132,10 +132,17 @@ fn plain_message(message: &str) -> String {
 /// Load and check the scene file at `path` with the files of its folder; files named by URL
 /// are refused (restauro-assets's `load_scene` fetches them, and reads archives too).
 pub fn load_folder(path: &Path, limits: &Limits) -> Result<LoadedScene> {
+    let (file, assets) = open_folder(path, limits)?;
+    load(file, &assets, limits)
+}
+
+/// The scene file at `path` and the files of its folder, as [`load_folder`] and
+/// [`crate::bundle::bundle_folder`] read them: the file parsed, its files named by URL refused
+/// ([`crate::pins::check_pins`]).
+pub fn open_folder(path: &Path, limits: &Limits) -> Result<(SceneFile, FolderAssets)> {
     let file = read_scene_file(path, limits)?;
     crate::pins::check_pins(path, &file.pins)?;
-    let assets = FolderAssets::new(path, limits.max_file_bytes)?;
-    load(file, &assets, limits)
+    Ok((file, FolderAssets::new(path, limits.max_file_bytes)?))
 }
 
 /// Read and parse the scene file at `path`: a regular file (not a FIFO or a device, which would

@@ -33,6 +33,7 @@ use restauro_demo::report::{
 };
 use restauro_image::image_files::read_exr;
 use restauro_proto as pb;
+use restauro_proto::job_status::{JobState, JobStatus};
 use restauro_scene::job::{JobName, JobSpec};
 use restauro_scene::load::{Limits, LoadedScene};
 use restauro_scene::plan::RenderOptions;
@@ -170,7 +171,7 @@ async fn render_all(
     bar.set_message("fetch");
     let mut finished = Vec::new();
     for ((job, (status, render_s)), plan) in jobs.iter().zip(statuses).zip(&submitted) {
-        if status.state != pb::JobState::Done as i32 {
+        if status.state != JobState::Done {
             bail!(
                 "the demo's render {} ended without results: {}",
                 job.key,
@@ -186,7 +187,7 @@ async fn render_all(
 }
 
 /// Uploads each job's scene and submits it; returns their first statuses, in the jobs' order.
-async fn submit_all(client: &mut Client, jobs: &[Job]) -> Result<Vec<pb::JobStatus>> {
+async fn submit_all(client: &mut Client, jobs: &[Job]) -> Result<Vec<JobStatus>> {
     let mut submitted = Vec::new();
     // Falling priorities: the renders run one after another (equal priorities would share the
     // workers), so each one's time is its own.
@@ -216,7 +217,7 @@ async fn submit_all(client: &mut Client, jobs: &[Job]) -> Result<Vec<pb::JobStat
 fn render_record(
     out: &Path,
     job: &Job,
-    plan: &pb::JobStatus,
+    plan: &JobStatus,
     render_s: f64,
     files: &[PathBuf],
 ) -> Result<RenderRecord> {
@@ -242,31 +243,31 @@ fn render_record(
 /// its first tile to its end.
 async fn watch_all(
     client: &Client,
-    submitted: &[pb::JobStatus],
+    submitted: &[JobStatus],
     bar: &ProgressBar,
-) -> Result<Vec<(pb::JobStatus, f64)>> {
+) -> Result<Vec<(JobStatus, f64)>> {
     let (tx, mut rx) = tokio::sync::mpsc::unbounded_channel();
     let mut tasks = tokio::task::JoinSet::new();
     for (index, job) in submitted.iter().enumerate() {
-        let (mut client, tx, id) = (client.clone(), tx.clone(), job.job_id.clone());
+        let (mut client, tx, id) = (client.clone(), tx.clone(), job.id.clone());
         tasks.spawn(async move {
             let mut stream = client
-                .watch_job(pb::JobRef { job_id: id.clone() })
+                .watch_job(pb::JobRef { job_id: id.to_string() })
                 .await
                 .map_err(|s| cluster::refused(&format!("watching job {id}"), s))?
                 .into_inner();
-            while let Some(status) = stream
+            while let Some(sent) = stream
                 .message()
                 .await
                 .map_err(|s| cluster::refused(&format!("watching {id}"), s))?
             {
-                let _ = tx.send((index, status));
+                let _ = tx.send((index, cluster::read_status(sent)?));
             }
             anyhow::Ok(())
         });
     }
     drop(tx);
-    let mut last: Vec<Option<pb::JobStatus>> = vec![None; submitted.len()];
+    let mut last: Vec<Option<JobStatus>> = vec![None; submitted.len()];
     let mut first_tile: Vec<Option<Instant>> = vec![None; submitted.len()];
     let mut ended: Vec<Option<f64>> = vec![None; submitted.len()];
     let mut done = vec![0u64; submitted.len()];
@@ -276,8 +277,7 @@ async fn watch_all(
         if (status.tiles_done > 0 || status.tiles_leased > 0) && first_tile[index].is_none() {
             first_tile[index] = Some(Instant::now());
         }
-        let state = pb::JobState::try_from(status.state).unwrap_or(pb::JobState::Unspecified);
-        if matches!(state, pb::JobState::Done | pb::JobState::Failed | pb::JobState::Cancelled) {
+        if status.state.is_final() {
             let from = first_tile[index].unwrap_or_else(Instant::now);
             ended[index].get_or_insert(from.elapsed().as_secs_f64());
             last[index] = Some(status);
@@ -294,7 +294,7 @@ async fn watch_all(
         .enumerate()
         .map(|(i, (status, s))| match (status, s) {
             (Some(status), Some(s)) => Ok((status, s)),
-            _ => Err(anyhow!("the coordinator stopped reporting job {}", submitted[i].job_id)),
+            _ => Err(anyhow!("the coordinator stopped reporting job {}", submitted[i].id)),
         })
         .collect()
 }

@@ -6,6 +6,7 @@ use crate::render::{checked_bundle, job_spec};
 use anyhow::{Result, bail};
 use restauro_cluster::{self as cluster, Client, refused};
 use restauro_proto as pb;
+use restauro_proto::job_status::JobState;
 use std::fmt::Write as _;
 
 fn with_client<T>(c: &ConnectArgs, f: impl AsyncFnOnce(&mut Client) -> Result<T>) -> Result<T> {
@@ -16,14 +17,6 @@ fn with_client<T>(c: &ConnectArgs, f: impl AsyncFnOnce(&mut Client) -> Result<T>
                 .await?;
         f(&mut client).await
     })
-}
-
-fn state_name(state: i32) -> String {
-    pb::JobState::try_from(state)
-        .unwrap_or(pb::JobState::Unspecified)
-        .as_str_name()
-        .trim_start_matches("JOB_STATE_")
-        .to_lowercase()
 }
 
 pub fn submit(args: &SubmitArgs) -> Result<String> {
@@ -45,14 +38,14 @@ pub fn submit(args: &SubmitArgs) -> Result<String> {
         cluster::upload(client, &bundle).await?;
         let what = format!("submitting {}", r.scene.display());
         let status = cluster::submit(client, &bundle, &spec, &what).await?;
-        let mut s = format!("{}\n", status.job_id);
+        let mut s = format!("{}\n", status.id);
         if args.wait {
-            let status = cluster::watch(client, &status.job_id, true).await?;
-            if status.state != pb::JobState::Done as i32 {
+            let status = cluster::watch(client, &status.id, true).await?;
+            if status.state != JobState::Done {
                 bail!(
                     "job {} is {}: {}",
-                    status.job_id,
-                    state_name(status.state),
+                    status.id,
+                    status.state.wire_name(),
                     shown(&status.error)
                 );
             }
@@ -69,8 +62,8 @@ pub fn watch(args: &JobArgs) -> Result<String> {
         let status = cluster::watch(client, &args.job, true).await?;
         Ok(format!(
             "job {} {}{}\n",
-            status.job_id,
-            state_name(status.state),
+            status.id,
+            status.state.wire_name(),
             if status.error.is_empty() {
                 String::new()
             } else {
@@ -87,9 +80,10 @@ pub fn fetch(args: &FetchArgs) -> Result<String> {
             .await
             .map_err(|s| refused("listing jobs", s))?
             .into_inner();
-        let Some(status) = list.jobs.into_iter().find(|j| j.job_id == args.job) else {
+        let Some(sent) = list.jobs.into_iter().find(|j| j.job_id == args.job) else {
             bail!("no job {} on this coordinator", args.job);
         };
+        let status = cluster::read_status(sent)?;
         let mut s = String::new();
         for f in cluster::fetch(client, &status, &args.out).await? {
             let _ = writeln!(s, "wrote {}", f.display());
@@ -100,12 +94,13 @@ pub fn fetch(args: &FetchArgs) -> Result<String> {
 
 pub fn cancel(args: &JobArgs) -> Result<String> {
     with_client(&args.connect, async |client| {
-        let status = client
+        let sent = client
             .cancel_job(pb::JobRef { job_id: args.job.clone() })
             .await
             .map_err(|s| refused(&format!("cancelling {}", args.job), s))?
             .into_inner();
-        Ok(format!("job {} {}\n", status.job_id, state_name(status.state)))
+        let status = cluster::read_status(sent)?;
+        Ok(format!("job {} {}\n", status.id, status.state.wire_name()))
     })
 }
 
@@ -120,12 +115,13 @@ pub fn jobs(args: &ConnectArgs) -> Result<String> {
         if !list.problem.is_empty() {
             let _ = writeln!(s, "coordinator: {}", shown(&list.problem));
         }
-        for j in list.jobs {
+        for sent in list.jobs {
+            let j = cluster::read_status(sent)?;
             let _ = writeln!(
                 s,
                 "{} {:<16} {:>5}/{:<5} tiles  {:>8.1} s  {}{}",
-                j.job_id,
-                state_name(j.state),
+                j.id,
+                j.state.wire_name(),
                 j.tiles_done,
                 j.tiles_total,
                 j.elapsed_s,

@@ -13,6 +13,7 @@ use restauro_image::framebuffer::{Framebuffer, TileExtras, TileLayout, encode_ti
 use restauro_image::image_files::{MAX_PIXELS, read_exr};
 use restauro_image::results::{ResultOptions, write_grid_results, write_results};
 use restauro_proto as pb;
+use restauro_proto::job_status::JobState;
 use restauro_render::prepared::PreparedScene;
 use restauro_render::tile::render_tile;
 use restauro_scene::bundle::Bundle;
@@ -112,11 +113,11 @@ pub fn run(args: &RenderArgs) -> Result<String> {
         cluster::upload(&mut client, &bundle).await?;
         let what = format!("submitting {}", args.scene.display());
         let submitted = cluster::submit(&mut client, &bundle, &spec, &what).await?;
-        let status = cluster::watch(&mut client, &submitted.job_id, true).await?;
-        if status.state != pb::JobState::Done as i32 {
+        let status = cluster::watch(&mut client, &submitted.id, true).await?;
+        if status.state != JobState::Done {
             anyhow::bail!(
                 "job {} ended without results: {}",
-                status.job_id,
+                status.id,
                 crate::connect::shown(&status.error)
             );
         }
@@ -143,7 +144,7 @@ pub fn run(args: &RenderArgs) -> Result<String> {
         plan.samples_per_pixel,
         status.tiles_total,
         started.elapsed().as_secs_f64(),
-        status.job_id
+        status.id
     );
     for f in files {
         let _ = writeln!(s, "wrote {}", f.display());

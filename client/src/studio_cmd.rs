@@ -25,7 +25,7 @@ async fn open_scene(cluster: &LocalCluster, scene: &Path) -> Result<String> {
     cluster::upload(&mut client, &bundle).await?;
     let what = format!("opening {}", scene.display());
     let submitted = cluster::submit(&mut client, &bundle, &spec, &what).await?;
-    Ok(submitted.job_id)
+    Ok(submitted.id.to_string())
 }
 
 pub fn run(args: &StudioArgs) -> Result<String> {

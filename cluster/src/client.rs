@@ -1,9 +1,11 @@
 //! Talking to a coordinator as a client: upload a scene's assets, submit, watch with a progress
-//! bar, fetch the results.
+//! bar, fetch the results. A job's status is read from the wire once, here ([`read_status`]):
+//! what these calls return is the domain's [`JobStatus`].
 
 use crate::error::{ClusterError, io_doing, io_error};
 use crate::progress::Progress;
 use restauro_image::atomic_file;
+use restauro_proto::job_status::JobStatus;
 use restauro_proto::pb::render_client::RenderClient;
 use restauro_proto::{self as pb, CHUNK_BYTES, Credentials, PROTOCOL_VERSION};
 use restauro_scene::bundle::Bundle;
@@ -106,19 +108,19 @@ pub async fn submit(
     bundle: &Bundle,
     spec: &restauro_scene::job::JobSpec,
     what: &str,
-) -> Result<pb::JobStatus> {
-    Ok(client
+) -> Result<JobStatus> {
+    let sent = client
         .submit_job(pb::convert::submit_request(bundle.canonical_json(), spec))
         .await
         .map_err(|s| refused(what, s))?
-        .into_inner())
+        .into_inner();
+    read_status(sent)
 }
 
-fn is_final(status: &pb::JobStatus) -> bool {
-    matches!(
-        pb::JobState::try_from(status.state),
-        Ok(pb::JobState::Done | pb::JobState::Failed | pb::JobState::Cancelled)
-    )
+/// A job status as the coordinator sent it, read once: one that holds no job (an id that is no
+/// UUID, an unknown or unspecified state) is refused, naming the field.
+pub fn read_status(sent: pb::JobStatus) -> Result<JobStatus> {
+    Ok(JobStatus::try_from(sent)?)
 }
 
 /// Whether a watch that failed with `status` may simply be opened again: the coordinator
@@ -141,7 +143,7 @@ const WATCH_PATIENCE: Duration = Duration::from_secs(600);
 /// Follows a job to its end, with a progress bar (tiles done, rate, ETA) when asked. A
 /// coordinator that restarts meanwhile is waited for (with back-off, up to ten minutes) and the
 /// watch resumes where it was.
-pub async fn watch(client: &mut Client, job_id: &str, show: bool) -> Result<pb::JobStatus> {
+pub async fn watch(client: &mut Client, job_id: &str, show: bool) -> Result<JobStatus> {
     let bar = if show {
         Progress::new(
             "render",
@@ -163,16 +165,15 @@ pub async fn watch(client: &mut Client, job_id: &str, show: bool) -> Result<pb::
                 let mut stream = stream.into_inner();
                 loop {
                     match stream.message().await {
-                        Ok(Some(status)) => {
+                        Ok(Some(sent)) => {
+                            let status =
+                                read_status(sent).inspect_err(|_| bar.finish_and_clear())?;
                             unreachable_since = None;
                             backoff = Duration::from_millis(100);
                             bar.set_length(u64::from(status.tiles_total));
                             bar.set_position(u64::from(status.tiles_done));
-                            let state = pb::JobState::try_from(status.state)
-                                .unwrap_or(pb::JobState::Unspecified);
-                            let name = state.as_str_name().trim_start_matches("JOB_STATE_");
-                            bar.set_message(name.to_lowercase());
-                            if is_final(&status) {
+                            bar.set_message(status.state.wire_name());
+                            if status.state.is_final() {
                                 bar.finish_and_clear();
                                 return Ok(status);
                             }
@@ -202,7 +203,7 @@ pub async fn watch(client: &mut Client, job_id: &str, show: bool) -> Result<pb::
 
 /// Downloads every result file of a finished job into `out`, each written atomically; the
 /// files travel at once, each written as soon as it has arrived.
-pub async fn fetch(client: &Client, status: &pb::JobStatus, out: &Path) -> Result<Vec<PathBuf>> {
+pub async fn fetch(client: &Client, status: &JobStatus, out: &Path) -> Result<Vec<PathBuf>> {
     std::fs::create_dir_all(out).map_err(io_error("creating", out))?;
     let mut downloads = tokio::task::JoinSet::new();
     for (index, name) in status.results.iter().enumerate() {
@@ -211,7 +212,7 @@ pub async fn fetch(client: &Client, status: &pb::JobStatus, out: &Path) -> Resul
             return Err(ClusterError::ResultName(name.clone()));
         }
         let (mut client, name, path) = (client.clone(), name.clone(), out.join(name));
-        let job_id = status.job_id.clone();
+        let job_id = status.id.clone();
         downloads.spawn(async move {
             let data = fetch_file(&mut client, &job_id, &name).await?;
             let written = path.clone();
@@ -276,4 +277,26 @@ async fn fetch_once(
         data.extend_from_slice(&chunk.data);
     }
     Ok((data, announced))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_status_that_holds_no_job_is_refused_naming_its_field() {
+        let done = pb::JobState::Done as i32;
+        let sent = pb::JobStatus { job_id: "j".into(), state: done, ..Default::default() };
+        assert_eq!(
+            read_status(sent).unwrap_err().to_string(),
+            "the coordinator sent a job status this client cannot read: job_id: `j` is not a job id"
+        );
+        let id = "0b7e7c5c-7b1e-4a43-9c8e-4f3f5f2b9a10";
+        let unknown = pb::JobStatus { job_id: id.into(), state: 99, ..Default::default() };
+        assert!(
+            read_status(unknown).unwrap_err().to_string().ends_with("state: 99 is not a job state")
+        );
+        let good = pb::JobStatus { job_id: id.into(), state: done, ..Default::default() };
+        assert_eq!(read_status(good).unwrap().id.as_str(), id);
+    }
 }

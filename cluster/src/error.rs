@@ -23,6 +23,10 @@ pub enum ClusterError {
     ResultName(String),
     #[error("{what}: the coordinator sent {sent} of the {announced} bytes it announced")]
     ShortFile { what: String, sent: usize, announced: u64 },
+    /// A job status the coordinator sent that does not hold a job (an id that is no UUID, a
+    /// state this client does not know): the field and what is wrong with it.
+    #[error("the coordinator sent a job status this client cannot read: {0}")]
+    Status(#[from] restauro_proto::convert::WireError),
     #[error("the embedded coordinator did not start: {0}")]
     CoordinatorDidNotStart(String),
     /// A file or process of this machine: what was being done, and the system's reason.

@@ -8,6 +8,8 @@ pub mod error;
 pub mod local;
 pub mod progress;
 
-pub use client::{Client, connect, connect_as, fetch, refused, runtime, submit, upload, watch};
+pub use client::{
+    Client, connect, connect_as, fetch, read_status, refused, runtime, submit, upload, watch,
+};
 pub use error::ClusterError;
 pub use local::LocalCluster;

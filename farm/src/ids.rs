@@ -1,80 +1,10 @@
 //! The identities the coordinator hands out: jobs, workers, and the secret that binds a worker
 //! to its registration.
 
-use serde::{Deserialize, Serialize};
-use std::borrow::Borrow;
 use std::fmt;
-use std::ops::Deref;
-use std::sync::Arc;
 
-/// A job's id: a UUID chosen by the coordinator. Cheap to clone (an `Arc<str>` inside), so a
-/// lease carries it without allocating.
-#[derive(Clone, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
-#[serde(from = "String", into = "String")]
-pub struct JobId(Arc<str>);
-
-impl JobId {
-    /// A new, random id.
-    pub fn random() -> Self {
-        Self::from(uuid::Uuid::new_v4().to_string())
-    }
-
-    pub fn as_str(&self) -> &str {
-        &self.0
-    }
-
-    /// A job id from a caller: the coordinator's ids are UUIDs, and nothing else names a job.
-    pub fn parse(text: &str) -> Result<Self, restauro_proto::convert::WireError> {
-        if uuid::Uuid::parse_str(text).is_err() {
-            let problem = format!("`{}` is not a job id", text.escape_debug());
-            return Err(restauro_proto::convert::WireError::new("job_id", problem));
-        }
-        Ok(JobId::from(text))
-    }
-}
-
-impl From<&str> for JobId {
-    fn from(s: &str) -> Self {
-        Self(Arc::from(s))
-    }
-}
-
-impl From<String> for JobId {
-    fn from(s: String) -> Self {
-        Self(Arc::from(s))
-    }
-}
-
-impl From<JobId> for String {
-    fn from(id: JobId) -> String {
-        id.0.to_string()
-    }
-}
-
-impl Deref for JobId {
-    type Target = str;
-    fn deref(&self) -> &str {
-        &self.0
-    }
-}
-
-impl Borrow<str> for JobId {
-    fn borrow(&self) -> &str {
-        &self.0
-    }
-}
-
-impl fmt::Display for JobId {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.0)
-    }
-}
-
-impl fmt::Debug for JobId {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        fmt::Debug::fmt(&*self.0, f)
-    }
-}
+/// A job's id lives with the wire types, which the command line shares.
+pub use restauro_proto::job_status::JobId;
 
 /// A worker's id, assigned at registration from 1 up and never reused within a run of the
 /// coordinator (64 bits: no run registers enough workers to wrap).

@@ -15,55 +15,13 @@
 //! resumed with all its tiles stored goes from queued straight to assembling.
 
 use crate::ids::JobId;
-use restauro_proto as pb;
-use restauro_proto::convert::WireError;
 use restauro_scene::job::JobSpec;
 use restauro_scene::plan::Plan;
 use serde::{Deserialize, Serialize};
-use std::fmt;
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum JobState {
-    Queued,
-    Running,
-    Assembling,
-    PostProcessing,
-    Done,
-    Failed,
-    Cancelled,
-}
-
-impl JobState {
-    pub fn is_final(self) -> bool {
-        matches!(self, JobState::Done | JobState::Failed | JobState::Cancelled)
-    }
-
-    /// Whether the diagram allows `self → to`.
-    fn allows(self, to: JobState) -> bool {
-        use JobState::*;
-        match (self, to) {
-            (Queued, Running) | (Queued | Running, Assembling) => true,
-            (Assembling, PostProcessing) | (PostProcessing, Done) => true,
-            (from, Failed | Cancelled) => !from.is_final(),
-            _ => false,
-        }
-    }
-}
-
-impl fmt::Display for JobState {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
-            JobState::Queued => "queued",
-            JobState::Running => "running",
-            JobState::Assembling => "assembling",
-            JobState::PostProcessing => "post-processing",
-            JobState::Done => "done",
-            JobState::Failed => "failed",
-            JobState::Cancelled => "cancelled",
-        })
-    }
-}
+/// The job's state and the status a client is sent live with the wire types, which the command
+/// line shares; the diagram above is [`JobState::allows`].
+pub use restauro_proto::job_status::{JobState, JobStatus};
 
 /// A lifecycle move the job's state does not allow (e.g. finishing a cancelled job).
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
@@ -246,125 +204,6 @@ impl JobRecord {
     }
 }
 
-/// A job as a client sees it, through either door: the studio sends it as JSON (its
-/// [`Serialize`], below), the gRPC services as `pb::JobStatus` (the `From`/`TryFrom` below).
-#[derive(Clone, Debug, PartialEq)]
-pub struct JobStatus {
-    pub id: JobId,
-    pub name: String,
-    pub state: JobState,
-    pub tiles_total: u32,
-    pub tiles_done: u32,
-    pub tiles_leased: u32,
-    pub tiles_requeued: u32,
-    pub error: String,
-    pub priority: i32,
-    pub width: u32,
-    pub height: u32,
-    pub elapsed_s: f64,
-    pub results: Vec<String>,
-}
-
-/// The studio's JSON of a job: every field, the id as a string, the state in words (`queued`,
-/// `running`, `assembling`, `post-processing`, `done`, `failed` or `cancelled`), and `finished`,
-/// whether the state is final (the page stops following the job then).
-impl Serialize for JobStatus {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        use serde::ser::SerializeStruct;
-        let mut out = s.serialize_struct("JobStatus", 14)?;
-        out.serialize_field("id", &self.id)?;
-        out.serialize_field("name", &self.name)?;
-        out.serialize_field("state", &self.state)?;
-        out.serialize_field("finished", &self.state.is_final())?;
-        out.serialize_field("tiles_total", &self.tiles_total)?;
-        out.serialize_field("tiles_done", &self.tiles_done)?;
-        out.serialize_field("tiles_leased", &self.tiles_leased)?;
-        out.serialize_field("tiles_requeued", &self.tiles_requeued)?;
-        out.serialize_field("error", &self.error)?;
-        out.serialize_field("priority", &self.priority)?;
-        out.serialize_field("width", &self.width)?;
-        out.serialize_field("height", &self.height)?;
-        out.serialize_field("elapsed_s", &self.elapsed_s)?;
-        out.serialize_field("results", &self.results)?;
-        out.end()
-    }
-}
-
-// The wire's job state and status: converted here, once, each way.
-
-impl From<JobState> for pb::JobState {
-    fn from(s: JobState) -> Self {
-        match s {
-            JobState::Queued => pb::JobState::Queued,
-            JobState::Running => pb::JobState::Running,
-            JobState::Assembling => pb::JobState::Assembling,
-            JobState::PostProcessing => pb::JobState::PostProcessing,
-            JobState::Done => pb::JobState::Done,
-            JobState::Failed => pb::JobState::Failed,
-            JobState::Cancelled => pb::JobState::Cancelled,
-        }
-    }
-}
-
-impl TryFrom<pb::JobState> for JobState {
-    type Error = WireError;
-    fn try_from(s: pb::JobState) -> std::result::Result<Self, WireError> {
-        Ok(match s {
-            pb::JobState::Queued => JobState::Queued,
-            pb::JobState::Running => JobState::Running,
-            pb::JobState::Assembling => JobState::Assembling,
-            pb::JobState::PostProcessing => JobState::PostProcessing,
-            pb::JobState::Done => JobState::Done,
-            pb::JobState::Failed => JobState::Failed,
-            pb::JobState::Cancelled => JobState::Cancelled,
-            pb::JobState::Unspecified => return Err(WireError::missing("state")),
-        })
-    }
-}
-
-impl From<JobStatus> for pb::JobStatus {
-    fn from(s: JobStatus) -> Self {
-        pb::JobStatus {
-            job_id: s.id.to_string(),
-            name: s.name,
-            state: pb::JobState::from(s.state) as i32,
-            tiles_total: s.tiles_total,
-            tiles_done: s.tiles_done,
-            tiles_leased: s.tiles_leased,
-            tiles_requeued: s.tiles_requeued,
-            error: s.error,
-            priority: s.priority,
-            width: s.width,
-            height: s.height,
-            elapsed_s: s.elapsed_s,
-            results: s.results,
-        }
-    }
-}
-
-impl TryFrom<pb::JobStatus> for JobStatus {
-    type Error = WireError;
-    fn try_from(s: pb::JobStatus) -> std::result::Result<Self, WireError> {
-        let state = pb::JobState::try_from(s.state)
-            .map_err(|_| WireError::new("state", format!("{} is not a job state", s.state)))?;
-        Ok(JobStatus {
-            id: JobId::parse(&s.job_id)?,
-            name: s.name,
-            state: JobState::try_from(state)?,
-            tiles_total: s.tiles_total,
-            tiles_done: s.tiles_done,
-            tiles_leased: s.tiles_leased,
-            tiles_requeued: s.tiles_requeued,
-            error: s.error,
-            priority: s.priority,
-            width: s.width,
-            height: s.height,
-            elapsed_s: s.elapsed_s,
-            results: s.results,
-        })
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -423,55 +262,6 @@ mod tests {
         assert!(r.finish(Vec::new()).is_err());
         r.begin_assembly().unwrap();
         assert!(!r.start(), "no way back to running");
-    }
-
-    fn status(state: JobState) -> JobStatus {
-        JobStatus {
-            id: JobId::from("0b7e7c5c-7b1e-4a43-9c8e-4f3f5f2b9a10"),
-            name: "aosta".into(),
-            state,
-            tiles_total: 4,
-            tiles_done: 2,
-            tiles_leased: 1,
-            tiles_requeued: 0,
-            error: String::new(),
-            priority: 3,
-            width: 64,
-            height: 48,
-            elapsed_s: 1.5,
-            results: vec!["aosta.exr".into()],
-        }
-    }
-
-    /// The studio's page reads these fields by name (studio/web/farm.js): the state in words,
-    /// and whether it is final.
-    #[test]
-    fn a_status_is_the_json_the_studio_page_reads() {
-        let json = serde_json::to_value(status(JobState::PostProcessing)).unwrap();
-        let keys: Vec<&str> = json.as_object().unwrap().keys().map(String::as_str).collect();
-        assert_eq!(keys.len(), 14, "{keys:?}");
-        assert_eq!(json["id"], "0b7e7c5c-7b1e-4a43-9c8e-4f3f5f2b9a10");
-        assert_eq!(
-            (json["state"].as_str(), json["finished"].as_bool()),
-            (Some("post-processing"), Some(false))
-        );
-        let done = serde_json::to_value(status(JobState::Cancelled)).unwrap();
-        assert_eq!(
-            (done["state"].as_str(), done["finished"].as_bool()),
-            (Some("cancelled"), Some(true))
-        );
-        assert_eq!(json["elapsed_s"], 1.5);
-        assert_eq!(json["results"][0], "aosta.exr");
-    }
-
-    #[test]
-    fn a_status_goes_over_the_wire_and_back_unchanged() {
-        for state in [JobState::Queued, JobState::PostProcessing, JobState::Done] {
-            let wire = pb::JobStatus::from(status(state));
-            assert_eq!(JobStatus::try_from(wire).unwrap(), status(state));
-        }
-        let unknown = pb::JobStatus { state: 99, ..pb::JobStatus::from(status(JobState::Done)) };
-        assert!(JobStatus::try_from(unknown).is_err());
     }
 
     #[test]

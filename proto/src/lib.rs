@@ -1,7 +1,8 @@
 //! restauro's wire types: `proto/restauro.proto` — the client-facing `Render` service and the
 //! worker-facing `Work` service — the code tonic/prost generate from it, and the one conversion
 //! of each wire type to its domain type and back ([`convert`]): a wire value is checked once, at
-//! the edge, and only domain types travel further.
+//! the edge, and only domain types travel further. A job's id, state and status, which both the
+//! coordinator and the command line hold, live here too ([`job_status`]), with their conversions.
 
 /// The protocol version spoken by this build. A worker or client of another version is refused.
 /// 3: a worker registers with its identity, to which its leases are bound.
@@ -26,6 +27,7 @@ pub const FILE_DESCRIPTOR_SET: &[u8] =
     include_bytes!(concat!(env!("OUT_DIR"), "/restauro_descriptor.bin"));
 
 pub mod convert;
+pub mod job_status;
 pub mod transport;
 
 /// Adds the protocol version and a bearer token to every outgoing request (clients and workers).

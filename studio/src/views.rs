@@ -1,6 +1,7 @@
 //! What the studio's JSON says of a worker: converted once, here, from the domain's type (the
 //! gRPC door converts the same type to its message in `grpc.rs`). A job needs no view: the
-//! farm's `JobStatus` is sent as it is (its `Serialize` is the page's JSON).
+//! `JobStatus` (restauro-proto's, as the farm keeps it) is sent as it is: its `Serialize` is the
+//! page's JSON.
 
 use restauro_farm::farm::WorkerStatus;
 use serde::Serialize;

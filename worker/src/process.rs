@@ -30,7 +30,7 @@ use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
-use tokio::sync::{oneshot, watch};
+use tokio::sync::{mpsc, oneshot, watch};
 use tonic::service::interceptor::InterceptedService;
 use tonic::transport::Channel;
 use tracing::{Instrument, debug, info, info_span, warn};
@@ -256,6 +256,8 @@ impl Worker {
         // restart it (and only it) may deliver what it rendered under the earlier run.
         let identity = identity();
         let mut reports = tokio::task::JoinSet::new();
+        // Sessions a delivery found the coordinator no longer knows (see [`report_slot`]).
+        let (unknown_tx, mut unknown_rx) = mpsc::unbounded_channel();
         'connection: loop {
             if self.stopping() {
                 return self.drain(&mut reports, None).await;
@@ -333,15 +335,20 @@ impl Worker {
                     let span = info_span!("tile", job = %lease.job_id, tile = lease.tile, attempt = lease.attempt);
                     match self.render(&mut client, &session, lease).instrument(span.clone()).await {
                         Ok(Some(report)) => {
-                            while reports.len() >= MAX_REPORTS_IN_FLIGHT {
-                                reports.join_next().await;
-                            }
                             let delivery = report.deliver(
                                 client.clone(),
                                 self.session.subscribe(),
+                                unknown_tx.clone(),
                                 self.metrics.clone(),
                             );
                             reports.spawn(delivery.instrument(span));
+                            if !report_slot(&mut reports, &mut unknown_rx, &session).await {
+                                info!(
+                                    "the coordinator no longer knows this worker; registering again"
+                                );
+                                self.unregistered(&heartbeat);
+                                continue 'connection;
+                            }
                         }
                         Ok(None) => {}
                         Err(e) => warn!("{}", restauro_proto::transport::error_chain(&e)),
@@ -655,6 +662,28 @@ const DELIVERY_PATIENCE: Duration = Duration::from_secs(600);
 /// How long a stopping worker waits for its results to be delivered.
 const DRAIN_PATIENCE: Duration = Duration::from_secs(120);
 
+/// Waits until fewer than [`MAX_REPORTS_IN_FLIGHT`] results are on their way; `false` when a
+/// delivery finds that the coordinator no longer knows `session` (it restarted). Those results
+/// wait for the worker to register again, which only its main loop does: waiting here for them
+/// to finish would hold both until the deliveries give up ([`DELIVERY_PATIENCE`]).
+async fn report_slot(
+    reports: &mut tokio::task::JoinSet<()>,
+    unknown: &mut mpsc::UnboundedReceiver<pb::WorkerSession>,
+    session: &pb::WorkerSession,
+) -> bool {
+    while reports.len() >= MAX_REPORTS_IN_FLIGHT {
+        tokio::select! {
+            _ = reports.join_next() => {}
+            Some(gone) = unknown.recv() => {
+                if &gone == session {
+                    return false;
+                }
+            }
+        }
+    }
+    true
+}
+
 /// A rendered tile on its way to the coordinator.
 struct Report {
     header: pb::TileHeader,
@@ -670,6 +699,7 @@ impl Report {
         self,
         mut client: Client,
         mut session: SessionWatch,
+        unknown: mpsc::UnboundedSender<pb::WorkerSession>,
         metrics: Arc<WorkerMetrics>,
     ) {
         let lease = self.header.lease.clone().unwrap_or_default();
@@ -696,8 +726,11 @@ impl Report {
             );
             match client.report_tile(tokio_stream::iter(messages)).await {
                 Ok(reply) if !reply.get_ref().known => {
-                    // This session is gone; the worker registers again, and this result goes
-                    // with the next session.
+                    // This session is gone; the worker registers again (told so, in case it is
+                    // waiting for this delivery), and this result goes with the next session.
+                    if let Some(gone) = &current {
+                        let _ = unknown.send(gone.clone());
+                    }
                     let _ =
                         tokio::time::timeout_at(give_up, session.wait_for(|s| *s != current)).await;
                 }
@@ -737,4 +770,59 @@ fn hostname() -> String {
             || format!("worker-{}", std::process::id()),
             |h| format!("{h}-{}", std::process::id()),
         )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn session(worker_id: u64) -> pb::WorkerSession {
+        pb::WorkerSession { worker_id, ..Default::default() }
+    }
+
+    /// `n` deliveries that never end, as results waiting for a registration do.
+    fn stuck_deliveries(n: usize) -> tokio::task::JoinSet<()> {
+        let mut reports = tokio::task::JoinSet::new();
+        for _ in 0..n {
+            reports.spawn(std::future::pending());
+        }
+        reports
+    }
+
+    #[tokio::test]
+    async fn a_full_set_of_deliveries_gives_way_when_the_coordinator_forgets_the_session() {
+        let (tx, mut rx) = mpsc::unbounded_channel();
+        let mut reports = stuck_deliveries(MAX_REPORTS_IN_FLIGHT);
+        // A session of an earlier registration is not this one: the wait goes on.
+        tx.send(session(1)).unwrap();
+        let waited = tokio::time::timeout(
+            Duration::from_millis(200),
+            report_slot(&mut reports, &mut rx, &session(2)),
+        )
+        .await;
+        assert!(waited.is_err(), "gave way for a session that is not the current one");
+        // This session is unknown to the coordinator: the worker must register again.
+        tx.send(session(2)).unwrap();
+        let waited = tokio::time::timeout(
+            Duration::from_secs(5),
+            report_slot(&mut reports, &mut rx, &session(2)),
+        )
+        .await;
+        assert_eq!(waited, Ok(false), "still waiting for deliveries that wait for it");
+    }
+
+    #[tokio::test]
+    async fn a_finished_delivery_frees_a_slot() {
+        let (_tx, mut rx) = mpsc::unbounded_channel();
+        // A full set, one of which ends.
+        let mut reports = stuck_deliveries(MAX_REPORTS_IN_FLIGHT - 1);
+        reports.spawn(async {});
+        let waited = tokio::time::timeout(
+            Duration::from_secs(5),
+            report_slot(&mut reports, &mut rx, &session(2)),
+        )
+        .await;
+        assert_eq!(waited, Ok(true));
+        assert!(reports.len() < MAX_REPORTS_IN_FLIGHT);
+    }
 }

@@ -34,6 +34,7 @@ const FILES: &[(&str, &str, &str)] = &[
     script!("luminaires.js"),
     script!("upload.js"),
     script!("colours.js"),
+    script!("panels.js"),
     script!("vendor/three/three.module.js"),
     script!("vendor/three/three.core.js"),
     script!("vendor/three/addons/controls/OrbitControls.js"),

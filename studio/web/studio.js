@@ -13,6 +13,7 @@ import * as variants from './variants.js';
 import * as painting from './painting.js';
 import * as luminaires from './luminaires.js';
 import * as upload from './upload.js';
+import * as panels from './panels.js';
 
 const $ = (id) => document.getElementById(id);
 let events = null;
@@ -77,7 +78,7 @@ async function open(id, revision) {
       viewer = new Viewer($('view'));
       // For the browser's console (and the tests): the view's camera and controls.
       window.studioViewer = viewer;
-      viewer.onPick = (p) => { picked = p; showMaterial(); };
+      viewer.onPick = (p) => { picked = p; panels.open(2, false); showMaterial(); };
       viewer.onNote = (title) => notes.open(title);
     }
     if (loadedGeometry !== id) {
@@ -290,7 +291,10 @@ function shortcuts() {
 }
 
 document.addEventListener('DOMContentLoaded', () => {
+  panels.init();
   farm.init({ show: (j) => show(j), error: showError });
+  // The snapshot closed: a later event about its job does not open it again.
+  $('result').addEventListener('close', () => { shown = null; });
   $('sign-in-form').addEventListener('submit', (e) => {
     e.preventDefault();
     signIn($('token').value);
@@ -357,12 +361,18 @@ document.addEventListener('DOMContentLoaded', () => {
   $('walk').addEventListener('click', () => toggleWalk());
   document.addEventListener('keydown', (e) => {
     if (e.target instanceof HTMLInputElement || e.target instanceof HTMLSelectElement) return;
+    if (e.target instanceof HTMLTextAreaElement || e.ctrlKey || e.metaKey || e.altKey) return;
     if (viewer && viewer.walker.active && viewer.walker.key(e, true)) { e.preventDefault(); return; }
     if (e.key === '?') shortcuts();
     if ((e.key === 'h' || e.key === 'H') && viewer && viewer.view) { viewer.home(); walking(false); }
     if (e.key === 'g' || e.key === 'G') toggleWalk();
     if ((e.key === 'v' || e.key === 'V') && viewer && viewer.view) variants.next();
-    if (e.key === 'Escape' && viewer && viewer.walker.active) toggleWalk();
+    if (e.key === 'p' || e.key === 'P') panels.showSidebar(!panels.sidebarOpen());
+    if (/^[1-6]$/.test(e.key) && panels.key(e.key)) e.preventDefault();
+    if (e.key === 'Escape') {
+      if (viewer && viewer.walker.active) toggleWalk();
+      else if (!document.querySelector('dialog[open]')) panels.closeFront();
+    }
   });
   document.addEventListener('keyup', (e) => { if (viewer) viewer.walker.key(e, false); });
   // `restauro studio` prints an address whose fragment carries the token: it is taken from

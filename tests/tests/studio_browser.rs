@@ -699,3 +699,164 @@ fn a_scans_photo_and_vertex_colours_show_in_the_view() {
     assert!(coloured > 3.0 * plain, "hue spread {coloured} with the colours, {plain} without");
     assert!(photo > 3.0 * plain, "hue spread {photo} with the photo, {plain} without");
 }
+
+/// The share of the window the view's canvas covers (its rectangle within the window's).
+fn view_share(b: &mut Browser) -> f64 {
+    let share = b.eval(
+        "(() => { const r = document.getElementById('view').getBoundingClientRect(); \
+         const w = Math.max(0, Math.min(r.right, innerWidth) - Math.max(r.left, 0)); \
+         const h = Math.max(0, Math.min(r.bottom, innerHeight) - Math.max(r.top, 0)); \
+         return w * h / (innerWidth * innerHeight); })()",
+    );
+    share.as_f64().unwrap()
+}
+
+/// Whether the page itself scrolls (in either direction).
+fn page_scrolls(b: &mut Browser) -> bool {
+    b.eval(
+        "(() => { const s = document.scrollingElement; \
+         return s.scrollHeight > innerHeight || s.scrollWidth > innerWidth; })()",
+    ) == serde_json::json!(true)
+}
+
+/// Waits until the view's renderer and camera follow the canvas's size on the page.
+fn view_follows_its_size(b: &mut Browser) {
+    b.wait_for(
+        "the renderer and camera to follow the canvas",
+        "(() => { const v = window.studioViewer, r = v.canvas.getBoundingClientRect(); \
+         const ratio = v.renderer.getPixelRatio(); \
+         return Math.abs(v.camera.aspect - r.width / r.height) < 1e-3 && \
+           Math.abs(v.canvas.width - Math.floor(r.width * ratio)) <= 1; })()",
+    );
+}
+
+/// The model in the whole window: at 1280 × 720 and at 1920 × 1080 the view covers most of the
+/// window with the panels beside it and all of it with them folded away (P), the page itself
+/// never scrolls, each panel's header folds and unfolds its body, a panel's key (1–6) brings
+/// it back into sight, and Esc closes what shows over the view.
+#[test]
+fn the_model_has_the_whole_window_and_the_panels_fold_beside_it() {
+    if !available("studio_browser") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // The scene is held as soon as it is sent: no worker is needed to open it.
+    let (c, page) = Coordinator::with_studio(d);
+    let scene = aosta_scene(d, 160, 90);
+    submit(&scene, &["--spp", "1"], &c.url, &d.join("client.token"));
+    let mut b = Browser::launch(1280, 720);
+    b.goto(&format!("{page}#token={CLIENT_TOKEN}"));
+    b.wait_for("the model", "document.getElementById('view').dataset.revision === '0'");
+    let heads: Vec<String> = serde_json::from_value(b.eval(
+        "[...document.querySelectorAll('#sidebar .panel-head button')].map(b => b.getAttribute('aria-controls'))",
+    ))
+    .unwrap();
+    assert_eq!(heads.len(), 6, "{heads:?}");
+    let listed = b.eval("document.getElementById('shortcuts').textContent");
+    for key in ["P", "1", "2", "3", "4", "5", "6"] {
+        let shown = b.eval(&format!(
+            "[...document.querySelectorAll('#shortcuts kbd')].some(k => k.textContent === '{key}')"
+        ));
+        assert_eq!(shown, true, "{key} is not among the shortcuts: {listed}");
+    }
+    let visible = |b: &mut Browser, id: &str| {
+        b.eval(&format!("document.getElementById('{id}').checkVisibility()")) == true
+    };
+    for (w, h) in [(1280u32, 720u32), (1920, 1080)] {
+        b.call(
+            "Emulation.setDeviceMetricsOverride",
+            serde_json::json!({ "width": w, "height": h, "deviceScaleFactor": 1, "mobile": false }),
+        );
+        b.wait_for("the window's size", &format!("innerWidth === {w} && innerHeight === {h}"));
+        view_follows_its_size(&mut b);
+        let open = view_share(&mut b);
+        assert!(
+            open >= 0.6,
+            "{w} × {h}: the view covers {:.0} % with the panels open",
+            open * 100.0
+        );
+        assert!(!page_scrolls(&mut b), "{w} × {h}: the page scrolls");
+        let sideways = "(() => { const p = document.getElementById('panels'); return p.scrollWidth > p.clientWidth; })()";
+        let wide = "(() => { const r = document.getElementById('panels').getBoundingClientRect().right; \
+                    return [...document.querySelectorAll('#panels *')].filter(e => e.getBoundingClientRect().right > r + 0.5) \
+                      .map(e => e.id || e.tagName).slice(0, 8); })()";
+        assert_eq!(
+            b.eval(sideways),
+            false,
+            "{w} × {h}: the panels are wider than the side bar: {}",
+            b.eval(wide)
+        );
+        b.screenshot(&shots().join(format!("50-window-{w}x{h}.png")));
+
+        // Each panel's header folds its body and unfolds it again.
+        for body in &heads {
+            let head = format!("#sidebar .panel-head button[aria-controls='{body}']");
+            let expanded =
+                format!("document.querySelector(\"{head}\").getAttribute('aria-expanded')");
+            assert_eq!(b.eval(&expanded), "true", "{body}");
+            assert!(visible(&mut b, body), "{body} is not shown");
+            b.click(&head);
+            assert_eq!(b.eval(&expanded), "false", "{body}");
+            assert!(!visible(&mut b, body), "{body} is still shown, folded");
+            assert!(!page_scrolls(&mut b), "{w} × {h}: the page scrolls, {body} folded");
+            b.click(&head);
+            assert_eq!(b.eval(&expanded), "true", "{body}");
+            assert!(visible(&mut b, body), "{body} is not shown again");
+        }
+
+        // P folds the side bar away: the view has the whole window; P again brings it back.
+        b.press("p");
+        b.wait_for("the side bar folded", "!document.getElementById('sidebar').checkVisibility()");
+        assert_eq!(
+            b.eval("document.getElementById('sidebar-toggle').getAttribute('aria-expanded')"),
+            "false"
+        );
+        view_follows_its_size(&mut b);
+        let folded = view_share(&mut b);
+        assert!(folded > 0.99, "{w} × {h}: the view covers {:.0} % folded", folded * 100.0);
+        assert!(!page_scrolls(&mut b), "{w} × {h}: the page scrolls, folded");
+        b.screenshot(&shots().join(format!("51-window-{w}x{h}-folded.png")));
+        b.press("p");
+        b.wait_for("the side bar back", "document.getElementById('sidebar').checkVisibility()");
+        view_follows_its_size(&mut b);
+        assert!((view_share(&mut b) - open).abs() < 1e-9, "{w} × {h}: not as it was");
+
+        // A panel's key, the side bar folded: the side bar opens, scrolled to that panel, its
+        // header focused; the key again folds it, and once more opens it.
+        b.press("p");
+        b.wait_for("the side bar folded", "!document.getElementById('sidebar').checkVisibility()");
+        b.press("6");
+        b.wait_for("the side bar back", "document.getElementById('sidebar').checkVisibility()");
+        let in_sight = b.eval(
+            "(() => { const p = document.getElementById('panels').getBoundingClientRect(), \
+             h = document.getElementById('farm').getBoundingClientRect(); \
+             return document.activeElement.getAttribute('aria-controls') === 'farm-body' && \
+               h.top >= p.top - 1 && h.top < p.bottom; })()",
+        );
+        assert_eq!(in_sight, true, "{w} × {h}: the farm is not in sight after its key");
+        b.press("6");
+        assert!(!visible(&mut b, "farm-body"), "{w} × {h}: 6 did not fold the farm");
+        b.press("6");
+        assert!(visible(&mut b, "farm-body"), "{w} × {h}: 6 did not open the farm");
+        b.screenshot(&shots().join(format!("52-window-{w}x{h}-farm.png")));
+        // The light panel, open but scrolled out of sight: its key brings it into sight.
+        b.press("3");
+        let light = "(() => { const p = document.getElementById('panels').getBoundingClientRect(), \
+                     h = document.getElementById('light-panel').getBoundingClientRect(); \
+                     return document.getElementById('light').checkVisibility() && h.top >= p.top - 1 && h.top < p.bottom; })()";
+        assert_eq!(b.eval(light), true, "{w} × {h}: 3 did not bring the light panel into sight");
+        b.screenshot(&shots().join(format!("53-window-{w}x{h}-light.png")));
+    }
+
+    // Esc closes what shows over the view, the one in front first.
+    b.eval("document.getElementById('compare-stage').hidden = false");
+    b.eval("document.getElementById('result').hidden = false");
+    b.press("Escape");
+    assert_eq!(
+        b.eval("[document.getElementById('result').hidden, document.getElementById('compare-stage').hidden]"),
+        serde_json::json!([true, false])
+    );
+    b.click("#compare-close");
+    assert_eq!(b.eval("document.getElementById('compare-stage').hidden"), true);
+}

@@ -287,8 +287,10 @@ fn snapshot_body(view: &serde_json::Value, plan: &LoadPlan) -> String {
             "position": c["position"], "target": c["target"], "up": c["up"],
             "vertical_fov_deg": c["vertical_fov_deg"]
         },
-        "width": plan.width, "height": plan.height,
-        "samples_per_pixel": plan.spp, "integrator": "whitted",
+        "render": {
+            "width": plan.width, "height": plan.height,
+            "samples_per_pixel": plan.spp, "integrator": "whitted",
+        },
     })
     .to_string()
 }

@@ -412,8 +412,11 @@ fn a_snapshot_paints_into_the_view_tile_by_tile() {
     // Per tile (the snapshot's tiles: 16 px for 160 × 90), how many of its pixels are opaque,
     // and the spread of the opaque pixels' green.
     let edge = restauro_scene::plan::auto_tile(160, 90) as usize;
-    let read = b.eval(&format!(
-        "(() => {{ const i = document.getElementById('painting'); const c = document.createElement('canvas'); \
+    // The picture is fetched again as tiles finish: read it when no fetch is under way (while
+    // one is, the image has no pixels to read).
+    let read_painting = format!(
+        "(() => {{ const i = document.getElementById('painting'); \
+         if (!i.complete || i.naturalWidth === 0) return null; const c = document.createElement('canvas'); \
          c.width = i.naturalWidth; c.height = i.naturalHeight; const g = c.getContext('2d'); g.drawImage(i, 0, 0); \
          const d = g.getImageData(0, 0, c.width, c.height).data; const tiles = {{}}; const greens = []; \
          for (let y = 0; y < c.height; y++) for (let x = 0; x < c.width; x++) {{ \
@@ -424,7 +427,15 @@ fn a_snapshot_paints_into_the_view_tile_by_tile() {
          const mean = greens.reduce((s, v) => s + v, 0) / greens.length; \
          const sd = Math.sqrt(greens.reduce((s, v) => s + (v - mean) ** 2, 0) / greens.length); \
          return [c.width, c.height, Object.values(tiles), sd]; }})()"
-    ));
+    );
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(30);
+    let read = loop {
+        let read = b.eval(&read_painting);
+        if !read.is_null() || std::time::Instant::now() > deadline {
+            break read;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    };
     assert_eq!((read[0].as_u64(), read[1].as_u64()), (Some(160), Some(90)), "{read}");
     let tiles = read[2].as_array().unwrap();
     assert_eq!(tiles.len(), 60);

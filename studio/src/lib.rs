@@ -7,6 +7,7 @@
 pub mod api;
 pub mod appearance;
 pub mod compare;
+pub mod demo_scene;
 pub mod display;
 pub mod edits;
 pub mod error;
@@ -104,6 +105,7 @@ fn router(studio: Arc<Studio>) -> Router {
                 .post(edits::open_folder)
                 .layer(axum::extract::DefaultBodyLimit::max(restauro_farm::farm::MAX_FOLDER_BYTES)),
         )
+        .route("/api/scenes/demo", post(demo_scene::open))
         .route("/api/scenes/{id}", get(api::scene))
         .route("/api/scenes/{id}/preview.glb", get(api::scene_glb))
         .route("/api/scenes/{id}/snapshots", post(api::take_snapshot))

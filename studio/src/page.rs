@@ -35,6 +35,7 @@ const FILES: &[(&str, &str, &str)] = &[
     script!("upload.js"),
     script!("colours.js"),
     script!("panels.js"),
+    script!("help.js"),
     script!("vendor/three/three.module.js"),
     script!("vendor/three/three.core.js"),
     script!("vendor/three/addons/controls/OrbitControls.js"),

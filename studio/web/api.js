@@ -9,7 +9,10 @@ export class ServerError extends Error {
 }
 
 export async function call(method, path, body) {
-  const init = { method, credentials: 'same-origin', headers: {} };
+  // Never from the browser's cache: the API's answers are the farm's state now. (Two identical
+  // requests at once otherwise wait on the cache's lock for the first one, tens of seconds in
+  // Chromium.)
+  const init = { method, credentials: 'same-origin', headers: {}, cache: 'no-store' };
   if (body instanceof ArrayBuffer) {
     init.headers['content-type'] = 'application/octet-stream';
     init.body = body;
@@ -37,6 +40,7 @@ export async function call(method, path, body) {
 export const signIn = (token) => call('POST', '/api/session', { token });
 export const signOut = () => call('DELETE', '/api/session');
 export const whoami = () => call('GET', '/api/whoami');
+export const openDemo = () => call('POST', '/api/scenes/demo');
 export const cancelJob = (id) => call('POST', `/api/jobs/${encodeURIComponent(id)}/cancel`);
 export const resultUrl = (id, name) =>
   `/api/jobs/${encodeURIComponent(id)}/results/${encodeURIComponent(name)}`;

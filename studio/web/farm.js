@@ -64,11 +64,21 @@ export function progressText(j) {
   return text;
 }
 
+// What each result file is, by how its name ends (the first that matches).
+const RESULT_KINDS = [
+  ['-retinex.exr', 'as seen (Retinex, adapted to its light), linear CIE XYZ'],
+  ['-retinex.png', 'as seen (Retinex, adapted to its light), sRGB'],
+  ['.exr', 'as rendered, linear CIE XYZ in cd/m²'],
+  ['.png', 'as rendered, sRGB at its exposure'],
+  ['.json', 'its figures'],
+];
+
 function button(text, label, onClick) {
   const b = document.createElement('button');
   b.type = 'button';
   b.textContent = text;
   b.setAttribute('aria-label', label);
+  b.title = label;
   b.addEventListener('click', onClick);
   return b;
 }
@@ -86,6 +96,7 @@ function renderJobs() {
       const a = document.createElement('a');
       a.href = resultUrl(j.id, name);
       a.textContent = name;
+      a.title = `${name}: ${RESULT_KINDS.find(([end]) => name.endsWith(end))?.[1] ?? 'a result file'} (${name.endsWith('.png') ? 'opens' : 'downloads'})`;
       if (!name.endsWith('.png')) a.download = name;
       results.append(a, ' ');
     }

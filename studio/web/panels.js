@@ -31,6 +31,7 @@ export function showSidebar(on) {
 // The panel under header button `b` open (true) or folded (false).
 function setPanel(b, open) {
   b.setAttribute('aria-expanded', String(open));
+  b.title = `${open ? 'Fold' : 'Open'} this panel (${b.dataset.key})`;
   $(b.getAttribute('aria-controls')).hidden = !open;
   remember();
 }
@@ -94,6 +95,7 @@ export function init() {
   let kept = null;
   try { kept = JSON.parse(localStorage.getItem(KEPT) || 'null'); } catch { kept = null; }
   for (const b of heads()) {
+    b.title = `Fold this panel (${b.dataset.key})`;
     b.addEventListener('click', () => setPanel(b, b.getAttribute('aria-expanded') !== 'true'));
     if (kept && kept.folded.includes(b.dataset.key)) setPanel(b, false);
   }

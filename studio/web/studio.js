@@ -14,6 +14,7 @@ import * as painting from './painting.js';
 import * as luminaires from './luminaires.js';
 import * as upload from './upload.js';
 import * as panels from './panels.js';
+import * as help from './help.js';
 
 const $ = (id) => document.getElementById(id);
 let events = null;
@@ -53,11 +54,14 @@ async function takeSnapshot() {
   }
 }
 
-// The scenes the coordinator holds, in the picker; the first is opened if none is.
-async function listScenes() {
+// The scenes the coordinator holds, in the picker; `preferred` (a scene just sent) is opened,
+// else the one open stays, else the latest is opened.
+async function listScenes(preferred) {
   const list = await api.scenes();
   const picker = $('scene-picker');
   const current = picker.value;
+  // A first visit: nothing to look at yet, so the page offers the demo's facade or a folder.
+  $('welcome').hidden = list.length > 0;
   if (list.length === 0) return;
   picker.replaceChildren(...list.map((s) => {
     const o = document.createElement('option');
@@ -65,7 +69,8 @@ async function listScenes() {
     o.textContent = `${s.name} (${s.jobs} ${s.jobs === 1 ? 'job' : 'jobs'})`;
     return o;
   }));
-  picker.value = list.some((s) => s.id === current) ? current : list[list.length - 1].id;
+  const keep = [preferred, current].find((id) => id && list.some((s) => s.id === id));
+  picker.value = keep ?? list[list.length - 1].id;
   if (picker.value !== openScene) await open(picker.value);
 }
 
@@ -152,6 +157,27 @@ function saveView() {
   applyEdit({ edit: 'save-view', view: { name, position, target, up, vertical_fov_deg } });
 }
 
+// The demo's facade, asked for on a first visit: opened as a folder sent from the page is.
+async function openDemo() {
+  $('open-demo').disabled = true;
+  $('welcome-status').textContent = 'writing the facade and sending it to the coordinator…';
+  try {
+    await opened(await api.openDemo());
+  } catch (e) {
+    showError(e);
+  } finally {
+    $('open-demo').disabled = false;
+    $('welcome-status').textContent = '';
+  }
+}
+
+// A scene folder taken (sent from the page, or the demo's): its preview job listed, the scene
+// opened in the view.
+async function opened({ job, scene }) {
+  farm.job(job);
+  await listScenes(scene);
+}
+
 function walking(on) {
   $('walk').setAttribute('aria-pressed', String(on));
   $('walk-hint').hidden = !on;
@@ -177,13 +203,46 @@ function status(text, live) {
   el.className = live ? 'live' : 'down';
 }
 
+// Where the person acted last, and when: an error that follows is shown there, in the server's
+// words, beside the row of controls (or the form) it came from; one with no such place (a click
+// in the view, the live events) shows over the view.
+let actedOn = null;
+let actedAt = 0;
+const ACTION_PATIENCE_MS = 120000;
+
+function noteAction(e) {
+  actedOn = e.submitter || e.target;
+  actedAt = performance.now();
+}
+
+// The message element beside the controls `el` belongs to, made the first time.
+function placeFor(el) {
+  if (!el || !el.closest || performance.now() - actedAt > ACTION_PATIENCE_MS) return null;
+  const host = el.closest('.actions, form, .fields, .choices, .overlay-head, .panel-body, dialog');
+  if (!host || !$('studio').contains(host)) return null;
+  let place = host.nextElementSibling;
+  if (!place || !place.classList.contains('action-problem')) {
+    place = document.createElement('p');
+    place.className = 'error action-problem';
+    place.setAttribute('role', 'alert');
+    host.after(place);
+  }
+  return place;
+}
+
+// The problem shown (or, with no text, every problem shown cleared).
 function problem(text) {
   $('problem').textContent = text || '';
   $('problem').hidden = !text;
+  if (!text) for (const p of document.querySelectorAll('.action-problem')) p.remove();
 }
 
 function showError(e) {
-  problem(e.message || String(e));
+  const text = e.message || String(e);
+  const place = placeFor(actedOn);
+  if (!place) return problem(text);
+  $('problem').hidden = true;
+  place.textContent = text;
 }
 
 async function askForToken(message) {
@@ -291,7 +350,9 @@ function shortcuts() {
 }
 
 document.addEventListener('DOMContentLoaded', () => {
+  for (const kind of ['click', 'change', 'submit']) document.addEventListener(kind, noteAction, true);
   panels.init();
+  help.init();
   farm.init({ show: (j) => show(j), error: showError });
   // The snapshot closed: a later event about its job does not open it again.
   $('result').addEventListener('close', () => { shown = null; });
@@ -322,15 +383,8 @@ document.addEventListener('DOMContentLoaded', () => {
   $('set-sun').addEventListener('click', () => viewer && viewer.view && applyEdit(light.edit()));
   light.init(showError);
   compare.init(showError);
-  upload.init({
-    error: showError,
-    opened: async ({ job, scene }) => {
-      farm.job(job);
-      await listScenes();
-      $('scene-picker').value = scene;
-      await open(scene);
-    },
-  });
+  upload.init({ error: showError, opened });
+  $('open-demo').addEventListener('click', openDemo);
   luminaires.init({
     edit: applyEdit,
     error: showError,
@@ -363,6 +417,8 @@ document.addEventListener('DOMContentLoaded', () => {
     if (e.target instanceof HTMLInputElement || e.target instanceof HTMLSelectElement) return;
     if (e.target instanceof HTMLTextAreaElement || e.ctrlKey || e.metaKey || e.altKey) return;
     if (viewer && viewer.walker.active && viewer.walker.key(e, true)) { e.preventDefault(); return; }
+    const onView = document.activeElement === $('view') || document.activeElement === document.body;
+    if (onView && viewer && viewer.nudge(e)) { e.preventDefault(); return; }
     if (e.key === '?') shortcuts();
     if ((e.key === 'h' || e.key === 'H') && viewer && viewer.view) { viewer.home(); walking(false); }
     if (e.key === 'g' || e.key === 'G') toggleWalk();

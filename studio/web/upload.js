@@ -104,11 +104,13 @@ async function archiveChosen() {
 // `context`: { opened({job, scene}), error(e) }.
 export function init(context) {
   ctx = context;
-  $('open-folder').addEventListener('click', () => {
-    $('upload-problem').textContent = '';
-    $('upload-choose').hidden = true;
-    $('open-folder-dialog').showModal();
-  });
+  for (const id of ['open-folder', 'welcome-open-folder']) {
+    $(id).addEventListener('click', () => {
+      $('upload-problem').textContent = '';
+      $('upload-choose').hidden = true;
+      $('open-folder-dialog').showModal();
+    });
+  }
   $('upload-folder').addEventListener('change', folderChosen);
   $('upload-archive').addEventListener('change', archiveChosen);
   $('upload-send').addEventListener('click', () => prepared && send(prepared.name, prepared.bytes, $('upload-scene').value));

@@ -214,7 +214,14 @@ impl Browser {
     /// Presses and releases a key (`"Enter"`, `"?"`, …).
     pub fn press(&mut self, key: &str) {
         let text = if key.chars().count() == 1 { key } else { "" };
-        let code = if key == "Enter" { 13 } else { 0 };
+        // The key's code, for what the browser itself does with a key (a dialog closes on
+        // Escape's 27, a form is sent on Enter's 13).
+        let code = match key {
+            "Enter" => 13,
+            "Escape" => 27,
+            "Tab" => 9,
+            _ => 0,
+        };
         for kind in ["keyDown", "keyUp"] {
             let mut event = json!({ "type": kind, "key": key, "windowsVirtualKeyCode": code });
             if kind == "keyDown" && !text.is_empty() {

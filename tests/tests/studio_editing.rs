@@ -100,13 +100,26 @@ fn download_shown(b: &mut Browser, c: &Coordinator, d: &std::path::Path) -> Path
 }
 
 /// Clicks `button` and finds the edit refused: the page shows the server's words, with
-/// `words` among them, and stays at revision `revision`.
+/// `words` among them, beside the button, and stays at revision `revision`.
 fn refused(b: &mut Browser, button: &str, words: &str, revision: &str) {
     b.click(button);
-    b.wait_for("the refusal", "!document.getElementById('problem').hidden");
-    let problem = b.eval("document.getElementById('problem').textContent");
-    assert!(problem.as_str().unwrap().contains(words), "{problem}");
+    let problem = refusal_beside(b, button);
+    assert!(problem.contains(words), "{problem}");
     assert_eq!(b.eval("document.getElementById('view').dataset.revision"), revision);
+}
+
+/// The refusal the page shows beside the row of controls (or the form) that `button` (a
+/// selector) is in, once it shows.
+fn refusal_beside(b: &mut Browser, button: &str) -> String {
+    let quoted = serde_json::to_string(button).unwrap();
+    let shown = format!(
+        "(() => {{ const host = document.querySelector({quoted}) \
+           .closest('.actions, form, .fields, .choices, .overlay-head, .panel-body, dialog'); \
+           const p = host && host.nextElementSibling; \
+           return p && p.classList.contains('action-problem') && p.checkVisibility() ? p.textContent : ''; }})()"
+    );
+    b.wait_for("the refusal beside the button", &format!("{shown} !== ''"));
+    b.eval(&shown).as_str().unwrap().to_owned()
 }
 
 /// The studio with the Aosta scene (160 × 90 px) rendered once, open in a browser signed in:
@@ -452,9 +465,8 @@ fn a_note_pinned_to_the_facade_survives_a_restart() {
     std::fs::write(&photo, restauro_tests::browser::solid_png(40, 30, photo_rgb)).unwrap();
     b.choose_file("#note-new-images", &photo.canonicalize().unwrap());
     b.click("#note-save");
-    b.wait_for("the refusal", "!document.getElementById('problem').hidden");
-    let problem = b.eval("document.getElementById('problem').textContent");
-    assert!(problem.as_str().unwrap().contains("is not a web address"), "{problem}");
+    let problem = refusal_beside(&mut b, "#note-save");
+    assert!(problem.contains("is not a web address"), "{problem}");
     let link = "https://example.org/survey/2019/arch-3.pdf";
     set_value(&mut b, "note-new-links", link);
     b.click("#note-save");

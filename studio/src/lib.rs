@@ -16,6 +16,7 @@ pub mod gltf_export;
 pub mod note_images;
 pub mod page;
 pub mod painting;
+pub mod pixel;
 pub mod preview;
 pub mod session;
 pub mod snapshot;
@@ -128,6 +129,7 @@ fn router(studio: Arc<Studio>) -> Router {
         .route("/api/jobs/{id}/luminance", get(display::luminance))
         .route("/api/jobs/{id}/luminance.png", get(display::false_colour))
         .route("/api/jobs/{id}/painting.png", get(painting::painting))
+        .route("/api/jobs/{id}/pixel", get(pixel::pixel))
         .route("/api/compare", get(compare::compare))
         .route("/api/compare/delta-e.png", get(compare::picture))
         .route_layer(middleware::from_fn_with_state(studio.clone(), signed_in));

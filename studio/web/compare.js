@@ -1,12 +1,20 @@
-// Two snapshots compared: A (before) and B (after) stacked, a slider choosing how much of the
-// width shows A; and the CIEDE2000 layer in place of B, the map the server computes as
-// `restauro compare` does, with its viridis scale in ΔE00 and its statistics.
+// Two snapshots compared over the whole view: A (before) and B (after) stacked, a slider
+// choosing how much of the width shows A; and the CIEDE2000 layer in place of B, the map the
+// server computes as `restauro compare` does, with its viridis scale in ΔE00 and its
+// statistics. Zoomable as a snapshot is (zoom.js); the readout gives the pixel under the
+// pointer in A and in B and the ΔE00 between them there (readout.js).
 
 import * as api from './api.js';
 import * as farm from './farm.js';
+import * as layer from './layer.js';
+import * as readout from './readout.js';
 import { viridisScale } from './colour_scale.js';
+import { Zoom } from './zoom.js';
 
 const $ = (id) => document.getElementById(id);
+let zoom = null;
+// The jobs compared, while the comparison shows.
+let pair = [null, null];
 
 const png = (job) => job.results.find((n) => n.endsWith('.png') && !n.endsWith('-retinex.png'));
 
@@ -38,13 +46,23 @@ function scale(top) {
 export async function show(onError) {
   const [a, b] = [farm.jobById($('compare-a').value), farm.jobById($('compare-b').value)];
   if (!a || !b) return onError(new Error('choose two finished snapshots to compare'));
+  const fresh = $('compare-stage').hidden || pair[0] !== a.id || pair[1] !== b.id;
+  pair = [a.id, b.id];
   $('compare-stage').hidden = false;
+  $('compare-stage-title').textContent = `Before (A): ${a.name} · after (B): ${b.name}`;
   $('compare-img-a').src = api.resultUrl(a.id, png(a));
   $('compare-img-a').alt = `A: ${a.name}, as rendered`;
   $('compare-img-b').src = api.resultUrl(b.id, png(b));
   $('compare-img-b').alt = `B: ${b.name}, as rendered`;
   $('compare-stats').textContent = '';
   $('compare-scale').replaceChildren();
+  if (fresh) {
+    // At fit, over the model when both were taken from one place (A's, if known here).
+    layer.align(a.id);
+    zoom.size(a.width, a.height);
+    zoom.fit();
+    $('compare-readout').textContent = 'Point at the picture to read a pixel in A and B.';
+  }
   try {
     const c = await api.compare(a.id, b.id);
     const s = c.delta_e00;
@@ -61,16 +79,22 @@ export async function show(onError) {
   slide();
 }
 
-function layer(on) {
-  $('compare-delta').setAttribute('aria-pressed', String(on));
+function layerOn(on) {
+  for (const id of ['compare-delta', 'compare-delta-here']) $(id).setAttribute('aria-pressed', String(on));
   $('compare-map').hidden = !on;
   $('compare-img-b').hidden = on;
   $('compare-scale').hidden = !on;
 }
 
 export function init(onError) {
+  zoom = new Zoom($('compare-viewport'), document.querySelector('#compare-viewport .before-after'), { output: $('compare-zoom') });
+  zoom.buttons($('compare-fit'), $('compare-one'), $('compare-out'), $('compare-in'));
+  readout.follow(zoom, $('compare-readout'), () => pair);
+  $('compare-stage').addEventListener('close', () => { pair = [null, null]; });
   $('compare-go').addEventListener('click', () => show(onError));
   $('compare-slider').addEventListener('input', slide);
-  $('compare-delta').addEventListener('click', () => layer($('compare-delta').getAttribute('aria-pressed') !== 'true'));
-  layer(false);
+  for (const id of ['compare-delta', 'compare-delta-here']) {
+    $(id).addEventListener('click', () => layerOn($(id).getAttribute('aria-pressed') !== 'true'));
+  }
+  layerOn(false);
 }

@@ -8,17 +8,17 @@ import * as light from './light.js';
 import * as compare from './compare.js';
 import * as notes from './notes.js';
 import * as colours from './colours.js';
-import * as exposure from './exposure.js';
 import * as variants from './variants.js';
 import * as painting from './painting.js';
 import * as luminaires from './luminaires.js';
 import * as upload from './upload.js';
 import * as panels from './panels.js';
 import * as help from './help.js';
+import * as layer from './layer.js';
+import * as strip from './strip.js';
 
 const $ = (id) => document.getElementById(id);
 let events = null;
-let shown = null;
 let viewer = null;
 let openScene = '';
 // The scene whose geometry the viewer holds (a new revision keeps it), the shipped spectra, and
@@ -46,6 +46,7 @@ async function takeSnapshot() {
   try {
     const job = await api.takeSnapshot(openScene, request);
     awaited = job.id;
+    layer.remember(job.id, request.camera);
     farm.job(job);
     painting.follow(job);
     problem('');
@@ -83,6 +84,7 @@ async function open(id, revision) {
       viewer = new Viewer($('view'));
       // For the browser's console (and the tests): the view's camera and controls.
       window.studioViewer = viewer;
+      layer.watch(viewer);
       viewer.onPick = (p) => { picked = p; panels.open(2, false); showMaterial(); };
       viewer.onNote = (title) => notes.open(title);
     }
@@ -288,17 +290,17 @@ function follow() {
   events = new EventSource('/api/events');
   const on = (kind, handler) => events.addEventListener(kind, (e) => handler(JSON.parse(e.data)));
   events.onopen = () => status('live', true);
-  on('snapshot', (data) => { farm.snapshot(data); compare.refresh(); });
+  on('snapshot', (data) => { farm.snapshot(data); compare.refresh(); strip.refresh(); });
   on('job', (j) => {
     const isNew = !farm.jobById(j.id);
     farm.job(j);
     painting.update(j);
-    if (j.state === 'done') compare.refresh();
-    if (shown && shown.id === j.id) show(j);
-    if (awaited === j.id && j.state === 'done') { awaited = null; show(j); }
+    if (j.state === 'done') { compare.refresh(); strip.refresh(); }
+    if (layer.current() && layer.current().id === j.id) layer.show(j);
+    if (awaited === j.id && j.state === 'done') { awaited = null; layer.show(j); }
     if (isNew) listScenes().catch(showError);
   });
-  on('job-gone', farm.jobGone);
+  on('job-gone', (g) => { farm.jobGone(g); strip.refresh(); });
   on('worker', farm.worker);
   on('worker-gone', farm.workerGone);
   events.onerror = async () => {
@@ -313,37 +315,6 @@ function follow() {
   };
 }
 
-function show(job, seen) {
-  if (shown === null || shown.id !== job.id) {
-    exposure.prepare(job).then(() => shown && shown.id === job.id && show(shown)).catch(showError);
-  }
-  shown = job;
-  const name = job.results.find((n) => n.endsWith('.png') && !n.endsWith('-retinex.png'));
-  const retinex = job.results.find((n) => n.endsWith('-retinex.png'));
-  const useSeen = seen ?? ($('as-seen').getAttribute('aria-pressed') === 'true');
-  const file = useSeen && retinex ? retinex : name;
-  $('as-seen').disabled = !retinex;
-  $('as-rendered').setAttribute('aria-pressed', String(file === name));
-  $('as-seen').setAttribute('aria-pressed', String(file === retinex));
-  $('result').hidden = false;
-  $('result-title').textContent = `Snapshot: ${job.name}`;
-  const img = $('result-image');
-  const adjusted = file === name ? exposure.url(job) : null;
-  img.src = adjusted ?? api.resultUrl(job.id, file);
-  img.alt = `${job.name}, ${file === retinex ? 'as seen, adapted to its light' : 'as rendered'}`;
-  const how = adjusted ? (adjusted.includes('luminance.png') ? 'false colour by luminance' : `at ${$('exposure-shown').textContent}`) : file;
-  $('result-caption').textContent = `${how} — ${job.width} × ${job.height} px`;
-  const downloads = $('result-downloads');
-  downloads.replaceChildren('Download: ');
-  for (const n of job.results) {
-    const a = document.createElement('a');
-    a.href = api.resultUrl(job.id, n);
-    a.download = n;
-    a.textContent = n;
-    downloads.append(a, ' ');
-  }
-}
-
 function shortcuts() {
   const d = $('shortcuts');
   if (d.open) d.close(); else d.showModal();
@@ -353,9 +324,10 @@ document.addEventListener('DOMContentLoaded', () => {
   for (const kind of ['click', 'change', 'submit']) document.addEventListener(kind, noteAction, true);
   panels.init();
   help.init();
-  farm.init({ show: (j) => show(j), error: showError });
-  // The snapshot closed: a later event about its job does not open it again.
-  $('result').addEventListener('close', () => { shown = null; });
+  farm.init({ show: (j) => layer.show(j), error: showError });
+  // The snapshot layer (a later event about its job does not open it again once closed).
+  layer.init(() => viewer, showError);
+  strip.init({ show: (j) => layer.show(j), compare: () => compare.show(showError) });
   $('sign-in-form').addEventListener('submit', (e) => {
     e.preventDefault();
     signIn($('token').value);
@@ -396,7 +368,6 @@ document.addEventListener('DOMContentLoaded', () => {
     error: showError,
     changed: (v) => { if (viewer && viewer.view) { viewer.colour(v); showMaterial(); } },
   });
-  exposure.init(() => shown && show(shown));
   colours.init(() => { if (viewer && viewer.view) { viewer.colour(undefined, colours.look); showMaterial(); } });
   notes.init({
     edit: applyEdit,
@@ -410,8 +381,6 @@ document.addEventListener('DOMContentLoaded', () => {
       return { position, target, up, vertical_fov_deg };
     },
   });
-  $('as-rendered').addEventListener('click', () => shown && show(shown, false));
-  $('as-seen').addEventListener('click', () => shown && show(shown, true));
   $('walk').addEventListener('click', () => toggleWalk());
   document.addEventListener('keydown', (e) => {
     if (e.target instanceof HTMLInputElement || e.target instanceof HTMLSelectElement) return;

@@ -322,7 +322,8 @@ fn a_restorer_compares_two_hypotheses_on_the_slider_and_the_delta_e_layer() {
     };
     let (a_png, b_png) = (png_of(&found), png_of(&cleaned));
     assert!(difference(&a_png, &b_png) > 2.0, "the hypotheses look alike");
-    b.eval("document.getElementById('compare-stage').scrollIntoView({ block: 'center' })");
+    // Over the whole view, at 1:1: one image pixel to one screen pixel.
+    b.click("#compare-one");
     let rect = b.rect("#compare-img-a");
     assert_eq!((rect[2], rect[3]), (160.0, 90.0), "shown at its own size");
     slide(&mut b, 100);
@@ -472,10 +473,10 @@ fn one_stop_brighter_then_in_false_colour(
     );
     assert_eq!(b.eval("document.getElementById('exposure-shown').textContent"), "+1 EV");
     let src = b.eval("new URL(document.getElementById('result-image').src).pathname + new URL(document.getElementById('result-image').src).search");
-    b.eval("document.getElementById('result-image').scrollIntoView({ block: 'center' })");
-    // (Inside its 1-px border.)
-    let [x, y, w, h] = b.rect("#result-image");
-    let rect = [x + 1.0, y + 1.0, w - 2.0, h - 2.0];
+    // The layer over the view at 1:1: one image pixel to one screen pixel.
+    b.click("#result-one");
+    let rect = b.rect("#result-image");
+    assert_eq!((rect[2], rect[3]), (160.0, 90.0), "1:1");
     let shown = pixels_in(&b.screenshot(&shots().join("25-one-stop-brighter.png")), rect);
     let served = restauro_tests::http::request(
         c.studio.as_deref().unwrap(),

@@ -386,7 +386,10 @@ document.addEventListener('DOMContentLoaded', () => {
     if (e.target instanceof HTMLInputElement || e.target instanceof HTMLSelectElement) return;
     if (e.target instanceof HTMLTextAreaElement || e.ctrlKey || e.metaKey || e.altKey) return;
     if (viewer && viewer.walker.active && viewer.walker.key(e, true)) { e.preventDefault(); return; }
-    const onView = document.activeElement === $('view') || document.activeElement === document.body;
+    // The arrows and + − move the view when it (or nothing) has the focus and no snapshot lies
+    // over it (over a snapshot, they zoom and pan the picture).
+    const free = $('result').hidden && $('compare-stage').hidden;
+    const onView = free && (document.activeElement === $('view') || document.activeElement === document.body);
     if (onView && viewer && viewer.nudge(e)) { e.preventDefault(); return; }
     if (e.key === '?') shortcuts();
     if ((e.key === 'h' || e.key === 'H') && viewer && viewer.view) { viewer.home(); walking(false); }

@@ -283,6 +283,36 @@ impl Browser {
         data
     }
 
+    /// Makes the page's window exactly `width × height` CSS pixels (at one device pixel each)
+    /// and waits until the page has taken the size.
+    pub fn window_size(&mut self, width: u32, height: u32) {
+        self.call(
+            "Emulation.setDeviceMetricsOverride",
+            json!({ "width": width, "height": height, "deviceScaleFactor": 1, "mobile": false }),
+        );
+        self.wait_for(
+            "the window's size",
+            &format!("innerWidth === {width} && innerHeight === {height}"),
+        );
+    }
+
+    /// A picture for the README and the guides, at 1920 × 1080: written to the folder `shots`
+    /// and, when `RESTAURO_UPDATE_DOCS` is set, to `docs/images/<name>` too, so the pictures
+    /// are remade by the tests that check what they show. The window keeps the size.
+    pub fn docs_picture(&mut self, shots: &Path, name: &str) -> Vec<u8> {
+        self.window_size(1920, 1080);
+        // Two frames, for the page to lay itself out and draw at the new size.
+        self.eval(
+            "new Promise(r => requestAnimationFrame(() => requestAnimationFrame(() => r(true))))",
+        );
+        let shot = self.screenshot(&shots.join(name));
+        if std::env::var_os("RESTAURO_UPDATE_DOCS").is_some() {
+            let docs = Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/images").join(name);
+            std::fs::write(&docs, &shot).unwrap_or_else(|e| panic!("{}: {e}", docs.display()));
+        }
+        shot
+    }
+
     /// The page-pixel rectangle (x, y, width, height) of the element `selector`.
     pub fn rect(&mut self, selector: &str) -> [f64; 4] {
         let quoted = serde_json::to_string(selector).unwrap();

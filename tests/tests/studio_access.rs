@@ -177,7 +177,7 @@ fn a_first_visit_offers_the_demos_facade_and_opens_it() {
         let shown = b.eval(&format!("document.getElementById('{id}').checkVisibility()"));
         assert_eq!(shown, true, "{id} is not offered");
     }
-    b.screenshot(&shots().join("60-first-visit-1920x1080.png"));
+    b.docs_picture(&shots(), "studio-first-visit.png");
 
     // "Open a folder" is the scene panel's own dialog.
     b.click("#welcome-open-folder");
@@ -209,7 +209,7 @@ fn a_first_visit_offers_the_demos_facade_and_opens_it() {
         b.eval("document.getElementById('snap-height').value"),
     );
     assert_eq!((width, height), (json!("1280"), json!("720")));
-    b.screenshot(&shots().join("61-demo-facade-1920x1080.png"));
+    b.docs_picture(&shots(), "studio.png");
 
     // Opened again, the page draws the facade without being asked: the time a restorer waits.
     b.goto(&page);

@@ -295,6 +295,8 @@ pub struct SceneView {
     pub sun: Option<SunView>,
     /// Every light of the file, in its order.
     pub lights: Vec<LightView>,
+    /// The calculation grids (`[[grids]]`), in the file's order.
+    pub grids: Vec<super::grid_views::GridView>,
     pub light_spectra: Vec<String>,
     /// The lights the page may colour the materials under, the scene's own first.
     pub preview_lights: Vec<appearance::LightChoice>,
@@ -447,6 +449,11 @@ fn build(id: &str, revision: u32, scene: &LoadedScene) -> ScenePreview {
         views,
         sun: sun_view(scene),
         lights: light_views(scene, offset_m),
+        grids: super::grid_views::grid_views(
+            scene,
+            |p| to_glb(p, offset_m),
+            |d| to_glb(d, [0.0; 3]),
+        ),
         light_spectra: light_spectra(scene),
         preview_lights: lights.iter().map(appearance::Light::choice).collect(),
         // The page's positions go back into the file: the scene's `origin` is part of it.

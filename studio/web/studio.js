@@ -12,6 +12,7 @@ import * as exposure from './exposure.js';
 import * as variants from './variants.js';
 import * as painting from './painting.js';
 import * as luminaires from './luminaires.js';
+import * as grids from './grids.js';
 import * as upload from './upload.js';
 import * as panels from './panels.js';
 
@@ -118,6 +119,7 @@ async function present(view) {
   $('download').href = api.downloadUrl(openScene, view.revision);
   light.show(view, showError);
   luminaires.show(view);
+  grids.show(view);
   notes.show(view);
   showMaterial();
 }
@@ -335,6 +337,18 @@ document.addEventListener('DOMContentLoaded', () => {
     edit: applyEdit,
     error: showError,
     picked: () => picked,
+    scene: () => openScene,
+  });
+  grids.init({
+    // Errors are shown by the grids' own form, where the action was taken.
+    edit: async (change) => {
+      const view = await api.edit(openScene, change);
+      problem('');
+      await present(view);
+      return view;
+    },
+    picked: () => picked,
+    viewer: () => viewer,
     scene: () => openScene,
   });
   variants.init({

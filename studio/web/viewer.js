@@ -243,6 +243,13 @@ export class Viewer {
     const orange = new THREE.LineBasicMaterial({ color: 0xff8800 });
     const line = (points, material) => new THREE.LineSegments(new THREE.BufferGeometry().setFromPoints(points), material);
     for (const l of lights) {
+      if (l.corners) {
+        // An area light: its emitting rectangle, drawn as light (unshaded), from both sides.
+        const c = l.corners.map((q) => new THREE.Vector3(...q));
+        const quad = new THREE.BufferGeometry().setFromPoints([c[0], c[1], c[2], c[0], c[2], c[3]]);
+        this.lamps.add(new THREE.Mesh(quad, new THREE.MeshBasicMaterial({ color: 0xfff4c0, side: THREE.DoubleSide, polygonOffset: true, polygonOffsetFactor: -2, polygonOffsetUnits: -2 })));
+        continue;
+      }
       if (!l.position) continue;
       const p = new THREE.Vector3(...l.position);
       const b = new THREE.Mesh(bulb, yellow);

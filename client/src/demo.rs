@@ -317,7 +317,7 @@ fn floodlighting(
     let image = read_exr(&exr, usize::MAX).with_context(|| format!("reading {}", exr.display()))?;
     let grids = grid_results(&scenes[&job.scene], &image, &exr)?;
     let document =
-        Document { schema: SCHEMA, scene: relative(out, &job.scene), variant: None, grids };
+        Document { schema: SCHEMA.into(), scene: relative(out, &job.scene), variant: None, grids };
     let json = serde_json::to_string_pretty(&document)? + "\n";
     let written = write_documents(&out.join("floodlit"), &document, &json)?;
     let (Some(grid), Some([csv, png])) = (document.grids.first(), written.per_grid.first()) else {

@@ -93,6 +93,10 @@ pub enum FarmError {
     #[error("{path}: {source}")]
     Io { path: String, source: std::io::Error },
 
+    /// A result file the farm wrote that it cannot read back or derive from.
+    #[error("{0}")]
+    Image(#[from] restauro_image::ImageError),
+
     /// An argument of the studio's scene calls (a revision, a file sent) the farm cannot take.
     #[error("invalid request: {0}")]
     Request(String),
@@ -171,7 +175,7 @@ impl FarmError {
             E::Limit { .. } | E::TooManyJobs { .. } => Code::ResourceExhausted,
             E::Stalled { .. } => Code::DeadlineExceeded,
             E::Store(_) => Code::Unavailable,
-            E::Io { .. } | E::Internal(_) => Code::Internal,
+            E::Io { .. } | E::Internal(_) | E::Image(_) => Code::Internal,
             E::Request(_) => Code::InvalidArgument,
             E::NoSuchScene(_) => Code::NotFound,
             E::CreateDir { .. }

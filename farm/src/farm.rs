@@ -39,6 +39,7 @@ use tokio::sync::{Notify, mpsc, watch};
 use tracing::{debug, info, warn};
 
 mod assembly;
+mod illuminance;
 mod scenes;
 pub use scenes::{
     MAX_FOLDER_BYTES, PhotometryInfo, Revised, RevisionInfo, SceneEntry, scene_identity, sent_file,

@@ -57,4 +57,11 @@ pub enum ImageError {
     /// A false-colour range from 0 on a log scale.
     #[error("the range {min_cd_m2}:{max_cd_m2} cd/m²: a log scale starts above 0 cd/m²")]
     LogRangeFromZero { min_cd_m2: f64, max_cd_m2: f64 },
+    /// A calculation of grids that is not of the scene's grids.
+    #[error(
+        "{}: {width}×{height} values, but the scene's grids have {points} points (2 rows each); \
+         was it computed from another scene?",
+        path.display()
+    )]
+    GridsMismatch { path: PathBuf, width: usize, height: usize, points: usize },
 }

@@ -10,6 +10,7 @@ pub mod delta_e;
 pub mod error;
 pub mod false_colour;
 pub mod framebuffer;
+pub mod illuminance;
 pub mod image_files;
 pub mod radiometric_bound;
 pub mod results;

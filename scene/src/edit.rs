@@ -6,6 +6,7 @@
 //! that does not exist is refused with the names that do.
 
 use crate::error::{Result, SceneError};
+pub use crate::grid_edit::{DeleteGrid, RenameGrid, SaveGrid};
 use crate::scene_file::{
     Annotation, Light, MaterialModel, SceneFile, SiteTime, SpectrumSource, Variant, View,
 };
@@ -28,6 +29,9 @@ pub enum Edit {
     DeleteVariant(DeleteVariant),
     SaveLight(SaveLight),
     DeleteLight(DeleteLight),
+    SaveGrid(SaveGrid),
+    RenameGrid(RenameGrid),
+    DeleteGrid(DeleteGrid),
 }
 
 /// A material's surface in one of its states (`base` unless given): a shipped spectrum by its
@@ -148,7 +152,7 @@ pub struct DeleteLight {
 }
 
 /// The kinds of edit, as `edit` names them.
-pub const KINDS: [&str; 11] = [
+pub const KINDS: [&str; 14] = [
     "material",
     "sun",
     "save-view",
@@ -160,6 +164,9 @@ pub const KINDS: [&str; 11] = [
     "delete-variant",
     "save-light",
     "delete-light",
+    "save-grid",
+    "rename-grid",
+    "delete-grid",
 ];
 
 /// The longest name of a hypothesis, in characters.
@@ -256,6 +263,9 @@ impl Edit {
                 let gone = scene.lights.remove(*index);
                 Ok(format!("light {index} ({}) deleted", light_kind(&gone)))
             }
+            Edit::SaveGrid(e) => crate::grid_edit::save_grid(scene, e),
+            Edit::RenameGrid(e) => crate::grid_edit::rename_grid(scene, e),
+            Edit::DeleteGrid(e) => crate::grid_edit::delete_grid(scene, e),
         }
     }
 }

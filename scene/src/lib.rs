@@ -18,6 +18,7 @@ pub mod edit;
 pub mod formats;
 pub mod glazing;
 pub mod grid;
+pub mod grid_edit;
 pub mod guard;
 pub mod job;
 pub mod limits;

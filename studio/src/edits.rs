@@ -81,6 +81,9 @@ fn parse_edit(body: &[u8]) -> Result<Edit> {
         "delete-variant" => Edit::DeleteVariant(parse(&fields, &what)?),
         "save-light" => Edit::SaveLight(parse(&fields, &what)?),
         "delete-light" => Edit::DeleteLight(parse(&fields, &what)?),
+        "save-grid" => Edit::SaveGrid(parse(&fields, &what)?),
+        "rename-grid" => Edit::RenameGrid(parse(&fields, &what)?),
+        "delete-grid" => Edit::DeleteGrid(parse(&fields, &what)?),
         other => {
             let other = other.chars().take(40).collect::<String>();
             return Err(refuse(format!("unknown kind `{}`; use {kinds}", other.escape_debug())));

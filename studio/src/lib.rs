@@ -13,6 +13,8 @@ pub mod edits;
 pub mod error;
 pub mod events;
 pub mod gltf_export;
+pub mod grid_views;
+pub mod grids;
 pub mod note_images;
 pub mod page;
 pub mod painting;
@@ -130,6 +132,9 @@ fn router(studio: Arc<Studio>) -> Router {
         .route("/api/jobs/{id}/luminance.png", get(display::false_colour))
         .route("/api/jobs/{id}/painting.png", get(painting::painting))
         .route("/api/jobs/{id}/pixel", get(pixel::pixel))
+        .route("/api/scenes/{id}/grids", post(grids::compute))
+        .route("/api/jobs/{id}/illuminance", get(grids::illuminance))
+        .route("/api/jobs/{id}/illuminance/{name}", get(grids::file))
         .route("/api/compare", get(compare::compare))
         .route("/api/compare/delta-e.png", get(compare::picture))
         .route_layer(middleware::from_fn_with_state(studio.clone(), signed_in));

@@ -32,6 +32,7 @@ const FILES: &[(&str, &str, &str)] = &[
     script!("variants.js"),
     script!("painting.js"),
     script!("luminaires.js"),
+    script!("grids.js"),
     script!("upload.js"),
     script!("colours.js"),
     script!("panels.js"),

@@ -142,6 +142,8 @@ pub struct LightView {
     pub intensity_cd: Option<f64>,
     pub flux_lm: Option<f64>,
     pub beam_angle_deg: Option<f64>,
+    /// An area light's corners in the GLB's frame: corner, + u, + u + v, + v.
+    pub corners: Option<[[f64; 3]; 4]>,
     /// The photometric solid: for γ = 0, 5, … 180° (rows) and C = 0, 10, … 350° (columns), the
     /// direction (GLB, unit) times I(C, γ) / I_peak.
     pub solid: Option<Vec<[f32; 3]>>,
@@ -204,6 +206,7 @@ fn light_views(scene: &LoadedScene, offset: [f64; 3]) -> Vec<LightView> {
             flux_lm: None,
             beam_angle_deg: None,
             solid: None,
+            corners: None,
             illuminance_lux: None,
             model: None,
         };
@@ -241,6 +244,13 @@ fn light_views(scene: &LoadedScene, offset: [f64; 3]) -> Vec<LightView> {
                 let centre: [f64; 3] =
                     std::array::from_fn(|k| panel.corner[k] + 0.5 * (panel.u[k] + panel.v[k]));
                 view.position = Some(to_glb(centre, offset));
+                let at = |a: f64, b: f64| {
+                    to_glb(
+                        std::array::from_fn(|k| panel.corner[k] + a * panel.u[k] + b * panel.v[k]),
+                        offset,
+                    )
+                };
+                view.corners = Some([at(0.0, 0.0), at(1.0, 0.0), at(1.0, 1.0), at(0.0, 1.0)]);
                 view.flux_lm = resolved.flux_lm();
             }
             Light::Sun { .. } => {}
@@ -295,6 +305,8 @@ pub struct SceneView {
     pub sun: Option<SunView>,
     /// Every light of the file, in its order.
     pub lights: Vec<LightView>,
+    /// The calculation grids (`[[grids]]`), in the file's order.
+    pub grids: Vec<super::grid_views::GridView>,
     pub light_spectra: Vec<String>,
     /// The lights the page may colour the materials under, the scene's own first.
     pub preview_lights: Vec<appearance::LightChoice>,
@@ -447,6 +459,11 @@ fn build(id: &str, revision: u32, scene: &LoadedScene) -> ScenePreview {
         views,
         sun: sun_view(scene),
         lights: light_views(scene, offset_m),
+        grids: super::grid_views::grid_views(
+            scene,
+            |p| to_glb(p, offset_m),
+            |d| to_glb(d, [0.0; 3]),
+        ),
         light_spectra: light_spectra(scene),
         preview_lights: lights.iter().map(appearance::Light::choice).collect(),
         // The page's positions go back into the file: the scene's `origin` is part of it.

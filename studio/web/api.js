@@ -77,3 +77,11 @@ export const takeSnapshot = (id, request) =>
 const pair = (a, b) => `a=${encodeURIComponent(a)}&b=${encodeURIComponent(b)}`;
 export const compare = (a, b) => call('GET', `/api/compare?${pair(a, b)}`);
 export const compareMapUrl = (a, b) => `/api/compare/delta-e.png?${pair(a, b)}`;
+// The revision's calculation grids computed on the farm (`render`: its options): the job.
+export const computeGrids = (id, revision, render) =>
+  call('POST', `${sceneUrl(id)}/grids`, { revision, render });
+export const job = (id) => call('GET', `/api/jobs/${encodeURIComponent(id)}`);
+// A finished calculation's figures per grid (`restauro illuminance`'s illuminance.json).
+export const illuminance = (job) => call('GET', `/api/jobs/${encodeURIComponent(job)}/illuminance`);
+export const illuminanceUrl = (job, name) =>
+  `/api/jobs/${encodeURIComponent(job)}/illuminance/${encodeURIComponent(name)}`;

@@ -21,6 +21,8 @@ let ctx = null;
 let view = null;
 let editing = null;
 let file = null;
+// The direction an area light faces (the scene's frame): out of the surface last placed on.
+let facing = null;
 
 // The preview's frame (Y up, offset removed) to the scene's (Z up, metres): the inverse of the
 // server's `to_glb`.
@@ -52,7 +54,10 @@ function fromPick(ids, lift) {
   const p = ctx.picked();
   if (!p || !view) return ctx.error(new Error('click a surface in the view first'));
   const w = toWorld(p.point, view.offset_m);
-  w[2] += lift;
+  if (ids[0] === 'lum-x' && p.normal) facing = toWorld(p.normal, [0, 0, 0]);
+  // An area light is raised off the surface along its normal (it faces out of it); a lamp up.
+  const up = $('lum-kind').value === 'area' && ids[0] === 'lum-x' && facing ? facing : [0, 0, 1];
+  up.forEach((d, k) => { w[k] += lift * d; });
   ids.forEach((id, k) => { $(id).value = w[k].toFixed(3); });
 }
 
@@ -98,7 +103,7 @@ export function show(v) {
   $('sky-now').textContent = sky
     ? `The scene's sky: ${sky.model}, ${number(sky.illuminance_lux)} lx on the horizontal, spectrum ${sky.light.spectrum}.`
     : 'The scene has no sky: setting one adds it.';
-  const rows = v.lights.filter((l) => l.light.kind === 'point' || l.light.kind === 'spot');
+  const rows = v.lights.filter((l) => ['point', 'spot', 'area'].includes(l.light.kind));
   $('no-luminaires').hidden = rows.length > 0;
   $('luminaires').querySelector('tbody').replaceChildren(...rows.map(row));
   if (editing !== null && !rows.some((l) => l.index === editing)) startNew();
@@ -108,7 +113,10 @@ function row(l) {
   const tr = document.createElement('tr');
   tr.dataset.index = String(l.index);
   const file = l.light.ies ? (l.light.ies.startsWith('blake3:') ? `${l.light.ies.slice(7, 19)}…` : l.light.ies) : 'none';
-  const cells = [l.index, l.light.kind, metres(l.light.position), metres(l.light.aim), number(l.intensity_cd),
+  const x = l.light;
+  const area = x.kind === 'area' ? { centre: x.corner.map((c, k) => c + (x.u[k] + x.v[k]) / 2), w: Math.hypot(...x.u), h: Math.hypot(...x.v) } : null;
+  const kind = area ? `area ${area.w.toFixed(2)} × ${area.h.toFixed(2)} m` : x.kind;
+  const cells = [l.index, kind, metres(area ? area.centre : x.position), metres(x.aim), number(l.intensity_cd),
     number(l.flux_lm), number(l.beam_angle_deg, 1), l.light.spectrum, file];
   for (const c of cells) {
     const td = document.createElement('td');
@@ -140,6 +148,13 @@ function startEditing(l) {
   const x = l.light;
   $('lum-kind').value = x.kind;
   fill(['lum-x', 'lum-y', 'lum-z'], x.position);
+  if (x.kind === 'area') {
+    fill(['lum-x', 'lum-y', 'lum-z'], x.corner.map((c, k) => c + (x.u[k] + x.v[k]) / 2));
+    $('lum-width').value = Math.hypot(...x.u);
+    $('lum-height').value = Math.hypot(...x.v);
+    $('lum-luminance').value = x.luminance_cd_m2 ?? '';
+    facing = unit(cross(x.u, x.v));
+  }
   fill(['lum-ax', 'lum-ay', 'lum-az'], x.aim);
   $('lum-cd').value = x.intensity_cd ?? '';
   $('lum-lm').value = x.flux_lm ?? '';
@@ -161,9 +176,39 @@ function startNew() {
 
 const value = (id) => ($(id).value === '' ? null : Number($(id).value));
 
+const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+const unit = (a) => { const n = Math.hypot(...a); return a.map((x) => x / n); };
+
+// An area light centred at the form's position, facing out of the surface it was placed on
+// (or towards the point it aims at), its width level (along x on a floor or a ceiling): a
+// `[[lights]]` entry whose u × v is the direction it emits to.
+function areaLight() {
+  const centre = ['lum-x', 'lum-y', 'lum-z'].map(value);
+  const aim = ['lum-ax', 'lum-ay', 'lum-az'].map(value);
+  const n = aim.every((v) => v !== null) ? unit(aim.map((a, k) => a - centre[k])) : facing;
+  if (!n) throw new Error('place the area light at a point clicked (it faces out of that surface), or give the point it aims at');
+  const e1 = Math.abs(n[2]) > 0.7 ? unit([1 - n[0] * n[0], -n[0] * n[1], -n[0] * n[2]]) : unit(cross([0, 0, 1], n));
+  const e2 = cross(n, e1);
+  // A size not given is 0, an edge the server refuses by its name (u or v).
+  const [w, h] = [value('lum-width') ?? 0, value('lum-height') ?? 0];
+  const l = {
+    kind: 'area',
+    corner: centre.map((c, k) => c - (w / 2) * e1[k] - (h / 2) * e2[k]),
+    u: e1.map((x) => x * w),
+    v: e2.map((x) => x * h),
+    spectrum: $('lum-spectrum').value,
+  };
+  const cd = value('lum-luminance');
+  if (cd !== null) l.luminance_cd_m2 = cd;
+  const lm = value('lum-lm');
+  if (lm !== null) l.flux_lm = lm;
+  return l;
+}
+
 // The luminaire in the form, as a `[[lights]]` entry.
 function light() {
   const kind = $('lum-kind').value;
+  if (kind === 'area') return areaLight();
   const aim = ['lum-ax', 'lum-ay', 'lum-az'].map(value);
   const l = {
     kind,
@@ -181,7 +226,8 @@ function light() {
 }
 
 async function save() {
-  const change = { edit: 'save-light', light: light() };
+  let change;
+  try { change = { edit: 'save-light', light: light() }; } catch (e) { return ctx.error(e); }
   if (editing !== null) change.index = editing;
   if (await ctx.edit(change) && editing === null) setFile(null);
 }

@@ -11,6 +11,7 @@ import * as colours from './colours.js';
 import * as variants from './variants.js';
 import * as painting from './painting.js';
 import * as luminaires from './luminaires.js';
+import * as grids from './grids.js';
 import * as upload from './upload.js';
 import * as panels from './panels.js';
 import * as help from './help.js';
@@ -125,6 +126,7 @@ async function present(view) {
   $('download').href = api.downloadUrl(openScene, view.revision);
   light.show(view, showError);
   luminaires.show(view);
+  grids.show(view);
   notes.show(view);
   showMaterial();
 }
@@ -361,6 +363,18 @@ document.addEventListener('DOMContentLoaded', () => {
     edit: applyEdit,
     error: showError,
     picked: () => picked,
+    scene: () => openScene,
+  });
+  grids.init({
+    // Errors are shown by the grids' own form, where the action was taken.
+    edit: async (change) => {
+      const view = await api.edit(openScene, change);
+      problem('');
+      await present(view);
+      return view;
+    },
+    picked: () => picked,
+    viewer: () => viewer,
     scene: () => openScene,
   });
   variants.init({

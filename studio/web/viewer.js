@@ -48,6 +48,9 @@ export class Viewer {
     // The luminaires: a bulb, a line to what each aims at, its photometric solid or its cone.
     this.lamps = new THREE.Group();
     this.scene.add(this.lamps);
+    // The calculation grids: an outline each, and once computed their false-colour map.
+    this.grids = new THREE.Group();
+    this.scene.add(this.grids);
     this.onNote = () => {};
     new ResizeObserver(() => this.resize()).observe(canvas);
     this.onPick = () => {};
@@ -80,7 +83,11 @@ export class Viewer {
     if (!hit) return;
     const extras = hit.object.geometry.userData || {};
     this.picked = hit.point.clone();
-    this.onPick({ object: extras.object, part: extras.part, material: extras.material, point: hit.point.toArray() });
+    // The surface's normal, turned to face the camera (the side that was clicked).
+    const normal = hit.face ? hit.face.normal.clone().transformDirection(hit.object.matrixWorld) : null;
+    if (normal && normal.dot(ray.ray.direction) > 0) normal.negate();
+    this.hit = hit;
+    this.onPick({ object: extras.object, part: extras.part, material: extras.material, point: hit.point.toArray(), normal: normal && normal.toArray() });
   }
 
   // The keyboard's orbit, pan and zoom, for a person who does not use a mouse: the arrows orbit
@@ -263,6 +270,13 @@ export class Viewer {
     const orange = new THREE.LineBasicMaterial({ color: 0xff8800 });
     const line = (points, material) => new THREE.LineSegments(new THREE.BufferGeometry().setFromPoints(points), material);
     for (const l of lights) {
+      if (l.corners) {
+        // An area light: its emitting rectangle, drawn as light (unshaded), from both sides.
+        const c = l.corners.map((q) => new THREE.Vector3(...q));
+        const quad = new THREE.BufferGeometry().setFromPoints([c[0], c[1], c[2], c[0], c[2], c[3]]);
+        this.lamps.add(new THREE.Mesh(quad, new THREE.MeshBasicMaterial({ color: 0xfff4c0, side: THREE.DoubleSide, polygonOffset: true, polygonOffsetFactor: -2, polygonOffsetUnits: -2 })));
+        continue;
+      }
       if (!l.position) continue;
       const p = new THREE.Vector3(...l.position);
       const b = new THREE.Mesh(bulb, yellow);
@@ -299,6 +313,53 @@ export class Viewer {
       }
       if (segments.length) this.lamps.add(line(segments, orange));
     }
+  }
+
+  // Each calculation grid (`GridView`s): a rectangle's outline in cyan, or a list's points; a
+  // computed grid (`computed(name)`: {url, legendPx, colours}) drawn over it, a rectangle as
+  // its map (the server's PNG without the legend under it: u to the right, v up), a list's
+  // points in their colours (linear sRGB).
+  placeGrids(grids, computed = () => null) {
+    this.grids.clear();
+    const cyan = new THREE.LineBasicMaterial({ color: 0x00c8ff });
+    const size = this.bounds ? this.bounds.getSize(new THREE.Vector3()).length() : 10;
+    for (const g of grids) {
+      const result = computed(g.name);
+      if (g.corners) {
+        const c = g.corners.map((p) => new THREE.Vector3(...p));
+        this.grids.add(new THREE.LineLoop(new THREE.BufferGeometry().setFromPoints(c), cyan));
+        if (result && result.url) this.grids.add(this.gridMap(c, result));
+      } else {
+        const points = g.points.map((p) => new THREE.Vector3(...p));
+        const geometry = new THREE.BufferGeometry().setFromPoints(points);
+        const colours = result && result.colours ? result.colours : points.map(() => [0, 0.78, 1]);
+        geometry.setAttribute('color', new THREE.Float32BufferAttribute(colours.flat(), 3));
+        const material = new THREE.PointsMaterial({ size: size / 150, vertexColors: true });
+        this.grids.add(new THREE.Points(geometry, material));
+      }
+    }
+    this.draw();
+  }
+
+  // A quad over the corners `c` textured with the grid's map.
+  gridMap(c, result) {
+    const geometry = new THREE.BufferGeometry().setFromPoints([c[0], c[1], c[2], c[0], c[2], c[3]]);
+    geometry.setAttribute('uv', new THREE.Float32BufferAttribute([0, 0, 1, 0, 1, 1, 0, 0, 1, 1, 0, 1], 2));
+    const texture = new THREE.TextureLoader().load(result.url, (t) => {
+      // The legend is the bottom rows of the picture: the quad shows the rows above it.
+      const h = t.image.height;
+      t.offset.set(0, result.legendPx / h);
+      t.repeat.set(1, (h - result.legendPx) / h);
+      t.needsUpdate = true;
+      this.draw();
+    });
+    texture.colorSpace = THREE.SRGBColorSpace;
+    const material = new THREE.MeshBasicMaterial({
+      map: texture, side: THREE.DoubleSide, polygonOffset: true, polygonOffsetFactor: -2, polygonOffsetUnits: -2,
+    });
+    const mesh = new THREE.Mesh(geometry, material);
+    mesh.userData.grid = true;
+    return mesh;
   }
 
   // The preview's sun along the scene's sun direction, its shadow camera over the model.

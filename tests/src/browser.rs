@@ -313,6 +313,21 @@ impl Browser {
         shot
     }
 
+    /// The error the page shows beside the row of controls (or the form) that `button` (a
+    /// selector) is in, where the studio shows the refusal of an action taken there, once it
+    /// shows.
+    pub fn refusal_beside(&mut self, button: &str) -> String {
+        let quoted = serde_json::to_string(button).unwrap();
+        let shown = format!(
+            "(() => {{ const host = document.querySelector({quoted}) \
+               .closest('.actions, form, .fields, .choices, .overlay-head, .panel-body, dialog'); \
+               const p = host && host.nextElementSibling; \
+               return p && p.classList.contains('action-problem') && p.checkVisibility() ? p.textContent : ''; }})()"
+        );
+        self.wait_for("the refusal beside the button", &format!("{shown} !== ''"));
+        self.eval(&shown).as_str().unwrap().to_owned()
+    }
+
     /// The page-pixel rectangle (x, y, width, height) of the element `selector`.
     pub fn rect(&mut self, selector: &str) -> [f64; 4] {
         let quoted = serde_json::to_string(selector).unwrap();

@@ -103,23 +103,9 @@ fn download_shown(b: &mut Browser, c: &Coordinator, d: &std::path::Path) -> Path
 /// `words` among them, beside the button, and stays at revision `revision`.
 fn refused(b: &mut Browser, button: &str, words: &str, revision: &str) {
     b.click(button);
-    let problem = refusal_beside(b, button);
+    let problem = b.refusal_beside(button);
     assert!(problem.contains(words), "{problem}");
     assert_eq!(b.eval("document.getElementById('view').dataset.revision"), revision);
-}
-
-/// The refusal the page shows beside the row of controls (or the form) that `button` (a
-/// selector) is in, once it shows.
-fn refusal_beside(b: &mut Browser, button: &str) -> String {
-    let quoted = serde_json::to_string(button).unwrap();
-    let shown = format!(
-        "(() => {{ const host = document.querySelector({quoted}) \
-           .closest('.actions, form, .fields, .choices, .overlay-head, .panel-body, dialog'); \
-           const p = host && host.nextElementSibling; \
-           return p && p.classList.contains('action-problem') && p.checkVisibility() ? p.textContent : ''; }})()"
-    );
-    b.wait_for("the refusal beside the button", &format!("{shown} !== ''"));
-    b.eval(&shown).as_str().unwrap().to_owned()
 }
 
 /// The studio with the Aosta scene (160 × 90 px) rendered once, open in a browser signed in:
@@ -465,7 +451,7 @@ fn a_note_pinned_to_the_facade_survives_a_restart() {
     std::fs::write(&photo, restauro_tests::browser::solid_png(40, 30, photo_rgb)).unwrap();
     b.choose_file("#note-new-images", &photo.canonicalize().unwrap());
     b.click("#note-save");
-    let problem = refusal_beside(&mut b, "#note-save");
+    let problem = b.refusal_beside("#note-save");
     assert!(problem.contains("is not a web address"), "{problem}");
     let link = "https://example.org/survey/2019/arch-3.pdf";
     set_value(&mut b, "note-new-links", link);

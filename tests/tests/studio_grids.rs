@@ -254,9 +254,8 @@ fn an_area_luminaire_placed_from_the_page_is_kept_with_its_sizes_and_drawn() {
     set_value(&mut b, "lum-luminance", "3000");
     set_value(&mut b, "lum-width", "");
     b.click("#lum-save");
-    b.wait_for("the refusal", "!document.getElementById('problem').hidden");
-    let problem = b.eval("document.getElementById('problem').textContent");
-    assert!(problem.as_str().unwrap().contains(".u: an edge of length 0"), "{problem}");
+    let problem = b.refusal_beside("#lum-save");
+    assert!(problem.contains(".u: an edge of length 0"), "{problem}");
     set_value(&mut b, "lum-width", "1.2");
     set_value(&mut b, "lum-height", "0.6");
     b.click("#lum-save");

@@ -163,6 +163,7 @@ fn a_grid_placed_by_clicking_is_computed_as_the_command_line_computes_it() {
     assert!(cli[1].parse::<f64>().unwrap() > 0.0, "the sun and sky light the paving: {line}");
 
     the_map_is_drawn_where_the_grid_is(&mut b, &before, &scene, &out.join("work-plane.png"));
+    b.docs_picture(&shots(), "studio-grids.png");
 
     // Renamed, then deleted.
     set_value(&mut b, "grid-name", "paving");

@@ -156,6 +156,17 @@ pub struct StudioFarm {
     pub token: PathBuf,
 }
 
+impl StudioFarm {
+    /// The studio's page in a headless Chromium of `width × height`, signed in by the token in
+    /// its address, once it has opened the scene the farm holds (send one first).
+    pub fn page_in_browser(&self, width: u32, height: u32) -> browser::Browser {
+        let mut b = browser::Browser::launch(width, height);
+        b.goto(&format!("{}#token={CLIENT_TOKEN}", self.page));
+        b.wait_for("the model", "document.getElementById('view').dataset.scene");
+        b
+    }
+}
+
 impl Drop for Coordinator {
     fn drop(&mut self) {
         let _ = self.child.kill();

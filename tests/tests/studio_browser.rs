@@ -511,9 +511,7 @@ fn a_scene_folder_is_opened_from_the_page() {
     let farm = Coordinator::studio_farm(d, 160, 90);
     let c = &farm.coordinator;
     let first = submit(&farm.scene, &["--spp", "1"], &c.url, &farm.token);
-    let mut b = Browser::launch(1280, 900);
-    b.goto(&format!("{}#token={CLIENT_TOKEN}", farm.page));
-    b.wait_for("the model", "document.getElementById('view').dataset.scene");
+    let mut b = farm.page_in_browser(1280, 900);
     let old = b.eval("document.getElementById('view').dataset.scene");
 
     // Another scene: the same facade under an overcast sky, as a tar of its folder.
@@ -772,93 +770,8 @@ fn the_model_has_the_whole_window_and_the_panels_fold_beside_it() {
         ));
         assert_eq!(shown, true, "{key} is not among the shortcuts: {listed}");
     }
-    let visible = |b: &mut Browser, id: &str| {
-        b.eval(&format!("document.getElementById('{id}').checkVisibility()")) == true
-    };
     for (w, h) in [(1280u32, 720u32), (1920, 1080)] {
-        b.call(
-            "Emulation.setDeviceMetricsOverride",
-            serde_json::json!({ "width": w, "height": h, "deviceScaleFactor": 1, "mobile": false }),
-        );
-        b.wait_for("the window's size", &format!("innerWidth === {w} && innerHeight === {h}"));
-        view_follows_its_size(&mut b);
-        let open = view_share(&mut b);
-        assert!(
-            open >= 0.6,
-            "{w} × {h}: the view covers {:.0} % with the panels open",
-            open * 100.0
-        );
-        assert!(!page_scrolls(&mut b), "{w} × {h}: the page scrolls");
-        let sideways = "(() => { const p = document.getElementById('panels'); return p.scrollWidth > p.clientWidth; })()";
-        let wide = "(() => { const r = document.getElementById('panels').getBoundingClientRect().right; \
-                    return [...document.querySelectorAll('#panels *')].filter(e => e.getBoundingClientRect().right > r + 0.5) \
-                      .map(e => e.id || e.tagName).slice(0, 8); })()";
-        assert_eq!(
-            b.eval(sideways),
-            false,
-            "{w} × {h}: the panels are wider than the side bar: {}",
-            b.eval(wide)
-        );
-        b.screenshot(&shots().join(format!("50-window-{w}x{h}.png")));
-
-        // Each panel's header folds its body and unfolds it again.
-        for body in &heads {
-            let head = format!("#sidebar .panel-head button[aria-controls='{body}']");
-            let expanded =
-                format!("document.querySelector(\"{head}\").getAttribute('aria-expanded')");
-            assert_eq!(b.eval(&expanded), "true", "{body}");
-            assert!(visible(&mut b, body), "{body} is not shown");
-            b.click(&head);
-            assert_eq!(b.eval(&expanded), "false", "{body}");
-            assert!(!visible(&mut b, body), "{body} is still shown, folded");
-            assert!(!page_scrolls(&mut b), "{w} × {h}: the page scrolls, {body} folded");
-            b.click(&head);
-            assert_eq!(b.eval(&expanded), "true", "{body}");
-            assert!(visible(&mut b, body), "{body} is not shown again");
-        }
-
-        // P folds the side bar away: the view has the whole window; P again brings it back.
-        b.press("p");
-        b.wait_for("the side bar folded", "!document.getElementById('sidebar').checkVisibility()");
-        assert_eq!(
-            b.eval("document.getElementById('sidebar-toggle').getAttribute('aria-expanded')"),
-            "false"
-        );
-        view_follows_its_size(&mut b);
-        let folded = view_share(&mut b);
-        assert!(folded > 0.99, "{w} × {h}: the view covers {:.0} % folded", folded * 100.0);
-        assert!(!page_scrolls(&mut b), "{w} × {h}: the page scrolls, folded");
-        b.screenshot(&shots().join(format!("51-window-{w}x{h}-folded.png")));
-        b.press("p");
-        b.wait_for("the side bar back", "document.getElementById('sidebar').checkVisibility()");
-        view_follows_its_size(&mut b);
-        assert!((view_share(&mut b) - open).abs() < 1e-9, "{w} × {h}: not as it was");
-
-        // A panel's key, the side bar folded: the side bar opens, scrolled to that panel, its
-        // header focused; the key again folds it, and once more opens it.
-        b.press("p");
-        b.wait_for("the side bar folded", "!document.getElementById('sidebar').checkVisibility()");
-        b.press("6");
-        b.wait_for("the side bar back", "document.getElementById('sidebar').checkVisibility()");
-        let in_sight = b.eval(
-            "(() => { const p = document.getElementById('panels').getBoundingClientRect(), \
-             h = document.getElementById('farm').getBoundingClientRect(); \
-             return document.activeElement.getAttribute('aria-controls') === 'farm-body' && \
-               h.top >= p.top - 1 && h.top < p.bottom; })()",
-        );
-        assert_eq!(in_sight, true, "{w} × {h}: the farm is not in sight after its key");
-        b.press("6");
-        assert!(!visible(&mut b, "farm-body"), "{w} × {h}: 6 did not fold the farm");
-        b.press("6");
-        assert!(visible(&mut b, "farm-body"), "{w} × {h}: 6 did not open the farm");
-        b.screenshot(&shots().join(format!("52-window-{w}x{h}-farm.png")));
-        // The light panel, open but scrolled out of sight: its key brings it into sight.
-        b.press("3");
-        let light = "(() => { const p = document.getElementById('panels').getBoundingClientRect(), \
-                     h = document.getElementById('light-panel').getBoundingClientRect(); \
-                     return document.getElementById('light').checkVisibility() && h.top >= p.top - 1 && h.top < p.bottom; })()";
-        assert_eq!(b.eval(light), true, "{w} × {h}: 3 did not bring the light panel into sight");
-        b.screenshot(&shots().join(format!("53-window-{w}x{h}-light.png")));
+        the_panels_fold_at(&mut b, w, h, &heads);
     }
 
     // Esc closes what shows over the view, the one in front first.
@@ -871,4 +784,87 @@ fn the_model_has_the_whole_window_and_the_panels_fold_beside_it() {
     );
     b.click("#compare-close");
     assert_eq!(b.eval("document.getElementById('compare-stage').hidden"), true);
+}
+
+/// At a `w × h` window: the view covers most of it with the panels open and all of it with the
+/// side bar folded, the page never scrolls, each panel (`heads`: their bodies' ids) folds and
+/// opens under its header, and P and a panel's key do what the shortcuts say.
+fn the_panels_fold_at(b: &mut Browser, w: u32, h: u32, heads: &[String]) {
+    let visible = |b: &mut Browser, id: &str| {
+        b.eval(&format!("document.getElementById('{id}').checkVisibility()")) == true
+    };
+    b.window_size(w, h);
+    view_follows_its_size(b);
+    let open = view_share(b);
+    assert!(open >= 0.6, "{w} × {h}: the view covers {:.0} % with the panels open", open * 100.0);
+    assert!(!page_scrolls(b), "{w} × {h}: the page scrolls");
+    let sideways = "(() => { const p = document.getElementById('panels'); return p.scrollWidth > p.clientWidth; })()";
+    let wide = "(() => { const r = document.getElementById('panels').getBoundingClientRect().right; \
+                return [...document.querySelectorAll('#panels *')].filter(e => e.getBoundingClientRect().right > r + 0.5) \
+                  .map(e => e.id || e.tagName).slice(0, 8); })()";
+    assert_eq!(
+        b.eval(sideways),
+        false,
+        "{w} × {h}: the panels are wider than the side bar: {}",
+        b.eval(wide)
+    );
+    b.screenshot(&shots().join(format!("50-window-{w}x{h}.png")));
+
+    // Each panel's header folds its body and unfolds it again.
+    for body in heads {
+        let head = format!("#sidebar .panel-head button[aria-controls='{body}']");
+        let expanded = format!("document.querySelector(\"{head}\").getAttribute('aria-expanded')");
+        assert_eq!(b.eval(&expanded), "true", "{body}");
+        assert!(visible(b, body), "{body} is not shown");
+        b.click(&head);
+        assert_eq!(b.eval(&expanded), "false", "{body}");
+        assert!(!visible(b, body), "{body} is still shown, folded");
+        assert!(!page_scrolls(b), "{w} × {h}: the page scrolls, {body} folded");
+        b.click(&head);
+        assert_eq!(b.eval(&expanded), "true", "{body}");
+        assert!(visible(b, body), "{body} is not shown again");
+    }
+
+    // P folds the side bar away: the view has the whole window; P again brings it back.
+    b.press("p");
+    b.wait_for("the side bar folded", "!document.getElementById('sidebar').checkVisibility()");
+    assert_eq!(
+        b.eval("document.getElementById('sidebar-toggle').getAttribute('aria-expanded')"),
+        "false"
+    );
+    view_follows_its_size(b);
+    let folded = view_share(b);
+    assert!(folded > 0.99, "{w} × {h}: the view covers {:.0} % folded", folded * 100.0);
+    assert!(!page_scrolls(b), "{w} × {h}: the page scrolls, folded");
+    b.screenshot(&shots().join(format!("51-window-{w}x{h}-folded.png")));
+    b.press("p");
+    b.wait_for("the side bar back", "document.getElementById('sidebar').checkVisibility()");
+    view_follows_its_size(b);
+    assert!((view_share(b) - open).abs() < 1e-9, "{w} × {h}: not as it was");
+
+    // A panel's key, the side bar folded: the side bar opens, scrolled to that panel, its
+    // header focused; the key again folds it, and once more opens it.
+    b.press("p");
+    b.wait_for("the side bar folded", "!document.getElementById('sidebar').checkVisibility()");
+    b.press("6");
+    b.wait_for("the side bar back", "document.getElementById('sidebar').checkVisibility()");
+    let in_sight = b.eval(
+        "(() => { const p = document.getElementById('panels').getBoundingClientRect(), \
+         h = document.getElementById('farm').getBoundingClientRect(); \
+         return document.activeElement.getAttribute('aria-controls') === 'farm-body' && \
+           h.top >= p.top - 1 && h.top < p.bottom; })()",
+    );
+    assert_eq!(in_sight, true, "{w} × {h}: the farm is not in sight after its key");
+    b.press("6");
+    assert!(!visible(b, "farm-body"), "{w} × {h}: 6 did not fold the farm");
+    b.press("6");
+    assert!(visible(b, "farm-body"), "{w} × {h}: 6 did not open the farm");
+    b.screenshot(&shots().join(format!("52-window-{w}x{h}-farm.png")));
+    // The light panel, open but scrolled out of sight: its key brings it into sight.
+    b.press("3");
+    let light = "(() => { const p = document.getElementById('panels').getBoundingClientRect(), \
+                 h = document.getElementById('light-panel').getBoundingClientRect(); \
+                 return document.getElementById('light').checkVisibility() && h.top >= p.top - 1 && h.top < p.bottom; })()";
+    assert_eq!(b.eval(light), true, "{w} × {h}: 3 did not bring the light panel into sight");
+    b.screenshot(&shots().join(format!("53-window-{w}x{h}-light.png")));
 }

@@ -137,43 +137,19 @@ fn close_poses(a: &Value, b: &Value) -> bool {
 const LAYER_LOADED: &str = "(() => { const i = document.getElementById('result-image'); \
     return !document.getElementById('result').hidden && i.complete && i.naturalWidth === 160; })()";
 
-/// A snapshot taken in the page stays over the view when it is done: the view's camera at its
-/// pose, the farm's PNG drawn at the view's height over the model (where the preview draws the
-/// model, the render has no sky), and closes when the camera moves; its thumbnail brings it
-/// back at its pose. At 1:1 each image pixel is one screen pixel, and the readout of a pixel is
-/// its luminance and CIELAB as the EXR files give them.
-#[test]
-fn a_finished_snapshot_stays_over_the_model_and_reads_out_its_pixels() {
-    if !available("studio_snapshots") {
-        return;
-    }
-    let dir = tempfile::tempdir().unwrap();
-    let d = dir.path();
-    let farm = Coordinator::studio_farm(d, 160, 90);
-    let c = &farm.coordinator;
-    // The scene reaches the farm with a render from the command line.
-    let first = submit(&farm.scene, &["--spp", "1"], &c.url, &farm.token);
-    let mut b = Browser::launch(1280, 720);
-    b.goto(&format!("{}#token={CLIENT_TOKEN}", farm.page));
-    b.wait_for("the model", "document.getElementById('view').dataset.revision === '0'");
-    // The panels folded away: the view has the whole window.
-    b.press("p");
-    // A snapshot of the view a little to the side of the scene's camera.
-    b.eval(
-        "(() => { const v = window.studioViewer, p = v.pose(); p.position[0] += 1.5; p.target[0] += 1.5; v.fly(p); })()",
-    );
-    let taken_at = pose(&mut b);
-    b.eval("document.getElementById('snap-spp').value = 2");
-    b.eval("document.getElementById('snapshot-form').requestSubmit()");
-    b.wait_for("the snapshot's layer", LAYER_LOADED);
-    let id = b.eval("document.getElementById('result').dataset.job").as_str().unwrap().to_owned();
-    assert_eq!(b.eval("document.getElementById('result').dataset.aligned"), "true");
-    assert!(close_poses(&pose(&mut b), &taken_at), "the view left the snapshot's pose");
-    let files = fetch(c, d, &farm.token, &id);
-    let (png, width) = png_rgb(&std::fs::read(file(&files, ".png")).unwrap());
-    assert_eq!(width, 160);
-    let rendered = exr(&file(&files, ".exr"));
+/// Where the layer's picture lies at fit: its left and top (page px), its scale (screen px an
+/// image px), the stage's width, and the image rows clear of the bar and the foot.
+struct Fit {
+    x: f64,
+    y: f64,
+    s: f64,
+    stage_width: f64,
+    rows: std::ops::Range<usize>,
+}
 
+/// At fit the layer is the view's height, centred, and each image pixel's middle shows the
+/// farm's PNG (160 × 90).
+fn the_layer_at_fit_is_the_png(b: &mut Browser, png: &[[u8; 3]]) -> Fit {
     // At fit: the view's height, centred; each image pixel's middle shows the PNG's pixel.
     let stage = b.rect("#stage");
     let [x, y, w, h] = b.rect("#result-image");
@@ -202,6 +178,18 @@ fn a_finished_snapshot_stays_over_the_model_and_reads_out_its_pixels() {
     let checked = rows.len() * 160;
     assert!(off * 50 < checked, "{off} of {checked} pixels of the layer differ from the PNG");
 
+    Fit { x, y, s, stage_width: stage[2], rows }
+}
+
+/// Moving the camera closes the layer; back at the snapshot's pose (`taken_at`), the model in
+/// the view is where the render's surfaces are (`emitter`: the render's sky pixels).
+fn the_model_lines_up_under_the_layer(
+    b: &mut Browser,
+    taken_at: &Value,
+    fit: &Fit,
+    emitter: &[bool],
+) {
+    let Fit { x, y, s, stage_width, ref rows } = *fit;
     // Moving the camera closes the layer; the model under it is where the render's surfaces are.
     b.eval(
         "(() => { const v = window.studioViewer, p = v.pose(); p.position[1] += 0.8; v.fly(p); })()",
@@ -213,13 +201,12 @@ fn a_finished_snapshot_stays_over_the_model_and_reads_out_its_pixels() {
     );
     b.eval(&back);
     let model = b.screenshot(&shots().join("61-model-under-the-layer.png"));
-    let (view, _) = png_rgb(&model);
-    let emitter = rendered.emitter.clone().expect("the render's emitter channel");
+    let (view, sw) = png_rgb(&model);
     let (mut agree, mut all) = (0, 0);
     for iy in rows.clone() {
         for ix in 2..158 {
             let (sx, sy) = (x + (ix as f64 + 0.5) * s, y + (iy as f64 + 0.5) * s);
-            if sx < 0.0 || sx >= stage[2] {
+            if sx < 0.0 || sx >= stage_width {
                 continue;
             }
             let sky_in_view = is_background(view[sy as usize * sw + sx as usize]);
@@ -233,6 +220,87 @@ fn a_finished_snapshot_stays_over_the_model_and_reads_out_its_pixels() {
         share * 100.0
     );
     assert!(share > 0.9, "the layer does not line up with the model: {share}");
+}
+
+/// The readout of a pixel of the model (at 1:1): luminance, CIELAB as rendered and as seen, as
+/// the farm's EXR files (`files`) give them.
+fn the_readout_is_the_exrs(
+    b: &mut Browser,
+    d: &Path,
+    files: &Path,
+    rendered: &XyzImage,
+    emitter: &[bool],
+) {
+    // The readout of a pixel of the model: luminance, CIELAB as rendered and as seen.
+    let (px, py) = (0..160 * 90)
+        .map(|i| (i % 160, i / 160))
+        .find(|&(ix, iy)| iy > 40 && ix > 60 && !emitter[iy * 160 + ix])
+        .unwrap();
+    let rect = b.rect("#result-image");
+    let said = point_at(
+        b,
+        "pixel-readout",
+        (rect[0] + px as f64 + 0.5, rect[1] + py as f64 + 0.5),
+        (px, py),
+    );
+    b.screenshot(&shots().join("63-readout.png"));
+    let i = py * 160 + px;
+    let luminance = f64::from(rendered.pixels[i][1]);
+    let shown = numbers_after(&said, "luminance ", 1)[0];
+    assert!((shown - luminance).abs() <= 1e-3 * luminance, "{said}: the EXR's Y is {luminance}");
+    let exr_path = file(files, ".exr");
+    let white = cli_compare(d, &exr_path, &exr_path, "self")["white_luminance"].as_f64().unwrap();
+    let want = cielab(rendered.pixels[i], white);
+    let got = numbers_after(&said, "as rendered ", 3);
+    for k in 0..3 {
+        assert!((got[k] - want[k]).abs() < 0.011, "{said}: L*a*b* as rendered {want:?}");
+    }
+    let seen = exr(&file(files, "-retinex.exr"));
+    let want = cielab(seen.pixels[i], 1.0);
+    let got = numbers_after(&said, "as seen ", 3);
+    for k in 0..3 {
+        assert!((got[k] - want[k]).abs() < 0.011, "{said}: L*a*b* as seen {want:?}");
+    }
+}
+
+/// A snapshot taken in the page stays over the view when it is done: the view's camera at its
+/// pose, the farm's PNG drawn at the view's height over the model (where the preview draws the
+/// model, the render has no sky), and closes when the camera moves; its thumbnail brings it
+/// back at its pose. At 1:1 each image pixel is one screen pixel, and the readout of a pixel is
+/// its luminance and CIELAB as the EXR files give them.
+#[test]
+fn a_finished_snapshot_stays_over_the_model_and_reads_out_its_pixels() {
+    if !available("studio_snapshots") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let farm = Coordinator::studio_farm(d, 160, 90);
+    let c = &farm.coordinator;
+    // The scene reaches the farm with a render from the command line.
+    let first = submit(&farm.scene, &["--spp", "1"], &c.url, &farm.token);
+    let mut b = farm.page_in_browser(1280, 720);
+    // The panels folded away: the view has the whole window.
+    b.press("p");
+    // A snapshot of the view a little to the side of the scene's camera.
+    b.eval(
+        "(() => { const v = window.studioViewer, p = v.pose(); p.position[0] += 1.5; p.target[0] += 1.5; v.fly(p); })()",
+    );
+    let taken_at = pose(&mut b);
+    b.eval("document.getElementById('snap-spp').value = 2");
+    b.eval("document.getElementById('snapshot-form').requestSubmit()");
+    b.wait_for("the snapshot's layer", LAYER_LOADED);
+    let id = b.eval("document.getElementById('result').dataset.job").as_str().unwrap().to_owned();
+    assert_eq!(b.eval("document.getElementById('result').dataset.aligned"), "true");
+    assert!(close_poses(&pose(&mut b), &taken_at), "the view left the snapshot's pose");
+    let files = fetch(c, d, &farm.token, &id);
+    let (png, width) = png_rgb(&std::fs::read(file(&files, ".png")).unwrap());
+    assert_eq!(width, 160);
+    let rendered = exr(&file(&files, ".exr"));
+
+    let fit = the_layer_at_fit_is_the_png(&mut b, &png);
+    let emitter = rendered.emitter.clone().expect("the render's emitter channel");
+    the_model_lines_up_under_the_layer(&mut b, &taken_at, &fit, &emitter);
 
     // The strip lists the snapshot; its thumbnail shows it again, at its pose (from elsewhere).
     b.press("h");
@@ -261,36 +329,7 @@ fn a_finished_snapshot_stays_over_the_model_and_reads_out_its_pixels() {
     assert_eq!(b.rect("#result-image")[2], 320.0);
     b.click("#result-one");
 
-    // The readout of a pixel of the model: luminance, CIELAB as rendered and as seen.
-    let (px, py) = (0..160 * 90)
-        .map(|i| (i % 160, i / 160))
-        .find(|&(ix, iy)| iy > 40 && ix > 60 && !emitter[iy * 160 + ix])
-        .unwrap();
-    let rect = b.rect("#result-image");
-    let said = point_at(
-        &mut b,
-        "pixel-readout",
-        (rect[0] + px as f64 + 0.5, rect[1] + py as f64 + 0.5),
-        (px, py),
-    );
-    b.screenshot(&shots().join("63-readout.png"));
-    let i = py * 160 + px;
-    let luminance = f64::from(rendered.pixels[i][1]);
-    let shown = numbers_after(&said, "luminance ", 1)[0];
-    assert!((shown - luminance).abs() <= 1e-3 * luminance, "{said}: the EXR's Y is {luminance}");
-    let exr_path = file(&files, ".exr");
-    let white = cli_compare(d, &exr_path, &exr_path, "self")["white_luminance"].as_f64().unwrap();
-    let want = cielab(rendered.pixels[i], white);
-    let got = numbers_after(&said, "as rendered ", 3);
-    for k in 0..3 {
-        assert!((got[k] - want[k]).abs() < 0.011, "{said}: L*a*b* as rendered {want:?}");
-    }
-    let seen = exr(&file(&files, "-retinex.exr"));
-    let want = cielab(seen.pixels[i], 1.0);
-    let got = numbers_after(&said, "as seen ", 3);
-    for k in 0..3 {
-        assert!((got[k] - want[k]).abs() < 0.011, "{said}: L*a*b* as seen {want:?}");
-    }
+    the_readout_is_the_exrs(&mut b, d, &files, &rendered, &emitter);
 }
 
 /// The pixel endpoint refuses what it cannot read, naming the field.
@@ -377,10 +416,30 @@ fn two_snapshots_chosen_in_the_strip_compare_over_the_whole_view() {
     let mean = cli["delta_e00"]["mean"].as_f64().unwrap();
     assert!(stats.as_str().unwrap().contains(&format!("mean {mean:.2}")), "{stats}: {cli}");
 
-    // The ΔE00 under the pointer, where the two differ most.
+    the_delta_e_under_the_pointer_is_the_exrs(
+        &mut b,
+        c,
+        &cli,
+        [&a_exr, &b_exr],
+        rect,
+        [&found, &cleaned],
+    );
+}
+/// The ΔE00 under the pointer, where the two snapshots differ most: the CIEDE2000 of the two
+/// EXRs' pixels (`exrs`, A's and B's) in the white `restauro compare` took (`cli`, its
+/// document), shown in the map's colour at that pixel. `rect`: the pictures at 1:1 on the page.
+fn the_delta_e_under_the_pointer_is_the_exrs(
+    b: &mut Browser,
+    c: &Coordinator,
+    cli: &Value,
+    exrs: [&Path; 2],
+    rect: [f64; 4],
+    jobs: [&str; 2],
+) {
+    let ([a_exr, b_exr], [found, cleaned]) = (exrs, jobs);
     b.click("#compare-delta-here");
     let white = cli["white_luminance"].as_f64().unwrap();
-    let (a, bb) = (exr(&a_exr), exr(&b_exr));
+    let (a, bb) = (exr(a_exr), exr(b_exr));
     let light = |m: &XyzImage, i: usize| m.emitter.as_ref().is_some_and(|e| e[i]);
     let lab = |p: [f32; 3]| {
         let [l, a, b] = cielab(p, white);
@@ -394,7 +453,7 @@ fn two_snapshots_chosen_in_the_strip_compare_over_the_whole_view() {
         .unwrap();
     let (px, py) = (i % 160, i / 160);
     let said = point_at(
-        &mut b,
+        b,
         "compare-readout",
         (rect[0] + px as f64 + 0.5, rect[1] + py as f64 + 0.5),
         (px, py),

@@ -266,25 +266,8 @@ impl Worker {
                 info!("stopped before reaching the coordinator: no tile in hand");
                 return self.drain(&mut reports, None).await;
             };
-            let reply = match client
-                .register(pb::RegisterRequest {
-                    protocol_version: self.args.protocol_version,
-                    name: name.clone(),
-                    capacity,
-                    build: format!("restauro-worker {}", env!("CARGO_PKG_VERSION")),
-                    identity: identity.to_vec(),
-                })
-                .await
-            {
-                Ok(r) => r.into_inner(),
-                Err(status) if is_refusal(&status) => {
-                    return Err(WorkerError::Refused(status));
-                }
-                Err(status) => {
-                    warn!("registering: {}; retrying", status.message());
-                    tokio::time::sleep(Duration::from_millis(200)).await;
-                    continue;
-                }
+            let Some(reply) = self.register(&mut client, &name, capacity, &identity).await? else {
+                continue;
             };
             let session = reply.session.ok_or(WorkerError::NoSession)?;
             info!(worker = session.worker_id, %name, capacity, "registered");
@@ -354,6 +337,33 @@ impl Worker {
                         Err(e) => warn!("{}", restauro_proto::transport::error_chain(&e)),
                     }
                 }
+            }
+        }
+    }
+
+    /// Registers with the coordinator as `name`: its reply, or `None` when the call failed in
+    /// a way worth retrying (after a pause); a refusal (a bad token, another protocol) ends it.
+    async fn register(
+        &self,
+        client: &mut Client,
+        name: &str,
+        capacity: u32,
+        identity: &[u8],
+    ) -> Result<Option<pb::RegisterReply>> {
+        let request = pb::RegisterRequest {
+            protocol_version: self.args.protocol_version,
+            name: name.to_owned(),
+            capacity,
+            build: format!("restauro-worker {}", env!("CARGO_PKG_VERSION")),
+            identity: identity.to_vec(),
+        };
+        match client.register(request).await {
+            Ok(r) => Ok(Some(r.into_inner())),
+            Err(status) if is_refusal(&status) => Err(WorkerError::Refused(status)),
+            Err(status) => {
+                warn!("registering: {}; retrying", status.message());
+                tokio::time::sleep(Duration::from_millis(200)).await;
+                Ok(None)
             }
         }
     }

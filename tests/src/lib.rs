@@ -156,6 +156,21 @@ pub struct StudioFarm {
     pub token: PathBuf,
 }
 
+/// Downloads the scene revision the studio's page shows, by its own link, as a folder under
+/// `d/downloaded`: the path of its `scene.toml`.
+pub fn download_shown(b: &mut browser::Browser, c: &Coordinator, d: &Path) -> PathBuf {
+    let href = b.eval("document.getElementById('download').getAttribute('href')");
+    let bearer = format!("Bearer {CLIENT_TOKEN}");
+    let auth = [("Authorization", bearer.as_str())];
+    let tar =
+        http::request(c.studio.as_deref().unwrap(), "GET", href.as_str().unwrap(), &auth, b"");
+    assert_eq!(tar.status, 200, "{}", tar.text());
+    let disposition = tar.header("content-disposition").unwrap().to_owned();
+    let name = disposition.split('"').nth(1).unwrap().trim_end_matches(".tar").to_owned();
+    tar::Archive::new(std::io::Cursor::new(tar.body)).unpack(d.join("downloaded")).unwrap();
+    d.join("downloaded").join(name).join("scene.toml")
+}
+
 impl StudioFarm {
     /// The studio's page in a headless Chromium of `width × height`, signed in by the token in
     /// its address, once it has opened the scene the farm holds (send one first).

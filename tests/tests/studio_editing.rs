@@ -12,10 +12,7 @@ use std::path::PathBuf;
 fn shots() -> PathBuf {
     PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("studio")
 }
-use restauro_tests::http::request;
-use restauro_tests::{CLIENT_TOKEN, Coordinator, client, submit, text};
-
-const BEARER: &str = "Bearer client-token-for-tests";
+use restauro_tests::{CLIENT_TOKEN, Coordinator, client, download_shown, submit, text};
 
 /// IEC 61966-2-1: an 8-bit sRGB value to linear.
 fn linear(v: u8) -> f64 {
@@ -84,19 +81,6 @@ fn set_value(b: &mut Browser, id: &str, value: &str) {
         "(() => {{ const e = document.getElementById('{id}'); e.value = {value:?}; \
          e.dispatchEvent(new Event('input')); e.dispatchEvent(new Event('change')); }})()"
     ));
-}
-
-/// Downloads the revision the page shows with its link, as a folder under `d/downloaded`:
-/// the path of its `scene.toml`.
-fn download_shown(b: &mut Browser, c: &Coordinator, d: &std::path::Path) -> PathBuf {
-    let href = b.eval("document.getElementById('download').getAttribute('href')");
-    let auth = [("Authorization", BEARER)];
-    let tar = request(c.studio.as_deref().unwrap(), "GET", href.as_str().unwrap(), &auth, b"");
-    assert_eq!(tar.status, 200, "{}", tar.text());
-    let disposition = tar.header("content-disposition").unwrap().to_owned();
-    let name = disposition.split('"').nth(1).unwrap().trim_end_matches(".tar").to_owned();
-    tar::Archive::new(std::io::Cursor::new(tar.body)).unpack(d.join("downloaded")).unwrap();
-    d.join("downloaded").join(name).join("scene.toml")
 }
 
 /// Clicks `button` and finds the edit refused: the page shows the server's words, with

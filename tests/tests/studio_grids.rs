@@ -6,8 +6,7 @@
 //! Screenshots in `<target>/tmp/studio/`.
 
 use restauro_tests::browser::{Browser, available, png_rgb};
-use restauro_tests::http::request;
-use restauro_tests::{CLIENT_TOKEN, Coordinator, StudioFarm, submit, text};
+use restauro_tests::{CLIENT_TOKEN, Coordinator, StudioFarm, download_shown, submit, text};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 
@@ -15,8 +14,6 @@ use std::path::{Path, PathBuf};
 fn shots() -> PathBuf {
     PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("studio")
 }
-
-const BEARER: &str = "Bearer client-token-for-tests";
 
 /// The studio with the Aosta scene (160 × 90 px) rendered once, open in a browser signed in.
 fn opened(d: &Path) -> (StudioFarm, Browser) {
@@ -47,17 +44,17 @@ fn click_view_at(b: &mut Browser, fx: f64, fy: f64) {
     }
 }
 
-/// Downloads the revision the page shows with its link, as a folder under `d/downloaded`:
-/// the path of its `scene.toml`.
-fn download_shown(b: &mut Browser, c: &Coordinator, d: &Path) -> PathBuf {
-    let href = b.eval("document.getElementById('download').getAttribute('href')");
-    let auth = [("Authorization", BEARER)];
-    let tar = request(c.studio.as_deref().unwrap(), "GET", href.as_str().unwrap(), &auth, b"");
-    assert_eq!(tar.status, 200, "{}", tar.text());
-    let disposition = tar.header("content-disposition").unwrap().to_owned();
-    let name = disposition.split('"').nth(1).unwrap().trim_end_matches(".tar").to_owned();
-    tar::Archive::new(std::io::Cursor::new(tar.body)).unpack(d.join("downloaded")).unwrap();
-    d.join("downloaded").join(name).join("scene.toml")
+/// Where the scene's point `p` (m, the scene's frame) is drawn: its index in a screenshot
+/// `width` device pixels wide, at `ratio` device pixels a CSS pixel.
+fn screen_pixel(b: &mut Browser, p: [f64; 3], ratio: f64, width: usize) -> usize {
+    let at = b.eval(&format!(
+        "(() => {{ const v = window.studioViewer, o = v.view.offset_m; \
+         const q = v.camera.position.clone().set({} - o[0], {} - o[2], -({} - o[1])); \
+         return v.onScreen(q); }})()",
+        p[0], p[2], p[1]
+    ));
+    let (x, y) = (at[0].as_f64().unwrap() * ratio, at[1].as_f64().unwrap() * ratio);
+    y as usize * width + x as usize
 }
 
 /// The grids' form shows a refusal naming `field`; the scene stays at `revision`.
@@ -198,18 +195,12 @@ fn the_map_is_drawn_where_the_grid_is(b: &mut Browser, before: &[u8], scene: &Pa
         for i in 0..10 {
             let (s, t) = ((f64::from(i) + 0.5) / 10.0, (f64::from(j) + 0.5) / 10.0);
             let p: [f64; 3] = std::array::from_fn(|k| origin[k] + s * u[k] + t * v[k]);
-            let at = b.eval(&format!(
-                "(() => {{ const v = window.studioViewer, o = v.view.offset_m; \
-                 const q = v.camera.position.clone().set({} - o[0], {} - o[2], -({} - o[1])); \
-                 return v.onScreen(q); }})()",
-                p[0], p[2], p[1]
-            ));
-            let (x, y) = (at[0].as_f64().unwrap() * ratio, at[1].as_f64().unwrap() * ratio);
-            let seen = shot[y as usize * width + x as usize];
+            let at = screen_pixel(b, p, ratio, width);
+            let seen = shot[at];
             let (mx, my) =
                 ((s * map_width as f64) as usize, ((1.0 - t) * map_height as f64) as usize);
             let want = map[my * map_width + mx];
-            let was = old[y as usize * width + x as usize];
+            let was = old[at];
             let far = |a: [u8; 3], b: [u8; 3]| {
                 (0..3).map(|k| (i32::from(a[k]) - i32::from(b[k])).abs()).max().unwrap()
             };
@@ -300,14 +291,7 @@ fn an_area_luminaire_placed_from_the_page_is_kept_with_its_sizes_and_drawn() {
         for i in 0..5 {
             let (s, t) = ((f64::from(i) + 0.5) / 5.0, (f64::from(j) + 0.5) / 5.0);
             let p: [f64; 3] = std::array::from_fn(|k| corner[k] + s * u[k] + t * v[k]);
-            let at = b.eval(&format!(
-                "(() => {{ const v = window.studioViewer, o = v.view.offset_m; \
-                 const q = v.camera.position.clone().set({} - o[0], {} - o[2], -({} - o[1])); \
-                 return v.onScreen(q); }})()",
-                p[0], p[2], p[1]
-            ));
-            let (x, y) = (at[0].as_f64().unwrap() * ratio, at[1].as_f64().unwrap() * ratio);
-            let seen = shot[y as usize * width + x as usize];
+            let seen = shot[screen_pixel(&mut b, p, ratio, width)];
             lit += usize::from((0..3).all(|k| (i32::from(seen[k]) - pale[k]).abs() <= 3));
         }
     }

@@ -23,11 +23,11 @@ pub struct BenchArgs {
     /// Tracer: the scene (the cluster benchmark renders the Aosta facade).
     #[arg(long, value_enum, default_value = "aosta")]
     pub scene: BenchScene,
-    /// Tracer: a scene file of your own instead of a built-in scene, rendered at --width ×
+    /// Tracer and adaptive: a scene file of your own instead of a built-in scene, rendered at --width ×
     /// --height with --spp; the path integrator uses the file's `max_depth`.
     #[arg(long, value_name = "SCENE.toml")]
     pub scene_file: Option<PathBuf>,
-    /// Tracer and cluster: samples per pixel.
+    /// Tracer and cluster: samples per pixel; adaptive: the cap.
     #[arg(long, default_value_t = 4)]
     pub spp: u32,
     /// Scheduler: simulated workers, each with its own connection.
@@ -50,6 +50,9 @@ pub enum BenchTarget {
     Retinex,
     /// The tracer: the BVH alone against whole Whitted samples, and the path integrator.
     Tracer,
+    /// Adaptive sampling against a fixed count: CPU time and per-pixel error against a
+    /// reference of 8 × --spp (use --spp 32 and a smaller --width/--height).
+    Adaptive,
     /// A render through an embedded cluster of two workers against the same one in-process.
     Cluster,
     /// The coordinator's leases and results per second over gRPC, with simulated workers.

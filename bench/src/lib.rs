@@ -1,11 +1,13 @@
 //! `restauro bench`: measured speed, printed as JSON. Tests never assert wall-clock times; this
 //! is where the figures in the issues' notes come from. Each target is a module: [`tracer`]
-//! (the tracer against its BVH alone), [`mesh`] (survey meshes as they grow), [`retinex`] (the
+//! (the tracer against its BVH alone), [`adaptive`] (adaptive sampling against a fixed count
+//! at equal error), [`mesh`] (survey meshes as they grow), [`retinex`] (the
 //! seen image), [`scheduler`] (the coordinator's leases over gRPC) and [`cluster`] (a render
 //! through the embedded cluster against one process). Scripts that measure beyond these (against
 //! a peer renderer, light by light, growth) are in this folder's `growth/`, `lights/` and
 //! `peer/`.
 
+pub mod adaptive;
 pub mod args;
 pub mod cluster;
 pub mod cpu;
@@ -27,6 +29,7 @@ use std::path::PathBuf;
 pub fn run(args: &BenchArgs) -> Result<String, BenchError> {
     match args.target {
         BenchTarget::Tracer => tracer::bench(args),
+        BenchTarget::Adaptive => adaptive::bench(args),
         BenchTarget::Cluster => cluster::bench(args),
         BenchTarget::Scheduler => scheduler::bench(args),
         BenchTarget::Mesh => mesh::bench(args),

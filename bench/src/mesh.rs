@@ -108,6 +108,7 @@ pub fn bench(args: &BenchArgs) -> Result<String, BenchError> {
             max_depth: 1,
             seed: 1,
             grids: false,
+            noise_target: 0.0,
         };
         let started = Instant::now();
         let prepared = PreparedScene::new(&scene, None, settings)?;

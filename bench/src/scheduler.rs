@@ -64,10 +64,10 @@ pub fn bench(args: &BenchArgs) -> Result<String> {
         matches!(l, restauro_scene::load::ResolvedLight::Sky { .. })
     };
     let layout = TileLayout {
-        spectral: false,
         sky: lights.iter().any(is_sky),
         lit: lights.iter().any(|l| !is_sky(l)),
         white: true,
+        ..TileLayout::default()
     };
     let cluster = LocalCluster::start_with(0, None, &["--no-retinex"])?;
     let runtime = cluster::runtime()?;

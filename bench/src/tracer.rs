@@ -321,6 +321,7 @@ pub fn bench(args: &BenchArgs) -> Result<String, BenchError> {
         max_depth: 1,
         seed: 1,
         grids: false,
+        noise_target: 0.0,
     };
     let whitted = PreparedScene::new(&scene, None, base)?;
     say("collecting the camera and shadow rays of every Whitted sample".into());

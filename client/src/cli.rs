@@ -154,9 +154,14 @@ pub struct RenderArgs {
     /// Override the scene's integrator.
     #[arg(long, value_enum)]
     pub integrator: Option<Integrator>,
-    /// Override the scene's samples per pixel.
+    /// Override the scene's samples per pixel (with --noise, the most a pixel takes).
     #[arg(long, value_parser = option_count)]
     pub spp: Option<NonZeroU32>,
+    /// Adaptive sampling: each pixel stops once the standard error of its mean is below this
+    /// fraction of its luminance (0.02: 2 %), --spp being the cap; 0 takes every sample.
+    /// Default: the scene's render.noise_target.
+    #[arg(long, value_name = "FRACTION", allow_negative_numbers = true)]
+    pub noise: Option<f32>,
     /// Override the image width (pixels).
     #[arg(long, value_parser = option_count)]
     pub width: Option<NonZeroU32>,

@@ -200,6 +200,7 @@ async fn submit_all(client: &mut Client, jobs: &[Job]) -> Result<Vec<JobStatus>>
             render: RenderOptions {
                 variant: job.kind.variant(),
                 samples_per_pixel: NonZeroU32::new(job.spp),
+                noise_target: job.noise_target,
                 grids: matches!(job.kind, Kind::Grid),
                 ..RenderOptions::default()
             },
@@ -232,6 +233,7 @@ fn render_record(
         width: plan.width,
         height: plan.height,
         samples_per_pixel: job.spp,
+        noise_target: job.noise_target,
         max_depth: render.max_depth,
         retinex: seen_method(),
         render_s,

@@ -30,6 +30,7 @@ pub fn run(args: &IlluminanceArgs) -> Result<String> {
         variants: Vec::new(),
         integrator: args.integrator,
         spp: args.spp,
+        noise: None,
         width: None,
         height: None,
         spectral: false,

@@ -36,6 +36,7 @@ pub fn render_options(args: &RenderArgs) -> RenderOptions {
         spectral: args.spectral,
         tile: args.tile,
         grids: args.grids,
+        noise_target: args.noise,
     }
 }
 
@@ -63,6 +64,7 @@ pub fn job_spec(args: &RenderArgs, priority: i32) -> Result<JobSpec> {
     spec.checked().map_err(|e| {
         let flag = match e.field {
             "render.samples_per_pixel" => "spp",
+            "render.noise_target" => "noise",
             other => other.trim_start_matches("render."),
         };
         anyhow::anyhow!("--{flag}: {}", e.problem)
@@ -214,6 +216,7 @@ fn run_in_process(args: &RenderArgs) -> Result<String> {
             sky: tile.sky.as_deref(),
             lit_by: tile.lit_by.as_deref(),
             white: tile.white.as_deref().filter(|_| layout.white),
+            samples: tile.samples.as_deref().filter(|_| layout.counts()),
         };
         let data = encode_tile(
             &tile.xyz,

@@ -184,6 +184,7 @@ impl JobRecord {
             white: false,
             tile: 1,
             grids: false,
+            noise_target: 0.0,
         };
         let was_final = matches!(
             old.get("state").and_then(|s| s.as_str()),
@@ -223,6 +224,7 @@ mod tests {
             white: false,
             tile: 8,
             grids: false,
+            noise_target: 0.0,
         };
         JobRecord::new(JobId::from("j"), JobSpec::default(), "{}".into(), plan, 0)
     }

@@ -5,14 +5,14 @@
 //! the fraction of its camera samples that saw the sky), then, when it has point or distant
 //! lights, each pixel's mask of the lights that light it (u32, [`LIT_BITS`] bits), then, for an
 //! image (not a calculation grid), each pixel's adapting white — X, Y, Z and the scotopic
-//! luminance of a perfect white diffuser at its surface (4 × f32) —, then, when the job keeps
-//! spectra, the 81 bands of every pixel (f32). All but the last make the tile's image part, the
-//! last its spectral part.
+//! luminance of a perfect white diffuser at its surface (4 × f32) —, then, with adaptive
+//! sampling, the samples each pixel took (u32), then, when the job keeps spectra, the 81 bands
+//! of every pixel (f32). All but the last make the tile's image part, the last its spectral part.
 //!
 //! Every value must be one a tracer can produce: radiometric quantities (X, Y, Z, the adapting
 //! white and spectral radiance) finite, not negative and within
 //! [`MAX_RADIOMETRIC`](crate::radiometric_bound::MAX_RADIOMETRIC) (why that bound: its module), a
-//! coverage between 0 and 1, a mask within its bits.
+//! coverage between 0 and 1, a mask within its bits, a sample count from 1 to the plan's cap.
 //! [`check_tile`] refuses anything else, so a broken or hostile worker cannot put NaN or ∞ into
 //! an image.
 
@@ -40,6 +40,9 @@ pub struct TileLayout {
     pub lit: bool,
     /// Each pixel's adapting white ([`WHITE_WORDS`] values).
     pub white: bool,
+    /// With adaptive sampling, the plan's samples per pixel: each pixel's count of samples
+    /// taken, at most this, follows the whites. 0: no counts.
+    pub samples_cap: u32,
 }
 
 /// The values of a pixel's adapting white: X, Y, Z (Y in cd/m²) and the scotopic luminance.
@@ -47,14 +50,28 @@ pub const WHITE_WORDS: usize = 4;
 
 impl From<&Plan> for TileLayout {
     fn from(plan: &Plan) -> Self {
-        TileLayout { spectral: plan.spectral, sky: plan.sky, lit: plan.lit, white: plan.white }
+        TileLayout {
+            spectral: plan.spectral,
+            sky: plan.sky,
+            lit: plan.lit,
+            white: plan.white,
+            samples_cap: if plan.adaptive() && !plan.grids { plan.samples_per_pixel } else { 0 },
+        }
     }
 }
 
 impl TileLayout {
     /// The 4-byte words per pixel of the image part.
     fn image_words(self) -> usize {
-        3 + usize::from(self.sky) + usize::from(self.lit) + WHITE_WORDS * usize::from(self.white)
+        3 + usize::from(self.sky)
+            + usize::from(self.lit)
+            + WHITE_WORDS * usize::from(self.white)
+            + usize::from(self.counts())
+    }
+
+    /// Whether tiles carry each pixel's count of samples.
+    pub fn counts(self) -> bool {
+        self.samples_cap > 0
     }
 }
 
@@ -70,7 +87,9 @@ struct Parts {
     sky: usize,
     lit: usize,
     white: usize,
+    samples: usize,
     spectral: usize,
+    cap: u32,
 }
 
 impl Parts {
@@ -79,8 +98,9 @@ impl Parts {
         let sky = pixels * 12;
         let lit = sky + if layout.sky { pixels * 4 } else { 0 };
         let white = lit + if layout.lit { pixels * 4 } else { 0 };
-        let spectral = white + if layout.white { pixels * 4 * WHITE_WORDS } else { 0 };
-        Parts { sky, lit, white, spectral }
+        let samples = white + if layout.white { pixels * 4 * WHITE_WORDS } else { 0 };
+        let spectral = samples + if layout.counts() { pixels * 4 } else { 0 };
+        Parts { sky, lit, white, samples, spectral, cap: layout.samples_cap }
     }
 
     /// The part a byte offset lies in, the pixel, and whether its value is in range.
@@ -93,7 +113,11 @@ impl Parts {
             a if a < self.white => {
                 ("light mask", (a - self.lit) / 4, u32::from_le_bytes(word) >> LIT_BITS == 0)
             }
-            a if a < self.spectral => ("adapting white", (a - self.white) / 16, radiometric),
+            a if a < self.samples => ("adapting white", (a - self.white) / 16, radiometric),
+            a if a < self.spectral => {
+                let n = u32::from_le_bytes(word);
+                ("sample count", (a - self.samples) / 4, (1..=self.cap).contains(&n))
+            }
             a => ("spectral radiance", (a - self.spectral) / (BANDS * 4), radiometric),
         }
     }
@@ -131,6 +155,10 @@ pub fn check_tile(
                     format!("{:#x}", u32::from_le_bytes(word)),
                     "a mask of at most 24 lights".to_owned(),
                 ),
+                "sample count" => (
+                    u32::from_le_bytes(word).to_string(),
+                    format!("1 to {} (the plan's samples per pixel)", layout.samples_cap),
+                ),
                 _ => (
                     f32::from_le_bytes(word).to_string(),
                     format!("finite, ≥ 0 and at most {MAX_RADIOMETRIC:e}"),
@@ -157,6 +185,9 @@ pub struct Framebuffer {
     pub lit_by: Option<Vec<u32>>,
     /// Each pixel's adapting white (X, Y, Z, scotopic luminance), for an image.
     pub white: Option<Vec<[f32; 4]>>,
+    /// With adaptive sampling, the samples each pixel took, and the cap.
+    pub samples: Option<Vec<u32>>,
+    samples_cap: u32,
 }
 
 impl Framebuffer {
@@ -170,6 +201,8 @@ impl Framebuffer {
             sky: layout.sky.then(|| vec![0.0; n]),
             lit_by: layout.lit.then(|| vec![0; n]),
             white: layout.white.then(|| vec![[0.0; 4]; n]),
+            samples: layout.counts().then(|| vec![0; n]),
+            samples_cap: layout.samples_cap,
         }
     }
 
@@ -179,6 +212,7 @@ impl Framebuffer {
             sky: self.sky.is_some(),
             lit: self.lit_by.is_some(),
             white: self.white.is_some(),
+            samples_cap: self.samples_cap,
         }
     }
 
@@ -217,9 +251,14 @@ impl Framebuffer {
             }
         }
         if let Some(white) = &mut self.white {
-            let values = floats(&data[parts.white..parts.spectral]);
+            let values = floats(&data[parts.white..parts.samples]);
             for (i, v) in values.chunks_exact(WHITE_WORDS).enumerate() {
                 white[at(self.width, rect, i, w)] = [v[0], v[1], v[2], v[3]];
+            }
+        }
+        if let Some(samples) = &mut self.samples {
+            for (i, word) in words(&data[parts.samples..parts.spectral]).into_iter().enumerate() {
+                samples[at(self.width, rect, i, w)] = u32::from_le_bytes(word);
             }
         }
         if let Some(planes) = &mut self.spectral {
@@ -245,6 +284,8 @@ pub struct TileExtras<'a> {
     pub sky: Option<&'a [f32]>,
     pub lit_by: Option<&'a [u32]>,
     pub white: Option<&'a [[f32; 4]]>,
+    /// With adaptive sampling, the samples each pixel took.
+    pub samples: Option<&'a [u32]>,
 }
 
 /// The wire bytes of a tile: XYZ, the sky coverage, light masks and adapting whites when given,
@@ -264,6 +305,9 @@ pub fn encode_tile<'a>(
     for v in extras.white.into_iter().flatten().flatten() {
         out.extend_from_slice(&v.to_le_bytes());
     }
+    for v in extras.samples.into_iter().flatten() {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
     if let Some(pixels) = spectral {
         for bands in pixels {
             for v in bands {
@@ -278,7 +322,8 @@ pub fn encode_tile<'a>(
 mod tests {
     use super::*;
 
-    const ALL: TileLayout = TileLayout { spectral: true, sky: true, lit: true, white: true };
+    const ALL: TileLayout =
+        TileLayout { spectral: true, sky: true, lit: true, white: true, samples_cap: 0 };
 
     #[test]
     fn tiles_land_where_their_rectangle_says() {
@@ -289,7 +334,8 @@ mod tests {
         let lit: Vec<u32> = (0..6).map(|i| i % 3).collect();
         let white: Vec<[f32; 4]> = (0..6).map(|i| [i as f32, 1.0, 2.0, 3.0]).collect();
         let spectra: Vec<Vec<f32>> = (0..6).map(|i| vec![i as f32 * 0.5; BANDS]).collect();
-        let extras = TileExtras { sky: Some(&sky), lit_by: Some(&lit), white: Some(&white) };
+        let extras =
+            TileExtras { sky: Some(&sky), lit_by: Some(&lit), white: Some(&white), samples: None };
         let data = encode_tile(&xyz, extras, Some(spectra.iter().map(Vec::as_slice)));
         fb.place(7, &rect, &data).unwrap();
         // Pixel 3 of the 2-wide tile is its second row, second column: image (4, 2).
@@ -316,7 +362,8 @@ mod tests {
         let lit = vec![1u32 << 23; 4];
         let white = vec![[2.0f32, 2.1, 2.2, 4.0]; 4];
         let spectra = vec![vec![0.25f32; BANDS]; 4];
-        let extras = TileExtras { sky: Some(&sky), lit_by: Some(&lit), white: Some(&white) };
+        let extras =
+            TileExtras { sky: Some(&sky), lit_by: Some(&lit), white: Some(&white), samples: None };
         let good = encode_tile(&xyz, extras, Some(spectra.iter().map(Vec::as_slice)));
         check_tile(0, &rect, ALL, &good).unwrap();
         let image_bytes = 4 * 36;
@@ -355,9 +402,45 @@ mod tests {
         let no_sky = TileLayout { sky: false, ..ALL };
         let data = encode_tile(
             &xyz,
-            TileExtras { sky: None, lit_by: Some(&lit), white: Some(&white) },
+            TileExtras { sky: None, lit_by: Some(&lit), white: Some(&white), samples: None },
             Some(spectra.iter().map(Vec::as_slice)),
         );
         check_tile(0, &rect, no_sky, &data).unwrap();
+    }
+
+    /// With adaptive sampling each pixel's count of samples follows the whites, lands where its
+    /// rectangle says, and must lie between 1 and the plan's cap.
+    #[test]
+    fn sample_counts_travel_and_are_checked() {
+        let layout = TileLayout { samples_cap: 16, ..ALL };
+        let rect = Rect { x: 1, y: 0, width: 2, height: 2 };
+        let xyz = vec![[1.0f32, 2.0, 3.0]; 4];
+        let sky = vec![0.5f32; 4];
+        let lit = vec![1u32; 4];
+        let white = vec![[2.0f32, 2.1, 2.2, 4.0]; 4];
+        let samples = vec![8u32, 16, 1, 9];
+        let spectra: Vec<Vec<f32>> = (0..4).map(|i| vec![i as f32; BANDS]).collect();
+        let extras = TileExtras {
+            sky: Some(&sky),
+            lit_by: Some(&lit),
+            white: Some(&white),
+            samples: Some(&samples),
+        };
+        let good = encode_tile(&xyz, extras, Some(spectra.iter().map(Vec::as_slice)));
+        assert_eq!(good.len(), 4 * 4 * (3 + 1 + 1 + 4 + 1) + 4 * 4 * BANDS);
+        let mut fb = Framebuffer::new(3, 2, layout);
+        fb.place(0, &rect, &good).unwrap();
+        assert_eq!(fb.samples.as_deref(), Some(&[0, 8, 16, 0, 1, 9][..]));
+        assert_eq!(fb.spectral.as_ref().unwrap()[0][5], 3.0, "the spectra follow the counts");
+        let counts_at = 4 * 4 * 9;
+        for bad in [0u32, 17] {
+            let mut data = good.clone();
+            data[counts_at + 4..counts_at + 8].copy_from_slice(&bad.to_le_bytes());
+            let e = check_tile(2, &rect, layout, &data).unwrap_err().to_string();
+            assert!(e.contains(&format!("pixel 1 has sample count {bad}")), "{e}");
+            assert!(e.contains("1 to 16 (the plan's samples per pixel)"), "{e}");
+        }
+        // A layout without counts refuses the longer tile.
+        assert!(check_tile(2, &rect, ALL, &good).is_err());
     }
 }

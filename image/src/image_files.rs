@@ -425,11 +425,37 @@ pub fn write_spectral_exr(
     bands: Vec<(f64, Vec<f32>)>,
     attributes: &[(&str, &str)],
 ) -> Result<()> {
-    let mut attrs: Vec<(&str, &str)> =
-        vec![("spectralLayoutVersion", "1.0"), ("emissiveUnits", "W.m^-2.sr^-1")];
-    attrs.extend_from_slice(attributes);
-    let extra = bands.into_iter().map(|(l, v)| (spectral_channel_name(l), v)).collect();
-    write_xyz_exr_with(path, image, extra, &attrs)
+    write_render_exr(path, image, Some(bands), None, attributes)
+}
+
+/// The EXR channel of a render with adaptive sampling that holds the samples each pixel took
+/// (whole numbers, exact in f32 up to 2²⁴).
+pub const SAMPLES_CHANNEL: &str = "samples";
+
+/// A render's EXR: [`write_xyz_exr`]'s, or [`write_spectral_exr`]'s when it has `bands`, and,
+/// with adaptive sampling, each pixel's count of samples in [`SAMPLES_CHANNEL`].
+pub fn write_render_exr(
+    path: &Path,
+    image: &XyzImage,
+    bands: Option<Vec<(f64, Vec<f32>)>>,
+    samples: Option<&[u32]>,
+    attributes: &[(&str, &str)],
+) -> Result<()> {
+    let counts = samples
+        .map(|n| (SAMPLES_CHANNEL.to_owned(), n.iter().map(|&n| n as f32).collect::<Vec<f32>>()));
+    match bands {
+        Some(bands) => {
+            let mut attrs: Vec<(&str, &str)> =
+                vec![("spectralLayoutVersion", "1.0"), ("emissiveUnits", "W.m^-2.sr^-1")];
+            attrs.extend_from_slice(attributes);
+            let extra = counts
+                .into_iter()
+                .chain(bands.into_iter().map(|(l, v)| (spectral_channel_name(l), v)))
+                .collect();
+            write_xyz_exr_with(path, image, extra, &attrs)
+        }
+        None => write_xyz_exr_with(path, image, counts.into_iter().collect(), attributes),
+    }
 }
 
 /// Code values for a PNG.

@@ -6,7 +6,9 @@
 
 use crate::error::ImageError;
 use crate::framebuffer::Framebuffer;
-use crate::image_files::{PngPixels, XyzImage, write_png, write_spectral_exr, write_xyz_exr};
+use crate::image_files::{
+    PngPixels, XyzImage, write_png, write_render_exr, write_spectral_exr, write_xyz_exr,
+};
 use restauro_spectral::appearance::ChannelSpace;
 use restauro_spectral::display::{DisplayParams, Exposure, encode, to_u8};
 use restauro_spectral::grid::wavelength_nm;
@@ -108,14 +110,10 @@ pub fn write_results(
         ("restauroXyzUnits", "absolute: Y in cd/m2 (K_m = 683 lm/W)"),
     ];
     let mut files = vec![format!("{name}.exr"), format!("{name}.png")];
-    match frame.spectral {
-        Some(planes) => {
-            let bands =
-                planes.into_iter().enumerate().map(|(i, v)| (wavelength_nm(i), v)).collect();
-            write_spectral_exr(&dir.join(&files[0]), &image, bands, &attrs)?;
-        }
-        None => write_xyz_exr(&dir.join(&files[0]), &image, &attrs)?,
-    }
+    let bands = frame
+        .spectral
+        .map(|planes| planes.into_iter().enumerate().map(|(i, v)| (wavelength_nm(i), v)).collect());
+    write_render_exr(&dir.join(&files[0]), &image, bands, frame.samples.as_deref(), &attrs)?;
     write_display_png(&dir.join(&files[1]), &image, options.exposure)?;
 
     let mut retinex_s = 0.0;

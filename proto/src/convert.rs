@@ -68,6 +68,10 @@ impl TryFrom<pb::RenderOptions> for RenderOptions {
     type Error = WireError;
     fn try_from(o: pb::RenderOptions) -> Result<Self, WireError> {
         let count = |field, value: Option<u32>| value.map(|v| option_count(field, v)).transpose();
+        if let Some(target) = o.noise_target {
+            restauro_scene::scene_file::check_noise_target(target)
+                .map_err(|problem| WireError::new("render.noise_target", problem))?;
+        }
         Ok(RenderOptions {
             integrator: integrator_from_wire(o.integrator, "render.integrator")?,
             variant: o.variant,
@@ -77,6 +81,7 @@ impl TryFrom<pb::RenderOptions> for RenderOptions {
             spectral: o.spectral,
             tile: count("render.tile", o.tile)?,
             grids: o.grids,
+            noise_target: o.noise_target,
         })
     }
 }
@@ -92,6 +97,7 @@ impl From<&RenderOptions> for pb::RenderOptions {
             spectral: o.spectral,
             tile: o.tile.map(NonZeroU32::get),
             grids: o.grids,
+            noise_target: o.noise_target,
         }
     }
 }
@@ -184,6 +190,7 @@ impl From<&Plan> for pb::Plan {
             white: p.white,
             tile: p.tile,
             grids: p.grids,
+            noise_target: p.noise_target,
         }
     }
 }
@@ -209,6 +216,7 @@ impl TryFrom<pb::Plan> for Plan {
             white: p.white,
             tile: p.tile,
             grids: p.grids,
+            noise_target: p.noise_target,
         })
     }
 }
@@ -277,6 +285,7 @@ mod tests {
                 spectral: true,
                 tile: NonZeroU32::new(32),
                 grids: true,
+                noise_target: Some(0.02),
             },
             exposure: Exposure::Absolute { white_cd_m2: 120.0 },
             retinex: RetinexOptions::new(Some(40), Some(7)).unwrap(),
@@ -302,6 +311,11 @@ mod tests {
         r.exposure =
             Some(pb::Exposure { mode: Some(pb::exposure::Mode::AbsoluteWhiteCdM2(f64::NAN)) });
         assert_eq!(field(r), "exposure");
+        for bad in [f32::NAN, -0.01, 0.6, f32::INFINITY] {
+            let mut r = ok.clone();
+            r.render.as_mut().unwrap().noise_target = Some(bad);
+            assert_eq!(field(r), "render.noise_target", "{bad}");
+        }
         type Zero = fn(&mut pb::RenderOptions);
         let zeroes: [(&str, Zero); 4] = [
             ("render.samples_per_pixel", |o| o.samples_per_pixel = Some(0)),
@@ -332,6 +346,7 @@ mod tests {
             white: true,
             tile: 16,
             grids: true,
+            noise_target: 0.05,
         };
         assert_eq!(Plan::try_from(pb::Plan::from(&plan)).unwrap(), plan);
         let unspecified = pb::Plan { integrator: 0, ..pb::Plan::from(&plan) };

@@ -2,9 +2,11 @@
 //! ([`prepared`]), the pinhole [`camera`], keyed [`sampler`], the [`bsdf`]s, photometric
 //! [`light`]s and the [`sky`], the Whitted and path [`integrator`]s (rays leave surfaces by
 //! the local [`frame`]), the calculation grids' [`sensor`]s, photo
-//! [`texture`]s as detail over measured spectra, and [`tile`] rendering. It knows nothing of the network: the worker process and `restauro render
+//! [`texture`]s as detail over measured spectra, and [`tile`] rendering, with [`adaptive`]
+//! sampling. It knows nothing of the network: the worker process and `restauro render
 //! --in-process` both call it.
 
+pub mod adaptive;
 pub mod bsdf;
 pub mod camera;
 pub mod degradation;

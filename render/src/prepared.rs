@@ -48,6 +48,15 @@ pub struct Settings {
     pub seed: u64,
     /// Compute the scene's calculation grids rather than its camera's image (`Plan::grids`).
     pub grids: bool,
+    /// Adaptive sampling's target (`crate::adaptive`): 0 takes every sample.
+    pub noise_target: f32,
+}
+
+impl Settings {
+    /// Whether pixels stop early by their own noise ([`crate::adaptive`]); never for grids.
+    pub fn adaptive(&self) -> bool {
+        self.noise_target > 0.0 && !self.grids
+    }
 }
 
 /// A scene's own `[render]` table, for its camera's image: what tests and benchmarks render a
@@ -60,6 +69,7 @@ impl From<&restauro_scene::scene_file::Render> for Settings {
             max_depth: render.max_depth,
             seed: render.seed,
             grids: false,
+            noise_target: render.noise_target,
         }
     }
 }
@@ -72,6 +82,7 @@ impl From<&Plan> for Settings {
             max_depth: plan.max_depth,
             seed: plan.seed,
             grids: plan.grids,
+            noise_target: plan.noise_target,
         }
     }
 }

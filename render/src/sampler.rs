@@ -20,6 +20,24 @@ impl PixelKey {
         Self(mix64(mix64(seed ^ 0x5851_f42d_4c95_7f2d) ^ pixel))
     }
 
+    /// The position within the pixel of sample `index` of a pixel that may stop after any
+    /// batch of its samples (adaptive sampling, `crate::adaptive`): the 2-D Sobol sequence
+    /// (Sobol 1967; its first two dimensions form a (0, 2)-sequence in base 2), digitally shifted
+    /// by a value of the pixel's own (a random XOR, which keeps the nets). Every aligned block of
+    /// 2^k samples is then a (0, k, 2)-net: each of the pixel's 2^k elementary rectangles of area
+    /// 2^−k, of any shape, holds exactly one sample. A pixel that stops after 8, 16 or 24 samples
+    /// has sampled its area as evenly as 8, 16 or 24 strata would.
+    #[inline]
+    pub fn subpixel_net(self, index: u32) -> (f32, f32) {
+        let shift = mix64(self.0 ^ 0x2545_f491_4f6c_dd1d);
+        let (shift_x, shift_y) = (shift as u32, (shift >> 32) as u32);
+        let x = index.reverse_bits() ^ shift_x;
+        let y = sobol_second_dimension(index) ^ shift_y;
+        // The top 24 bits: exactly representable in f32, and below 1.
+        let unit = |bits: u32| (bits >> 8) as f32 * (1.0 / (1u32 << 24) as f32);
+        (unit(x), unit(y))
+    }
+
     /// The stream of sample `sample` of the pixel.
     #[inline]
     pub fn sampler(self, sample: u32) -> PixelSampler {
@@ -44,6 +62,22 @@ impl PixelSampler {
     pub fn next2(&mut self) -> (f32, f32) {
         (self.next_1d(), self.next_1d())
     }
+}
+
+/// The second dimension of the Sobol sequence, as 32 bits: its direction numbers are
+/// v₁ = 2³¹ and v_k = v_{k−1} ⊕ (v_{k−1} ≫ 1) (primitive polynomial x + 1), and the point of
+/// index i is the XOR of the v_k of i's set bits (Bratley & Fox, ACM TOMS 14, 1988).
+#[inline]
+fn sobol_second_dimension(mut index: u32) -> u32 {
+    let (mut v, mut bits) = (1u32 << 31, 0u32);
+    while index != 0 {
+        if index & 1 != 0 {
+            bits ^= v;
+        }
+        index >>= 1;
+        v ^= v >> 1;
+    }
+    bits
 }
 
 /// The strata of a pixel's samples: `count` cells of equal area 1/count that tile the pixel,
@@ -184,5 +218,32 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Every aligned block of 2^k samples of the net puts one sample in each of the 2^k
+    /// elementary rectangles of every shape 2^−a × 2^−(k−a), whatever the pixel's shift.
+    #[test]
+    fn subpixel_net_blocks_are_nets() {
+        for pixel in [PixelKey::new(1, 0, 0), PixelKey::new(7, 31, 9)] {
+            for (k, start) in [(3u32, 0u32), (3, 8), (4, 16), (5, 0), (6, 64)] {
+                let n = 1u32 << k;
+                let points: Vec<(f32, f32)> =
+                    (start..start + n).map(|i| pixel.subpixel_net(i)).collect();
+                assert!(
+                    points.iter().all(|&(x, y)| (0.0..1.0).contains(&x) && (0.0..1.0).contains(&y))
+                );
+                for a in 0..=k {
+                    let (columns, rows) = (1u32 << a, 1u32 << (k - a));
+                    let mut seen = vec![0u32; n as usize];
+                    for &(x, y) in &points {
+                        let cell = (y * rows as f32) as u32 * columns + (x * columns as f32) as u32;
+                        seen[cell as usize] += 1;
+                    }
+                    assert!(seen.iter().all(|&c| c == 1), "k {k}, start {start}, {columns}×{rows}");
+                }
+            }
+        }
+        // Two pixels are shifted apart.
+        assert_ne!(PixelKey::new(1, 0, 0).subpixel_net(0), PixelKey::new(1, 1, 0).subpixel_net(0));
     }
 }

@@ -3,6 +3,7 @@
 //! pixel's sum runs in a fixed order from samples keyed by (seed, pixel, sample), so the result
 //! is bit-identical whatever the tile size, the thread count or the worker.
 
+use crate::adaptive::{BATCH, NoiseEstimate};
 use crate::integrator::{LIT_BITS, add_radiance};
 use crate::prepared::PreparedScene;
 use crate::sampler::{PixelKey, PixelSampler};
@@ -55,6 +56,8 @@ pub struct TileResult {
     /// For an image (not a grid): each pixel's adapting white ([`white_of`]), the mean over
     /// its camera samples that met a surface; zero where none did.
     pub white: Option<Vec<[f32; 4]>>,
+    /// With adaptive sampling: the samples each pixel took ([`crate::adaptive`]).
+    pub samples: Option<Vec<u32>>,
     /// The rays traced for the tile.
     pub rays: u64,
 }
@@ -81,13 +84,20 @@ fn keyed_camera_ray(
 ) -> (Vec3A, PixelSampler) {
     let mut sampler = key.sampler(s);
     let (u, v) = sampler.next2();
-    let (dx, dy) = scene.strata.position(s, u, v);
+    // A pixel that may stop after any batch takes its positions from a net that is even after
+    // every batch; one that takes every sample, from the strata of its count.
+    let (dx, dy) = match scene.settings.adaptive() {
+        true => key.subpixel_net(s),
+        false => scene.strata.position(s, u, v),
+    };
     (scene.camera.direction(x as f32 + dx, y as f32 + dy), sampler)
 }
 
 /// What a pixel's samples add up to.
 struct PixelSum {
     radiance: Spectrum,
+    /// The samples taken: the render's count, or fewer where [`crate::adaptive`] stopped.
+    samples: u32,
     /// The samples that saw the sky.
     sky: u32,
     /// The lights that light the first hits of more than half of the samples.
@@ -97,42 +107,111 @@ struct PixelSum {
 }
 
 /// The sum of the spectral radiance of pixel (x, y)'s samples, how many saw the sky, the
-/// lights that light the first hits of more than half of them, and their white.
+/// lights that light the first hits of more than half of them, and their white. With adaptive
+/// sampling the pixel takes its samples in batches until its own estimate of its noise is
+/// within the target ([`crate::adaptive`]).
 #[inline]
 fn pixel_sum(scene: &PreparedScene, x: u32, y: u32, rays: &mut u64) -> PixelSum {
     if scene.settings.grids {
         // Sensor x's direct (row 0) or indirect (row 1) irradiance.
         let radiance = sensor::irradiance_sum(scene, x, Component::of_row(y), rays);
-        return PixelSum { radiance, sky: 0, lit_by: 0, white: Spectrum::ZERO };
+        let samples = scene.settings.samples_per_pixel.max(1);
+        return PixelSum { radiance, samples, sky: 0, lit_by: 0, white: Spectrum::ZERO };
     }
     let key = PixelKey::new(scene.settings.seed, x, y);
-    let mut sum = Spectrum::ZERO;
-    let mut white = Spectrum::ZERO;
-    let (mut sky, mut surfaces) = (0, 0u32);
-    let mut lit = [0u32; LIT_BITS];
-    let samples = scene.settings.samples_per_pixel.max(1);
-    for s in 0..samples {
+    let mut acc = Accumulated::default();
+    let cap = scene.settings.samples_per_pixel.max(1);
+    if !scene.settings.adaptive() {
+        for s in 0..cap {
+            acc.add_sample(scene, key, (x, y), s, rays);
+        }
+        return acc.finish(cap);
+    }
+    let mut noise = NoiseEstimate::default();
+    let mut seen = [0.0f32; 3];
+    let mut taken = 0;
+    while taken < cap {
+        for s in taken..(taken + BATCH).min(cap) {
+            acc.add_sample(scene, key, (x, y), s, rays);
+            // This sample's own X, Y, Z: the film is linear, so the sums' difference.
+            let now = film_xyz(&acc.radiance);
+            noise.add([now[0] - seen[0], now[1] - seen[1], now[2] - seen[2]]);
+            seen = now;
+        }
+        taken = noise.count();
+        if noise.converged(scene.settings.noise_target) {
+            break;
+        }
+    }
+    acc.finish(taken)
+}
+
+/// A pixel's samples summed so far.
+#[derive(Default)]
+struct Accumulated {
+    radiance: Spectrum,
+    white: Spectrum,
+    sky: u32,
+    surfaces: u32,
+    lit: [u32; LIT_BITS],
+}
+
+impl Accumulated {
+    /// Sample `s` of pixel (x, y), added.
+    #[inline]
+    fn add_sample(
+        &mut self,
+        scene: &PreparedScene,
+        key: PixelKey,
+        (x, y): (u32, u32),
+        s: u32,
+        rays: &mut u64,
+    ) {
         let (direction, mut sampler) = keyed_camera_ray(scene, key, x, y, s);
         let origin = scene.camera.origin;
-        let seen = add_radiance(scene, origin, direction, &mut sampler, rays, &mut sum, &mut white);
-        sky += u32::from(seen.sky);
-        surfaces += u32::from(seen.surface);
+        let seen = add_radiance(
+            scene,
+            origin,
+            direction,
+            &mut sampler,
+            rays,
+            &mut self.radiance,
+            &mut self.white,
+        );
+        self.sky += u32::from(seen.sky);
+        self.surfaces += u32::from(seen.surface);
         let mut bits = seen.lit_by;
         while bits != 0 {
-            lit[bits.trailing_zeros() as usize] += 1;
+            self.lit[bits.trailing_zeros() as usize] += 1;
             bits &= bits - 1;
         }
     }
-    let lit_by = (0..LIT_BITS).filter(|&k| 2 * lit[k] > samples).fold(0, |m, k| m | 1 << k);
-    if surfaces > 0 {
-        white *= 1.0 / surfaces as f32;
+
+    /// The pixel's sum after `samples` samples.
+    fn finish(mut self, samples: u32) -> PixelSum {
+        let lit = &self.lit;
+        let lit_by = (0..LIT_BITS).filter(|&k| 2 * lit[k] > samples).fold(0, |m, k| m | 1 << k);
+        if self.surfaces > 0 {
+            self.white *= 1.0 / self.surfaces as f32;
+        }
+        PixelSum { radiance: self.radiance, samples, sky: self.sky, lit_by, white: self.white }
     }
-    PixelSum { radiance: sum, sky, lit_by, white }
 }
 
 /// [`pixel`], counting the rays traced.
 pub fn pixel_counted(scene: &PreparedScene, x: u32, y: u32, rays: &mut u64) -> Spectrum {
-    pixel_sum(scene, x, y, rays).radiance * (1.0 / scene.settings.samples_per_pixel.max(1) as f32)
+    let sum = pixel_sum(scene, x, y, rays);
+    sum.radiance * (1.0 / sum.samples as f32)
+}
+
+/// The per-pixel layers a tile carries besides XYZ.
+#[derive(Clone, Copy)]
+struct Layers {
+    spectral: bool,
+    sky: bool,
+    lit: bool,
+    white: bool,
+    samples: bool,
 }
 
 /// The pixels of one row of a tile, or of a whole tile once the rows are joined.
@@ -143,27 +222,30 @@ struct Pixels {
     sky: Option<Vec<f32>>,
     lit_by: Option<Vec<u32>>,
     white: Option<Vec<[f32; 4]>>,
+    samples: Option<Vec<u32>>,
     rays: u64,
 }
 
 impl Pixels {
     /// Room for `n` pixels, with the layers asked for.
-    fn with_capacity(n: usize, spectral: bool, sky: bool, lit: bool, white: bool) -> Self {
+    fn with_capacity(n: usize, layers: Layers) -> Self {
         fn layer<T>(on: bool, n: usize) -> Option<Vec<T>> {
             on.then(|| Vec::with_capacity(n))
         }
         Pixels {
             xyz: Vec::with_capacity(n),
-            spectra: layer(spectral, n),
-            sky: layer(sky, n),
-            lit_by: layer(lit, n),
-            white: layer(white, n),
+            spectra: layer(layers.spectral, n),
+            sky: layer(layers.sky, n),
+            lit_by: layer(layers.lit, n),
+            white: layer(layers.white, n),
+            samples: layer(layers.samples, n),
             rays: 0,
         }
     }
 
-    /// A pixel from its samples' sum (`mean` = 1 / samples).
-    fn push(&mut self, sum: &PixelSum, mean: f32) {
+    /// A pixel from its samples' sum.
+    fn push(&mut self, sum: &PixelSum) {
+        let mean = 1.0 / sum.samples as f32;
         // The film is linear: the XYZ of the sum, scaled, is the XYZ of the mean.
         self.xyz.push(film_xyz(&sum.radiance).map(|v| v * mean));
         if let Some(s) = &mut self.spectra {
@@ -177,6 +259,9 @@ impl Pixels {
         }
         if let Some(w) = &mut self.white {
             w.push(white_of(&sum.white));
+        }
+        if let Some(n) = &mut self.samples {
+            n.push(sum.samples);
         }
     }
 
@@ -192,6 +277,7 @@ impl Pixels {
         join(&mut self.sky, row.sky);
         join(&mut self.lit_by, row.lit_by);
         join(&mut self.white, row.white);
+        join(&mut self.samples, row.samples);
         self.rays += row.rays;
     }
 }
@@ -203,8 +289,14 @@ pub fn render_tile(scene: &PreparedScene, rect: Rect, spectral: bool) -> TileRes
     let image = !scene.settings.grids;
     let has_sky = scene.has_visible_sources() && image;
     let has_lights = !scene.lights.is_empty() && image;
-    let layers = |n| Pixels::with_capacity(n, spectral, has_sky, has_lights, image);
-    let mean = 1.0 / scene.settings.samples_per_pixel.max(1) as f32;
+    let layers = Layers {
+        spectral,
+        sky: has_sky,
+        lit: has_lights,
+        white: image,
+        samples: scene.settings.adaptive(),
+    };
+    let layers = |n| Pixels::with_capacity(n, layers);
     let rows: Vec<Pixels> = (rect.y..rect.y + rect.height)
         .into_par_iter()
         .map(|y| {
@@ -221,12 +313,12 @@ pub fn render_tile(scene: &PreparedScene, rect: Rect, spectral: bool) -> TileRes
                     .collect();
                 for (sum, rays) in &sums {
                     row.rays += rays;
-                    row.push(sum, mean);
+                    row.push(sum);
                 }
             } else {
                 for x in xs {
                     let sum = pixel_sum(scene, x, y, &mut row.rays);
-                    row.push(&sum, mean);
+                    row.push(&sum);
                 }
             }
             row
@@ -243,6 +335,7 @@ pub fn render_tile(scene: &PreparedScene, rect: Rect, spectral: bool) -> TileRes
         sky: all.sky,
         lit_by: all.lit_by,
         white: all.white,
+        samples: all.samples,
         rays: all.rays,
     }
 }

@@ -80,6 +80,7 @@ fn at(scene: &LoadedScene, variant: &str, x: f32) -> Spectrum {
         max_depth: 1,
         seed: 1,
         grids: false,
+        noise_target: 0.0,
     };
     let prepared = PreparedScene::new(scene, Some(variant), settings).unwrap();
     let hit = prepared.intersect(Vec3A::new(x, -5.0, 1.0), Vec3A::Y, f32::INFINITY).unwrap();

@@ -50,6 +50,7 @@ fn a_shadow_edge_in_survey_coordinates_is_placed_to_the_millimetre() {
         max_depth: 0,
         seed: 3,
         grids: true,
+        noise_target: 0.0,
     };
     let prepared = PreparedScene::new(&scene, None, settings).unwrap();
     let tile = render_tile(&prepared, Rect { x: 0, y: 0, width: 2, height: 2 }, false);

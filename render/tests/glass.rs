@@ -54,6 +54,7 @@ fn settings(scene: &LoadedScene, grids: bool) -> Settings {
         max_depth: r.max_depth,
         seed: 2,
         grids,
+        noise_target: 0.0,
     }
 }
 

@@ -32,6 +32,7 @@ fn irradiance(scene: &LoadedScene, samples: u32) -> (Vec<Spectrum>, Vec<Spectrum
         max_depth: 0,
         seed: 3,
         grids: true,
+        noise_target: 0.0,
     };
     let prepared = PreparedScene::new(scene, None, settings).unwrap();
     let n = prepared.sensors.len() as u32;

@@ -41,6 +41,7 @@ fn seen(distance_m: f64, height_px: u32) -> f32 {
         max_depth: 1,
         seed: 1,
         grids: false,
+        noise_target: 0.0,
     };
     let prepared = PreparedScene::new(&scene, None, settings).unwrap();
     assert_eq!(prepared.triangle_count(), 12, "one level is traced");

@@ -8,8 +8,10 @@ use restauro_scene::scene_file::Integrator;
 use restauro_spectral::colorimetry::{Observer, absolute_xyz};
 use restauro_spectral::keyed_random::KeyedRng;
 use std::f64::consts::PI;
-use std::fmt::Write as _;
 use std::path::Path;
+
+mod shapes;
+use shapes::inward_sphere;
 
 /// A scene folder: a flat grey reflectance, a mesh, and the scene file around them.
 fn scene(dir: &Path, mesh: &str, camera: &str, lights: &str, render: &str) -> LoadedScene {
@@ -65,6 +67,7 @@ fn settings(scene: &LoadedScene) -> Settings {
         max_depth: r.max_depth,
         seed: r.seed,
         grids: false,
+        noise_target: 0.0,
     }
 }
 
@@ -157,29 +160,6 @@ fn path_tracer_converges_to_the_furnace_value() {
     let tile = render_tile(&whitted, Rect { x: 0, y: 0, width: 16, height: 16 }, false);
     let mean: f64 = tile.xyz.iter().map(|p| f64::from(p[1])).sum::<f64>() / tile.xyz.len() as f64;
     assert!((mean / (0.5 * 100.0 / PI) - 1.0).abs() < 0.02, "{mean}");
-}
-
-/// A unit sphere of 96 × 48 facets, wound to face inwards.
-fn inward_sphere() -> String {
-    let mut obj = String::new();
-    let (nu, nv) = (96usize, 48usize);
-    for j in 0..=nv {
-        let t = PI * j as f64 / nv as f64;
-        for i in 0..nu {
-            let p = 2.0 * PI * i as f64 / nu as f64;
-            let _ = writeln!(obj, "v {} {} {}", t.sin() * p.cos(), t.sin() * p.sin(), t.cos());
-        }
-    }
-    for j in 0..nv {
-        for i in 0..nu {
-            let a = j * nu + i + 1;
-            let b = j * nu + (i + 1) % nu + 1;
-            let (c, d) = (a + nu, b + nu);
-            // Wound to face inwards.
-            let _ = writeln!(obj, "f {a} {b} {d} {c}");
-        }
-    }
-    obj
 }
 
 /// A closed sphere of reflectance 0.95 (given as a number): light is reflected twenty times on

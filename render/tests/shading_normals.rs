@@ -72,6 +72,7 @@ fn prepare(scene: &LoadedScene) -> PreparedScene {
         max_depth: 1,
         seed: 3,
         grids: false,
+        noise_target: 0.0,
     };
     PreparedScene::new(scene, None, settings).unwrap()
 }

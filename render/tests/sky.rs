@@ -118,6 +118,7 @@ fn direct_lux(scene: &LoadedScene, samples: u32) -> Vec<f64> {
         max_depth: 1,
         seed: 5,
         grids: true,
+        noise_target: 0.0,
     };
     let prepared = PreparedScene::new(scene, None, settings).unwrap();
     let n = prepared.sensors.len() as u32;

@@ -39,6 +39,7 @@ fn the_band_under_the_cornice_is_darker_than_the_rain_washed_buttresses() {
         max_depth: 2,
         seed: 1,
         grids: false,
+        noise_target: 0.0,
     };
     let prepared = PreparedScene::new(&loaded, Some("as-found"), settings).unwrap();
     // The wall 30 cm under the cornice (at 21.2 m), mid-bay; the front of the buttress at

@@ -59,6 +59,7 @@ const SETTINGS: Settings = Settings {
     max_depth: 1,
     seed: 7,
     grids: false,
+    noise_target: 0.0,
 };
 
 /// The reflectance the tracer uses where a ray straight down meets the ground at (x, y).

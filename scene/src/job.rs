@@ -165,6 +165,10 @@ impl JobSpec {
         if self.render.variant.as_deref().is_some_and(str::is_empty) {
             return Err(refuse("render.variant", "an empty variant name; leave it out instead"));
         }
+        if let Some(target) = self.render.noise_target {
+            crate::scene_file::check_noise_target(target)
+                .map_err(|problem| refuse("render.noise_target", problem))?;
+        }
         Ok(self)
     }
 }

@@ -43,6 +43,9 @@ pub struct RenderOptions {
     /// Compute the illuminance at the scene's calculation grids instead of the camera's image
     /// (see [`Plan::grids`]). Absent in jobs stored before grids existed.
     pub grids: bool,
+    /// The adaptive sampling's noise target ([`Plan::noise_target`]); `Some(0.0)` renders every
+    /// pixel at the full count whatever the scene says.
+    pub noise_target: Option<f32>,
 }
 
 /// Why a count of [`RenderOptions`] cannot be 0, and what to give instead.
@@ -108,6 +111,18 @@ pub struct Plan {
     /// pixels do, so the grids compute identically in-process and on any cluster.
     #[serde(default)]
     pub grids: bool,
+    /// Adaptive sampling: each pixel stops once the standard error of its mean is below this
+    /// fraction of its luminance, `samples_per_pixel` being the cap; 0 takes every sample.
+    /// Never for a grid. Absent in plans stored before it existed: 0.
+    #[serde(default)]
+    pub noise_target: f32,
+}
+
+impl Plan {
+    /// Whether pixels stop early by their own noise, so that tiles carry each pixel's count.
+    pub fn adaptive(&self) -> bool {
+        self.noise_target > 0.0
+    }
 }
 
 /// The lights with a bit of their own in a pixel's mask of the lights that light it (in the
@@ -229,6 +244,11 @@ impl Plan {
                 false => auto_tile(width, height),
             }),
             grids: options.grids,
+            // A sensor's estimate is not a pixel's: grids always take every sample.
+            noise_target: match options.grids {
+                true => 0.0,
+                false => options.noise_target.unwrap_or(render.noise_target),
+            },
         };
         plan.check(limits, path)?;
         Ok(plan)
@@ -275,6 +295,9 @@ impl Plan {
             let fix = "use fewer samples per pixel, or raise the limit (--max-spp)";
             let (value, max) = (self.samples_per_pixel.into(), limits.max_samples_per_pixel.into());
             return Err(limit("samples_per_pixel".into(), value, max, fix));
+        }
+        if let Err(problem) = crate::scene_file::check_noise_target(self.noise_target) {
+            return Err(invalid("noise_target", problem));
         }
         if self.max_depth > limits.max_depth {
             let fix = "use fewer bounces (render.max_depth), or raise the limit (--max-depth)";

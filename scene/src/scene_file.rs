@@ -402,6 +402,27 @@ pub struct Render {
     pub max_depth: u32,
     #[serde(default)]
     pub seed: u64,
+    /// Adaptive sampling: a pixel stops taking samples once the standard error of its mean
+    /// (X, Y and Z alike) is below this fraction of its luminance, `samples_per_pixel` being
+    /// the cap (see `restauro_render::adaptive`). 0, the default: every pixel takes
+    /// `samples_per_pixel`.
+    #[serde(default)]
+    pub noise_target: f32,
+}
+
+/// The largest noise target: a pixel whose standard error is half its value is noise.
+pub const MAX_NOISE_TARGET: f32 = 0.5;
+
+/// Checks a noise target (a fraction of a pixel's luminance): finite, 0 (off) or positive, at
+/// most [`MAX_NOISE_TARGET`]. The problem, in words that say the fix, when it is not.
+pub fn check_noise_target(target: f32) -> std::result::Result<(), String> {
+    if target.is_finite() && (0.0..=MAX_NOISE_TARGET).contains(&target) {
+        return Ok(());
+    }
+    Err(format!(
+        "{target} is not a noise target; give the standard error a pixel may keep as a fraction \
+         of its luminance, from 0.001 (0.1 %) to {MAX_NOISE_TARGET}, or 0 to take every sample"
+    ))
 }
 
 fn default_integrator() -> Integrator {
@@ -421,6 +442,7 @@ impl Default for Render {
             samples_per_pixel: default_spp(),
             max_depth: default_depth(),
             seed: 0,
+            noise_target: 0.0,
         }
     }
 }

@@ -39,6 +39,8 @@ async function takeSnapshot() {
       width: number('snap-width'),
       height: number('snap-height'),
       samples_per_pixel: number('snap-spp'),
+      // Adaptive sampling: a fraction of each pixel's luminance; 0 takes every sample.
+      noise_target: number('snap-noise') / 100,
       integrator: $('snap-integrator').value,
       variant: $('snap-variant').value || null,
     },

@@ -420,3 +420,20 @@ pub fn signal(child: &Child, sig: &str) {
     let ok = Command::new("kill").args([sig, &child.id().to_string()]).status().unwrap();
     assert!(ok.success());
 }
+
+/// The values of channel `name` of the EXR at `path` (its first layer), or `None` when it has
+/// no such channel.
+pub fn exr_channel(path: &Path, name: &str) -> Option<Vec<f32>> {
+    use exr::prelude::{ReadChannels as _, ReadLayers as _};
+    let image = exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let list = image.layer_data.channel_data.list;
+    let channel = list.iter().find(|c| c.name.to_string() == name)?;
+    Some(channel.sample_data.values_as_f32().collect())
+}

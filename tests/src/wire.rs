@@ -152,7 +152,7 @@ pub async fn lease(work: &mut Work, session: &pb::WorkerSession, max: u32) -> Ve
 /// The tiles of the demo's facade (`aosta`): XYZ, sky coverage (it has a sky), light masks
 /// (it has a sun) and adapting whites (it is an image), no spectra.
 pub const AOSTA_TILES: TileLayout =
-    TileLayout { spectral: false, sky: true, lit: true, white: true };
+    TileLayout { spectral: false, sky: true, lit: true, white: true, samples_cap: 0 };
 
 /// The bytes of a tile of `rect` whose every XYZ value is `value`, with sky coverage 0 and no
 /// light as the layout asks.
@@ -160,10 +160,12 @@ pub fn tile_data(rect: &Rect, layout: TileLayout, value: f32) -> Vec<u8> {
     let pixels = rect.width as usize * rect.height as usize;
     let xyz = vec![[value; 3]; pixels];
     let (sky, lit, white) = (vec![0f32; pixels], vec![0u32; pixels], vec![[value; 4]; pixels]);
+    let samples = vec![layout.samples_cap; pixels];
     let extras = TileExtras {
         sky: layout.sky.then_some(&sky[..]),
         lit_by: layout.lit.then_some(&lit[..]),
         white: layout.white.then_some(&white[..]),
+        samples: layout.counts().then_some(&samples[..]),
     };
     encode_tile(&xyz, extras, None::<std::iter::Empty<&[f32]>>)
 }

@@ -40,6 +40,16 @@ fn render_in_process(scene: &str, spp: &str, out: &Path) {
     assert!(o.status.success(), "{}", text(&o));
 }
 
+/// `restauro submit` of `scene` with `options` to the coordinator at `url`, waiting for the
+/// results in `out`.
+fn submit_and_wait(scene: &str, options: &[&str], out: &Path, url: &str, token: &Path) {
+    let mut args = vec!["submit", scene, "--wait", "--out", out.to_str().unwrap()];
+    args.extend(options);
+    args.extend(["--coordinator", url, "--token-file", token.to_str().unwrap()]);
+    let o = restauro(&args);
+    assert!(o.status.success(), "{}", text(&o));
+}
+
 #[test]
 fn two_workers_render_what_one_process_renders_and_survive_a_killed_worker() {
     let dir = tempfile::tempdir().unwrap();
@@ -56,22 +66,7 @@ fn two_workers_render_what_one_process_renders_and_survive_a_killed_worker() {
     let w2 = Worker::start(d, &coordinator.url, "w2", &["--tile-log", w2_log.to_str().unwrap()]);
     let (client_token, _) = token_files(d);
     let out = d.join("cluster");
-    let o = restauro(&[
-        "submit",
-        &scene,
-        "--wait",
-        "--spp",
-        "2",
-        "--tile",
-        "16",
-        "--out",
-        out.to_str().unwrap(),
-        "--coordinator",
-        &coordinator.url,
-        "--token-file",
-        client_token.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", text(&o));
+    submit_and_wait(&scene, &["--spp", "2", "--tile", "16"], &out, &coordinator.url, &client_token);
     assert_identical(&pixels(&out.join("aosta.exr")), &reference);
     let retinex = pixels(&out.join("aosta-retinex.exr"));
     assert_identical(&retinex, &pixels(&local.join("aosta-retinex.exr")));
@@ -341,4 +336,62 @@ fn a_restarted_coordinator_resumes_without_rendering_finished_tiles_again() {
     assert!(o.status.success(), "{}", text(&o));
     assert_identical(&pixels(&out.join("aosta.exr")), &pixels(&local.join("aosta.exr")));
     workers.clear();
+}
+
+/// The `samples` channel of a render's EXR: each pixel's count under adaptive sampling.
+fn samples_channel(path: &Path) -> Vec<f32> {
+    restauro_tests::exr_channel(path, "samples")
+        .unwrap_or_else(|| panic!("{} has no samples channel", path.display()))
+}
+
+/// Adaptive sampling on the cluster: two workers render what one process renders, bit for bit,
+/// and each pixel's count of samples, in the EXR's `samples` channel, is the same too: whole,
+/// within the batches and the cap, and smaller than the cap where the pixel was quiet.
+#[test]
+fn adaptive_sampling_on_two_workers_is_what_one_process_renders() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = aosta(d);
+    let adaptive = ["--spp", "32", "--noise", "0.1", "--tile", "16"];
+    let local = d.join("local");
+    let mut args = vec!["render", scene.as_str(), "--in-process", "--out", local.to_str().unwrap()];
+    args.extend(adaptive);
+    let o = restauro(&args);
+    assert!(o.status.success(), "{}", text(&o));
+
+    let coordinator = Coordinator::start(d, &d.join("data"), "127.0.0.1:0", &[]);
+    let _w1 = Worker::start(d, &coordinator.url, "w1", &[]);
+    let _w2 = Worker::start(d, &coordinator.url, "w2", &[]);
+    let (client_token, _) = token_files(d);
+    let out = d.join("cluster");
+    submit_and_wait(&scene, &adaptive, &out, &coordinator.url, &client_token);
+    assert_identical(&pixels(&out.join("aosta.exr")), &pixels(&local.join("aosta.exr")));
+    let counts = samples_channel(&local.join("aosta.exr"));
+    assert_eq!(samples_channel(&out.join("aosta.exr")), counts);
+    let batch = restauro_render::adaptive::BATCH as f32;
+    assert!(counts.iter().all(|&n| n % batch == 0.0 && (batch..=32.0).contains(&n)), "{counts:?}");
+    assert!(counts.iter().any(|&n| n < 32.0) && counts.contains(&32.0));
+}
+
+/// A noise target that is not a fraction of a pixel's luminance is refused before anything
+/// renders, naming the flag or the scene file's field and saying what to give.
+#[test]
+fn a_bad_noise_target_is_refused_naming_where_it_came_from() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = aosta(d);
+    for bad in ["0.9", "-0.1", "NaN"] {
+        let o = restauro(&["render", &scene, "--in-process", "--noise", bad]);
+        assert!(!o.status.success());
+        let said = text(&o);
+        assert!(said.contains("--noise") && said.contains("or 0 to take every sample"), "{said}");
+    }
+    let text_of = std::fs::read_to_string(&scene).unwrap();
+    let with = text_of.replacen("[render]\n", "[render]\nnoise_target = 2.0\n", 1);
+    assert_ne!(with, text_of, "the scene has a [render] table");
+    std::fs::write(&scene, with).unwrap();
+    let o = restauro(&["render", &scene, "--in-process"]);
+    assert!(!o.status.success());
+    let said = text(&o);
+    assert!(said.contains("render.noise_target") && said.contains("from 0.001"), "{said}");
 }

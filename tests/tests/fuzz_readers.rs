@@ -751,6 +751,7 @@ fn load_and_trace(scene: &Path) -> Outcome {
         max_depth: loaded.file.render.max_depth.min(3),
         seed: 1,
         grids: false,
+        noise_target: 0.0,
     };
     // Everything hidden is the tracer's refusal to make, not a reader's.
     let Ok(prepared) = PreparedScene::new(&loaded, None, settings) else { return Ok(()) };

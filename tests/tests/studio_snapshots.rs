@@ -297,6 +297,11 @@ fn a_finished_snapshot_stays_over_the_model_and_reads_out_its_pixels() {
     let (png, width) = png_rgb(&std::fs::read(file(&files, ".png")).unwrap());
     assert_eq!(width, 160);
     let rendered = exr(&file(&files, ".exr"));
+    // The form's default noise target makes the snapshot adaptive: its EXR records each pixel's
+    // samples, here all at the cap of 2 (a pixel's first look comes after 8).
+    let counts = restauro_tests::exr_channel(&file(&files, ".exr"), "samples")
+        .expect("a snapshot at the form's noise target records its samples");
+    assert!(counts.iter().all(|&n| n == 2.0), "{:?}", &counts[..8]);
 
     let fit = the_layer_at_fit_is_the_png(&mut b, &png);
     let emitter = rendered.emitter.clone().expect("the render's emitter channel");

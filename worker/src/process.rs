@@ -464,6 +464,7 @@ impl Worker {
             sky: tile.sky.as_deref().filter(|_| layout.sky),
             lit_by: tile.lit_by.as_deref().filter(|_| layout.lit),
             white: tile.white.as_deref().filter(|_| layout.white),
+            samples: tile.samples.as_deref().filter(|_| layout.counts()),
         };
         let data = encode_tile(
             &tile.xyz,

@@ -56,7 +56,10 @@ fn renders(s: &mut String, r: &Report) {
             x.integrator,
             x.width,
             x.height,
-            x.samples_per_pixel,
+            match x.noise_target {
+                Some(t) => format!("≤ {}, to {} % noise", x.samples_per_pixel, t * 100.0),
+                None => x.samples_per_pixel.to_string(),
+            },
             x.max_depth,
             x.render_s
         );

@@ -53,7 +53,10 @@ pub struct RenderRecord {
     pub integrator: Integrator,
     pub width: u32,
     pub height: u32,
+    /// With a noise target, the most a pixel takes.
     pub samples_per_pixel: u32,
+    /// Adaptive sampling's noise target, when the render had one.
+    pub noise_target: Option<f32>,
     pub max_depth: u32,
     /// How the seen image was made ([`seen_method`]).
     pub retinex: String,

@@ -25,5 +25,8 @@ pub(super) fn check_render(ctx: &Ctx, limits: &Limits) -> Result<()> {
             "use fewer bounces (0: no cap, the roulette ends paths), or raise the limit with --max-depth",
         ));
     }
+    if let Err(problem) = crate::scene_file::check_noise_target(r.noise_target) {
+        return Err(ctx.invalid("render.noise_target", problem));
+    }
     Ok(())
 }

@@ -357,6 +357,38 @@ fn framework_adaptation(light_ratio: &[[f64; 3]], weight: f32) -> Vec<[f64; 3]> 
         .collect()
 }
 
+/// How the paths are drawn: their seed, the least samples a pixel gets (N), the shared paths
+/// of phase 1, their steps and their burn-in.
+struct Plan {
+    seed: u64,
+    least: u32,
+    shared_paths: u64,
+    steps: u32,
+    burn_in: u32,
+}
+
+/// The samples of every pixel (row-major), with what it took.
+struct Sampled {
+    sums: Vec<paths::Sums>,
+    top_up_paths: u64,
+    top_up_steps: u64,
+    /// The seconds of phase 2.
+    top_up: f64,
+}
+
+/// Both phases of the paths on `walker`'s image.
+fn sample<const C: usize>(
+    walker: &Walker<'_, C>,
+    plan: &Plan,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> Sampled {
+    let mut sums = walker.shared(plan.seed, plan.shared_paths, plan.steps, plan.burn_in, progress);
+    let clock = std::time::Instant::now();
+    let (top_up_paths, top_up_steps) =
+        walker.top_up(&mut sums, plan.seed, plan.least, plan.steps, plan.burn_in);
+    Sampled { sums, top_up_paths, top_up_steps, top_up: clock.elapsed().as_secs_f64() }
+}
+
 /// The Retinex lightness of each channel of `pixels` (row-major, `width` × `height`, any
 /// non-negative linear values): 1 for the reference white. `progress(done, total)` is called
 /// from worker threads as phase-1 paths finish.
@@ -424,26 +456,41 @@ pub(crate) fn run(
     let steps = length - 1;
     let burn_in = length / 4;
     let tiling = tiling::Tiling::new(width, height);
-    let tiled_logs = tiling.tiled(&white.logs, [0; 4]);
-    let walker = Walker {
-        logs: &tiled_logs,
-        tiling,
-        width,
-        height,
-        turning: Turning::with_persistence(persistence),
-        threshold: (params.threshold * LOG_SCALE).round() as i32,
-        // The logs are relative to the brightest cleaned value; a known start needs them
-        // absolute.
-        prior: (params.anchor == Anchor::Known)
-            .then(|| white.zero.map(|z| (z * f64::from(LOG_SCALE)).round() as i32)),
+    // The logs are relative to the brightest cleaned value; a known start needs them absolute.
+    let prior = (params.anchor == Anchor::Known)
+        .then(|| white.zero.map(|z| (z * f64::from(LOG_SCALE)).round() as i32));
+    let shared_paths = {
+        let samples_per_path = u64::from(steps - burn_in + 1);
+        (2 * u64::from(params.paths) * n as u64).div_ceil(samples_per_path)
     };
-    let samples_per_path = u64::from(steps - burn_in + 1);
-    let shared_paths = (2 * u64::from(params.paths) * n as u64).div_ceil(samples_per_path);
-    let mut sums = walker.shared(params.seed, shared_paths, steps, burn_in, progress);
-    let shared_seconds = lap(&mut since);
-    let (top_up_paths, top_up_steps) =
-        walker.top_up(&mut sums, params.seed, params.paths, steps, burn_in);
-    let top_up = lap(&mut since);
+    let plan = Plan { seed: params.seed, least: params.paths, shared_paths, steps, burn_in };
+    // A walker on logs of any number of lanes (a closure cannot be generic).
+    macro_rules! walker {
+        ($logs:expr) => {
+            Walker {
+                logs: $logs,
+                tiling,
+                width,
+                height,
+                turning: Turning::with_persistence(persistence),
+                threshold: (params.threshold * LOG_SCALE).round() as i32,
+                prior,
+            }
+        };
+    }
+    // A grey image (the seen image's relative luminance in three equal channels) is walked
+    // with its one channel: the same integers, in half the memory.
+    let grey = white.logs.iter().all(|l| l[0] == l[1] && l[1] == l[2])
+        && prior.is_none_or(|p| p[0] == p[1] && p[1] == p[2]);
+    let sampled = if grey {
+        let logs: Vec<[i16; 2]> = white.logs.iter().map(|l| [l[0], l[3]]).collect();
+        sample(&walker!(&tiling.tiled(&logs, [0; 2])), &plan, progress)
+    } else {
+        sample(&walker!(&tiling.tiled(&white.logs, [0; 4])), &plan, progress)
+    };
+    let Sampled { sums, top_up_paths, top_up_steps, top_up, .. } = sampled;
+    // Phase 1 with the preparation of its image.
+    let shared_seconds = lap(&mut since) - top_up;
 
     let out = (0..n)
         .into_par_iter()

@@ -378,6 +378,24 @@ struct Plan {
     burn_in: u32,
 }
 
+/// The paths on a grid of `cells_x` × `cells_y` cells of `cell` pixels: their plan, the walk's
+/// persistence (in cells) and the path length L (in steps).
+fn plan(
+    params: &RetinexParams,
+    (cells_x, cells_y): (usize, usize),
+    cell: usize,
+) -> (Plan, f64, u32) {
+    let (persistence, reach_length) = walk_for_reach(params.reach * diagonal(cells_x, cells_y));
+    // A length given is in pixels of the image; a step of the grid is `cell` of them.
+    let length = params.length.map_or(reach_length, |l| l.div_ceil(cell as u32).max(4));
+    let (steps, burn_in) = (length - 1, length / 4);
+    let samples_per_path = u64::from(steps - burn_in + 1);
+    let shared_paths =
+        (2 * u64::from(params.paths) * (cells_x * cells_y) as u64).div_ceil(samples_per_path);
+    let plan = Plan { seed: params.seed, least: params.paths, shared_paths, steps, burn_in };
+    (plan, persistence, length)
+}
+
 /// The samples of every pixel (row-major), with what it took.
 struct Sampled {
     sums: Vec<paths::Sums>,
@@ -478,21 +496,11 @@ fn run_on_grid(
     let cleaning = lap(&mut since);
     let grid = grid::Grid::new(width, height, cell);
     let (cells_x, cells_y) = (grid.width, grid.height);
-    let (persistence, reach_length) = walk_for_reach(params.reach * diagonal(cells_x, cells_y));
-    // A length given is in pixels of the image; a step of the grid is `cell` of them.
-    let length = params.length.map_or(reach_length, |l| l.div_ceil(cell as u32).max(4));
-    let steps = length - 1;
-    let burn_in = length / 4;
+    let (plan, persistence, length) = plan(params, (cells_x, cells_y), cell);
     let tiling = tiling::Tiling::new(cells_x, cells_y);
     // The logs are relative to the brightest cleaned value; a known start needs them absolute.
     let prior = (params.anchor == Anchor::Known)
         .then(|| white.zero.map(|z| (z * f64::from(LOG_SCALE)).round() as i32));
-    let cells = cells_x * cells_y;
-    let shared_paths = {
-        let samples_per_path = u64::from(steps - burn_in + 1);
-        (2 * u64::from(params.paths) * cells as u64).div_ceil(samples_per_path)
-    };
-    let plan = Plan { seed: params.seed, least: params.paths, shared_paths, steps, burn_in };
     // A walker on logs of any number of lanes (a closure cannot be generic).
     macro_rules! walker {
         ($logs:expr) => {
@@ -536,9 +544,9 @@ fn run_on_grid(
         length,
         persistence_px: persistence * cell as f64,
         cell_px: cell as u32,
-        shared_paths,
+        shared_paths: plan.shared_paths,
         top_up_paths,
-        steps: shared_paths * u64::from(steps) + top_up_steps,
+        steps: plan.shared_paths * u64::from(plan.steps) + top_up_steps,
         min_samples: sums.iter().map(count).min().unwrap_or(0),
         max_samples: sums.iter().map(count).max().unwrap_or(0),
         noise: white.noise,

@@ -20,6 +20,8 @@
 //!   a glint or Monte Carlo noise cannot be the white, and light sources in view are passed
 //!   over, so the sky is neither the building's white nor a wall across its ratios;
 //! * [`frameworks`] — the regions lit by the same light (the sun, the sky in the shadows);
+//! * [`grid`] — what the paths walk on: the pixels, or on a large image cells of 2×2 (4×4, …)
+//!   pixels, each with its brightest pixel's value, whose pixels share their samples;
 //! * [`paths`] — the path function and the two phases that give every pixel ≥ N samples;
 //! * [`tiling`] — the order in which the paths' images are kept: tiles, for the caches.
 //!
@@ -29,7 +31,10 @@
 //! unfolded plane: beyond about half a diagonal the reflected paths cover the whole image);
 //! the walk's persistence length is a tenth of it, and the path length L is chosen so that the
 //! samples (steps L/4..L) lie at that RMS distance. See [`DEFAULT_REACH`] for the default and
-//! why.
+//! why. Distances and lengths are in steps of the walk's grid: a pixel, or on an image with a
+//! diagonal over [`grid::WALK_DIAGONAL_PX`] a cell (see [`grid`] for why and what it changes:
+//! at 1920×1080 the seen image moved by less than the paths' own noise, and the paths took 4.5
+//! times fewer steps).
 //!
 //! **Frameworks: mixed light.** Under a warm sun and a blue sky, one white for the whole image
 //! makes the sky-lit shadows blue, and a smaller reach cannot help (a neighbourhood's brightest
@@ -54,6 +59,7 @@
 //! source, a highlight smaller than the white's least area) it is above 1.
 
 mod frameworks;
+mod grid;
 mod paths;
 mod tiling;
 mod walk;
@@ -99,12 +105,14 @@ pub enum WhiteReference {
 /// the same image.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RetinexParams {
-    /// N: the least number of path samples per pixel (1–4096).
+    /// N: the least number of path samples per pixel (1–4096); on a grid of cells, per cell,
+    /// whose samples all its pixels take.
     pub paths: u32,
     /// The RMS distance from a path's start to its samples, as a fraction of the image
     /// diagonal (0.01–4): the extent of the adaptation field.
     pub reach: f64,
-    /// L: steps per path; `None` for the length that gives `reach`.
+    /// L: the length of a path in pixels (steps of one pixel; on a large image's grid of
+    /// cells, L / cell steps of a cell); `None` for the length that gives `reach`.
     pub length: Option<u32>,
     /// The threshold on |log ratio| below which a step counts as zero (natural-log units).
     pub threshold: f32,
@@ -164,8 +172,10 @@ impl Default for RetinexParams {
 /// What a run did, for reports and tests.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RetinexStats {
-    /// The path length L used.
+    /// The path length L used, in steps of the walk's grid.
     pub length: u32,
+    /// The side of the walk's grid's cells, in pixels (1: the paths walk on the pixels).
+    pub cell_px: u32,
     /// The walk's persistence length, in pixels.
     pub persistence_px: f64,
     /// Paths started in phase 1.
@@ -174,7 +184,8 @@ pub struct RetinexStats {
     pub top_up_paths: u64,
     /// Path steps taken in both phases.
     pub steps: u64,
-    /// The smallest and largest number of samples of any pixel.
+    /// The smallest and largest number of samples of any cell of the walk's grid (each of its
+    /// pixels has them).
     pub min_samples: u32,
     pub max_samples: u32,
     /// The noise σ of each channel (natural-log units) the cleaned image was made for, in each
@@ -357,6 +368,56 @@ fn framework_adaptation(light_ratio: &[[f64; 3]], weight: f32) -> Vec<[f64; 3]> 
         .collect()
 }
 
+/// How the paths are drawn: their seed, the least samples a pixel gets (N), the shared paths
+/// of phase 1, their steps and their burn-in.
+struct Plan {
+    seed: u64,
+    least: u32,
+    shared_paths: u64,
+    steps: u32,
+    burn_in: u32,
+}
+
+/// The paths on a grid of `cells_x` × `cells_y` cells of `cell` pixels: their plan, the walk's
+/// persistence (in cells) and the path length L (in steps).
+fn plan(
+    params: &RetinexParams,
+    (cells_x, cells_y): (usize, usize),
+    cell: usize,
+) -> (Plan, f64, u32) {
+    let (persistence, reach_length) = walk_for_reach(params.reach * diagonal(cells_x, cells_y));
+    // A length given is in pixels of the image; a step of the grid is `cell` of them.
+    let length = params.length.map_or(reach_length, |l| l.div_ceil(cell as u32).max(4));
+    let (steps, burn_in) = (length - 1, length / 4);
+    let samples_per_path = u64::from(steps - burn_in + 1);
+    let shared_paths =
+        (2 * u64::from(params.paths) * (cells_x * cells_y) as u64).div_ceil(samples_per_path);
+    let plan = Plan { seed: params.seed, least: params.paths, shared_paths, steps, burn_in };
+    (plan, persistence, length)
+}
+
+/// The samples of every pixel (row-major), with what it took.
+struct Sampled {
+    sums: Vec<paths::Sums>,
+    top_up_paths: u64,
+    top_up_steps: u64,
+    /// The seconds of phase 2.
+    top_up: f64,
+}
+
+/// Both phases of the paths on `walker`'s image.
+fn sample<const C: usize>(
+    walker: &Walker<'_, C>,
+    plan: &Plan,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> Sampled {
+    let mut sums = walker.shared(plan.seed, plan.shared_paths, plan.steps, plan.burn_in, progress);
+    let clock = std::time::Instant::now();
+    let (top_up_paths, top_up_steps) =
+        walker.top_up(&mut sums, plan.seed, plan.least, plan.steps, plan.burn_in);
+    Sampled { sums, top_up_paths, top_up_steps, top_up: clock.elapsed().as_secs_f64() }
+}
+
 /// The Retinex lightness of each channel of `pixels` (row-major, `width` × `height`, any
 /// non-negative linear values): 1 for the reference white. `progress(done, total)` is called
 /// from worker threads as phase-1 paths finish.
@@ -398,6 +459,20 @@ pub(crate) fn run(
     frameworks: &Frameworks,
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Result<(Vec<[f32; 3]>, RetinexStats)> {
+    let cell = grid::cell_px(width, height);
+    run_on_grid(pixels, (width, height), params, emitters, frameworks, progress, cell)
+}
+
+/// [`run`] with the paths on a grid of `cell` × `cell` pixel cells (see [`grid`]).
+fn run_on_grid(
+    pixels: &[[f32; 3]],
+    (width, height): (usize, usize),
+    params: &RetinexParams,
+    emitters: &[bool],
+    frameworks: &Frameworks,
+    progress: &(dyn Fn(u64, u64) + Sync),
+    cell: usize,
+) -> Result<(Vec<[f32; 3]>, RetinexStats)> {
     let clock = std::time::Instant::now();
     let lap = |since: &mut f64| {
         let now = clock.elapsed().as_secs_f64();
@@ -419,46 +494,59 @@ pub(crate) fn run(
         Anchor::Known => vec![[0.0; 3]; frameworks.count],
     };
     let cleaning = lap(&mut since);
-    let (persistence, reach_length) = walk_for_reach(params.reach * diagonal(width, height));
-    let length = params.length.unwrap_or(reach_length);
-    let steps = length - 1;
-    let burn_in = length / 4;
-    let tiling = tiling::Tiling::new(width, height);
-    let tiled_logs = tiling.tiled(&white.logs, [0; 4]);
-    let walker = Walker {
-        logs: &tiled_logs,
-        tiling,
-        width,
-        height,
-        turning: Turning::with_persistence(persistence),
-        threshold: (params.threshold * LOG_SCALE).round() as i32,
-        // The logs are relative to the brightest cleaned value; a known start needs them
-        // absolute.
-        prior: (params.anchor == Anchor::Known)
-            .then(|| white.zero.map(|z| (z * f64::from(LOG_SCALE)).round() as i32)),
+    let grid = grid::Grid::new(width, height, cell);
+    let (cells_x, cells_y) = (grid.width, grid.height);
+    let (plan, persistence, length) = plan(params, (cells_x, cells_y), cell);
+    let tiling = tiling::Tiling::new(cells_x, cells_y);
+    // The logs are relative to the brightest cleaned value; a known start needs them absolute.
+    let prior = (params.anchor == Anchor::Known)
+        .then(|| white.zero.map(|z| (z * f64::from(LOG_SCALE)).round() as i32));
+    // A walker on logs of any number of lanes (a closure cannot be generic).
+    macro_rules! walker {
+        ($logs:expr) => {
+            Walker {
+                logs: $logs,
+                tiling,
+                width: cells_x,
+                height: cells_y,
+                turning: Turning::with_persistence(persistence),
+                // A step of the grid spans `cell` pixels, and a smooth gradient's ratio over
+                // it is `cell` times its ratio per pixel: the threshold is on a pixel's.
+                threshold: (params.threshold * LOG_SCALE * cell as f32).round() as i32,
+                prior,
+            }
+        };
+    }
+    let logs = grid.logs(&white.logs);
+    // A grey image (the seen image's relative luminance in three equal channels) is walked
+    // with its one channel: the same integers, in half the memory.
+    let grey = logs.iter().all(|l| l[0] == l[1] && l[1] == l[2])
+        && prior.is_none_or(|p| p[0] == p[1] && p[1] == p[2]);
+    let sampled = if grey {
+        let logs: Vec<[i16; 2]> = logs.iter().map(|l| [l[0], l[3]]).collect();
+        sample(&walker!(&tiling.tiled(&logs, [0; 2])), &plan, progress)
+    } else {
+        sample(&walker!(&tiling.tiled(&logs, [0; 4])), &plan, progress)
     };
-    let samples_per_path = u64::from(steps - burn_in + 1);
-    let shared_paths = (2 * u64::from(params.paths) * n as u64).div_ceil(samples_per_path);
-    let mut sums = walker.shared(params.seed, shared_paths, steps, burn_in, progress);
-    let shared_seconds = lap(&mut since);
-    let (top_up_paths, top_up_steps) =
-        walker.top_up(&mut sums, params.seed, params.paths, steps, burn_in);
-    let top_up = lap(&mut since);
+    let Sampled { sums, top_up_paths, top_up_steps, top_up } = sampled;
+    // Phase 1 with the preparation of its image.
+    let shared_seconds = lap(&mut since) - top_up;
 
     let out = (0..n)
         .into_par_iter()
         .map(|p| {
             let own =
                 if emitters[p] { [0.0; 3] } else { adaptation[usize::from(frameworks.labels[p])] };
-            lightness(pixels[p], &white, p, &sums[p], emitters[p], own)
+            lightness(pixels[p], &white, p, &sums[grid.cell_of(p)], emitters[p], own)
         })
         .collect();
     let stats = RetinexStats {
         length,
-        persistence_px: persistence,
-        shared_paths,
+        persistence_px: persistence * cell as f64,
+        cell_px: cell as u32,
+        shared_paths: plan.shared_paths,
         top_up_paths,
-        steps: shared_paths * u64::from(steps) + top_up_steps,
+        steps: plan.shared_paths * u64::from(plan.steps) + top_up_steps,
         min_samples: sums.iter().map(count).min().unwrap_or(0),
         max_samples: sums.iter().map(count).max().unwrap_or(0),
         noise: white.noise,
@@ -623,6 +711,44 @@ mod tests {
         let local = RetinexParams { framework_weight: 1.0, ..told.clone() };
         let (full, _) = retinex(&pixels, w, h, &local, &|_, _| {}).unwrap();
         assert!(full[card].iter().all(|v| (v - 1.0).abs() < 0.05), "{:?}", full[card]);
+    }
+
+    /// On a grid of 2×2 cells (as a large image is walked) the white stays exactly white, a
+    /// darker pixel in a cell at the white's edge is relative to that white, every pixel has
+    /// its N samples and the output does not depend on the thread count. The white square's
+    /// edges (odd coordinates) cut through cells.
+    #[test]
+    fn on_cells_the_white_stays_white_and_its_neighbours_are_relative_to_it() {
+        let (w, h) = (41, 31);
+        let pixels: Vec<[f32; 3]> = (0..w * h)
+            .map(|i| {
+                let (x, y) = (i % w, i / w);
+                if (5..16).contains(&x) && (7..18).contains(&y) {
+                    [8.0, 6.0, 4.0]
+                } else {
+                    [2.0; 3]
+                }
+            })
+            .collect();
+        let params = RetinexParams { paths: 12, seed: 3, ..Default::default() };
+        let emitters = vec![false; w * h];
+        let frameworks = Frameworks::one(counted(&emitters, &pixels));
+        let on_cells = || {
+            run_on_grid(&pixels, (w, h), &params, &emitters, &frameworks, &|_, _| {}, 2).unwrap()
+        };
+        let pool = |t| rayon::ThreadPoolBuilder::new().num_threads(t).build().unwrap();
+        let (one, stats) = pool(1).install(on_cells);
+        let (two, _) = pool(2).install(on_cells);
+        assert_eq!(one, two);
+        assert_eq!(stats.cell_px, 2);
+        assert!(stats.min_samples >= params.paths, "{stats:?}");
+        for (i, p) in one.iter().enumerate() {
+            let white = pixels[i][0] == 8.0;
+            let expect = if white { [1.0; 3] } else { [0.25, 1.0 / 3.0, 0.5] };
+            for c in 0..3 {
+                assert!((p[c] - expect[c]).abs() < 1e-3 * expect[c], "pixel {i}: {p:?}");
+            }
+        }
     }
 
     #[test]

@@ -21,6 +21,11 @@
 //! samples; phase 2 gives every pixel still short of N its own paths ending exactly there, with
 //! lengths drawn from the same L/4..L.
 //!
+//! **A grey image** (the seen image's Retinex runs on one relative luminance copied to three
+//! channels) is walked with one channel: the three would be the same integers, so the sums are
+//! too, and a pixel's logs and sums take half the memory (4 and 8 bytes instead of 8 and 16),
+//! which is what the walk waits on at 1920×1080.
+//!
 //! **Exactness and determinism.** The whole path function runs in integers; every random
 //! number is a function of (seed, phase, path); samples are summed as integers, whose addition
 //! is associative. The output is bit-identical for any number of threads and any order of work.
@@ -47,10 +52,12 @@ const MAX_ACCUMULATOR_IMAGES: usize = 8;
 /// 0.98 s with 8.
 const SIDE_BY_SIDE: usize = 4;
 
-/// Everything a path needs to know about the image.
-pub(super) struct Walker<'a> {
+/// Everything a path needs to know about the image. `C` is the number of lanes of a pixel's
+/// logs and sums: the channels and, last, a surface's framework (or [`EMITTER`]) in the logs
+/// and the count in the sums — 4 for three channels, 2 for a grey image's one.
+pub(super) struct Walker<'a, const C: usize> {
     /// The cleaned logs, in the tiled order of `tiling`.
-    pub logs: &'a [[i16; 4]],
+    pub logs: &'a [[i16; C]],
     pub tiling: Tiling,
     pub width: usize,
     pub height: usize,
@@ -65,35 +72,35 @@ pub(super) struct Walker<'a> {
 
 /// The state of a path: per channel the running s, and the logs of the last surface crossed.
 #[derive(Clone, Copy)]
-struct State {
-    s: [i32; 4],
-    last: [i16; 4],
+struct State<const C: usize> {
+    s: [i32; C],
+    last: [i16; C],
     on_surface: bool,
 }
 
-impl State {
+impl<const C: usize> State<C> {
     fn new() -> Self {
-        State { s: [0; 4], last: [0; 4], on_surface: false }
+        State { s: [0; C], last: [0; C], on_surface: false }
     }
 
     /// One step onto a pixel with logs `to`; `prior` is the walker's (a known white's).
     #[inline]
-    fn step(&mut self, to: [i16; 4], threshold: i32, prior: Option<[i32; 3]>) {
-        if to[3] == EMITTER {
+    fn step(&mut self, to: [i16; C], threshold: i32, prior: Option<[i32; 3]>) {
+        if to[C - 1] == EMITTER {
             return;
         }
         if self.on_surface {
-            // Four lanes so that the compiler does the three channels in one vector operation;
-            // the fourth (a surface's framework) is never read.
+            // All lanes, so that the compiler does the channels in one vector operation; the
+            // last (a surface's framework) is never read.
             #[allow(clippy::needless_range_loop)] // the lanes of three arrays at once
-            for c in 0..4 {
+            for c in 0..C {
                 let r = i32::from(to[c]) - i32::from(self.last[c]);
                 // A select, not a branch: whether a step crosses an edge is unpredictable.
                 let delta = if r.abs() > threshold { r } else { 0 };
                 self.s[c] = (self.s[c] + delta).min(0);
             }
         } else if let Some(prior) = prior {
-            for c in 0..3 {
+            for c in 0..C - 1 {
                 self.s[c] = (i32::from(to[c]) + prior[c]).min(0);
             }
         }
@@ -103,22 +110,23 @@ impl State {
 
     /// The white found: log w = log W_last − s, per channel.
     #[inline]
-    fn white(&self) -> [i32; 4] {
+    fn white(&self) -> [i32; C] {
         std::array::from_fn(|c| i32::from(self.last[c]) - self.s[c])
     }
 }
 
+/// A sample added to a pixel's sums: each channel's white, clamped, and one to the count.
 #[inline]
-fn add(sums: &mut Sums, white: [i32; 4]) {
-    for c in 0..4 {
-        let v = if c == 3 { 1 } else { white[c].clamp(-32768, 32767) };
+fn add<const C: usize>(sums: &mut [i32; C], white: [i32; C]) {
+    for c in 0..C {
+        let v = if c == C - 1 { 1 } else { white[c].clamp(-32768, 32767) };
         sums[c] = sums[c].wrapping_add(v);
     }
 }
 
 /// `b`'s samples added to `a`'s (wrapping, so in any order).
-fn merge(a: &mut Sums, b: &Sums) {
-    for c in 0..4 {
+fn merge<const C: usize>(a: &mut [i32; C], b: &[i32; C]) {
+    for c in 0..C {
         a[c] = a[c].wrapping_add(b[c]);
     }
 }
@@ -127,7 +135,72 @@ pub(super) fn count(sums: &Sums) -> u32 {
     sums[3] as u32
 }
 
-impl Walker<'_> {
+/// A pixel's sums with all of its channels: a grey image's one channel copied to the three.
+fn full<const C: usize>(sums: &[i32; C]) -> Sums {
+    std::array::from_fn(|c| if c == 3 { sums[C - 1] } else { sums[c.min(C - 2)] })
+}
+
+/// The value at its start of a path read backwards, from the far end to the start: what the
+/// path function gives after walking the surfaces `y_m, …, y_1, y_0` (the order in which they
+/// are met walking *out* from the start is y_0, y_1, …), folded in the order they are met.
+///
+/// The path function s ← min(0, s + d) from s₀ at y_m ends at
+/// s = min(0, D_1, …, D_{m−1}, D_m + s₀), with D_j the sum of the first j steps' d taken
+/// outwards (d for the step from y_{i+1} to y_i is the thresholded y_i − y_{i+1}): Lindley's
+/// recursion unrolled. So one pass outwards keeps D and the least of the earlier D, and no
+/// trail of the walk is stored. D is held in 64 bits; s₀ needs the last surface, known at the
+/// end.
+struct Backwards<const C: usize> {
+    nearest: [i16; C],
+    farthest: [i16; C],
+    sum: [i64; C],
+    least: [i64; C],
+    surfaces: bool,
+}
+
+impl<const C: usize> Backwards<C> {
+    fn new() -> Self {
+        Backwards { nearest: [0; C], farthest: [0; C], sum: [0; C], least: [0; C], surfaces: false }
+    }
+
+    #[inline]
+    fn step(&mut self, to: [i16; C], threshold: i32) {
+        if to[C - 1] == EMITTER {
+            return;
+        }
+        if self.surfaces {
+            #[allow(clippy::needless_range_loop)] // the lanes of four arrays at once
+            for c in 0..C {
+                self.least[c] = self.least[c].min(self.sum[c]);
+                let r = i32::from(self.farthest[c]) - i32::from(to[c]);
+                let delta = if r.abs() > threshold { r } else { 0 };
+                self.sum[c] += i64::from(delta);
+            }
+        } else {
+            self.nearest = to;
+            self.surfaces = true;
+        }
+        self.farthest = to;
+    }
+
+    /// The white found at the start, if the path met a surface.
+    fn white(&self, prior: Option<[i32; 3]>) -> Option<[i32; C]> {
+        self.surfaces.then(|| {
+            std::array::from_fn(|c| {
+                let start = match prior {
+                    Some(prior) if c < C - 1 => {
+                        (i32::from(self.farthest[c]) + prior[c]).min(0).into()
+                    }
+                    _ => 0,
+                };
+                let s = self.least[c].min(self.sum[c] + start);
+                (i64::from(self.nearest[c]) - s) as i32
+            })
+        })
+    }
+}
+
+impl<const C: usize> Walker<'_, C> {
     /// Walks K paths of `steps` steps each from pixels `starts` (row-major), side by side, and
     /// adds the white each has found to `sums` (tiled) after each step k = `from`..=steps at
     /// which it has met a surface.
@@ -139,26 +212,24 @@ impl Walker<'_> {
     #[inline]
     fn run<const K: usize>(
         &self,
-        rngs: &mut [KeyedRng; K],
+        rngs: [KeyedRng; K],
         starts: [usize; K],
         steps: u32,
         from: u32,
-        sums: &mut [Sums],
+        sums: &mut [[i32; C]],
     ) {
         const BATCH: u32 = 32;
-        let mut walks: [Walk; K] = {
-            let mut rngs = rngs.iter_mut();
-            std::array::from_fn(|i| {
-                let rng = rngs.next().expect("one generator per path");
-                Walk::new(rng, self.width, self.height, starts[i], self.turning)
-            })
-        };
-        let mut states = [State::new(); K];
+        let mut rngs = rngs.into_iter();
+        let mut walks: [Walk; K] = std::array::from_fn(|i| {
+            let rng = rngs.next().expect("one generator per path");
+            Walk::new(rng, self.width, self.height, starts[i], self.turning)
+        });
+        let mut states = [State::<C>::new(); K];
         for (state, &start) in states.iter_mut().zip(&starts) {
             state.step(self.logs[self.tiling.index_of(start)], self.threshold, self.prior);
         }
         let mut places = [[0usize; K]; BATCH as usize];
-        let mut logs = [[[0i16; 4]; K]; BATCH as usize];
+        let mut logs = [[[0i16; C]; K]; BATCH as usize];
         let mut k = 1;
         while k <= steps {
             let batch = BATCH.min(steps - k + 1) as usize;
@@ -172,7 +243,7 @@ impl Walker<'_> {
             for (l, step) in logs.iter_mut().zip(&places[..batch]) {
                 for (l, &place) in l.iter_mut().zip(step) {
                     *l = self.logs[place];
-                    touched = touched.wrapping_add(sums[place][3]);
+                    touched = touched.wrapping_add(sums[place][C - 1]);
                 }
             }
             // The sums were read only to bring them into the cache.
@@ -202,15 +273,15 @@ impl Walker<'_> {
     ) -> Vec<Sums> {
         let n = self.tiling.len();
         let pixels = self.width * self.height;
-        let by_memory = (ACCUMULATOR_BYTES / (n * std::mem::size_of::<Sums>())).max(1);
+        let by_memory = (ACCUMULATOR_BYTES / (n * std::mem::size_of::<[i32; C]>())).max(1);
         let tasks = rayon::current_num_threads().clamp(1, MAX_ACCUMULATOR_IMAGES).min(by_memory);
         let tasks = tasks as u64;
         let done = AtomicU64::new(0);
         const CHUNK: u64 = 256;
-        let partials: Vec<Vec<Sums>> = (0..tasks)
+        let partials: Vec<Vec<[i32; C]>> = (0..tasks)
             .into_par_iter()
             .map(|task| {
-                let mut sums = vec![[0i32; 4]; n];
+                let mut sums = vec![[0i32; C]; n];
                 let (first, end) = (paths * task / tasks, paths * (task + 1) / tasks);
                 // Each path's generator is its own: its start, then its walk.
                 let path_rng = |path: u64| {
@@ -224,12 +295,12 @@ impl Walker<'_> {
                         let group: [(KeyedRng, usize); SIDE_BY_SIDE] =
                             std::array::from_fn(|i| path_rng(path + i as u64));
                         let starts = group.each_ref().map(|(_, start)| *start);
-                        let mut rngs = group.map(|(rng, _)| rng);
-                        self.run(&mut rngs, starts, steps, burn_in, &mut sums);
+                        let rngs = group.map(|(rng, _)| rng);
+                        self.run(rngs, starts, steps, burn_in, &mut sums);
                         path += SIDE_BY_SIDE as u64;
                     } else {
                         let (rng, start) = path_rng(path);
-                        self.run(&mut [rng], [start], steps, burn_in, &mut sums);
+                        self.run([rng], [start], steps, burn_in, &mut sums);
                         path += 1;
                     }
                     if path - reported >= CHUNK || path == end {
@@ -242,17 +313,17 @@ impl Walker<'_> {
             })
             .collect();
         let mut partials = partials.into_iter();
-        let mut sums = partials.next().unwrap_or_else(|| vec![[0i32; 4]; n]);
+        let mut sums = partials.next().unwrap_or_else(|| vec![[0i32; C]; n]);
         for partial in partials {
             sums.par_iter_mut().zip(partial.par_iter()).for_each(|(a, b)| merge(a, b));
         }
-        self.tiling.row_major(&sums, pixels)
+        (0..pixels).into_par_iter().map(|p| full(&sums[self.tiling.index_of(p)])).collect()
     }
 
     /// Phase 2: every pixel with fewer than `least` samples gets its own paths ending there,
     /// `least − count` of them. A path ending at p is walked from p outwards and read
     /// backwards (the walk is reversible), so its value at p is that of a path from the far end
-    /// to p. Returns the paths and steps added.
+    /// to p (see [`Backwards`]). Returns the paths and steps added.
     pub(super) fn top_up(
         &self,
         sums: &mut [Sums],
@@ -267,44 +338,107 @@ impl Walker<'_> {
             .filter_map(|(p, s)| (count(s) < least).then(|| (p, least - count(s))))
             .collect();
         let paths: u64 = short.iter().map(|&(_, d)| u64::from(d)).sum();
-        let top_ups: Vec<(usize, Sums, u64)> = short
+        let top_ups: Vec<(usize, [i32; C], u64)> = short
             .par_iter()
-            .map_init(
-                || Vec::with_capacity(steps as usize + 1),
-                |trail, &(pixel, deficit)| {
-                    let mut total = [0i32; 4];
-                    let mut walked = 0;
-                    for j in 0..deficit {
-                        let mut rng = KeyedRng::from_parts(&[seed, 2, pixel as u64, u64::from(j)]);
-                        let k = burn_in + rng.below(steps - burn_in + 1);
-                        // The logs along the walk, read as it goes (the reads do not wait on
-                        // one another), then taken backwards.
-                        trail.clear();
-                        trail.push(self.logs[self.tiling.index_of(pixel)]);
-                        let mut walk =
-                            Walk::new(&mut rng, self.width, self.height, pixel, self.turning);
-                        for _ in 0..k {
-                            let (x, y) = walk.step();
-                            trail.push(self.logs[self.tiling.index(x, y)]);
-                        }
-                        let mut state = State::new();
-                        for &logs in trail.iter().rev() {
-                            state.step(logs, self.threshold, self.prior);
-                        }
-                        if state.on_surface {
-                            add(&mut total, state.white());
-                        }
-                        walked += u64::from(k);
+            .map(|&(pixel, deficit)| {
+                let mut total = [0i32; C];
+                let mut walked = 0;
+                for j in 0..deficit {
+                    let mut rng = KeyedRng::from_parts(&[seed, 2, pixel as u64, u64::from(j)]);
+                    let k = burn_in + rng.below(steps - burn_in + 1);
+                    let mut backwards = Backwards::new();
+                    backwards.step(self.logs[self.tiling.index_of(pixel)], self.threshold);
+                    let mut walk = Walk::new(rng, self.width, self.height, pixel, self.turning);
+                    for _ in 0..k {
+                        let (x, y) = walk.step();
+                        backwards.step(self.logs[self.tiling.index(x, y)], self.threshold);
                     }
-                    (pixel, total, walked)
-                },
-            )
+                    if let Some(white) = backwards.white(self.prior) {
+                        add(&mut total, white);
+                    }
+                    walked += u64::from(k);
+                }
+                (pixel, total, walked)
+            })
             .collect();
         let mut walked = 0;
         for (pixel, extra, k) in top_ups {
-            merge(&mut sums[pixel], &extra);
+            merge(&mut sums[pixel], &full(&extra));
             walked += k;
         }
         (paths, walked)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Logs of random surfaces and light sources, with steps above and below the threshold.
+    fn trail(rng: &mut KeyedRng, len: usize) -> Vec<[i16; 4]> {
+        (0..len)
+            .map(|_| {
+                if rng.below(6) == 0 {
+                    [0, 0, 0, EMITTER]
+                } else {
+                    std::array::from_fn(|c| if c == 3 { 0 } else { -(rng.below(300) as i16) })
+                }
+            })
+            .collect()
+    }
+
+    /// Folding a walk outwards gives, to the last bit, what the path function gives walking
+    /// it backwards, from its far end to its start: with and without a known white, with
+    /// light sources anywhere (the start among them) and with none of the trail a surface.
+    #[test]
+    fn the_outward_fold_is_the_path_function_walked_backwards() {
+        let mut rng = KeyedRng::new(11);
+        for case in 0..3000 {
+            let trail = trail(&mut rng, 1 + case % 40);
+            let prior = (case % 2 == 0).then_some([-20, 35, 0]);
+            let threshold = (case % 3) as i32 * 40;
+            let mut state = State::<4>::new();
+            for &to in trail.iter().rev() {
+                state.step(to, threshold, prior);
+            }
+            let mut fold = Backwards::<4>::new();
+            for &to in &trail {
+                fold.step(to, threshold);
+            }
+            let expect = state.on_surface.then(|| state.white());
+            let got = fold.white(prior);
+            assert_eq!(got.map(|w| [w[0], w[1], w[2]]), expect.map(|w| [w[0], w[1], w[2]]));
+        }
+    }
+
+    /// A grey image walked with its one channel gives the sums that its three equal channels
+    /// give walked as such.
+    #[test]
+    fn a_grey_image_walked_in_one_channel_gives_the_same_sums() {
+        let (width, height) = (37, 23);
+        let mut rng = KeyedRng::new(5);
+        let logs: Vec<[i16; 4]> = (0..width * height)
+            .map(|_| {
+                let v = -(rng.below(2000) as i16);
+                if rng.below(10) == 0 { [0, 0, 0, EMITTER] } else { [v, v, v, 0] }
+            })
+            .collect();
+        let tiling = Tiling::new(width, height);
+        let grey: Vec<[i16; 2]> = logs.iter().map(|l| [l[0], l[3]]).collect();
+        let (four, two) = (tiling.tiled(&logs, [0; 4]), tiling.tiled(&grey, [0; 2]));
+        for prior in [None, Some([-300; 3])] {
+            let turning = Turning::with_persistence(6.0);
+            let a =
+                Walker { logs: &four[..], tiling, width, height, turning, threshold: 10, prior };
+            let b = Walker { logs: &two[..], tiling, width, height, turning, threshold: 10, prior };
+            let mut sums_a = a.shared(3, 9, 400, 100, &|_, _| {});
+            let mut sums_b = b.shared(3, 9, 400, 100, &|_, _| {});
+            assert_eq!(sums_a, sums_b);
+            assert_eq!(
+                a.top_up(&mut sums_a, 3, 30, 400, 100),
+                b.top_up(&mut sums_b, 3, 30, 400, 100)
+            );
+            assert_eq!(sums_a, sums_b);
+        }
     }
 }

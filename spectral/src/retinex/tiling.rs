@@ -9,6 +9,7 @@
 //! block of logs, whichever way the path goes. The order is only storage: the samples are the
 //! same integers, summed in any order, so the output is bit-identical.
 
+#[cfg(test)]
 use rayon::prelude::*;
 
 const TILE_BITS: u32 = 4;
@@ -70,6 +71,7 @@ impl Tiling {
     }
 
     /// A tiled image back in row-major order (`pixels` of them).
+    #[cfg(test)]
     pub(super) fn row_major<T: Copy + Send + Sync>(&self, tiled: &[T], pixels: usize) -> Vec<T> {
         (0..pixels).into_par_iter().map(|p| tiled[self.index_of(p)]).collect()
     }

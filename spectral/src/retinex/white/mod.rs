@@ -85,11 +85,21 @@ pub(super) fn white_image(
     height: usize,
     area: bool,
 ) -> WhiteImage {
-    let logs: [Vec<f32>; 3] =
-        std::array::from_fn(|c| pixels.par_iter().map(|p| ln(p[c])).collect());
+    // A grey image (the seen image's relative luminance, in three equal channels) has its one
+    // channel filtered once and copied: each filter of a channel reads that channel alone, and
+    // the joint bilateral mean gives equal channels equal results.
+    let grey = pixels
+        .par_iter()
+        .all(|p| p[1].to_bits() == p[0].to_bits() && p[2].to_bits() == p[0].to_bits());
+    let channels = if grey { 1 } else { 3 };
+    let per_channel = |f: &(dyn Fn(usize) -> Vec<f32> + Sync)| -> [Vec<f32>; 3] {
+        let distinct: Vec<Vec<f32>> = (0..channels).map(f).collect();
+        std::array::from_fn(|c| distinct[c.min(channels - 1)].clone())
+    };
+    let logs = per_channel(&|c| pixels.par_iter().map(|p| ln(p[c])).collect());
     let mut noise = vec![[0f32; 3]; count];
     let cleaned: [Vec<f32>; 3] = if area {
-        let medians: [Vec<f32>; 3] = std::array::from_fn(|c| {
+        let medians = per_channel(&|c| {
             let open = opening(&logs[c], emitter, width, height);
             let mut m = median(&logs[c], emitter, width, height);
             m.par_iter_mut().zip(&open).zip(emitter.par_iter()).for_each(|((m, o), e)| {
@@ -101,7 +111,11 @@ pub(super) fn white_image(
         });
         let regions = regions(emitter, frameworks);
         noise = (0..count as u8)
-            .map(|f| std::array::from_fn(|c| noise_sigma(&logs[c], &regions, width, f)))
+            .map(|f| {
+                let sigma: Vec<f32> =
+                    (0..channels).map(|c| noise_sigma(&logs[c], &regions, width, f)).collect();
+                std::array::from_fn(|c| sigma[c.min(channels - 1)])
+            })
             .collect();
         let mut image: Vec<[f32; 3]> =
             (0..pixels.len()).into_par_iter().map(|p| medians.each_ref().map(|m| m[p])).collect();

@@ -331,6 +331,10 @@ fn snapshots_are_checked_as_a_submission_is(s: &str, scene_id: &str, view: &serd
         (serde_json::json!({ "colour": "red" }), "unknown field `colour`"),
         (serde_json::json!({ "render.colour": "red" }), "render.colour: unknown field `colour`"),
         (serde_json::json!({ "render.width": -3 }), "render.width"),
+        (
+            serde_json::json!({ "render.noise_target": 0.9 }),
+            "render.noise_target: 0.9 is not a noise target",
+        ),
     ] {
         let r = snapshot(patch.clone());
         assert_eq!(r.status, 400, "{patch}: {}", r.text());

@@ -291,6 +291,9 @@ fn snapshot_is_the_cli_render_of_the_download(
         "160",
         "--height",
         "90",
+        // The snapshot form's noise target, 15 %: the same adaptive render, bit for bit.
+        "--noise",
+        "0.15",
         "--progress",
         "none",
     ]);

@@ -55,7 +55,7 @@ impl From<&Plan> for TileLayout {
             sky: plan.sky,
             lit: plan.lit,
             white: plan.white,
-            samples_cap: if plan.adaptive() && !plan.grids { plan.samples_per_pixel } else { 0 },
+            samples_cap: if plan.adaptive() { plan.samples_per_pixel } else { 0 },
         }
     }
 }

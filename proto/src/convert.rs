@@ -68,10 +68,6 @@ impl TryFrom<pb::RenderOptions> for RenderOptions {
     type Error = WireError;
     fn try_from(o: pb::RenderOptions) -> Result<Self, WireError> {
         let count = |field, value: Option<u32>| value.map(|v| option_count(field, v)).transpose();
-        if let Some(target) = o.noise_target {
-            restauro_scene::scene_file::check_noise_target(target)
-                .map_err(|problem| WireError::new("render.noise_target", problem))?;
-        }
         Ok(RenderOptions {
             integrator: integrator_from_wire(o.integrator, "render.integrator")?,
             variant: o.variant,

@@ -118,13 +118,6 @@ pub struct Plan {
     pub noise_target: f32,
 }
 
-impl Plan {
-    /// Whether pixels stop early by their own noise, so that tiles carry each pixel's count.
-    pub fn adaptive(&self) -> bool {
-        self.noise_target > 0.0
-    }
-}
-
 /// The lights with a bit of their own in a pixel's mask of the lights that light it (in the
 /// scene's order, the sky not counted); lights beyond the last share its bit. 24, so that a
 /// mask is an exact integer in an f32 image channel.
@@ -176,6 +169,12 @@ pub fn tiles(width: u32, height: u32, tile: u32) -> Vec<Rect> {
 }
 
 impl Plan {
+    /// Whether pixels stop early by their own noise, so that tiles carry each pixel's count:
+    /// never for a grid, whatever a plan from the wire says (as `Settings::adaptive` renders it).
+    pub fn adaptive(&self) -> bool {
+        self.noise_target > 0.0 && !self.grids
+    }
+
     /// Resolves `options` against `scene` (whose file is `path`, for messages), within `limits`.
     pub fn new(
         scene: &LoadedScene,

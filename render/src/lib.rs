@@ -8,6 +8,7 @@
 
 pub mod adaptive;
 pub mod bsdf;
+pub mod bvh;
 pub mod camera;
 pub mod degradation;
 pub mod frame;

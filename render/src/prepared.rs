@@ -1,8 +1,9 @@
-//! A scene prepared for tracing, once per job per process: every visible triangle in one CWBVH
-//! (obvhs), each triangle's material resolved for the chosen restoration hypothesis, every
+//! A scene prepared for tracing, once per job per process: every visible triangle in one
+//! four-wide BVH ([`crate::bvh`]), each triangle's material resolved for the chosen restoration hypothesis, every
 //! spectrum on the grid, every light turned into spectral terms.
 
 use crate::bsdf::Bsdf;
+use crate::bvh::{self, Bvh4};
 use crate::camera::Camera;
 use crate::degradation::ClassMap;
 use crate::glass::Transmission;
@@ -14,9 +15,7 @@ use crate::soiling::Soiling;
 use crate::texture::{Detail, DetailPoint, LuminancePyramid, Pyramid, TexturedTriangle};
 use crate::vertex_colour::{ColourPoint, VertexPalette};
 use glam::Vec3A;
-use obvhs::BvhBuildParams;
-use obvhs::cwbvh::CwBvh;
-use obvhs::ray::{Ray, RayHit};
+use obvhs::ray::Ray;
 use obvhs::rt_triangle::RtTriangle;
 use obvhs::triangle::Triangle;
 use restauro_scene::load::{LoadedObject, LoadedScene, ResolvedLight};
@@ -28,7 +27,6 @@ use restauro_spectral::grid::BANDS;
 use restauro_spectral::photometry::LuminousSpectrum;
 use std::collections::BTreeMap;
 use std::sync::Arc;
-use std::time::Duration;
 
 #[derive(Debug, thiserror::Error)]
 pub enum TraceError {
@@ -94,7 +92,7 @@ pub struct PreparedScene {
     pub camera: Camera,
     pub settings: Settings,
     pub strata: Strata,
-    bvh: CwBvh,
+    bvh: Bvh4,
     /// Triangles in BVH order.
     triangles: Vec<RtTriangle>,
     normals: Vec<Vec3A>,
@@ -238,7 +236,7 @@ impl PreparedScene {
 
     /// The number of triangles traced (after hidden parts are removed).
     pub fn triangle_count(&self) -> usize {
-        self.triangles.len()
+        self.bvh.triangle_count()
     }
 
     /// The memory the prepared scene holds, in bytes (the BVH, the triangles and their
@@ -247,8 +245,7 @@ impl PreparedScene {
     pub fn memory_bytes(&self) -> usize {
         use std::mem::size_of;
         size_of::<Self>()
-            + self.bvh.nodes.len() * size_of::<obvhs::cwbvh::node::CwBvhNode>()
-            + self.bvh.primitive_indices.len() * size_of::<u32>()
+            + self.bvh.memory_bytes()
             + self.triangles.len() * size_of::<RtTriangle>()
             + self.normals.len() * size_of::<Vec3A>()
             + self.smooth_of.len() * size_of::<u32>()
@@ -269,15 +266,10 @@ impl PreparedScene {
     /// The closest hit along the ray within (tmin, tmax).
     #[inline]
     pub fn intersect(&self, origin: Vec3A, direction: Vec3A, tmax: f32) -> Option<Hit> {
-        let ray = Ray::new(origin, direction, 0.0, tmax);
-        let mut hit = RayHit::none();
-        if !self.bvh.ray_traverse(ray, &mut hit, |r, slot| self.triangles[slot].intersect(r)) {
-            return None;
-        }
-        let slot = hit.primitive_id as usize;
+        let (slot, t) = self.bvh.closest(origin, direction, tmax)?;
         let n = self.normals[slot];
         let normal = if n.dot(direction) > 0.0 { -n } else { n };
-        let point = origin + direction * hit.t;
+        let point = origin + direction * t;
         let material = self.material_of[slot];
         let detail = match (self.texture_of.get(slot), self.coloured_of.get(slot)) {
             (Some(&k), _) if k != FLAT => Some(self.detail_point(slot, point, On::Photo(k))),
@@ -287,11 +279,11 @@ impl PreparedScene {
         match self.smooth_of.get(slot) {
             Some(&k) if k != FLAT => {
                 let corners = &self.vertex_normals[k as usize];
-                let mut hit = self.smooth_hit(slot, corners, point, hit.t, normal, material);
+                let mut hit = self.smooth_hit(slot, corners, point, t, normal, material);
                 hit.detail = detail;
                 Some(hit)
             }
-            _ => Some(Hit { t: hit.t, point, normal, shading: normal, material, detail }),
+            _ => Some(Hit { t, point, normal, shading: normal, material, detail }),
         }
     }
 
@@ -442,8 +434,7 @@ impl PreparedScene {
     /// Whether anything blocks the segment from `origin` along `direction` up to `distance`.
     #[inline]
     pub fn occluded(&self, origin: Vec3A, direction: Vec3A, distance: f32) -> bool {
-        let ray = Ray::new(origin, direction, 0.0, distance);
-        !self.bvh.ray_traverse_miss(ray, |r, slot| self.triangles[slot].intersect(r))
+        self.bvh.any_hit(origin, direction, distance)
     }
 
     /// A closest hit by testing every triangle, for checking the BVH.
@@ -567,12 +558,8 @@ impl Gathered {
 }
 
 /// The BVH over `tris`, and the triangles and their normals in its order.
-fn build_bvh(tris: &[Triangle]) -> (CwBvh, Vec<RtTriangle>, Vec<Vec3A>) {
-    let bvh = obvhs::cwbvh::builder::build_cwbvh_from_tris(
-        tris,
-        BvhBuildParams::medium_build(),
-        &mut Duration::default(),
-    );
+fn build_bvh(tris: &[Triangle]) -> (Bvh4, Vec<RtTriangle>, Vec<Vec3A>) {
+    let bvh = Bvh4::build(tris, bvh::build_params());
     let order = &bvh.primitive_indices;
     let triangles: Vec<RtTriangle> =
         order.iter().map(|&i| RtTriangle::from(&tris[i as usize])).collect();

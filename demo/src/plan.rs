@@ -14,9 +14,10 @@ use std::path::{Path, PathBuf};
 pub const ILLUMINANTS: [&str; 4] = ["A", "B", "C", "D65"];
 
 /// The noise target of the facade, the night and the block (`restauro_render::adaptive`): a
-/// pixel stops once the standard error of its mean is within 10 % of its luminance. At a cap of 32 samples, `restauro bench adaptive` measured
-/// the same per-pixel error as 32 samples everywhere (RMS 1 % higher, 95th percentile lower) in
-/// about 0.7 of the samples (bench/README.md).
+/// pixel stops once the standard error of its mean is within 10 % of its luminance. At a cap of
+/// 32 samples, `restauro bench adaptive` measured the same per-pixel error as 32 samples
+/// everywhere (RMS 1 % higher, 95th percentile lower) in about 0.7 of the samples
+/// (bench/README.md).
 pub const FACADE_NOISE_TARGET: f32 = 0.1;
 
 /// Image sizes and samples.

@@ -1,6 +1,6 @@
 //! A scene prepared for tracing, once per job per process: every visible triangle in one
-//! four-wide BVH ([`crate::bvh`]), each triangle's material resolved for the chosen restoration hypothesis, every
-//! spectrum on the grid, every light turned into spectral terms.
+//! four-wide BVH ([`crate::bvh`]), each triangle's material resolved for the chosen restoration
+//! hypothesis, every spectrum on the grid, every light turned into spectral terms.
 
 use crate::bsdf::Bsdf;
 use crate::bvh::{self, Bvh4};

@@ -73,10 +73,7 @@ fn widest_children(bvh2: &Bvh2, index: u32) -> [Option<u32>; 4] {
 fn add_leaves(leaves: &mut Vec<Leaf4>, bvh2: &Bvh2, tris: &[Triangle], first: u32, count: u32) {
     for start in (first..first + count).step_by(4) {
         let end = (start + 4).min(first + count);
-        let four: Vec<Triangle> = bvh2.primitive_indices[start as usize..end as usize]
-            .iter()
-            .map(|&i| tris[i as usize])
-            .collect();
-        leaves.push(Leaf4::new(&four, start));
+        let four = bvh2.primitive_indices[start as usize..end as usize].iter();
+        leaves.push(Leaf4::new(four.map(|&i| &tris[i as usize]), start));
     }
 }

@@ -22,7 +22,7 @@ pub(super) struct Leaf4 {
 
 impl Leaf4 {
     /// The leaf of `triangles` (one to four), whose first is slot `first`.
-    pub(super) fn new(triangles: &[Triangle], first: u32) -> Self {
+    pub(super) fn new<'a>(triangles: impl Iterator<Item = &'a Triangle>, first: u32) -> Self {
         let mut leaf = Leaf4 {
             v0: [Vec4::ZERO; 3],
             e1: [Vec4::ZERO; 3],
@@ -30,7 +30,7 @@ impl Leaf4 {
             normal: [Vec4::ZERO; 3],
             first,
         };
-        for (lane, t) in triangles.iter().take(4).enumerate() {
+        for (lane, t) in triangles.take(4).enumerate() {
             let (e1, e2) = (t.v0 - t.v1, t.v2 - t.v0);
             let columns: [(&mut [Vec4; 3], Vec3A); 4] = [
                 (&mut leaf.v0, t.v0),

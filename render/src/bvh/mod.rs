@@ -70,7 +70,7 @@ pub struct Bvh4 {
 }
 
 impl Bvh4 {
-    /// Builds the binary BVH with obvhs (`params`, at most `leaf_size` triangles a leaf) and
+    /// Builds the binary BVH with obvhs (`params`: [`build_params`] for the tracer) and
     /// collapses it to four children a node.
     pub fn build(tris: &[Triangle], params: BvhBuildParams) -> Self {
         let bvh2: Bvh2 =

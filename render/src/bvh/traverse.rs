@@ -85,22 +85,22 @@ impl Bvh4 {
     #[inline]
     pub fn closest(&self, origin: Vec3A, direction: Vec3A, t_max: f32) -> Option<(usize, f32)> {
         let ray = BoxRay::new(origin, direction);
-        if 3 * self.depth < STACK {
-            self.closest_with(&mut [Entry::ZERO; STACK], &ray, t_max)
-        } else {
-            self.closest_with(&mut vec![Entry::ZERO; 3 * self.depth + 1], &ray, t_max)
-        }
+        self.on_stack(Entry::ZERO, |stack| self.closest_with(stack, &ray, t_max))
     }
 
     /// Whether any triangle meets the ray in [0, `t_max`).
     #[inline]
     pub fn any_hit(&self, origin: Vec3A, direction: Vec3A, t_max: f32) -> bool {
         let ray = BoxRay::new(origin, direction);
-        if 3 * self.depth < STACK {
-            self.any_hit_with(&mut [0; STACK], &ray, t_max)
-        } else {
-            self.any_hit_with(&mut vec![0; 3 * self.depth + 1], &ray, t_max)
-        }
+        self.on_stack(0, |stack| self.any_hit_with(stack, &ray, t_max))
+    }
+
+    /// Runs `walk` with a traversal stack deep enough for this tree (each level leaves at most
+    /// three children waiting): on the thread's stack, or on the heap for a pathological tree.
+    #[inline(always)]
+    fn on_stack<T: Copy, R>(&self, zero: T, walk: impl FnOnce(&mut [T]) -> R) -> R {
+        let need = 3 * self.depth + 1;
+        if need <= STACK { walk(&mut [zero; STACK]) } else { walk(&mut vec![zero; need]) }
     }
 
     #[inline(always)]
@@ -128,7 +128,7 @@ impl Bvh4 {
                     continue;
                 }
             } else {
-                for leaf in self.leaves_of(current) {
+                for leaf in self.leaves_of(current.child, current.count) {
                     if let Some((slot, t)) = leaf.closest(ray, t_max) {
                         t_max = t;
                         hit = Some((slot as usize, t));
@@ -149,9 +149,9 @@ impl Bvh4 {
         }
     }
 
-    #[inline(always)]
     /// The stack holds inner nodes only: a leaf is tested as soon as the ray is found to enter
     /// it, since any hit ends the walk.
+    #[inline(always)]
     fn any_hit_with(&self, stack: &mut [u32], ray: &BoxRay, t_max: f32) -> bool {
         let mut top = 1;
         stack[0] = 0;
@@ -162,11 +162,11 @@ impl Bvh4 {
             while mask != 0 {
                 let i = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
-                let entry = Entry { t_near: 0.0, child: node.child[i], count: node.count[i] };
-                if entry.count == INNER {
-                    stack[top] = entry.child;
+                let (child, count) = (node.child[i], node.count[i]);
+                if count == INNER {
+                    stack[top] = child;
                     top += 1;
-                } else if self.leaves_of(entry).iter().any(|leaf| leaf.any(ray, t_max)) {
+                } else if self.leaves_of(child, count).iter().any(|leaf| leaf.any(ray, t_max)) {
                     return true;
                 }
             }
@@ -174,11 +174,11 @@ impl Bvh4 {
         false
     }
 
-    /// The four-lane leaves holding a leaf child's triangles.
+    /// The four-lane leaves, from `first`, holding a leaf child's `count` triangles.
     #[inline(always)]
-    fn leaves_of(&self, leaf: Entry) -> &[Leaf4] {
-        let first = leaf.child as usize;
-        &self.leaves[first..first + leaf.count.div_ceil(4) as usize]
+    fn leaves_of(&self, first: u32, count: u32) -> &[Leaf4] {
+        let first = first as usize;
+        &self.leaves[first..first + count.div_ceil(4) as usize]
     }
 }
 

@@ -64,3 +64,51 @@ fn a_model_of_a_million_triangles_opens_and_orbits() {
         })
     ));
 }
+
+/// How long a restorer waits for a snapshot of the demo's facade: the Aosta scene at 1280 × 720
+/// on a coordinator with two workers of one thread each (`restauro studio` on two cores),
+/// the snapshot form's defaults (a cap of 16 samples, a 15 % noise target), from the click on
+/// "Take snapshot" to the seen image shown over the view. Measured, not asserted: it prints a
+/// JSON line.
+///
+/// `cargo test --release -p restauro-tests --test studio_speed -- --ignored --nocapture snapshot`
+#[test]
+#[ignore = "a measurement: run it by name with --ignored"]
+fn a_snapshot_of_the_facade_from_the_click_to_the_seen_image() {
+    if !available("studio_speed") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let farm = restauro_tests::Coordinator::studio_farm(dir.path(), 1280, 720);
+    // A second worker of one thread beside the farm's first, as `restauro studio`'s embedded
+    // cluster has on two cores.
+    let _second = restauro_tests::Worker::start(dir.path(), &farm.coordinator.url, "local-2", &[]);
+    // The scene reaches the farm with a quick render from the command line, as in every
+    // studio test; it is waited for, so that its time is not the snapshot's.
+    let c = &farm.coordinator;
+    let first = restauro_tests::submit(&farm.scene, &["--spp", "1"], &c.url, &farm.token);
+    let o = restauro_tests::client(&["watch", &first], &c.url, &farm.token);
+    assert!(o.status.success(), "{}", restauro_tests::text(&o));
+    let mut b = farm.page_in_browser(1280, 720);
+    let shown = "(() => { const i = document.getElementById('result-image'); \
+        return !document.getElementById('result').hidden && i.complete && i.naturalWidth === 1280; })()";
+    let start = Instant::now();
+    b.click("#take-snapshot");
+    b.wait_for("the snapshot's seen image", shown);
+    let seconds = start.elapsed().as_secs_f64();
+    let spp = b.eval("document.getElementById('snap-spp').value");
+    let noise = b.eval("document.getElementById('snap-noise').value");
+    #[allow(clippy::print_stdout)]
+    let print = |line: String| println!("{line}");
+    print(format!(
+        "{}",
+        serde_json::json!({
+            "measure": "studio_snapshot",
+            "scene": "aosta 1280 × 720",
+            "samples_per_pixel_cap": spp,
+            "noise_target_percent": noise,
+            "click_to_seen_image_s": seconds,
+            "farm": "one coordinator, two workers of one thread, on this machine",
+        })
+    ));
+}

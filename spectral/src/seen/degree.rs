@@ -73,15 +73,33 @@ pub fn uv(xyz: Xyz) -> Option<(f64, f64)> {
 /// pixel of a seen image.
 const LOCUS_SEGMENTS: u32 = 16;
 
+/// One chord of the locus polyline: its start, its direction and the reciprocal of its
+/// squared length (so that the distance at each pixel multiplies rather than divides).
+struct Chord {
+    u0: f64,
+    v0: f64,
+    du: f64,
+    dv: f64,
+    inverse_length2: f64,
+}
+
 /// The bluish half of the CIE daylight locus in u′v′, as a polyline even in reciprocal
 /// temperature (mired).
-static BLUE_DAYLIGHT: LazyLock<Vec<(f64, f64)>> = LazyLock::new(|| {
+static BLUE_DAYLIGHT: LazyLock<Vec<Chord>> = LazyLock::new(|| {
     let (from, to) = (1e6 / BLUE_DAYLIGHT_FROM_K, 1e6 / 25_000.0);
-    (0..=LOCUS_SEGMENTS)
+    let points: Vec<(f64, f64)> = (0..=LOCUS_SEGMENTS)
         .map(|i| {
             let mired = from + (to - from) * f64::from(i) / f64::from(LOCUS_SEGMENTS);
             let c = daylight_chromaticity(1e6 / mired).expect("within the daylight locus");
             uv(c.to_xyz(1.0)).expect("a daylight is not black")
+        })
+        .collect();
+    points
+        .windows(2)
+        .map(|s| {
+            let ((u0, v0), (u1, v1)) = (s[0], s[1]);
+            let (du, dv) = (u1 - u0, v1 - v0);
+            Chord { u0, v0, du, dv, inverse_length2: 1.0 / (du * du + dv * dv) }
         })
         .collect()
 });
@@ -89,15 +107,18 @@ static BLUE_DAYLIGHT: LazyLock<Vec<(f64, f64)>> = LazyLock::new(|| {
 /// Δ: the u′v′ distance from `white` to the daylight locus between 6500 K and 25 000 K.
 pub fn distance_from_blue_daylight(white: Xyz) -> f64 {
     let Some((u, v)) = uv(white) else { return 0.0 };
+    // The nearest chord by squared distance, one square root at the end: this runs at every
+    // pixel of a seen image, where a `hypot` and a division per chord took a tenth of its time.
     BLUE_DAYLIGHT
-        .windows(2)
-        .map(|s| {
-            let ((u0, v0), (u1, v1)) = (s[0], s[1]);
-            let (du, dv) = (u1 - u0, v1 - v0);
-            let t = (((u - u0) * du + (v - v0) * dv) / (du * du + dv * dv)).clamp(0.0, 1.0);
-            (u - u0 - t * du).hypot(v - v0 - t * dv)
+        .iter()
+        .map(|c| {
+            let (pu, pv) = (u - c.u0, v - c.v0);
+            let t = ((pu * c.du + pv * c.dv) * c.inverse_length2).clamp(0.0, 1.0);
+            let (eu, ev) = (pu - t * c.du, pv - t * c.dv);
+            eu * eu + ev * ev
         })
         .fold(f64::INFINITY, f64::min)
+        .sqrt()
 }
 
 /// The chromatic term of D: 1 − β·Δ, at least 0.

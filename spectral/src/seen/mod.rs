@@ -233,16 +233,25 @@ pub fn seen(
     // Y_r(p), each light floored a millionth below the level: a surface no light reaches is
     // dark, not divided by zero.
     let floor = 1e-6 * level;
+    // Per framework, its floored level and the framework's share of the reference, so that a
+    // pixel raises one number to a power, not three.
+    let frameworks_reference: Vec<(f64, f64)> = adapting
+        .framework_level_cd_m2
+        .iter()
+        .map(|framework| {
+            let framework = framework.max(floor);
+            (framework, framework.powf(w) * level.powf(1.0 - w))
+        })
+        .collect();
     let reference: Vec<f64> = (0..n)
         .into_par_iter()
         .map(|p| {
             if emitters[p] {
                 return level;
             }
-            let framework = adapting.framework_level_cd_m2[usize::from(adapting.framework[p])];
-            let framework = framework.max(floor);
+            let (framework, share) = frameworks_reference[usize::from(adapting.framework[p])];
             let own = adapting.local[p][1].max(floor);
-            framework.powf(w) * level.powf(1.0 - w) * (own / framework).powf(v)
+            share * (own / framework).powf(v)
         })
         .collect();
     let relative: Vec<[f32; 3]> = (0..n)

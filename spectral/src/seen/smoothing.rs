@@ -34,10 +34,6 @@ impl Grid {
         Grid { cell_px, columns: width.div_ceil(cell_px), rows: height.div_ceil(cell_px) }
     }
 
-    fn cell_of(&self, x: usize, y: usize) -> usize {
-        (y / self.cell_px) * self.columns + x / self.cell_px
-    }
-
     /// The half-width (in cells) of each of three box passes whose sum is a Gaussian of σ
     /// (pixels): a box of width b has variance (b² − 1)/12, three of them 3(b² − 1)/12.
     fn box_radius(&self, sigma_px: f64) -> usize {
@@ -124,17 +120,32 @@ impl<'a> Smoother<'a> {
 
     /// Smooths `value` (four numbers a pixel) over each framework's area, at the pixels where
     /// it is `Some`.
-    pub(super) fn smooth(&self, value: impl Fn(usize) -> Option<[f64; 4]>) -> Smoothed {
+    pub(super) fn smooth(&self, value: impl Fn(usize) -> Option<[f64; 4]> + Sync) -> Smoothed {
         let (grid, f) = (self.grid, self.frameworks);
-        let mut cells: Vec<Cells> = vec![vec![[0.0; 5]; grid.columns * grid.rows]; f.count];
-        for p in (0..f.labels.len()).filter(|&p| f.solid[p]) {
-            if let Some(v) = value(p) {
-                let cell = &mut cells[usize::from(f.labels[p])]
-                    [grid.cell_of(p % self.width, p / self.width)];
-                for c in 0..4 {
-                    cell[c] += v[c];
+        let height = f.labels.len() / self.width;
+        // Each row of cells sums its own band of pixel rows, in parallel: a cell takes its
+        // pixels in the same order as a pass over the whole image would, so the sums are the
+        // same to the bit.
+        let bands: Vec<Vec<Cells>> = (0..grid.rows)
+            .into_par_iter()
+            .map(|row| {
+                let mut band: Vec<Cells> = vec![vec![[0.0; 5]; grid.columns]; f.count];
+                let rows = row * grid.cell_px..((row + 1) * grid.cell_px).min(height);
+                for p in rows.flat_map(|y| y * self.width..(y + 1) * self.width) {
+                    let Some(v) = f.solid[p].then(|| value(p)).flatten() else { continue };
+                    let cell = &mut band[usize::from(f.labels[p])][(p % self.width) / grid.cell_px];
+                    for c in 0..4 {
+                        cell[c] += v[c];
+                    }
+                    cell[4] += 1.0;
                 }
-                cell[4] += 1.0;
+                band
+            })
+            .collect();
+        let mut cells: Vec<Cells> = vec![Vec::with_capacity(grid.columns * grid.rows); f.count];
+        for band in bands {
+            for (framework, row) in cells.iter_mut().zip(band) {
+                framework.extend(row);
             }
         }
         Smoothed(

@@ -54,18 +54,18 @@ fn kernel() -> [f32; SIDE * SIDE] {
 
 /// The bilateral sums of one pixel as its window is read.
 #[derive(Clone, Copy)]
-struct Window {
-    centre: [f32; 3],
+struct Window<const C: usize> {
+    centre: [f32; C],
     own: u8,
-    cut: [f32; 3],
-    sum: [f32; 3],
+    cut: [f32; C],
+    sum: [f32; C],
     total: f32,
 }
 
-impl Window {
+impl<const C: usize> Window<C> {
     /// The window of a pixel that is filtered, or `None` for one that keeps its value (a light
     /// source, a log of −∞, a framework without noise).
-    fn of(centre: [f32; 3], own: u8, cuts: &[[f32; 3]]) -> Option<Self> {
+    fn of(centre: [f32; C], own: u8, cuts: &[[f32; C]]) -> Option<Self> {
         if own == LIGHT {
             return None;
         }
@@ -73,15 +73,17 @@ impl Window {
         if centre.iter().any(|v| !v.is_finite()) || cut.contains(&0.0) {
             return None;
         }
-        Some(Self { centre, own, cut, sum: [0.0; 3], total: 0.0 })
+        Some(Self { centre, own, cut, sum: [0.0; C], total: 0.0 })
     }
 
     /// A neighbour of logs `v` in region `r` at spatial weight `k`.
     #[inline(always)]
-    fn take(&mut self, v: [f32; 3], r: u8, k: f32) {
-        let outside = (v[0] - self.centre[0]).abs() > self.cut[0]
-            || (v[1] - self.centre[1]).abs() > self.cut[1]
-            || (v[2] - self.centre[2]).abs() > self.cut[2];
+    fn take(&mut self, v: [f32; C], r: u8, k: f32) {
+        // Every channel compared, without a branch per channel.
+        let mut outside = false;
+        for ((v, centre), cut) in v.iter().zip(&self.centre).zip(&self.cut) {
+            outside |= (v - centre).abs() > *cut;
+        }
         if r != self.own || outside {
             return;
         }
@@ -91,7 +93,7 @@ impl Window {
         self.total += k;
     }
 
-    fn mean(&self) -> [f32; 3] {
+    fn mean(&self) -> [f32; C] {
         self.sum.map(|s| s / self.total)
     }
 }
@@ -106,13 +108,16 @@ impl Window {
 /// added in the same order give the same image. Inside the image two neighbouring pixels are
 /// filtered together, so that their chains of additions, each of which waits on itself, run
 /// side by side.
-pub(super) fn bilateral(
-    image: &[[f32; 3]],
+///
+/// `C` is 3, or 1 for a grey image: each channel's sums read that channel alone, and the cut
+/// compares equal channels equally, so one channel gives the grey image's three bit for bit.
+pub(super) fn bilateral<const C: usize>(
+    image: &[[f32; C]],
     regions: &[u8],
     (width, height): (usize, usize),
-    noise: &[[f32; 3]],
-) -> Vec<[f32; 3]> {
-    let cuts: Vec<[f32; 3]> = noise.iter().map(|n| n.map(|n| RANGE_SIGMAS * n)).collect();
+    noise: &[[f32; C]],
+) -> Vec<[f32; C]> {
+    let cuts: Vec<[f32; C]> = noise.iter().map(|n| n.map(|n| RANGE_SIGMAS * n)).collect();
     let kernel = kernel();
     let mut out = image.to_vec();
     out.par_chunks_mut(width).enumerate().for_each(|(y, row)| {

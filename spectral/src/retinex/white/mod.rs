@@ -117,12 +117,24 @@ pub(super) fn white_image(
                 std::array::from_fn(|c| sigma[c.min(channels - 1)])
             })
             .collect();
-        let mut image: Vec<[f32; 3]> =
-            (0..pixels.len()).into_par_iter().map(|p| medians.each_ref().map(|m| m[p])).collect();
-        for _ in 0..BILATERAL_PASSES {
-            image = bilateral(&image, &regions, (width, height), &noise);
+        if grey {
+            let mut image: Vec<[f32; 1]> = medians[0].par_iter().map(|&m| [m]).collect();
+            let noise: Vec<[f32; 1]> = noise.iter().map(|n| [n[0]]).collect();
+            for _ in 0..BILATERAL_PASSES {
+                image = bilateral(&image, &regions, (width, height), &noise);
+            }
+            let one: Vec<f32> = image.into_par_iter().map(|[v]| v).collect();
+            [one.clone(), one.clone(), one]
+        } else {
+            let mut image: Vec<[f32; 3]> = (0..pixels.len())
+                .into_par_iter()
+                .map(|p| medians.each_ref().map(|m| m[p]))
+                .collect();
+            for _ in 0..BILATERAL_PASSES {
+                image = bilateral(&image, &regions, (width, height), &noise);
+            }
+            std::array::from_fn(|c| image.par_iter().map(|v| v[c]).collect())
         }
-        std::array::from_fn(|c| image.par_iter().map(|v| v[c]).collect())
     } else {
         logs
     };

@@ -74,6 +74,25 @@ pub(super) fn ln(v: f32) -> f32 {
     if v > 0.0 { v.ln() } else { f32::NEG_INFINITY }
 }
 
+/// [`BILATERAL_PASSES`] of the bilateral mean on the first `C` of the three channels (`C` = 1
+/// for a grey image, whose other two are copies of the first), returned as three channels.
+fn bilateral_mean<const C: usize>(
+    medians: &[Vec<f32>; 3],
+    regions: &[u8],
+    size: (usize, usize),
+    noise: &[[f32; 3]],
+) -> [Vec<f32>; 3] {
+    let mut image: Vec<[f32; C]> = (0..medians[0].len())
+        .into_par_iter()
+        .map(|p| std::array::from_fn(|c| medians[c][p]))
+        .collect();
+    let noise: Vec<[f32; C]> = noise.iter().map(|n| std::array::from_fn(|c| n[c])).collect();
+    for _ in 0..BILATERAL_PASSES {
+        image = bilateral(&image, regions, size, &noise);
+    }
+    std::array::from_fn(|c| image.par_iter().map(|v| v[c.min(C - 1)]).collect())
+}
+
 /// The cleaned image of `pixels` (non-negative, finite), with `emitter` marking light sources
 /// and `frameworks` each surface's framework (0..count). `area` false gives the paper's image:
 /// every pixel as it is.
@@ -117,23 +136,11 @@ pub(super) fn white_image(
                 std::array::from_fn(|c| sigma[c.min(channels - 1)])
             })
             .collect();
+        let size = (width, height);
         if grey {
-            let mut image: Vec<[f32; 1]> = medians[0].par_iter().map(|&m| [m]).collect();
-            let noise: Vec<[f32; 1]> = noise.iter().map(|n| [n[0]]).collect();
-            for _ in 0..BILATERAL_PASSES {
-                image = bilateral(&image, &regions, (width, height), &noise);
-            }
-            let one: Vec<f32> = image.into_par_iter().map(|[v]| v).collect();
-            [one.clone(), one.clone(), one]
+            bilateral_mean::<1>(&medians, &regions, size, &noise)
         } else {
-            let mut image: Vec<[f32; 3]> = (0..pixels.len())
-                .into_par_iter()
-                .map(|p| medians.each_ref().map(|m| m[p]))
-                .collect();
-            for _ in 0..BILATERAL_PASSES {
-                image = bilateral(&image, &regions, (width, height), &noise);
-            }
-            std::array::from_fn(|c| image.par_iter().map(|v| v[c]).collect())
+            bilateral_mean::<3>(&medians, &regions, size, &noise)
         }
     } else {
         logs

@@ -38,6 +38,12 @@ pub enum Command {
     /// on loopback) unless --coordinator is given: absolute XYZ (and spectral radiance) to
     /// OpenEXR and a PNG, each also after the Retinex.
     Render(RenderArgs),
+    /// Render a sequence of one scene through a cluster: the day at the scene's site from one
+    /// hour to another (--sun-from 06:00 --to 21:00 --every 15m), one hour on several dates
+    /// (--dates … --at 12:00), a walk through saved views (--path VIEW,VIEW,… --fps 25) or the
+    /// hypotheses (--variants as-found,cleaned). One job on the farm; each frame's EXRs and PNGs,
+    /// each frame bit-identical to the same scene rendered alone.
+    Sequence(SequenceArgs),
     /// The illuminance (lux) at a scene's calculation grids, direct and indirect, computed
     /// spectrally through a cluster (or in-process): a CSV and a false-colour PNG per grid, and
     /// a JSON document with each grid's minimum, mean, maximum and uniformity.
@@ -188,6 +194,49 @@ pub struct RenderArgs {
     /// Compute the scene's calculation grids instead of its image (`restauro illuminance`).
     #[arg(skip)]
     pub grids: bool,
+}
+
+#[derive(Clone, Debug, Args)]
+pub struct SequenceArgs {
+    /// The scene, where it runs and how each frame renders, as `render` takes them (--variants
+    /// makes a sequence of the hypotheses).
+    #[command(flatten)]
+    pub render: RenderArgs,
+    /// The day's first frame: a clock time at the scene's site (HH:MM, in the UTC offset of the
+    /// scene's own date-time), with --to and --every.
+    #[arg(long, value_name = "HH:MM", value_parser = clock_time, requires_all = ["to", "every"])]
+    pub sun_from: Option<chrono::NaiveTime>,
+    /// The day's last frame at most (HH:MM).
+    #[arg(long, value_name = "HH:MM", value_parser = clock_time, requires = "sun_from")]
+    pub to: Option<chrono::NaiveTime>,
+    /// The step between frames of the day: 15m, 1h, 90s, 1h30m.
+    #[arg(long, value_parser = restauro_scene::sequence::parse_every, requires = "sun_from")]
+    pub every: Option<restauro_scene::sequence::Every>,
+    /// The day (YYYY-MM-DD); the scene's own date unless given.
+    #[arg(long, requires = "sun_from")]
+    pub date: Option<chrono::NaiveDate>,
+    /// The same hour (--at) on each of these dates: 2026-03-20,2026-06-21,2026-12-21.
+    #[arg(long, value_delimiter = ',', requires = "at", conflicts_with = "sun_from")]
+    pub dates: Vec<chrono::NaiveDate>,
+    /// The hour of --dates (HH:MM).
+    #[arg(long, value_name = "HH:MM", value_parser = clock_time, requires = "dates")]
+    pub at: Option<chrono::NaiveTime>,
+    /// A walk through these saved views of the scene, in order (at least two).
+    #[arg(long, value_delimiter = ',', conflicts_with_all = ["sun_from", "dates"])]
+    pub path: Vec<String>,
+    /// Frames a second of the walk.
+    #[arg(long, default_value_t = 25.0)]
+    pub fps: f64,
+    /// The walking speed, m/s.
+    #[arg(long, default_value_t = restauro_scene::sequence::WALKING_SPEED_M_S)]
+    pub speed: f64,
+}
+
+/// A clock time as HH:MM (or HH:MM:SS).
+fn clock_time(text: &str) -> Result<chrono::NaiveTime, String> {
+    chrono::NaiveTime::parse_from_str(text, "%H:%M")
+        .or_else(|_| chrono::NaiveTime::parse_from_str(text, "%H:%M:%S"))
+        .map_err(|_| format!("`{text}` is not a clock time; write it as HH:MM, e.g. 06:00"))
 }
 
 #[derive(Clone, Debug, Args)]

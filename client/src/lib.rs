@@ -11,4 +11,5 @@ pub mod render;
 pub mod retinex;
 pub mod scene_cmd;
 pub mod scene_new;
+pub mod sequence;
 pub mod studio_cmd;

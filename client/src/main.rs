@@ -10,6 +10,7 @@ fn main() -> ExitCode {
         Command::Color(args) => restauro::color::run(args),
         Command::Demo(args) => restauro::demo::run(args),
         Command::Render(args) => restauro::render::run(args),
+        Command::Sequence(args) => restauro::sequence::run(args),
         Command::Illuminance(args) => restauro::illuminance::run(args),
         Command::Submit(args) => restauro::jobs_cmd::submit(args),
         Command::Watch(args) => restauro::jobs_cmd::watch(args),

@@ -60,7 +60,14 @@ pub fn job_spec(args: &RenderArgs, priority: i32) -> Result<JobSpec> {
     let name = JobName::new(&name).map_err(|e| {
         anyhow::anyhow!("the job's name (from the scene file and variant) `{name}`: {}", e.problem)
     })?;
-    let spec = JobSpec { name, priority, render: render_options(args), exposure, retinex };
+    let spec = JobSpec {
+        name,
+        priority,
+        render: render_options(args),
+        exposure,
+        retinex,
+        frames: Vec::new(),
+    };
     spec.checked().map_err(|e| {
         let flag = match e.field {
             "render.samples_per_pixel" => "spp",
@@ -88,50 +95,11 @@ pub fn run(args: &RenderArgs) -> Result<String> {
         return run_in_process(args);
     }
     let started = Instant::now();
-    // An embedded cluster starts first: its processes come up while the scene is checked.
-    let tls_ca = args.run.connect.tls_ca.as_deref();
-    let (url, token, _cluster) = match &args.run.connect.coordinator {
-        Some(url) => {
-            let token = crate::connect::client_token(args.run.connect.token_file.as_deref())?;
-            (url.clone(), token, None)
-        }
-        None => {
-            // The embedded coordinator checks the job against the limits given here.
-            let limits = args.run.limits.to_args();
-            let limits: Vec<&str> = limits.iter().map(String::as_str).collect();
-            let c = LocalCluster::start_with(
-                args.run.workers.max(1),
-                args.run.cluster_logs.as_deref(),
-                &limits,
-            )?;
-            (c.url.clone(), c.client_token.clone(), Some(c))
-        }
-    };
+    let cluster = Cluster::open(args)?;
     let spec = job_spec(args, 0)?;
     let (bundle, plan) = checked_bundle(args)?;
-    let runtime = cluster::runtime()?;
-    let (status, files) = runtime.block_on(async {
-        let mut client = cluster::connect_as(&url, &token, tls_ca, pb::PROTOCOL_VERSION).await?;
-        cluster::upload(&mut client, &bundle).await?;
-        let what = format!("submitting {}", args.scene.display());
-        let submitted = cluster::submit(&mut client, &bundle, &spec, &what).await?;
-        let status = cluster::watch(&mut client, &submitted.id, true).await?;
-        if status.state != JobState::Done {
-            anyhow::bail!(
-                "job {} ended without results: {}",
-                status.id,
-                crate::connect::shown(&status.error)
-            );
-        }
-        let files = cluster::fetch(&client, &status, &args.out).await?;
-        anyhow::Ok((status, files))
-    })?;
+    let (status, files) = cluster.run(&bundle, &spec, &args.scene, &args.out)?;
     let mut s = String::new();
-    let where_ = if args.run.connect.coordinator.is_some() {
-        format!("coordinator {url}")
-    } else {
-        format!("an embedded cluster of {} workers", args.run.workers.max(1))
-    };
     let size = if plan.grids {
         format!("{} grid points", plan.width)
     } else {
@@ -139,12 +107,13 @@ pub fn run(args: &RenderArgs) -> Result<String> {
     };
     let _ = writeln!(
         s,
-        "{} {} ({size}, {}, {} spp, {} tiles) through {where_} in {:.2} s (job {})",
+        "{} {} ({size}, {}, {} spp, {} tiles) through {} in {:.2} s (job {})",
         if plan.grids { "computed" } else { "rendered" },
         args.scene.display(),
         plan.integrator,
         plan.samples_per_pixel,
         status.tiles_total,
+        cluster.description(args),
         started.elapsed().as_secs_f64(),
         status.id
     );
@@ -152,6 +121,77 @@ pub fn run(args: &RenderArgs) -> Result<String> {
         let _ = writeln!(s, "wrote {}", f.display());
     }
     Ok(s)
+}
+
+/// The cluster a render runs on: the coordinator named, or an embedded local one (started
+/// first, so that its processes come up while the scene is checked), kept while this lives.
+pub struct Cluster {
+    url: String,
+    token: String,
+    tls_ca: Option<std::path::PathBuf>,
+    _local: Option<LocalCluster>,
+}
+
+impl Cluster {
+    pub fn open(args: &RenderArgs) -> Result<Self> {
+        let tls_ca = args.run.connect.tls_ca.clone();
+        match &args.run.connect.coordinator {
+            Some(url) => {
+                let token = crate::connect::client_token(args.run.connect.token_file.as_deref())?;
+                Ok(Self { url: url.clone(), token, tls_ca, _local: None })
+            }
+            None => {
+                // The embedded coordinator checks the job against the limits given here.
+                let limits = args.run.limits.to_args();
+                let limits: Vec<&str> = limits.iter().map(String::as_str).collect();
+                let c = LocalCluster::start_with(
+                    args.run.workers.max(1),
+                    args.run.cluster_logs.as_deref(),
+                    &limits,
+                )?;
+                let (url, token) = (c.url.clone(), c.client_token.clone());
+                Ok(Self { url, token, tls_ca, _local: Some(c) })
+            }
+        }
+    }
+
+    /// "coordinator URL" or "an embedded cluster of N workers".
+    pub fn description(&self, args: &RenderArgs) -> String {
+        match self._local {
+            None => format!("coordinator {}", self.url),
+            Some(_) => format!("an embedded cluster of {} workers", args.run.workers.max(1)),
+        }
+    }
+
+    /// Uploads `bundle`, submits `spec`, follows the job with a progress bar and fetches its
+    /// files into `out`. Refused when the job ends without results.
+    pub fn run(
+        &self,
+        bundle: &Bundle,
+        spec: &JobSpec,
+        scene: &std::path::Path,
+        out: &std::path::Path,
+    ) -> Result<(restauro_proto::job_status::JobStatus, Vec<std::path::PathBuf>)> {
+        let runtime = cluster::runtime()?;
+        runtime.block_on(async {
+            let tls_ca = self.tls_ca.as_deref();
+            let mut client =
+                cluster::connect_as(&self.url, &self.token, tls_ca, pb::PROTOCOL_VERSION).await?;
+            cluster::upload(&mut client, bundle).await?;
+            let what = format!("submitting {}", scene.display());
+            let submitted = cluster::submit(&mut client, bundle, spec, &what).await?;
+            let status = cluster::watch(&mut client, &submitted.id, true).await?;
+            if status.state != JobState::Done {
+                anyhow::bail!(
+                    "job {} ended without results: {}",
+                    status.id,
+                    crate::connect::shown(&status.error)
+                );
+            }
+            let files = cluster::fetch(&client, &status, out).await?;
+            anyhow::Ok((status, files))
+        })
+    }
 }
 
 /// `--variants a,b,…`: each variant rendered as `--variant` renders it, then the first compared

@@ -172,7 +172,10 @@ pub async fn watch(client: &mut Client, job_id: &str, show: bool) -> Result<JobS
                             backoff = Duration::from_millis(100);
                             bar.set_length(u64::from(status.tiles_total));
                             bar.set_position(u64::from(status.tiles_done));
-                            bar.set_message(status.state.wire_name());
+                            bar.set_message(match status.frames_total {
+                                0 => status.state.wire_name().to_owned(),
+                                total => format!("frames {}/{total}", status.frames_ready),
+                            });
                             if status.state.is_final() {
                                 bar.finish_and_clear();
                                 return Ok(status);

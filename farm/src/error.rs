@@ -47,6 +47,11 @@ pub enum FarmError {
 
     #[error("no job {0}")]
     NoSuchJob(JobId),
+    #[error("frame {index} ({label}): {problem}")]
+    Frame { index: usize, label: String, problem: Box<SceneError> },
+
+    #[error("job {job} has no frame {frame}")]
+    NoSuchFrame { job: JobId, frame: u32 },
 
     #[error("job {job} has no result `{name}`")]
     NoSuchResult { job: JobId, name: String },
@@ -167,11 +172,15 @@ impl FarmError {
             E::NoToken { .. } | E::BadToken { .. } => Code::Unauthenticated,
             E::WrongRole { .. } | E::ForeignLease { .. } => Code::PermissionDenied,
             E::Scene(SceneError::Limit { .. }) => Code::ResourceExhausted,
+            E::Frame { problem, .. } if matches!(**problem, SceneError::Limit { .. }) => {
+                Code::ResourceExhausted
+            }
+            E::Frame { .. } => Code::InvalidArgument,
             E::Wire(_) | E::Scene(_) | E::AssetReference { .. } | E::AssetUpload { .. } => {
                 Code::InvalidArgument
             }
             E::TileData { .. } => Code::InvalidArgument,
-            E::NoSuchJob(_) | E::NoSuchResult { .. } => Code::NotFound,
+            E::NoSuchJob(_) | E::NoSuchFrame { .. } | E::NoSuchResult { .. } => Code::NotFound,
             E::Limit { .. } | E::TooManyJobs { .. } => Code::ResourceExhausted,
             E::Stalled { .. } => Code::DeadlineExceeded,
             E::Store(_) => Code::Unavailable,

@@ -41,6 +41,7 @@ use tracing::{debug, info, warn};
 mod assembly;
 mod illuminance;
 mod scenes;
+mod sequence_frame;
 pub use scenes::{
     MAX_FOLDER_BYTES, PhotometryInfo, Revised, RevisionInfo, SceneEntry, scene_identity, sent_file,
 };
@@ -123,6 +124,10 @@ struct FarmState {
     admitting: usize,
     /// The studio's scenes: their revisions and which manifests are theirs.
     scenes: scenes::Scenes,
+    /// Each running sequence's tiles done, frame by frame.
+    frame_done: HashMap<JobId, Vec<u32>>,
+    /// The sequences whose frames are being assembled now (one thread a job, frame after frame).
+    assembling_frames: std::collections::HashSet<JobId>,
 }
 
 struct WorkerEntry {
@@ -151,6 +156,8 @@ pub struct WorkerJob {
     pub manifest_json: String,
     pub plan: Plan,
     pub limits: Limits,
+    /// The job's number of the frame's first tile (0 for a still).
+    pub first_tile: u32,
 }
 
 /// How a tile report stands before its pixels are read.
@@ -231,6 +238,8 @@ impl Farm {
                 workers: HashMap::new(),
                 admitting: 0,
                 scenes: scenes::Scenes::default(),
+                frame_done: HashMap::new(),
+                assembling_frames: Default::default(),
             }),
             config,
             persisting: Mutex::new(()),
@@ -241,21 +250,25 @@ impl Farm {
             changed: watch::Sender::new(0),
             metrics: Metrics::new(),
         });
-        let to_assemble = farm.resume()?;
+        let (to_assemble, sequences) = farm.resume()?;
         farm.resume_scenes()?;
         for id in to_assemble {
             let farm = farm.clone();
             std::thread::spawn(move || assembly::assemble(&farm, &id));
+        }
+        for id in sequences {
+            farm.kick_frames(&id);
         }
         info!(epoch, "coordinator run started");
         Ok(farm)
     }
 
     /// Loads every job of the store; the unfinished ones go back to the scheduler with their
-    /// finished tiles. The jobs to assemble (every tile stored).
-    fn resume(&self) -> Result<Vec<JobId>> {
+    /// finished tiles. The stills to assemble (every tile stored), and the sequences to resume.
+    fn resume(&self) -> Result<(Vec<JobId>, Vec<JobId>)> {
         let store = |e| FarmError::StoreAtStart(e);
         let mut to_assemble = Vec::new();
+        let mut sequences = Vec::new();
         for (id, bytes) in self.store.jobs().map_err(store)? {
             let mut record = JobRecord::from_bytes(&id, &bytes).map_err(|e| {
                 FarmError::UnreadableRecord { job: id.clone(), problem: e.to_string() }
@@ -272,20 +285,42 @@ impl Farm {
                     self.store.remove_tiles(&id).map_err(store)?;
                 }
             } else {
-                let done = self.store.finished_tiles(&id).map_err(store)?;
-                let total = record.plan.tile_count();
+                let mut done = self.store.finished_tiles(&id).map_err(store)?;
+                // A ready frame's tiles left the store once its files were written.
+                if record.frames_ready > 0 {
+                    done.extend(
+                        record.frame_range(0).start
+                            ..record.frame_range(record.frames_ready - 1).end,
+                    );
+                    done.sort_unstable();
+                    done.dedup();
+                }
+                let total = record.tile_count();
                 info!(job = %id, done = done.len(), total, "resuming job");
                 let mut st = self.lock();
                 st.scheduler
                     .add_job(id.clone(), record.spec.priority, total, &done, Instant::now())
                     .map_err(|problem| FarmError::Resume { job: id.clone(), problem })?;
-                if record.resume_assembly(done.len() as u32 == total) {
+                let all_done = done.len() as u32 == total;
+                if record.is_sequence() {
+                    let mut per_frame = vec![0; record.frame_count() as usize];
+                    for &tile in &done {
+                        if let Some(place) = record.place(tile) {
+                            per_frame[place.frame as usize] += 1;
+                        }
+                    }
+                    st.frame_done.insert(id.clone(), per_frame);
+                    if all_done {
+                        record.resume_assembly(true);
+                    }
+                    sequences.push(id.clone());
+                } else if record.resume_assembly(all_done) {
                     to_assemble.push(id.clone());
                 }
             }
             self.lock().jobs.insert(id, record);
         }
-        Ok(to_assemble)
+        Ok((to_assemble, sequences))
     }
 
     fn lock(&self) -> MutexGuard<'_, FarmState> {
@@ -307,7 +342,7 @@ impl Farm {
 
     fn status(st: &FarmState, r: &JobRecord) -> JobStatus {
         let progress = st.scheduler.progress(&r.id);
-        let total = r.plan.tile_count();
+        let total = r.tile_count();
         let done = match r.state() {
             JobState::Done | JobState::Assembling | JobState::PostProcessing => total,
             JobState::Failed | JobState::Cancelled => r.tiles_done_at_end,
@@ -326,8 +361,39 @@ impl Farm {
             width: r.plan.width,
             height: r.plan.height,
             elapsed_s: now_unix_ms().saturating_sub(r.submitted_unix_ms) as f64 / 1e3,
-            results: r.results.clone(),
+            // A running sequence's list grows with its frames: sent once, when it is done.
+            results: match r.is_sequence() && r.state() != JobState::Done {
+                true => Vec::new(),
+                false => r.results.clone(),
+            },
+            frames_total: r.frame_count(),
+            frames_ready: r.frames_ready,
+            frames: Self::frames_begun(st, r),
         }
+    }
+
+    /// The frames of sequence `r` begun and not ready. Tiles are leased in order, so these are
+    /// the frames from the first not ready to the one the scheduler's cursor is in: a few.
+    fn frames_begun(st: &FarmState, r: &JobRecord) -> Vec<crate::job::FrameProgress> {
+        let Some(done) = st.frame_done.get(&r.id) else { return Vec::new() };
+        let cursor = st.scheduler.cursor(&r.id).unwrap_or(0);
+        (r.frames_ready..r.frame_count())
+            .map_while(|f| {
+                let range = r.frame_range(f);
+                let tiles_done = done.get(f as usize).copied().unwrap_or(0);
+                (range.start < cursor || tiles_done > 0).then(|| crate::job::FrameProgress {
+                    index: f,
+                    label: r
+                        .spec
+                        .frames
+                        .get(f as usize)
+                        .map(|x| x.label.clone())
+                        .unwrap_or_default(),
+                    tiles_done,
+                    tiles_total: range.len() as u32,
+                })
+            })
+            .collect()
     }
 
     /// A copy of job `id`'s record.
@@ -376,6 +442,7 @@ impl Farm {
         end(r, progress.as_ref().map_or(0, |p| p.done))?;
         r.tiles_requeued_at_end = progress.map_or(0, |p| p.requeued);
         st.scheduler.remove_job(id);
+        st.frame_done.remove(id);
         // Queued under the lock: after every tile of the job accepted before. (The committer
         // logs a removal that fails; nothing waits for it.)
         drop(self.commits.remove_job(id.clone()));
@@ -406,6 +473,7 @@ impl Farm {
             r.finish(files)?;
             r.tiles_requeued_at_end = requeued;
             st.scheduler.remove_job(id);
+            st.frame_done.remove(id);
             drop(self.commits.remove_job(id.clone()));
         }
         self.persist(id);
@@ -491,6 +559,21 @@ impl Farm {
         spec: JobSpec,
     ) -> Result<JobStatus> {
         let mut admission = self.admit()?;
+        if !spec.frames.is_empty() {
+            let farm = self.clone();
+            let (spec, frames) = self
+                .loading_scene(move || {
+                    let frames = farm.plan_frames(&manifest_json, &spec)?;
+                    Ok((spec, (manifest_json, frames)))
+                })
+                .await?;
+            let (manifest, frames) = frames;
+            let plan = frames.plans[0].clone();
+            let mut record = JobRecord::new(JobId::random(), spec, manifest, plan, now_unix_ms());
+            record.frame_plans = frames.plans;
+            record.frame_tiles = frames.tiles;
+            return self.record_job(record, &mut admission).await;
+        }
         let farm = self.clone();
         let (render, name, manifest) = (spec.render.clone(), spec.name.to_string(), manifest_json);
         let key = plan_key(&manifest, &render);
@@ -511,9 +594,18 @@ impl Farm {
                 (plan, manifest)
             }
         };
-        let id = JobId::random();
-        let tiles = plan.tile_count();
-        let record = JobRecord::new(id.clone(), spec, manifest, plan, now_unix_ms());
+        let record = JobRecord::new(JobId::random(), spec, manifest, plan, now_unix_ms());
+        self.record_job(record, &mut admission).await
+    }
+
+    /// Stores a new job's record and queues its tiles.
+    async fn record_job(
+        self: &Arc<Self>,
+        record: JobRecord,
+        admission: &mut Admission<'_>,
+    ) -> Result<JobStatus> {
+        let id = record.id.clone();
+        let tiles = record.tile_count();
         let (store, key, bytes) = (self.store.clone(), id.clone(), record.to_bytes());
         tokio::task::spawn_blocking(move || store.put_job(&key, &bytes)).await??;
         let status = {
@@ -523,6 +615,9 @@ impl Farm {
             st.scheduler
                 .add_job(id.clone(), record.spec.priority, tiles, &[], Instant::now())
                 .map_err(|e| FarmError::Internal(e.to_string()))?;
+            if record.is_sequence() {
+                st.frame_done.insert(id.clone(), vec![0; record.frame_count() as usize]);
+            }
             let status = Self::status(&st, &record);
             st.jobs.insert(id.clone(), record);
             status
@@ -570,7 +665,8 @@ impl Farm {
     pub fn result_path(&self, id: &JobId, name: &str) -> Result<PathBuf> {
         let st = self.lock();
         let r = st.jobs.get(id).ok_or_else(|| FarmError::NoSuchJob(id.clone()))?;
-        if r.state() != JobState::Done {
+        // A sequence's frames are fetched as they are ready.
+        if r.state() != JobState::Done && !r.is_sequence() {
             return Err(FarmError::NotDone { job: id.clone(), state: r.state() });
         }
         if !r.results.iter().any(|f| f == name) {
@@ -721,8 +817,9 @@ impl Farm {
             if record.start() {
                 started.push(l.job.clone());
             }
-            let Some(rect) = record.plan.tile_rect(l.tile) else { continue };
-            out.push(self.signer.grant(&l, rect, &identity));
+            let Some(place) = record.place(l.tile) else { continue };
+            let Some(rect) = place.plan.tile_rect(place.tile) else { continue };
+            out.push(self.signer.grant(&l, rect, place.frame, &identity));
         }
         drop(st);
         self.deadline_added();
@@ -772,8 +869,9 @@ impl Farm {
         if !matches!(r.state(), JobState::Queued | JobState::Running) {
             return Ok(Expected::Stale);
         }
-        match r.plan.tile_rect(claim.tile) {
-            Some(rect) => Ok(Expected::Tile { rect, layout: TileLayout::from(&r.plan) }),
+        let Some(place) = r.place(claim.tile) else { return Ok(Expected::Stale) };
+        match place.plan.tile_rect(place.tile) {
+            Some(rect) => Ok(Expected::Tile { rect, layout: TileLayout::from(place.plan) }),
             None => Ok(Expected::Stale),
         }
     }
@@ -850,15 +948,22 @@ impl Farm {
         let tile = claim.tile;
         match committed.wait().await {
             Ok(()) => {
-                let finished = {
+                let (finished, sequence) = {
                     let mut st = self.lock();
-                    let finished = st.scheduler.committed(&claim.job, tile);
-                    finished
-                        && st.jobs.get_mut(&claim.job).is_some_and(|r| r.begin_assembly().is_ok())
+                    let committed = st.scheduler.committed(&claim.job, tile);
+                    let frame_whole = Self::count_frame_tile(&mut st, &claim.job, tile);
+                    let finished = committed
+                        && st.jobs.get_mut(&claim.job).is_some_and(|r| r.begin_assembly().is_ok());
+                    let sequence = st.jobs.get(&claim.job).is_some_and(JobRecord::is_sequence);
+                    (finished, sequence && (finished || frame_whole))
                 };
                 debug!(job = %claim.job, tile, %worker, render_s, "tile done");
                 if finished {
                     self.persist(&claim.job);
+                }
+                if sequence {
+                    self.kick_frames(&claim.job);
+                } else if finished {
                     let (farm, id) = (self.clone(), claim.job.clone());
                     tokio::task::spawn_blocking(move || assembly::assemble(&farm, &id));
                 }
@@ -966,18 +1071,25 @@ impl Farm {
         Ok(Some(any))
     }
 
-    /// What a worker renders for job `id`.
-    pub fn worker_job(&self, session: &Session, id: &JobId) -> Result<WorkerJob> {
-        let mut st = self.lock();
-        if !Self::known(&mut st, session) {
-            return Err(FarmError::UnknownSession { worker: session.worker.0 });
-        }
-        let r = st.jobs.get(id).ok_or_else(|| FarmError::NoSuchJob(id.clone()))?;
-        Ok(WorkerJob {
-            manifest_json: r.manifest_json.clone(),
-            plan: r.plan.clone(),
-            limits: self.config.limits,
-        })
+    /// What a worker renders for frame `frame` of job `id` (frame 0 of a still): for a
+    /// sequence, the job's scene with the frame's changes.
+    pub fn worker_job(&self, session: &Session, id: &JobId, frame: u32) -> Result<WorkerJob> {
+        let (manifest, plan, first_tile, change) = {
+            let mut st = self.lock();
+            if !Self::known(&mut st, session) {
+                return Err(FarmError::UnknownSession { worker: session.worker.0 });
+            }
+            let r = st.jobs.get(id).ok_or_else(|| FarmError::NoSuchJob(id.clone()))?;
+            let no_frame = || FarmError::NoSuchFrame { job: id.clone(), frame };
+            let plan = r.frame_plan(frame).ok_or_else(no_frame)?.clone();
+            let change = r.spec.frames.get(frame as usize).cloned();
+            (r.manifest_json.clone(), plan, r.frame_range(frame).start, change)
+        };
+        let manifest_json = match change {
+            None => manifest,
+            Some(change) => sequence_frame::frame_manifest(&manifest, &change)?,
+        };
+        Ok(WorkerJob { manifest_json, plan, limits: self.config.limits, first_tile })
     }
 
     /// The file of an asset, for a worker.

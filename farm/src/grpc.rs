@@ -300,12 +300,13 @@ impl pb::work_server::Work for WorkService {
         let req = request.into_inner();
         let session = session(req.session.as_ref())?;
         let id = job_id(&req.job_id)?;
-        let job = self.0.worker_job(&session, &id)?;
+        let job = self.0.worker_job(&session, &id, req.frame)?;
         Ok(Response::new(pb::WorkerJob {
             job_id: id.to_string(),
             manifest_json: job.manifest_json,
             plan: Some((&job.plan).into()),
             limits: Some((&job.limits).into()),
+            first_tile: job.first_tile,
         }))
     }
 

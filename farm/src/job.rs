@@ -21,7 +21,7 @@ use serde::{Deserialize, Serialize};
 
 /// The job's state and the status a client is sent live with the wire types, which the command
 /// line shares; the diagram above is [`JobState::allows`].
-pub use restauro_proto::job_status::{JobState, JobStatus};
+pub use restauro_proto::job_status::{FrameProgress, JobState, JobStatus};
 
 /// A lifecycle move the job's state does not allow (e.g. finishing a cancelled job).
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
@@ -54,8 +54,27 @@ pub struct JobRecord {
     pub tiles_done_at_end: u32,
     /// Times a tile went back to the queue, counted until the job left the scheduler.
     pub tiles_requeued_at_end: u32,
-    /// The result files, once done.
+    /// The result files, once done; a sequence's grow as its frames are ready.
     pub results: Vec<String>,
+    /// A sequence's plans (frames with the same plan share it; usually one or two, the sun up
+    /// and down); empty for a still.
+    #[serde(default)]
+    pub frame_plans: Vec<Plan>,
+    /// Each frame's first tile in the job's numbering and its plan in `frame_plans`; the
+    /// frames' tiles follow each other, frame 0's first.
+    #[serde(default)]
+    pub frame_tiles: Vec<(u32, u32)>,
+    /// Frames whose files are written, in order: `0..frames_ready`.
+    #[serde(default)]
+    pub frames_ready: u32,
+}
+
+/// Where a tile of a job is: its frame (0 for a still), the frame's plan and the tile's number
+/// in that plan.
+pub struct TilePlace<'a> {
+    pub frame: u32,
+    pub plan: &'a Plan,
+    pub tile: u32,
 }
 
 impl JobRecord {
@@ -72,7 +91,68 @@ impl JobRecord {
             tiles_done_at_end: 0,
             tiles_requeued_at_end: 0,
             results: Vec::new(),
+            frame_plans: Vec::new(),
+            frame_tiles: Vec::new(),
+            frames_ready: 0,
         }
+    }
+
+    /// Whether the job is a sequence of frames.
+    pub fn is_sequence(&self) -> bool {
+        !self.frame_tiles.is_empty()
+    }
+
+    /// The frames of the job: 0 for a still.
+    pub fn frame_count(&self) -> u32 {
+        self.frame_tiles.len() as u32
+    }
+
+    /// Every tile of the job, all its frames together.
+    pub fn tile_count(&self) -> u32 {
+        match self.frame_tiles.last() {
+            None => self.plan.tile_count(),
+            Some(&(first, plan)) => first + self.frame_plans[plan as usize].tile_count(),
+        }
+    }
+
+    /// The plan of frame `frame` (the job's plan for a still).
+    pub fn frame_plan(&self, frame: u32) -> Option<&Plan> {
+        match self.frame_tiles.get(frame as usize) {
+            None if self.frame_tiles.is_empty() && frame == 0 => Some(&self.plan),
+            None => None,
+            Some(&(_, plan)) => self.frame_plans.get(plan as usize),
+        }
+    }
+
+    /// The job's tiles of frame `frame`.
+    pub fn frame_range(&self, frame: u32) -> std::ops::Range<u32> {
+        let Some(&(first, _)) = self.frame_tiles.get(frame as usize) else {
+            return 0..self.tile_count();
+        };
+        let plan = self.frame_plan(frame).expect("each frame names a plan of the record");
+        first..first + plan.tile_count()
+    }
+
+    /// Where tile `tile` of the job is; `None` past the last.
+    pub fn place(&self, tile: u32) -> Option<TilePlace<'_>> {
+        if tile >= self.tile_count() {
+            return None;
+        }
+        if self.frame_tiles.is_empty() {
+            return Some(TilePlace { frame: 0, plan: &self.plan, tile });
+        }
+        let frame = self.frame_tiles.partition_point(|&(first, _)| first <= tile) - 1;
+        let (first, plan) = self.frame_tiles[frame];
+        Some(TilePlace {
+            frame: frame as u32,
+            plan: &self.frame_plans[plan as usize],
+            tile: tile - first,
+        })
+    }
+
+    /// The stem of frame `frame`'s files: the job's name and the frame's number.
+    pub fn frame_stem(&self, frame: u32) -> String {
+        format!("{}-{frame:04}", self.spec.name.file_stem())
     }
 
     pub fn state(&self) -> JobState {
@@ -140,7 +220,11 @@ impl JobRecord {
 
     /// What the renders were made with, for the files' headers.
     pub fn info(&self) -> String {
-        let p = &self.plan;
+        self.info_of(&self.plan)
+    }
+
+    /// What a render of `plan` was made with, for the files' headers.
+    pub fn info_of(&self, p: &Plan) -> String {
         format!(
             "variant={} integrator={} spp={} max_depth={} seed={}",
             p.variant.as_deref().unwrap_or("base"),
@@ -264,6 +348,27 @@ mod tests {
         assert!(r.finish(Vec::new()).is_err());
         r.begin_assembly().unwrap();
         assert!(!r.start(), "no way back to running");
+    }
+
+    /// A sequence's tiles are its frames' one after another; each tile maps to its frame and
+    /// its number in the frame's plan.
+    #[test]
+    fn a_sequences_tiles_map_to_their_frames() {
+        let mut r = record();
+        let one = r.plan.clone(); // 8 × 8 in one 8-px tile
+        let four = Plan { width: 16, height: 16, ..one.clone() };
+        r.frame_plans = vec![one, four];
+        r.frame_tiles = vec![(0, 0), (1, 1), (5, 0)];
+        assert_eq!((r.tile_count(), r.frame_count()), (6, 3));
+        let at = |t| r.place(t).map(|p| (p.frame, p.tile, p.plan.width));
+        assert_eq!(at(0), Some((0, 0, 8)));
+        assert_eq!(at(1), Some((1, 0, 16)));
+        assert_eq!(at(4), Some((1, 3, 16)));
+        assert_eq!(at(5), Some((2, 0, 8)));
+        assert_eq!(at(6), None);
+        assert_eq!(r.frame_range(1), 1..5);
+        assert_eq!(r.frame_stem(2), "render-0002");
+        assert_eq!(JobRecord::from_bytes("j", &r.to_bytes()).unwrap(), r);
     }
 
     #[test]

@@ -61,6 +61,7 @@ impl LeaseSigner {
         &self,
         lease: &crate::scheduler::Lease,
         rect: Rect,
+        frame: u32,
         identity: &[u8; 32],
     ) -> pb::Lease {
         let ticket = self.ticket(&Fields {
@@ -79,6 +80,7 @@ impl LeaseSigner {
             epoch: self.epoch,
             holder: lease.worker.0,
             ticket: ticket.to_vec(),
+            frame,
         }
     }
 
@@ -149,7 +151,7 @@ mod tests {
         let run1 = LeaseSigner::new([3; 32], 1);
         let lease = Lease { job: "j".into(), tile: 4, attempt: 2, worker: WorkerId(9) };
         let (holder, other) = (identity_digest(&[7; 32]), identity_digest(&[8; 32]));
-        let wire = run1.grant(&lease, Rect { x: 0, y: 0, width: 8, height: 8 }, &holder);
+        let wire = run1.grant(&lease, Rect { x: 0, y: 0, width: 8, height: 8 }, 0, &holder);
         let claim = LeaseClaim::try_from(&wire).unwrap();
         assert!(run1.verify(&claim, &holder));
         assert_eq!(run1.lease(&claim), lease);

@@ -884,6 +884,11 @@ impl Scheduler {
         self.free_slots.push(slot);
     }
 
+    /// Every tile of `job` below this has been leased at least once (or was done at resume).
+    pub fn cursor(&self, job: &str) -> Option<u32> {
+        Some(self.job(*self.by_id.get(job)?).cursor)
+    }
+
     pub fn progress(&self, job: &str) -> Option<JobProgress> {
         let job = self.job(*self.by_id.get(job)?);
         Some(JobProgress {

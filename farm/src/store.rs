@@ -281,6 +281,18 @@ impl Store {
         })
     }
 
+    /// Forgets the tiles `tiles` of a job (a sequence's frame whose files are written).
+    pub fn remove_tile_range(&self, job: &str, tiles: std::ops::Range<u32>) -> Result<()> {
+        if tiles.is_empty() {
+            return Ok(());
+        }
+        self.write(|txn| {
+            let mut table = txn.open_table(TILES)?;
+            table.retain_in((job, tiles.start)..=(job, tiles.end - 1), |_, _| false)?;
+            Ok(())
+        })
+    }
+
     /// Takes the assets an earlier release kept in the store, one at a time, for `keep` to
     /// write elsewhere; each is removed from the store once `keep` succeeded. How many moved.
     pub fn drain_legacy_assets(

@@ -16,7 +16,8 @@ use crate::pb;
 use restauro_scene::job::{JobName, JobSpec, JobSpecError, RetinexOptions, option_count};
 use restauro_scene::limits::Limits;
 use restauro_scene::plan::{Plan, Rect, RenderOptions};
-use restauro_scene::scene_file::Integrator;
+use restauro_scene::scene_file::{Integrator, Pose};
+use restauro_scene::sequence::Frame;
 use restauro_spectral::display::Exposure;
 use std::num::NonZeroU32;
 
@@ -152,6 +153,7 @@ impl TryFrom<&pb::SubmitJobRequest> for JobSpec {
             render: r.render.clone().unwrap_or_default().try_into()?,
             exposure: r.exposure.unwrap_or_default().try_into()?,
             retinex: r.retinex.unwrap_or_default().try_into()?,
+            frames: r.frames.iter().cloned().map(Frame::try_from).collect::<Result<_, _>>()?,
         };
         Ok(spec.checked()?)
     }
@@ -167,6 +169,48 @@ pub fn submit_request(manifest_json: String, spec: &JobSpec) -> pb::SubmitJobReq
         name: spec.name.as_str().to_owned(),
         exposure: Some(spec.exposure.into()),
         retinex: Some(spec.retinex.into()),
+        frames: spec.frames.iter().map(pb::Frame::from).collect(),
+    }
+}
+
+impl From<&Frame> for pb::Frame {
+    fn from(f: &Frame) -> Self {
+        pb::Frame {
+            label: f.label.clone(),
+            datetime: f.datetime.clone(),
+            camera: f.camera.as_ref().map(|c| pb::Pose {
+                position: c.position.to_vec(),
+                target: c.target.to_vec(),
+                up: c.up.to_vec(),
+                vertical_fov_deg: c.vertical_fov_deg,
+            }),
+            variant: f.variant.clone(),
+        }
+    }
+}
+
+/// A frame as sent; what it holds is checked with the job (`Frame::check`).
+impl TryFrom<pb::Frame> for Frame {
+    type Error = WireError;
+    fn try_from(f: pb::Frame) -> Result<Self, WireError> {
+        let three = |field: &str, v: Vec<f64>| {
+            <[f64; 3]>::try_from(v).map_err(|v| {
+                WireError::new(
+                    format!("frames.camera.{field}"),
+                    format!("{} numbers; give 3", v.len()),
+                )
+            })
+        };
+        let camera = match f.camera {
+            Some(c) => Some(Pose {
+                position: three("position", c.position)?,
+                target: three("target", c.target)?,
+                up: three("up", c.up)?,
+                vertical_fov_deg: c.vertical_fov_deg,
+            }),
+            None => None,
+        };
+        Ok(Frame { label: f.label, datetime: f.datetime, camera, variant: f.variant })
     }
 }
 
@@ -230,6 +274,8 @@ impl From<&Limits> for pb::SceneLimits {
             min_tile: l.min_tile,
             max_instances: l.max_instances,
             max_polygon_vertices: l.max_polygon_vertices,
+            max_frames: l.max_frames,
+            max_job_tiles: l.max_job_tiles,
         }
     }
 }
@@ -247,6 +293,8 @@ impl From<pb::SceneLimits> for Limits {
             min_tile: l.min_tile.max(1),
             max_instances: l.max_instances,
             max_polygon_vertices: l.max_polygon_vertices,
+            max_frames: l.max_frames,
+            max_job_tiles: l.max_job_tiles,
         }
     }
 }
@@ -285,9 +333,33 @@ mod tests {
             },
             exposure: Exposure::Absolute { white_cd_m2: 120.0 },
             retinex: RetinexOptions::new(Some(40), Some(7)).unwrap(),
+            frames: Vec::new(),
         };
         let wire = submit_request("{}".into(), &spec);
         assert_eq!(JobSpec::try_from(&wire).unwrap(), spec);
+        let pose = Pose {
+            position: [1.0, -2.0, 1.7],
+            target: [0.0, 0.0, 9.0],
+            up: [0.0, 0.0, 1.0],
+            vertical_fov_deg: 50.0,
+        };
+        let frames = vec![
+            Frame {
+                label: "06:15".into(),
+                datetime: Some("2026-07-15T06:15:00+02:00".into()),
+                camera: None,
+                variant: None,
+            },
+            Frame { label: "1.00 s".into(), datetime: None, camera: Some(pose), variant: None },
+        ];
+        let render = RenderOptions { grids: false, ..spec.render.clone() };
+        let sequence = JobSpec { frames, render, ..spec };
+        let wire = submit_request("{}".into(), &sequence);
+        assert_eq!(JobSpec::try_from(&wire).unwrap(), sequence);
+        let mut short = wire.clone();
+        short.frames[1].camera.as_mut().unwrap().target.pop();
+        let e = JobSpec::try_from(&short).unwrap_err();
+        assert_eq!(e.field, "frames.camera.target");
     }
 
     #[test]

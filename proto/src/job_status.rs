@@ -163,6 +163,21 @@ pub struct JobStatus {
     pub height: u32,
     pub elapsed_s: f64,
     pub results: Vec<String>,
+    /// A sequence's frames; 0 for a still.
+    pub frames_total: u32,
+    /// Frames whose files are written: they are ready in order, frames `0..frames_ready`.
+    pub frames_ready: u32,
+    /// Each frame begun and not yet ready.
+    pub frames: Vec<FrameProgress>,
+}
+
+/// How far one frame of a sequence is.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FrameProgress {
+    pub index: u32,
+    pub label: String,
+    pub tiles_done: u32,
+    pub tiles_total: u32,
 }
 
 /// The studio's JSON of a job: every field, the id as a string, the state in words (`queued`,
@@ -171,7 +186,7 @@ pub struct JobStatus {
 impl Serialize for JobStatus {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         use serde::ser::SerializeStruct;
-        let mut out = s.serialize_struct("JobStatus", 14)?;
+        let mut out = s.serialize_struct("JobStatus", 17)?;
         out.serialize_field("id", &self.id)?;
         out.serialize_field("name", &self.name)?;
         out.serialize_field("state", &self.state)?;
@@ -186,6 +201,9 @@ impl Serialize for JobStatus {
         out.serialize_field("height", &self.height)?;
         out.serialize_field("elapsed_s", &self.elapsed_s)?;
         out.serialize_field("results", &self.results)?;
+        out.serialize_field("frames_total", &self.frames_total)?;
+        out.serialize_field("frames_ready", &self.frames_ready)?;
+        out.serialize_field("frames", &self.frames)?;
         out.end()
     }
 }
@@ -238,6 +256,18 @@ impl From<JobStatus> for pb::JobStatus {
             height: s.height,
             elapsed_s: s.elapsed_s,
             results: s.results,
+            frames_total: s.frames_total,
+            frames_ready: s.frames_ready,
+            frames: s
+                .frames
+                .into_iter()
+                .map(|f| pb::FrameProgress {
+                    index: f.index,
+                    label: f.label,
+                    tiles_done: f.tiles_done,
+                    tiles_total: f.tiles_total,
+                })
+                .collect(),
         }
     }
 }
@@ -261,6 +291,18 @@ impl TryFrom<pb::JobStatus> for JobStatus {
             height: s.height,
             elapsed_s: s.elapsed_s,
             results: s.results,
+            frames_total: s.frames_total,
+            frames_ready: s.frames_ready,
+            frames: s
+                .frames
+                .into_iter()
+                .map(|f| FrameProgress {
+                    index: f.index,
+                    label: f.label,
+                    tiles_done: f.tiles_done,
+                    tiles_total: f.tiles_total,
+                })
+                .collect(),
         })
     }
 }
@@ -284,6 +326,14 @@ mod tests {
             height: 48,
             elapsed_s: 1.5,
             results: vec!["aosta.exr".into()],
+            frames_total: 3,
+            frames_ready: 1,
+            frames: vec![FrameProgress {
+                index: 1,
+                label: "06:15".into(),
+                tiles_done: 2,
+                tiles_total: 4,
+            }],
         }
     }
 
@@ -293,7 +343,8 @@ mod tests {
     fn a_status_is_the_json_the_studio_page_reads() {
         let json = serde_json::to_value(status(JobState::PostProcessing)).unwrap();
         let keys: Vec<&str> = json.as_object().unwrap().keys().map(String::as_str).collect();
-        assert_eq!(keys.len(), 14, "{keys:?}");
+        assert_eq!(keys.len(), 17, "{keys:?}");
+        assert_eq!(json["frames"][0]["label"], "06:15");
         assert_eq!(json["id"], "0b7e7c5c-7b1e-4a43-9c8e-4f3f5f2b9a10");
         assert_eq!(
             (json["state"].as_str(), json["finished"].as_bool()),

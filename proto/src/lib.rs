@@ -5,8 +5,9 @@
 //! coordinator and the command line hold, live here too ([`job_status`]), with their conversions.
 
 /// The protocol version spoken by this build. A worker or client of another version is refused.
-/// 3: a worker registers with its identity, to which its leases are bound.
-pub const PROTOCOL_VERSION: u32 = 3;
+/// 3: a worker registers with its identity, to which its leases are bound. 4: sequences (a job
+/// of frames; a lease names its frame, and a worker fetches the frame's scene and plan).
+pub const PROTOCOL_VERSION: u32 = 4;
 
 /// The metadata key that carries the caller's protocol version on every call.
 pub const PROTOCOL_HEADER: &str = "x-restauro-protocol";

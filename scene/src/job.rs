@@ -155,6 +155,10 @@ pub struct JobSpec {
     pub render: RenderOptions,
     pub exposure: Exposure,
     pub retinex: RetinexOptions,
+    /// A sequence's frames, each the scene with its changes; none for a still. Absent in jobs
+    /// stored before sequences existed.
+    #[serde(default)]
+    pub frames: Vec<crate::sequence::Frame>,
 }
 
 impl JobSpec {
@@ -168,6 +172,16 @@ impl JobSpec {
         if let Some(target) = self.render.noise_target {
             crate::scene_file::check_noise_target(target)
                 .map_err(|problem| refuse("render.noise_target", problem))?;
+        }
+        if !self.frames.is_empty() && self.render.grids {
+            return Err(refuse(
+                "frames",
+                "a sequence of calculation grids is not rendered yet; compute each time with \
+                 `restauro illuminance`",
+            ));
+        }
+        for (index, frame) in self.frames.iter().enumerate() {
+            frame.check(index)?;
         }
         Ok(self)
     }

@@ -29,5 +29,6 @@ pub mod origin;
 pub mod pins;
 pub mod plan;
 pub mod scene_file;
+pub mod sequence;
 pub mod upright;
 pub mod web_url;

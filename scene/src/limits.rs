@@ -16,6 +16,8 @@
 //! | a file of the scene | 2048 MiB | `--max-file-mb` |
 //! | node instances of one mesh file (VRML97 `USE`, reused glTF nodes) | 20 000 000 | `--max-instances` |
 //! | vertices of one polygon | 10 000 | `--max-polygon-vertices` |
+//! | frames of a sequence | 4096 | `--max-frames` |
+//! | tiles of one job, every frame of a sequence together | 1 048 576 | `--max-job-tiles` |
 
 /// The bounds no flag raises: beyond them a number is a mistake of units, not a bigger scene.
 /// The largest coordinate (m, each of x, y and z, after placement) of a vertex, the camera or
@@ -55,6 +57,11 @@ pub struct Limits {
     /// The most vertices of one polygon (OBJ, PLY, VRML97 faces): more is a corrupt file, not
     /// a building.
     pub max_polygon_vertices: u64,
+    /// The most frames of one sequence.
+    pub max_frames: u32,
+    /// The most tiles of one job, all its frames together: the scheduler keeps a few dozen
+    /// bytes per tile.
+    pub max_job_tiles: u32,
 }
 
 impl Default for Limits {
@@ -72,6 +79,10 @@ impl Default for Limits {
             min_tile: 8,
             max_instances: 20_000_000,
             max_polygon_vertices: 10_000,
+            // A walk of two minutes at 25 frames a second; a day at one frame a minute is 900.
+            max_frames: 4096,
+            // About 40 MB of the scheduler's memory; 4096 frames of 256 tiles.
+            max_job_tiles: 1 << 20,
         }
     }
 }
@@ -112,6 +123,12 @@ pub struct LimitArgs {
     /// The most vertices of one polygon of a mesh.
     #[arg(long, default_value_t = Limits::default().max_polygon_vertices)]
     pub max_polygon_vertices: u64,
+    /// The most frames of one sequence.
+    #[arg(long, default_value_t = Limits::default().max_frames)]
+    pub max_frames: u32,
+    /// The most tiles of one job, all the frames of a sequence together.
+    #[arg(long, default_value_t = Limits::default().max_job_tiles)]
+    pub max_job_tiles: u32,
 }
 
 #[cfg(feature = "cli")]
@@ -130,6 +147,8 @@ impl LimitArgs {
             ("--max-depth", self.max_depth.to_string()),
             ("--max-instances", self.max_instances.to_string()),
             ("--max-polygon-vertices", self.max_polygon_vertices.to_string()),
+            ("--max-frames", self.max_frames.to_string()),
+            ("--max-job-tiles", self.max_job_tiles.to_string()),
         ]
         .into_iter()
         .flat_map(|(flag, value)| [flag.to_owned(), value])
@@ -151,6 +170,8 @@ impl From<&LimitArgs> for Limits {
             min_tile: a.min_tile.max(1),
             max_instances: a.max_instances,
             max_polygon_vertices: a.max_polygon_vertices,
+            max_frames: a.max_frames,
+            max_job_tiles: a.max_job_tiles,
         }
     }
 }

@@ -93,6 +93,8 @@ fn content_key(manifest_json: &str, plan: &pb::Plan, limits: &pb::SceneLimits) -
 struct ReadyJob {
     scene: PreparedScene,
     plan: Plan,
+    /// The job's number of the frame's first tile (0 for a still).
+    first_tile: u32,
 }
 
 /// The worker's registration, shared with the tasks that deliver results: `None` while it is
@@ -411,7 +413,7 @@ impl Worker {
         session: &pb::WorkerSession,
         lease: pb::Lease,
     ) -> Result<Option<Report>> {
-        let job = match self.job(client, session, &lease.job_id).await {
+        let job = match self.job(client, session, &lease.job_id, lease.frame).await {
             Ok(job) => job,
             Err(e) => {
                 self.fail(client, session, lease, &e).await?;
@@ -419,7 +421,8 @@ impl Worker {
             }
         };
         let rect = lease.rect.map(Rect::from);
-        if rect.is_none() || rect != job.plan.tile_rect(lease.tile) {
+        let tile = lease.tile.checked_sub(job.first_tile);
+        if rect.is_none() || rect != tile.and_then(|t| job.plan.tile_rect(t)) {
             let e = JobError::Scene(format!(
                 "lease of tile {} with rectangle {rect:?}, which is not the plan's tile",
                 lease.tile
@@ -518,8 +521,11 @@ impl Worker {
         client: &mut Client,
         session: &pb::WorkerSession,
         job_id: &str,
+        frame: u32,
     ) -> Result<Arc<ReadyJob>, JobError> {
-        if let Some(job) = self.scenes.get(job_id) {
+        // A sequence's frames are scenes of their own, cached apart.
+        let key = format!("{job_id}#{frame}");
+        if let Some(job) = self.scenes.get(&key) {
             return Ok(job);
         }
         let fetch = |what: String| move |status| JobError::Fetch { what, status };
@@ -527,6 +533,7 @@ impl Worker {
             .fetch_job(pb::FetchJobRequest {
                 session: Some(session.clone()),
                 job_id: job_id.to_owned(),
+                frame,
             })
             .await
             .map_err(fetch(format!("job {job_id}")))?
@@ -537,8 +544,11 @@ impl Worker {
             spec.limits.ok_or_else(|| scene_error(&"no limits"))?,
         );
         let content = content_key(&spec.manifest_json, &wire_plan, &wire_limits);
-        if let Some((ready, bytes)) = self.scenes.get_by_content(&content) {
-            self.scenes.insert(job_id, &content, ready.clone(), bytes);
+        let first_tile = spec.first_tile;
+        if let Some((ready, bytes)) = self.scenes.get_by_content(&content)
+            && ready.first_tile == first_tile
+        {
+            self.scenes.insert(&key, &content, ready.clone(), bytes);
             return Ok(ready);
         }
         let plan = Plan::try_from(wire_plan).map_err(|e| scene_error(&e))?;
@@ -567,13 +577,13 @@ impl Worker {
                 .install(|| PreparedScene::for_plan(&scene, &plan))
                 .map_err(|e| scene_error(&e))?;
             info!(job = %job_name, triangles = prepared.triangle_count(), mib = prepared.memory_bytes() >> 20, seconds = started.elapsed().as_secs_f64(), "scene prepared");
-            Ok(ReadyJob { scene: prepared, plan })
+            Ok(ReadyJob { scene: prepared, plan, first_tile })
         })
         .await
         .map_err(|e| JobError::Local(format!("preparing job {job_id}: {e}")))??;
         let bytes = ready.scene.memory_bytes();
         let ready = Arc::new(ready);
-        for evicted in self.scenes.insert(job_id, &content, ready.clone(), bytes) {
+        for evicted in self.scenes.insert(&key, &content, ready.clone(), bytes) {
             info!(job = %evicted, "scene dropped from the cache (least recently used)");
         }
         Ok(ready)

@@ -4,11 +4,14 @@
 //! partial files are removed rather than left for a client to find.
 
 use super::Farm;
+use super::sequence_frame::FrameStep;
 use crate::error::FarmError;
 use crate::ids::JobId;
 use crate::job::{IllegalTransition, JobRecord, JobState};
 use restauro_image::framebuffer::{Framebuffer, TileLayout};
 use restauro_image::results::{ResultOptions, write_grid_results, write_results};
+use restauro_scene::job::JobSpec;
+use restauro_scene::plan::Plan;
 use restauro_spectral::retinex::RetinexParams;
 use std::sync::Arc;
 use std::time::Instant;
@@ -63,46 +66,69 @@ enum Outcome {
 fn files(farm: &Arc<Farm>, record: &JobRecord) -> Result<Vec<String>, Outcome> {
     let id = &record.id;
     let plan = &record.plan;
+    let frame = placed(farm, id, plan, 0)?;
+    farm.transition(id, JobRecord::begin_post_processing).map_err(Outcome::Ended)?;
+    let stem = record.spec.name.file_stem();
+    write(farm, id, frame, plan, &stem, &record.info(), &record.spec)
+}
+
+/// The framebuffer of `plan` from its tiles in the store, the first of which is the job's tile
+/// `first_tile`.
+fn placed(
+    farm: &Arc<Farm>,
+    id: &JobId,
+    plan: &Plan,
+    first_tile: u32,
+) -> Result<Framebuffer, Outcome> {
     let mut frame = Framebuffer::new(plan.width, plan.height, TileLayout::from(plan));
     for (index, rect) in plan.tiles().enumerate() {
         let data = farm
             .store
-            .tile(id, index as u32)
+            .tile(id, first_tile + index as u32)
             .map_err(|e| Outcome::Failed(e.to_string()))?
             .ok_or_else(|| {
-            // A job cancelled meanwhile has had its tiles dropped: that is not a failure.
-            match farm.transition(id, |_| Ok(())) {
-                Ok((_, r)) if r.state().is_final() => {
-                    Outcome::Ended(FarmError::from(IllegalTransition {
-                        job: id.clone(),
-                        from: r.state(),
-                        to: JobState::PostProcessing,
-                    }))
+                // A job cancelled meanwhile has had its tiles dropped: that is not a failure.
+                match farm.transition(id, |_| Ok(())) {
+                    Ok((_, r)) if r.state().is_final() => {
+                        Outcome::Ended(FarmError::from(IllegalTransition {
+                            job: id.clone(),
+                            from: r.state(),
+                            to: JobState::PostProcessing,
+                        }))
+                    }
+                    _ => Outcome::Failed(format!("tile {index} is missing from the store")),
                 }
-                _ => Outcome::Failed(format!("tile {index} is missing from the store")),
-            }
-        })?;
+            })?;
         frame.place(index as u32, &rect, &data).map_err(|e| Outcome::Failed(e.to_string()))?;
     }
-    farm.transition(id, JobRecord::begin_post_processing).map_err(Outcome::Ended)?;
+    Ok(frame)
+}
+
+/// Writes the files of `frame`, rendered by `plan`, under `stem`.
+fn write(
+    farm: &Arc<Farm>,
+    id: &JobId,
+    frame: Framebuffer,
+    plan: &Plan,
+    stem: &str,
+    info: &str,
+    spec: &JobSpec,
+) -> Result<Vec<String>, Outcome> {
     let dir = farm.results_dir(id);
     std::fs::create_dir_all(&dir)
         .map_err(|e| Outcome::Failed(format!("{}: {e}", dir.display())))?;
-    let stem = record.spec.name.file_stem();
-    let info = record.info();
     if plan.grids {
-        let written = write_grid_results(&dir, frame, &stem, &info)
+        let written = write_grid_results(&dir, frame, stem, info)
             .map_err(|e| Outcome::Failed(e.to_string()))?;
         info!("grids written");
         return Ok(written.files);
     }
     let retinex = farm.config.retinex.then(|| RetinexParams {
-        paths: record.spec.retinex.paths,
-        seed: record.spec.retinex.seed,
+        paths: spec.retinex.paths,
+        seed: spec.retinex.seed,
         ..RetinexParams::default()
     });
-    let options =
-        ResultOptions { name: &stem, info: &info, exposure: record.spec.exposure, retinex };
+    let options = ResultOptions { name: stem, info, exposure: spec.exposure, retinex };
     let written =
         write_results(&dir, frame, &options).map_err(|e| Outcome::Failed(e.to_string()))?;
     info!(retinex_s = written.retinex_s, "results written");
@@ -110,6 +136,80 @@ fn files(farm: &Arc<Farm>, record: &JobRecord) -> Result<Vec<String>, Outcome> {
         farm.metrics.retinex_seconds.observe(written.retinex_s);
     }
     Ok(written.files)
+}
+
+/// Writes the frames of sequence `id` whose tiles are all stored, in order, and finishes the
+/// job after its last frame (see `sequence_frame`). Runs on a thread of its own.
+pub(super) fn assemble_frames(farm: &Arc<Farm>, id: &JobId) {
+    let _span = tracing::info_span!("frames", job = %id).entered();
+    loop {
+        match farm.next_frame_step(id) {
+            FrameStep::Stop => return,
+            FrameStep::Finish => {
+                let files = farm.jobs_record(id).map(|r| r.results).unwrap_or_default();
+                let finished = farm
+                    .transition(id, JobRecord::begin_post_processing)
+                    .and_then(|_| farm.finish_job(id, files));
+                match finished {
+                    Ok(()) => info!("sequence done"),
+                    Err(e) => info!("{e}; the sequence stops"),
+                }
+                farm.next_frame_step(id);
+                return;
+            }
+            FrameStep::Frame(work) => {
+                let started = Instant::now();
+                let written = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                    let frame = placed(farm, id, &work.plan, work.tiles.start)?;
+                    write(farm, id, frame, &work.plan, &work.stem, &work.info, &work.spec)
+                }))
+                .unwrap_or_else(|_| {
+                    Err(Outcome::Failed(format!(
+                        "writing frame {} stopped on an internal error; this is a defect of \
+                         restauro: please report it with the coordinator's log",
+                        work.frame
+                    )))
+                });
+                match written {
+                    Ok(files) if farm.frame_ready(id, work.frame, &files) => {
+                        info!(
+                            frame = work.frame,
+                            seconds = started.elapsed().as_secs_f64(),
+                            "frame ready"
+                        );
+                        if let Err(e) = farm.store.remove_tile_range(id, work.tiles.clone()) {
+                            warn!(frame = work.frame, "could not drop the frame's tiles: {e}");
+                        }
+                    }
+                    Ok(files) => {
+                        remove_files(farm, id, &files);
+                        farm.next_frame_step(id);
+                        return;
+                    }
+                    Err(Outcome::Ended(e)) => {
+                        info!("{e}; the frames stop");
+                        farm.next_frame_step(id);
+                        return;
+                    }
+                    Err(Outcome::Failed(reason)) => {
+                        farm.fail_job(id, format!("frame {}: {reason}", work.frame));
+                        farm.next_frame_step(id);
+                        return;
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Removes files of a job that no record lists (a frame written as its job was cancelled).
+fn remove_files(farm: &Farm, id: &JobId, files: &[String]) {
+    let dir = farm.results_dir(id);
+    for file in files {
+        if let Err(e) = std::fs::remove_file(dir.join(file)) {
+            warn!(file, "could not remove a frame's file: {e}");
+        }
+    }
 }
 
 fn remove_results(farm: &Farm, id: &JobId) {

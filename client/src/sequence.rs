@@ -1,0 +1,90 @@
+//! `restauro sequence`: one scene as a sequence of frames (the sun through a day or across the
+//! year, a walk through saved views, the hypotheses), rendered as one job on a cluster. The
+//! frames are expanded here, from the scene file, and each frame's files are fetched into
+//! `--out` as `<scene>-<frame>.exr`, `.png`, … (frame numbers from 0000).
+
+use crate::cli::SequenceArgs;
+use crate::render::{Cluster, checked_bundle, job_spec};
+use anyhow::{Context, Result, bail};
+use restauro_scene::load::Limits;
+use restauro_scene::sequence::Sequence;
+use std::fmt::Write as _;
+use std::time::Instant;
+
+/// The sequence the flags ask for: exactly one kind.
+pub fn sequence(args: &SequenceArgs) -> Result<Sequence> {
+    let kinds = [
+        args.sun_from.is_some(),
+        !args.dates.is_empty(),
+        !args.path.is_empty(),
+        !args.render.variants.is_empty(),
+    ];
+    match kinds.iter().filter(|&&k| k).count() {
+        1 => {}
+        0 => bail!(
+            "say which sequence: --sun-from 06:00 --to 21:00 --every 15m (a day), --dates \
+             2026-06-21,2026-12-21 --at 12:00 (dates), --path VIEW,VIEW --fps 25 (a walk) or \
+             --variants as-found,cleaned (the hypotheses)"
+        ),
+        _ => {
+            bail!("give one kind of sequence: a day, dates, a walk or the hypotheses, not several")
+        }
+    }
+    if let (Some(from), Some(to), Some(every)) = (args.sun_from, args.to, args.every) {
+        return Ok(Sequence::Day { date: args.date, from, to, every });
+    }
+    if let Some(at) = args.at {
+        return Ok(Sequence::Dates { dates: args.dates.clone(), at });
+    }
+    if !args.path.is_empty() {
+        return Ok(Sequence::Walk {
+            views: args.path.clone(),
+            fps: args.fps,
+            speed_m_s: args.speed,
+        });
+    }
+    Ok(Sequence::Hypotheses { variants: args.render.variants.clone() })
+}
+
+pub fn run(args: &SequenceArgs) -> Result<String> {
+    let started = Instant::now();
+    if args.render.run.in_process {
+        bail!("--in-process renders one image; a sequence runs on a cluster (leave it out)");
+    }
+    let sequence = sequence(args)?;
+    let render = crate::cli::RenderArgs { variants: Vec::new(), ..args.render.clone() };
+    let limits: Limits = (&render.run.limits).into();
+    let (bundle, plan) = checked_bundle(&render)?;
+    // The frames are expanded from the scene as the file says it (before its origin recentres
+    // it), as a frame's scene is the bundle's with the frame's changes.
+    let frames = sequence
+        .frames(&bundle.scene, &render.scene, &limits)
+        .with_context(|| format!("the sequence of {}", render.scene.display()))?;
+    let mut spec = job_spec(&render, 0)?;
+    spec.frames = frames;
+    let spec = spec.checked().map_err(|e| anyhow::anyhow!("{e}"))?;
+    let count = spec.frames.len();
+    let cluster = Cluster::open(&render)?;
+    let (status, files) = cluster.run(&bundle, &spec, &render.scene, &render.out)?;
+    let seconds = started.elapsed().as_secs_f64();
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "rendered {} as {count} frames ({}×{}, {}, {} spp, {} tiles) through {} in {seconds:.1} \
+         s, {:.0} frames an hour (job {})",
+        render.scene.display(),
+        plan.width,
+        plan.height,
+        plan.integrator,
+        plan.samples_per_pixel,
+        status.tiles_total,
+        cluster.description(&render),
+        count as f64 * 3600.0 / seconds.max(1e-9),
+        status.id
+    );
+    for (index, frame) in spec.frames.iter().enumerate() {
+        let _ = writeln!(s, "frame {index:04}: {}", frame.label);
+    }
+    let _ = writeln!(s, "wrote {} files into {}", files.len(), render.out.display());
+    Ok(s)
+}

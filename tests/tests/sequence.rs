@@ -1,0 +1,320 @@
+//! Sequences on the cluster, as real processes on loopback: each frame is the same scene
+//! rendered alone, bit for bit; frames are ready in order while the job runs and can be
+//! fetched then; a coordinator killed mid-sequence resumes without rendering a finished tile
+//! again; and what cannot be a sequence is refused with the fix.
+
+use restauro_proto as pb;
+use restauro_scene::sequence::Frame;
+use restauro_tests::{Coordinator, Worker, aosta_scene, client, restauro, text, wire};
+use std::path::Path;
+
+/// The scene at `scene` with its sun's date-time set to `datetime`, written beside it as `name`.
+fn at_time(scene: &str, datetime: &str, name: &str) -> String {
+    let text = std::fs::read_to_string(scene).unwrap();
+    let own = "datetime = \"2026-07-15T15:30:00+02:00\"";
+    assert!(text.contains(own), "the generated scene's sun has moved: update this test");
+    let path = Path::new(scene).with_file_name(name);
+    std::fs::write(&path, text.replace(own, &format!("datetime = \"{datetime}\""))).unwrap();
+    path.to_str().unwrap().to_owned()
+}
+
+fn bytes(path: &Path) -> Vec<u8> {
+    std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+#[test]
+fn each_frame_of_a_day_is_the_same_scene_rendered_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = aosta_scene(d, 64, 36);
+    let out = d.join("day");
+    let o = restauro(&[
+        "sequence",
+        &scene,
+        "--sun-from",
+        "05:00",
+        "--to",
+        "21:00",
+        "--every",
+        "4h",
+        "--spp",
+        "2",
+        "--tile",
+        "16",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let said = text(&o);
+    assert!(said.contains("as 5 frames") && said.contains("frame 0004: 21:00"), "{said}");
+    assert!(said.contains("frames an hour"), "{said}");
+    // At 05:00 the sun has not risen at Aosta in July (it rises near 05:50 CEST): the sky
+    // alone lights that frame. At 13:00 it is high.
+    for (frame, datetime) in [(0, "2026-07-15T05:00:00+02:00"), (2, "2026-07-15T13:00:00+02:00")] {
+        let alone = at_time(&scene, datetime, &format!("alone-{frame}.toml"));
+        let alone_out = d.join(format!("alone-{frame}"));
+        let o = restauro(&[
+            "render",
+            &alone,
+            "--in-process",
+            "--spp",
+            "2",
+            "--tile",
+            "16",
+            "--out",
+            alone_out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", text(&o));
+        for suffix in [".exr", ".png", "-retinex.exr", "-retinex.png"] {
+            let a = bytes(&alone_out.join(format!("alone-{frame}{suffix}")));
+            let b = bytes(&out.join(format!("aosta-{frame:04}{suffix}")));
+            assert!(a == b, "frame {frame}{suffix} differs from the scene at {datetime} alone");
+        }
+    }
+    let (dawn, noon) = (bytes(&out.join("aosta-0000.exr")), bytes(&out.join("aosta-0002.exr")));
+    assert_ne!(dawn, noon, "the frames are of different hours");
+}
+
+#[test]
+fn what_cannot_be_a_sequence_is_refused_with_the_fix() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = aosta_scene(d, 32, 18);
+    let refused = |extra: &[&str]| {
+        let mut args = vec!["sequence", scene.as_str(), "--out", "never"];
+        args.extend(extra);
+        let o = restauro(&args);
+        assert!(!o.status.success(), "{extra:?} was accepted");
+        text(&o)
+    };
+    let e = refused(&["--sun-from", "06:00", "--to", "21:00", "--every", "0m"]);
+    assert!(e.contains("a step of zero") && e.contains("15m"), "{e}");
+    let e = refused(&["--sun-from", "22:00", "--to", "23:30", "--every", "30m"]);
+    assert!(e.contains("the sun never rises") && e.contains("sunrise and sunset"), "{e}");
+    let e = refused(&["--path", "front", "--fps", "25"]);
+    assert!(e.contains("at least two saved views"), "{e}");
+    let e = refused(&[]);
+    assert!(e.contains("say which sequence") && e.contains("--sun-from"), "{e}");
+    let e = refused(&["--sun-from", "06:00", "--to", "21:00", "--every", "1s"]);
+    assert!(e.contains("--max-frames"), "{e}");
+    let e = refused(&["--sun-from", "6 am", "--to", "21:00", "--every", "1h"]);
+    assert!(e.contains("HH:MM"), "{e}");
+    assert!(!Path::new("never").exists());
+}
+
+/// A walk through two saved views at 1.4 m/s and 5 frames a second: the frames step along the
+/// path, and the first is the first view's.
+#[test]
+fn a_walk_through_saved_views_renders_its_frames() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = aosta_scene(d, 32, 18);
+    let mut text_of = std::fs::read_to_string(&scene).unwrap();
+    text_of.push_str(
+        "\n[[views]]\nname = \"west\"\nposition = [-6.0, -30.0, 1.7]\ntarget = [0.0, 0.0, 9.0]\nvertical_fov_deg = 50.0\n\
+         \n[[views]]\nname = \"east\"\nposition = [-3.0, -30.0, 1.7]\ntarget = [0.0, 0.0, 9.0]\nvertical_fov_deg = 50.0\n",
+    );
+    std::fs::write(&scene, text_of).unwrap();
+    let out = d.join("walk");
+    let o = restauro(&[
+        "sequence",
+        &scene,
+        "--path",
+        "west,east",
+        "--fps",
+        "5",
+        "--spp",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    // 3 m at 1.4 m/s is 2.14 s: frames at 0, 0.2, …, 2.0 s.
+    let said = text(&o);
+    assert!(said.contains("as 11 frames") && said.contains("frame 0010: 2.00 s, 2.8 m"), "{said}");
+    assert!(out.join("aosta-0010.png").is_file());
+    // The first frame stands at the first view: the scene's own camera, which is there.
+    let alone = d.join("alone");
+    let o = restauro(&[
+        "render",
+        &scene,
+        "--in-process",
+        "--spp",
+        "1",
+        "--out",
+        alone.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(bytes(&alone.join("aosta.exr")) == bytes(&out.join("aosta-0000.exr")));
+}
+
+/// Frames every hour of a day.
+fn morning() -> Vec<Frame> {
+    (7..=14)
+        .map(|h| Frame {
+            label: format!("{h:02}:00"),
+            datetime: Some(format!("2026-07-15T{h:02}:00:00+02:00")),
+            camera: None,
+            variant: None,
+        })
+        .collect()
+}
+
+fn lines(path: &Path) -> Vec<String> {
+    std::fs::read_to_string(path).unwrap_or_default().lines().map(str::to_owned).collect()
+}
+
+/// The job's tiles in a worker's log (`job tile attempt` a line).
+fn tiles_in(lines: &[String], id: &str) -> Vec<u32> {
+    lines
+        .iter()
+        .filter(|l| l.starts_with(id))
+        .map(|l| l.split(' ').nth(1).unwrap().parse().unwrap())
+        .collect()
+}
+
+#[test]
+fn frames_are_ready_in_order_and_a_restarted_coordinator_renders_no_finished_tile_again() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let runtime = tokio::runtime::Runtime::new().unwrap();
+    let (mut coordinator, mut grpc, bundle) =
+        runtime.block_on(wire::farm(d, 96, 54, &["--heartbeat-timeout-s", "2"]));
+    let url = coordinator.url.clone();
+    let logs: Vec<_> = (1..=2).map(|i| d.join(format!("tiles-{i}.log"))).collect();
+    let _workers: Vec<Worker> = logs
+        .iter()
+        .enumerate()
+        .map(|(i, log)| {
+            Worker::start(d, &url, &format!("w{i}"), &["--tile-log", log.to_str().unwrap()])
+        })
+        .collect();
+    let spec = restauro_scene::job::JobSpec { frames: morning(), ..wire::spec("aosta", 16, 24) };
+    let status = runtime.block_on(wire::submit(&mut grpc, &bundle, &spec)).unwrap();
+    let id = status.job_id.clone();
+    assert_eq!((status.frames_total, status.tiles_total), (8, 8 * 24));
+    // Follow the job until a frame is ready, and fetch it while the others render.
+    let seen = runtime.block_on(async {
+        let mut stream =
+            grpc.watch_job(pb::pb::JobRef { job_id: id.clone() }).await.unwrap().into_inner();
+        let mut ready = 0;
+        while let Some(s) = stream.message().await.unwrap() {
+            assert!(s.frames_ready >= ready, "frames became ready out of order");
+            ready = s.frames_ready;
+            for f in &s.frames {
+                assert!(f.index >= ready && f.tiles_done <= f.tiles_total && f.tiles_total == 24);
+            }
+            if ready >= 1 {
+                return s;
+            }
+        }
+        panic!("the watch ended before a frame was ready");
+    });
+    assert!(seen.frames_ready < 8, "the whole sequence ran before the restart: slow it down");
+    let early = runtime.block_on(async {
+        let request =
+            pb::pb::FetchResultRequest { job_id: id.clone(), name: "aosta-0000.png".into() };
+        let mut stream = grpc.fetch_result(request).await.unwrap().into_inner();
+        let mut bytes = Vec::new();
+        while let Some(chunk) = stream.message().await.unwrap() {
+            bytes.extend(chunk.data);
+        }
+        bytes
+    });
+    assert!(early.starts_with(b"\x89PNG"), "a ready frame is fetched while the job runs");
+    coordinator.child.kill().unwrap();
+    coordinator.child.wait().unwrap();
+    let offsets: Vec<usize> = logs.iter().map(|l| lines(l).len()).collect();
+    let finished: Vec<u32> = {
+        let store = restauro_farm::store::Store::open(&d.join("data/store.redb")).unwrap();
+        let (_, record) = store.jobs().unwrap().into_iter().find(|(k, _)| *k == id).unwrap();
+        let record = restauro_farm::job::JobRecord::from_bytes(&id, &record).unwrap();
+        let ready = record.frames_ready;
+        assert!(ready >= 1);
+        let mut done = store.finished_tiles(&id).unwrap();
+        done.extend(0..record.frame_range(ready - 1).end);
+        done
+    };
+    let addr = url.strip_prefix("http://").unwrap();
+    let _coordinator = Coordinator::start(d, &d.join("data"), addr, &[]);
+    let token = restauro_tests::token_files(d).0;
+    let o = client(&["watch", &id], &url, &token);
+    assert!(text(&o).contains("done"), "{}", text(&o));
+    for (log, &from) in logs.iter().zip(&offsets) {
+        let after = tiles_in(&lines(log)[from..], &id);
+        for tile in after {
+            assert!(
+                !finished.contains(&tile),
+                "tile {tile} was finished before the restart and rendered again"
+            );
+        }
+    }
+    let out = d.join("fetched");
+    let o = client(&["fetch", &id, "--out", out.to_str().unwrap()], &url, &token);
+    assert!(o.status.success(), "{}", text(&o));
+    for frame in 0..8 {
+        for suffix in [".exr", ".png", "-retinex.exr", "-retinex.png"] {
+            assert!(
+                out.join(format!("aosta-{frame:04}{suffix}")).is_file(),
+                "frame {frame}{suffix}"
+            );
+        }
+    }
+    // The frame fetched early is the one the finished job lists.
+    assert!(early == bytes(&out.join("aosta-0000.png")));
+}
+
+/// A sequence from a hostile or careless client: a frame's date-time without its offset, more
+/// frames or tiles than the coordinator takes, a frame a worker asks for that the job does not
+/// have. Each is refused naming the fix; a sequence within the limits is taken after them.
+#[test]
+fn sequences_over_the_coordinators_limits_are_refused_naming_the_flag() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let runtime = tokio::runtime::Runtime::new().unwrap();
+    runtime.block_on(async {
+        let limits = ["--max-frames", "6", "--max-job-tiles", "100"];
+        let (coordinator, mut client, bundle) = wire::farm(d, 64, 36, &limits).await;
+        let with = |frames: Vec<Frame>| restauro_scene::job::JobSpec {
+            frames,
+            ..wire::spec("aosta", 16, 1)
+        };
+        let mut no_offset = morning();
+        no_offset[1].datetime = Some("2026-07-15T08:00:00".into());
+        let e = wire::submit(&mut client, &bundle, &with(no_offset)).await.unwrap_err();
+        assert_eq!(e.code(), tonic::Code::InvalidArgument);
+        assert!(
+            e.message().contains("frame 1 (08:00)") && e.message().contains("UTC offset"),
+            "{e}"
+        );
+        let e = wire::submit(&mut client, &bundle, &with(morning())).await.unwrap_err();
+        assert_eq!(e.code(), tonic::Code::ResourceExhausted);
+        assert!(e.message().contains("--max-frames"), "{e}");
+        // Five frames of 4 × 3 tiles of 16 px: 60 tiles; in tiles of 8 px, 240.
+        let five = with(morning()[..5].to_vec());
+        let small_tiles = restauro_scene::job::JobSpec {
+            render: restauro_scene::plan::RenderOptions {
+                tile: std::num::NonZeroU32::new(8),
+                ..five.render.clone()
+            },
+            ..five.clone()
+        };
+        let e = wire::submit(&mut client, &bundle, &small_tiles).await.unwrap_err();
+        assert_eq!(e.code(), tonic::Code::ResourceExhausted);
+        assert!(e.message().contains("--max-job-tiles"), "{e}");
+        let status = wire::submit(&mut client, &bundle, &five).await.unwrap();
+        assert_eq!((status.frames_total, status.tiles_total), (5, 60));
+        let mut work = wire::work_client(&coordinator.url).await;
+        let session = wire::register(&mut work, "w").await;
+        let asked = |frame| pb::pb::FetchJobRequest {
+            session: Some(session.clone()),
+            job_id: status.job_id.clone(),
+            frame,
+        };
+        let e = work.fetch_job(asked(5)).await.unwrap_err();
+        assert_eq!(e.code(), tonic::Code::NotFound);
+        let third = work.fetch_job(asked(2)).await.unwrap().into_inner();
+        assert_eq!(third.first_tile, 24);
+        assert!(third.manifest_json.contains("2026-07-15T09:00:00+02:00"));
+    });
+}

@@ -230,6 +230,18 @@ pub struct SequenceArgs {
     /// The walking speed, m/s.
     #[arg(long, default_value_t = restauro_scene::sequence::WALKING_SPEED_M_S)]
     pub speed: f64,
+    /// Frames a second of the video of a day, dates or hypotheses (a walk's video plays at
+    /// --fps).
+    #[arg(long, default_value_t = 2.0, value_parser = video_rate)]
+    pub video_fps: f64,
+}
+
+/// A video's frame rate: above 0, at most 240.
+fn video_rate(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(fps) if fps > 0.0 && fps <= 240.0 => Ok(fps),
+        _ => Err(format!("`{text}`: give frames a second between 0 and 240, e.g. 2")),
+    }
 }
 
 /// A clock time as HH:MM (or HH:MM:SS).

@@ -73,6 +73,30 @@ fn each_frame_of_a_day_is_the_same_scene_rendered_alone() {
     }
     let (dawn, noon) = (bytes(&out.join("aosta-0000.exr")), bytes(&out.join("aosta-0002.exr")));
     assert_ne!(dawn, noon, "the frames are of different hours");
+    the_sheet_and_the_video_hold_the_seen_frames(&out, 5);
+}
+
+/// The contact sheet is a PNG wider than one frame; the video is an APNG of every seen frame,
+/// at 2 frames a second, whose first frame is the first seen PNG.
+fn the_sheet_and_the_video_hold_the_seen_frames(out: &Path, frames: u32) {
+    let decoded = |path: &Path| {
+        let file = std::fs::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let mut reader = png::Decoder::new(std::io::BufReader::new(file)).read_info().unwrap();
+        let mut data = vec![0; reader.output_buffer_size().unwrap()];
+        let frame = reader.next_frame(&mut data).unwrap();
+        data.truncate(frame.buffer_size());
+        let info = reader.info();
+        let control = info.animation_control.map(|a| a.num_frames);
+        let delay = info.frame_control.map(|f| (f.delay_num, f.delay_den));
+        (frame.width, control, delay, data)
+    };
+    let (sheet_width, ..) = decoded(&out.join("aosta-sheet.png"));
+    let (frame_width, _, _, first) = decoded(&out.join("aosta-0000-retinex.png"));
+    assert!(sheet_width > frame_width);
+    let (width, control, delay, video_first) = decoded(&out.join("aosta.apng"));
+    assert_eq!((width, control), (frame_width, Some(frames)));
+    assert_eq!(delay, Some((100, 200)));
+    assert!(video_first == first, "the video starts with the first seen frame");
 }
 
 #[test]

@@ -1,7 +1,11 @@
 //! `restauro sequence`: one scene as a sequence of frames (the sun through a day or across the
 //! year, a walk through saved views, the hypotheses), rendered as one job on a cluster. The
 //! frames are expanded here, from the scene file, and each frame's files are fetched into
-//! `--out` as `<scene>-<frame>.exr`, `.png`, … (frame numbers from 0000).
+//! `--out` as `<scene>-<frame>.exr`, `.png`, … (frame numbers from 0000); then the contact sheet
+//! and the video of the seen frames are made from them.
+
+mod sheet;
+mod video;
 
 use crate::cli::SequenceArgs;
 use crate::render::{Cluster, checked_bundle, job_spec};
@@ -9,6 +13,7 @@ use anyhow::{Context, Result, bail};
 use restauro_scene::load::Limits;
 use restauro_scene::sequence::Sequence;
 use std::fmt::Write as _;
+use std::path::PathBuf;
 use std::time::Instant;
 
 /// The sequence the flags ask for: exactly one kind.
@@ -86,5 +91,31 @@ pub fn run(args: &SequenceArgs) -> Result<String> {
         let _ = writeln!(s, "frame {index:04}: {}", frame.label);
     }
     let _ = writeln!(s, "wrote {} files into {}", files.len(), render.out.display());
+    let stem = spec.name.file_stem();
+    // The seen frames; a coordinator that runs no Retinex (`--no-retinex`) writes none.
+    let seen = render.out.join(format!("{stem}-0000-retinex.png")).is_file();
+    let (suffix, how) = if seen { ("-retinex", "as seen") } else { ("", "as rendered") };
+    let seen: Vec<(PathBuf, String)> = spec
+        .frames
+        .iter()
+        .enumerate()
+        .map(|(i, f)| (render.out.join(format!("{stem}-{i:04}{suffix}.png")), f.label.clone()))
+        .collect();
+    let sheet = render.out.join(format!("{stem}-sheet.png"));
+    let title = format!("{}, {how}", render.scene.display());
+    sheet::write_sheet(&sheet, &title, &seen)?;
+    let _ = writeln!(s, "wrote {} (the contact sheet)", sheet.display());
+    let video = render.out.join(format!("{stem}.apng"));
+    let paths: Vec<PathBuf> = seen.into_iter().map(|(p, _)| p).collect();
+    video::write_apng(&video, &paths, video_fps(args, &sequence))?;
+    let _ = writeln!(s, "wrote {} (the video, APNG)", video.display());
     Ok(s)
+}
+
+/// The video's frames a second: a walk's own rate; otherwise `--video-fps`.
+fn video_fps(args: &SequenceArgs, sequence: &Sequence) -> f64 {
+    match sequence {
+        Sequence::Walk { fps, .. } => *fps,
+        _ => args.video_fps,
+    }
 }

@@ -202,25 +202,8 @@ pub struct SequenceArgs {
     /// makes a sequence of the hypotheses).
     #[command(flatten)]
     pub render: RenderArgs,
-    /// The day's first frame: a clock time at the scene's site (HH:MM, in the UTC offset of the
-    /// scene's own date-time), with --to and --every.
-    #[arg(long, value_name = "HH:MM", value_parser = clock_time, requires_all = ["to", "every"])]
-    pub sun_from: Option<chrono::NaiveTime>,
-    /// The day's last frame at most (HH:MM).
-    #[arg(long, value_name = "HH:MM", value_parser = clock_time, requires = "sun_from")]
-    pub to: Option<chrono::NaiveTime>,
-    /// The step between frames of the day: 15m, 1h, 90s, 1h30m.
-    #[arg(long, value_parser = restauro_scene::sequence::parse_every, requires = "sun_from")]
-    pub every: Option<restauro_scene::sequence::Every>,
-    /// The day (YYYY-MM-DD); the scene's own date unless given.
-    #[arg(long, requires = "sun_from")]
-    pub date: Option<chrono::NaiveDate>,
-    /// The same hour (--at) on each of these dates: 2026-03-20,2026-06-21,2026-12-21.
-    #[arg(long, value_delimiter = ',', requires = "at", conflicts_with = "sun_from")]
-    pub dates: Vec<chrono::NaiveDate>,
-    /// The hour of --dates (HH:MM).
-    #[arg(long, value_name = "HH:MM", value_parser = clock_time, requires = "dates")]
-    pub at: Option<chrono::NaiveTime>,
+    #[command(flatten)]
+    pub sun: SunTimeArgs,
     /// A walk through these saved views of the scene, in order (at least two).
     #[arg(long, value_delimiter = ',', conflicts_with_all = ["sun_from", "dates"])]
     pub path: Vec<String>,
@@ -251,6 +234,42 @@ fn clock_time(text: &str) -> Result<chrono::NaiveTime, String> {
         .map_err(|_| format!("`{text}` is not a clock time; write it as HH:MM, e.g. 06:00"))
 }
 
+/// A sequence of the sun's times: a day, or one hour on several dates.
+#[derive(Clone, Debug, Default, Args)]
+pub struct SunTimeArgs {
+    /// The day's first frame: a clock time at the scene's site (HH:MM, in the UTC offset of the
+    /// scene's own date-time), with --to and --every.
+    #[arg(long, value_name = "HH:MM", value_parser = clock_time, requires_all = ["to", "every"])]
+    pub sun_from: Option<chrono::NaiveTime>,
+    /// The day's last frame at most (HH:MM).
+    #[arg(long, value_name = "HH:MM", value_parser = clock_time, requires = "sun_from")]
+    pub to: Option<chrono::NaiveTime>,
+    /// The step between frames of the day: 15m, 1h, 90s, 1h30m.
+    #[arg(long, value_parser = restauro_scene::sequence::parse_every, requires = "sun_from")]
+    pub every: Option<restauro_scene::sequence::Every>,
+    /// The day (YYYY-MM-DD); the scene's own date unless given.
+    #[arg(long, requires = "sun_from")]
+    pub date: Option<chrono::NaiveDate>,
+    /// The same hour (--at) on each of these dates: 2026-03-20,2026-06-21,2026-12-21.
+    #[arg(long, value_delimiter = ',', requires = "at", conflicts_with = "sun_from")]
+    pub dates: Vec<chrono::NaiveDate>,
+    /// The hour of --dates (HH:MM).
+    #[arg(long, value_name = "HH:MM", value_parser = clock_time, requires = "dates")]
+    pub at: Option<chrono::NaiveTime>,
+}
+
+impl SunTimeArgs {
+    /// The sequence these flags ask for, if any.
+    pub fn sequence(&self) -> Option<restauro_scene::sequence::Sequence> {
+        use restauro_scene::sequence::Sequence;
+        if let (Some(from), Some(to), Some(every)) = (self.sun_from, self.to, self.every) {
+            return Some(Sequence::Day { date: self.date, from, to, every });
+        }
+        let at = self.at?;
+        Some(Sequence::Dates { dates: self.dates.clone(), at })
+    }
+}
+
 #[derive(Clone, Debug, Args)]
 pub struct IlluminanceArgs {
     /// The scene file, with its calculation grids (`[[grids]]`).
@@ -271,8 +290,12 @@ pub struct IlluminanceArgs {
     #[arg(long, value_parser = option_count)]
     pub spp: Option<NonZeroU32>,
     /// Print the JSON document (schema restauro.illuminance/1) instead of a summary.
-    #[arg(long)]
+    #[arg(long, conflicts_with_all = ["sun_from", "dates"])]
     pub json: bool,
+    /// Through a day or on several dates: each point's illuminance at each time, as a CSV and
+    /// a chart per grid.
+    #[command(flatten)]
+    pub sun: SunTimeArgs,
     #[command(flatten)]
     pub run: RunArgs,
 }

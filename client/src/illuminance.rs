@@ -41,6 +41,9 @@ pub fn run(args: &IlluminanceArgs) -> Result<String> {
         run: args.run.clone(),
         grids: true,
     };
+    if let Some(sequence) = args.sun.sequence() {
+        return crate::illuminance_day::run(args, &render, &sequence);
+    }
     let computed = crate::render::run(&render)?;
     let stem = crate::render::job_spec(&render, 0)?.name.file_stem();
     let exr = args.out.join(format!("{stem}.exr"));

@@ -6,6 +6,7 @@ pub mod compare;
 pub mod connect;
 pub mod demo;
 pub mod illuminance;
+pub mod illuminance_day;
 pub mod jobs_cmd;
 pub mod render;
 pub mod retinex;

@@ -173,13 +173,6 @@ impl JobSpec {
             crate::scene_file::check_noise_target(target)
                 .map_err(|problem| refuse("render.noise_target", problem))?;
         }
-        if !self.frames.is_empty() && self.render.grids {
-            return Err(refuse(
-                "frames",
-                "a sequence of calculation grids is not rendered yet; compute each time with \
-                 `restauro illuminance`",
-            ));
-        }
         for (index, frame) in self.frames.iter().enumerate() {
             frame.check(index)?;
         }

@@ -342,3 +342,58 @@ fn sequences_over_the_coordinators_limits_are_refused_naming_the_flag() {
         assert!(third.manifest_json.contains("2026-07-15T09:00:00+02:00"));
     });
 }
+
+/// The bay's calculation grid under the CIE clear sky through three hours: a column of lux per
+/// hour for each of its points, each hour's grid the scene at that hour computed alone, and a
+/// chart.
+#[test]
+fn a_grid_through_the_day_is_each_hour_computed_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let summer = aosta_scene(d, 32, 18);
+    let clear = Path::new(&summer).with_file_name("aosta-clear.toml");
+    let clear = clear.to_str().unwrap();
+    let out = d.join("bay");
+    let o = restauro(&[
+        "illuminance",
+        clear,
+        "--sun-from",
+        "12:00",
+        "--to",
+        "14:00",
+        "--every",
+        "1h",
+        "--spp",
+        "2",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let csv = std::fs::read_to_string(out.join("bay-4-day.csv")).unwrap();
+    let rows: Vec<&str> = csv.lines().collect();
+    assert_eq!(rows[0], "index,x_m,y_m,z_m,lux 12:00,lux 13:00,lux 14:00");
+    assert_eq!(rows.len(), 1 + 12 * 42);
+    let alone = at_time(clear, "2026-07-15T13:00:00+02:00", "alone.toml");
+    let alone_out = d.join("alone");
+    let o = restauro(&[
+        "illuminance",
+        &alone,
+        "--in-process",
+        "--spp",
+        "2",
+        "--out",
+        alone_out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let a = bytes(&alone_out.join("alone-illuminance.exr"));
+    assert!(a == bytes(&out.join("aosta-clear-illuminance-0001.exr")), "13:00 differs alone");
+    // The day's 13:00 column is the lone computation's lux column, point by point.
+    let lone = std::fs::read_to_string(alone_out.join("bay-4.csv")).unwrap();
+    for (day, lone) in rows[1..].iter().zip(lone.lines().skip(1)) {
+        let day: Vec<&str> = day.split(',').collect();
+        let lone: Vec<&str> = lone.split(',').collect();
+        assert_eq!(day[5], lone[7], "point {}", day[0]);
+    }
+    let chart = bytes(&out.join("bay-4-day.png"));
+    assert!(chart.starts_with(b"\x89PNG"));
+}

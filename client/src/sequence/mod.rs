@@ -19,8 +19,8 @@ use std::time::Instant;
 /// The sequence the flags ask for: exactly one kind.
 pub fn sequence(args: &SequenceArgs) -> Result<Sequence> {
     let kinds = [
-        args.sun_from.is_some(),
-        !args.dates.is_empty(),
+        args.sun.sun_from.is_some(),
+        !args.sun.dates.is_empty(),
         !args.path.is_empty(),
         !args.render.variants.is_empty(),
     ];
@@ -35,11 +35,8 @@ pub fn sequence(args: &SequenceArgs) -> Result<Sequence> {
             bail!("give one kind of sequence: a day, dates, a walk or the hypotheses, not several")
         }
     }
-    if let (Some(from), Some(to), Some(every)) = (args.sun_from, args.to, args.every) {
-        return Ok(Sequence::Day { date: args.date, from, to, every });
-    }
-    if let Some(at) = args.at {
-        return Ok(Sequence::Dates { dates: args.dates.clone(), at });
+    if let Some(sun) = args.sun.sequence() {
+        return Ok(sun);
     }
     if !args.path.is_empty() {
         return Ok(Sequence::Walk {

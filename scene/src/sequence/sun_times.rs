@@ -5,7 +5,7 @@
 use super::Frame;
 use crate::error::{Result, SceneError};
 use crate::limits::Limits;
-use crate::scene_file::{Light, SceneFile, SiteTime};
+use crate::scene_file::{Light, SceneFile, SiteTime, SkyModel};
 use crate::sun::{Site, sun_position};
 use chrono::{DateTime, FixedOffset, NaiveDate, NaiveTime, TimeDelta};
 use std::path::Path;
@@ -84,13 +84,43 @@ fn elevation_deg(site: &SiteTime, datetime: &str, path: &Path) -> Result<f64> {
         .map_err(|e| SceneError::invalid(path, "lights.site", e.to_string()))
 }
 
-/// Refuses a sequence of times in which the sun never rises.
-fn check_sees_sun(site: &SiteTime, frames: &[Frame], path: &Path) -> Result<()> {
+/// Whether a sky of `scene` takes its shape from the scene's sun (a CIE general sky given
+/// neither its own sun position nor its own site): it has no shape while the sun is down.
+fn sky_shaped_by_the_sun(scene: &SceneFile) -> bool {
+    scene.lights.iter().any(|l| {
+        matches!(
+            l,
+            Light::Sky {
+                model: Some(SkyModel::CieGeneral),
+                site: None,
+                sun_elevation_deg: None,
+                ..
+            }
+        )
+    })
+}
+
+/// Refuses a sequence of times in which the sun never rises, and one with a time at which it is
+/// down when the scene's sky is shaped by it.
+fn check_sees_sun(scene: &SceneFile, site: &SiteTime, frames: &[Frame], path: &Path) -> Result<()> {
     let mut highest: Option<(f64, &str)> = None;
+    let shaped = sky_shaped_by_the_sun(scene);
     for f in frames {
         let e = elevation_deg(site, f.datetime.as_deref().unwrap_or_default(), path)?;
         if highest.is_none_or(|(h, _)| e > h) {
             highest = Some((e, &f.label));
+        }
+        if shaped && e <= 0.0 {
+            return Err(SceneError::invalid(
+                path,
+                "sequence",
+                format!(
+                    "at {} the sun is below the horizon ({e:.1}°), and the scene's CIE general \
+                     sky takes its shape from the sun; choose times between sunrise and sunset, \
+                     or give the sky a shape of its own (sun_elevation_deg and sun_azimuth_deg)",
+                    f.label
+                ),
+            ));
         }
     }
     match highest {
@@ -146,7 +176,7 @@ pub(super) fn day(
             }
         })
         .collect();
-    check_sees_sun(site, &frames, path)?;
+    check_sees_sun(scene, site, &frames, path)?;
     Ok(frames)
 }
 
@@ -175,6 +205,6 @@ pub(super) fn dates(
             variant: None,
         })
         .collect();
-    check_sees_sun(site, &frames, path)?;
+    check_sees_sun(scene, site, &frames, path)?;
     Ok(frames)
 }

@@ -230,3 +230,26 @@ fn a_frame_from_the_wire_is_checked() {
     let bad_label = Frame { label: "a\u{1b}[2J".into(), ..good };
     assert!(bad_label.check(0).unwrap_err().problem.contains("control character"));
 }
+
+#[test]
+fn a_sky_shaped_by_the_sun_refuses_the_times_it_is_down() {
+    let s = scene(
+        r#"
+[[lights]]
+kind = "sun"
+preset = "sun"
+spectrum = "white"
+site = { latitude_deg = 45.7371, longitude_deg = 7.3228, height_m = 583.0, datetime = "2026-07-15T15:30:00+02:00" }
+[[lights]]
+kind = "sky"
+illuminance_lux = 15000.0
+model = "cie-general"
+cie_type = 12
+"#,
+    );
+    let day = Sequence::Day { date: None, from: hm(5, 0), to: hm(7, 0), every: every("1h") };
+    let e = day.frames(&s, Path::new("s.toml"), &Limits::default()).unwrap_err().to_string();
+    assert!(e.contains("at 05:00 the sun is below the horizon") && e.contains("sunrise"), "{e}");
+    let later = Sequence::Day { date: None, from: hm(7, 0), to: hm(9, 0), every: every("1h") };
+    assert_eq!(later.frames(&s, Path::new("s.toml"), &Limits::default()).unwrap().len(), 3);
+}

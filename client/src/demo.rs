@@ -202,8 +202,11 @@ async fn submit_all(client: &mut Client, jobs: &[Job]) -> Result<Vec<JobStatus>>
                 samples_per_pixel: NonZeroU32::new(job.spp),
                 noise_target: job.noise_target,
                 grids: matches!(job.kind, Kind::Grid),
+                width: job.size.and_then(|(w, _)| NonZeroU32::new(w)),
+                height: job.size.and_then(|(_, h)| NonZeroU32::new(h)),
                 ..RenderOptions::default()
             },
+            frames: job.frames.clone(),
             ..JobSpec::default()
         };
         let what = format!("submitting {}", job.scene.display());

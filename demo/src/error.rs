@@ -13,6 +13,13 @@ pub enum DemoError {
     /// the file in its message).
     #[error(transparent)]
     AostaScene(io::Error),
+    /// The sun study's frames could not be made from the summer scene.
+    #[error("the sun study of {}", path.display())]
+    SunStudy {
+        path: PathBuf,
+        #[source]
+        source: Box<restauro_scene::SceneError>,
+    },
     #[error("cannot write {}", path.display())]
     Write {
         path: PathBuf,

@@ -7,6 +7,8 @@ use crate::error::{DemoError, Result};
 use crate::scene_files::write_aosta;
 use crate::scenes::{photo_block, samples};
 use restauro_image::atomic_file;
+use restauro_scene::limits::Limits;
+use restauro_scene::sequence::{Frame, Sequence};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
@@ -32,6 +34,10 @@ pub struct Size {
     pub grid_spp: u32,
     /// The width of a facade image on its contact sheet.
     pub sheet_cell: u32,
+    /// The sun study's frames: their size and most samples a pixel (noise target
+    /// [`FACADE_NOISE_TARGET`]).
+    pub sun_study: (u32, u32),
+    pub sun_study_spp: u32,
 }
 
 impl Size {
@@ -45,6 +51,8 @@ impl Size {
                 samples_spp: 1,
                 grid_spp: 16,
                 sheet_cell: 320,
+                sun_study: (160, 90),
+                sun_study_spp: 2,
             }
         } else {
             Self {
@@ -54,6 +62,8 @@ impl Size {
                 samples_spp: 4,
                 grid_spp: 256,
                 sheet_cell: 560,
+                sun_study: (384, 216),
+                sun_study_spp: 8,
             }
         }
     }
@@ -99,13 +109,20 @@ pub enum Kind {
     Grid,
     /// The pudding-stone blocks, flat and with a photo, as found and cleaned.
     Block,
+    /// The facade through the summer day ([`SUN_STUDY_HOURS`]), as `variant`.
+    SunStudy {
+        variant: &'static str,
+    },
 }
+
+/// The hours of the sun study: every hour from 08:00 to 19:00 of the summer afternoon's day.
+pub const SUN_STUDY_HOURS: (u32, u32) = (8, 19);
 
 impl Kind {
     /// The restoration hypothesis rendered.
     pub fn variant(&self) -> Option<String> {
         match self {
-            Kind::Facade { variant, .. } => Some(variant.to_string()),
+            Kind::Facade { variant, .. } | Kind::SunStudy { variant } => Some(variant.to_string()),
             Kind::Night => Some("cleaned".into()),
             Kind::Block => Some(photo_block::VARIANT.into()),
             Kind::Samples { .. } | Kind::Grid => None,
@@ -122,6 +139,10 @@ pub struct Job {
     /// Samples per pixel: with a noise target, the most a pixel takes.
     pub spp: u32,
     pub noise_target: Option<f32>,
+    /// A sequence's frames (none for a still).
+    pub frames: Vec<Frame>,
+    /// The image's size, when not the scene's.
+    pub size: Option<(u32, u32)>,
 }
 
 /// Writes the facade scene, the photo block and the four sample scenes under `out/scenes/`;
@@ -142,6 +163,8 @@ pub fn write_scenes(out: &Path, size: &Size) -> Result<Vec<Job>> {
                 kind: Kind::Facade { light, variant },
                 spp: size.facade_spp,
                 noise_target: Some(FACADE_NOISE_TARGET),
+                frames: Vec::new(),
+                size: None,
             });
         }
     }
@@ -151,6 +174,8 @@ pub fn write_scenes(out: &Path, size: &Size) -> Result<Vec<Job>> {
         kind: Kind::Night,
         spp: size.facade_spp,
         noise_target: Some(FACADE_NOISE_TARGET),
+        frames: Vec::new(),
+        size: None,
     });
     jobs.push(Job {
         key: "floodlit-grid".into(),
@@ -158,6 +183,8 @@ pub fn write_scenes(out: &Path, size: &Size) -> Result<Vec<Job>> {
         kind: Kind::Grid,
         spp: size.grid_spp,
         noise_target: None,
+        frames: Vec::new(),
+        size: None,
     });
     jobs.push(Job {
         key: "block".into(),
@@ -165,9 +192,34 @@ pub fn write_scenes(out: &Path, size: &Size) -> Result<Vec<Job>> {
         kind: Kind::Block,
         spp: size.facade_spp,
         noise_target: Some(FACADE_NOISE_TARGET),
+        frames: Vec::new(),
+        size: None,
     });
     jobs.extend(write_sample_scenes(&out.join("scenes/samples"), size)?);
+    let frames = sun_study_frames(&aosta.sunny)?;
+    for variant in ["as-found", "cleaned"] {
+        jobs.push(Job {
+            key: format!("sun-study-{variant}"),
+            scene: aosta.sunny.clone(),
+            kind: Kind::SunStudy { variant },
+            spp: size.sun_study_spp,
+            noise_target: Some(FACADE_NOISE_TARGET),
+            frames: frames.clone(),
+            size: Some(size.sun_study),
+        });
+    }
     Ok(jobs)
+}
+
+/// The frames of the sun study of the summer scene at `scene`: every hour of its day.
+fn sun_study_frames(scene: &Path) -> Result<Vec<Frame>> {
+    let failed = |e| DemoError::SunStudy { path: scene.to_owned(), source: Box::new(e) };
+    let file = restauro_scene::load::read_scene_file(scene, &Limits::default()).map_err(failed)?;
+    let hour = |h| chrono::NaiveTime::from_hms_opt(h, 0, 0).expect("an hour of the day");
+    let every = restauro_scene::sequence::parse_every("1h").expect("one hour");
+    let (from, to) = (hour(SUN_STUDY_HOURS.0), hour(SUN_STUDY_HOURS.1));
+    let day = Sequence::Day { date: None, from, to, every };
+    day.frames(&file, scene, &Limits::default()).map_err(failed)
 }
 
 /// The sample board under each of the [`ILLUMINANTS`], in `dir`; returns their renders.
@@ -190,6 +242,8 @@ fn write_sample_scenes(dir: &Path, size: &Size) -> Result<Vec<Job>> {
             kind: Kind::Samples { illuminant },
             spp: size.samples_spp,
             noise_target: None,
+            frames: Vec::new(),
+            size: None,
         });
     }
     Ok(jobs)

@@ -79,8 +79,10 @@ fn the_quick_demo_writes_what_it_lists_and_the_retinex_adapts() {
     let listed = every_listed_image_decodes(&out, &report, &markdown);
     let renders = report["renders"].as_array().unwrap();
     // The facade under three lights, as found and cleaned; the stones under four illuminants;
-    // the facade floodlit at night, and its grid; the photo block.
-    assert_eq!(renders.len(), 13);
+    // the facade floodlit at night, and its grid; the photo block; the sun study as found and
+    // cleaned.
+    assert_eq!(renders.len(), 15);
+    the_sun_study_has_every_hour(renders);
     the_floodlit_bays_figures_are_its_grids(&out, &report, &markdown, &listed);
     for r in renders {
         for f in r["files"].as_array().unwrap() {
@@ -88,13 +90,37 @@ fn the_quick_demo_writes_what_it_lists_and_the_retinex_adapts() {
         }
         assert!(r["render_s"].as_f64().unwrap() > 0.0, "{r}");
     }
-    for sheet in ["facade.png", "cleaning-delta-e.png", "stones.png", "boards.png", "block.png"] {
+    for sheet in [
+        "facade.png",
+        "cleaning-delta-e.png",
+        "stones.png",
+        "boards.png",
+        "block.png",
+        "sun-study.png",
+    ] {
         assert!(listed.contains(&format!("sheets/{sheet}").as_str()), "{sheet}");
     }
     nothing_half_written_is_left(&out);
     the_retinex_brings_each_stone_closer_to_d65(&out, &report);
     after_is_measured_against_the_d65_render_as_rendered_and_as_seen(&out, &report, &markdown);
     names_are_for_people(&markdown, &text(&o), renders);
+}
+
+/// The sun study: each hypothesis every hour from 08:00 to 19:00, each frame rendered and seen.
+fn the_sun_study_has_every_hour(renders: &[Value]) {
+    for variant in ["as-found", "cleaned"] {
+        let job = format!("sun-study-{variant}");
+        let r = renders.iter().find(|r| r["job"] == job.as_str()).unwrap();
+        let files: Vec<&str> =
+            r["files"].as_array().unwrap().iter().map(|f| f.as_str().unwrap()).collect();
+        for hour in 0..12 {
+            for suffix in [".exr", ".png", "-retinex.exr", "-retinex.png"] {
+                let file = format!("renders/{job}/{job}-{hour:04}{suffix}");
+                assert!(files.contains(&file.as_str()), "{file} in {files:?}");
+            }
+        }
+        assert_eq!(files.len(), 12 * 4);
+    }
 }
 
 /// Every image the report lists exists and decodes, and report.md lists it too: the files

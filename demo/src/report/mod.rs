@@ -26,6 +26,7 @@ mod facade;
 mod markdown;
 mod renders;
 mod stones;
+mod sun_study;
 
 pub use facade::CleaningDifference;
 pub use stones::{INNER_FRACTION, Measured, StoneColour};
@@ -240,6 +241,7 @@ pub fn analyse(
     images.push(stones::boards_sheet(out, size, &renders)?);
     let block = renders.block.as_ref().ok_or(DemoError::MissingBlock)?;
     images.push(block::photo_block_sheet(out, size, block)?);
+    images.push(sun_study::sun_study_sheet(out, jobs, finished)?);
     Ok(Analysis { images, stones, cleaning })
 }
 

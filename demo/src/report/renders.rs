@@ -50,7 +50,7 @@ impl<'a> Renders<'a> {
                 Kind::Samples { illuminant } => {
                     renders.stones.insert(illuminant, Pair::read(f)?);
                 }
-                Kind::Night | Kind::Grid => {}
+                Kind::Night | Kind::Grid | Kind::SunStudy { .. } => {}
             }
         }
         Ok(renders)

@@ -117,9 +117,13 @@ pub fn jobs(args: &ConnectArgs) -> Result<String> {
         }
         for sent in list.jobs {
             let j = cluster::read_status(sent)?;
+            let frames = match j.frames_total {
+                0 => String::new(),
+                total => format!(", frames {}/{total} ready", j.frames_ready),
+            };
             let _ = writeln!(
                 s,
-                "{} {:<16} {:>5}/{:<5} tiles  {:>8.1} s  {}{}",
+                "{} {:<16} {:>5}/{:<5} tiles  {:>8.1} s  {}{frames}{}",
                 j.id,
                 j.state.wire_name(),
                 j.tiles_done,

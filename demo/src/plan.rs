@@ -62,8 +62,9 @@ impl Size {
                 samples_spp: 4,
                 grid_spp: 256,
                 sheet_cell: 560,
-                sun_study: (384, 216),
-                sun_study_spp: 8,
+                // Shown 192 px wide on its sheet: a bigger frame is time the sheet does not show.
+                sun_study: (256, 144),
+                sun_study_spp: 4,
             }
         }
     }

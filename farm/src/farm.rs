@@ -288,10 +288,7 @@ impl Farm {
                 let mut done = self.store.finished_tiles(&id).map_err(store)?;
                 // A ready frame's tiles left the store once its files were written.
                 if record.frames_ready > 0 {
-                    done.extend(
-                        record.frame_range(0).start
-                            ..record.frame_range(record.frames_ready - 1).end,
-                    );
+                    done.extend(0..record.frame_range(record.frames_ready - 1).end);
                     done.sort_unstable();
                     done.dedup();
                 }

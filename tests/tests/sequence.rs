@@ -123,6 +123,33 @@ fn what_cannot_be_a_sequence_is_refused_with_the_fix() {
     assert!(e.contains("--max-frames"), "{e}");
     let e = refused(&["--sun-from", "6 am", "--to", "21:00", "--every", "1h"]);
     assert!(e.contains("HH:MM"), "{e}");
+    let e = refused(&["--sun-from", "06:00", "--to", "21:00", "--every", "1h", "--in-process"]);
+    assert!(e.contains("a sequence runs on a cluster (leave it out)"), "{e}");
+    let e =
+        refused(&["--sun-from", "06:00", "--to", "21:00", "--every", "1h", "--variants", "a,b"]);
+    assert!(e.contains("one kind of sequence") && e.contains("not several"), "{e}");
+    let e = refused(&["--sun-from", "06:00", "--to", "21:00", "--every", "1h", "--video-fps", "0"]);
+    assert!(e.contains("between 0 and 240"), "{e}");
+    let clear = Path::new(&scene).with_file_name("aosta-clear.toml");
+    let o = restauro(&[
+        "illuminance",
+        clear.to_str().unwrap(),
+        "--in-process",
+        "--sun-from",
+        "12:00",
+        "--to",
+        "13:00",
+        "--every",
+        "1h",
+        "--out",
+        "never",
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        text(&o).contains("makes the grids at one time; a sequence runs on a cluster"),
+        "{}",
+        text(&o)
+    );
     assert!(!Path::new("never").exists());
 }
 

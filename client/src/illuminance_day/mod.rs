@@ -10,8 +10,8 @@
 mod chart;
 
 use crate::cli::{IlluminanceArgs, RenderArgs};
-use crate::render::{Cluster, checked_bundle, job_spec};
-use anyhow::{Context, Result, bail};
+use crate::sequence::{Rendered, render_sequence};
+use anyhow::{Context, Result};
 use restauro_assets::load_scene;
 use restauro_image::illuminance::{GridResult, grid_results};
 use restauro_image::image_files::{MAX_PIXELS, PngPixels, read_exr, write_png};
@@ -23,19 +23,8 @@ use std::path::PathBuf;
 
 /// The grids at each frame of `sequence`; `render` is the grids' render (`grids: true`).
 pub fn run(args: &IlluminanceArgs, render: &RenderArgs, sequence: &Sequence) -> Result<String> {
-    if args.run.in_process {
-        bail!("--in-process computes one time; the grids through a day run on a cluster");
-    }
+    let Rendered { spec, cluster, status, .. } = render_sequence(render, sequence, "the grids")?;
     let limits: Limits = (&args.run.limits).into();
-    let (bundle, _) = checked_bundle(render)?;
-    let frames = sequence
-        .frames(&bundle.scene, &render.scene, &limits)
-        .with_context(|| format!("the times of {}", render.scene.display()))?;
-    let mut spec = job_spec(render, 0)?;
-    spec.frames = frames;
-    let spec = spec.checked().map_err(|e| anyhow::anyhow!("{e}"))?;
-    let cluster = Cluster::open(render)?;
-    let (status, _) = cluster.run(&bundle, &spec, &render.scene, &render.out)?;
     let scene = load_scene(&args.scene, &limits)?;
     let stem = spec.name.file_stem();
     // Each frame's grids, frame by frame.

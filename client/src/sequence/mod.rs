@@ -7,10 +7,13 @@
 mod sheet;
 mod video;
 
-use crate::cli::SequenceArgs;
+use crate::cli::{RenderArgs, SequenceArgs};
 use crate::render::{Cluster, checked_bundle, job_spec};
 use anyhow::{Context, Result, bail};
+use restauro_proto::job_status::JobStatus;
+use restauro_scene::job::JobSpec;
 use restauro_scene::load::Limits;
+use restauro_scene::plan::Plan;
 use restauro_scene::sequence::Sequence;
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -48,26 +51,45 @@ pub fn sequence(args: &SequenceArgs) -> Result<Sequence> {
     Ok(Sequence::Hypotheses { variants: args.render.variants.clone() })
 }
 
-pub fn run(args: &SequenceArgs) -> Result<String> {
-    let started = Instant::now();
-    if args.render.run.in_process {
-        bail!("--in-process renders one image; a sequence runs on a cluster (leave it out)");
+/// A sequence rendered and fetched: its job, the first frame's plan, the cluster it ran on, the
+/// job's last status and the files fetched.
+pub struct Rendered {
+    pub spec: JobSpec,
+    pub plan: Plan,
+    pub cluster: Cluster,
+    pub status: JobStatus,
+    pub files: Vec<PathBuf>,
+}
+
+/// Renders `sequence` of the scene `render` names, with its options, through a cluster, and
+/// fetches every frame's files into `render.out`. `--in-process` is refused: `what` says what
+/// it would have made.
+pub fn render_sequence(render: &RenderArgs, sequence: &Sequence, what: &str) -> Result<Rendered> {
+    if render.run.in_process {
+        bail!("--in-process makes {what} at one time; a sequence runs on a cluster (leave it out)");
     }
-    let sequence = sequence(args)?;
-    let render = crate::cli::RenderArgs { variants: Vec::new(), ..args.render.clone() };
     let limits: Limits = (&render.run.limits).into();
-    let (bundle, plan) = checked_bundle(&render)?;
+    let (bundle, plan) = checked_bundle(render)?;
     // The frames are expanded from the scene as the file says it (before its origin recentres
     // it), as a frame's scene is the bundle's with the frame's changes.
     let frames = sequence
         .frames(&bundle.scene, &render.scene, &limits)
         .with_context(|| format!("the sequence of {}", render.scene.display()))?;
-    let mut spec = job_spec(&render, 0)?;
+    let mut spec = job_spec(render, 0)?;
     spec.frames = frames;
     let spec = spec.checked().map_err(|e| anyhow::anyhow!("{e}"))?;
-    let count = spec.frames.len();
-    let cluster = Cluster::open(&render)?;
+    let cluster = Cluster::open(render)?;
     let (status, files) = cluster.run(&bundle, &spec, &render.scene, &render.out)?;
+    Ok(Rendered { spec, plan, cluster, status, files })
+}
+
+pub fn run(args: &SequenceArgs) -> Result<String> {
+    let started = Instant::now();
+    let sequence = sequence(args)?;
+    let render = RenderArgs { variants: Vec::new(), ..args.render.clone() };
+    let Rendered { spec, plan, cluster, status, files } =
+        render_sequence(&render, &sequence, "one image")?;
+    let count = spec.frames.len();
     let seconds = started.elapsed().as_secs_f64();
     let mut s = String::new();
     let _ = writeln!(

@@ -22,21 +22,7 @@ pub(super) fn assemble(farm: &Arc<Farm>, id: &JobId) {
     let _span = tracing::info_span!("assemble", job = %id).entered();
     let started = Instant::now();
     let Some(record) = farm.jobs_record(id) else { return };
-    // A panic here is a defect, but it must not leave the job assembling for ever, with every
-    // client watching it waiting: the job fails with the panic's words (the panic hook has
-    // written where it happened to the log).
-    let assembled = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| files(farm, &record)))
-        .unwrap_or_else(|panic| {
-            let what = panic
-                .downcast_ref::<&str>()
-                .map(|s| (*s).to_owned())
-                .or_else(|| panic.downcast_ref::<String>().cloned())
-                .unwrap_or_default();
-            Err(Outcome::Failed(format!(
-                "assembling the image stopped on an internal error ({what}); this is a defect \
-                 of restauro: please report it with the coordinator's log"
-            )))
-        });
+    let assembled = guarded("assembling the image", || files(farm, &record));
     match assembled {
         Ok(files) => match farm.finish_job(id, files) {
             Ok(()) => info!(seconds = started.elapsed().as_secs_f64(), "job done"),
@@ -54,6 +40,27 @@ pub(super) fn assemble(farm: &Arc<Farm>, id: &JobId) {
             farm.fail_job(id, reason);
         }
     }
+}
+
+/// Runs `write`, a job's writing of its files. A panic there is a defect, but it must not leave
+/// the job assembling for ever, with every client watching it waiting: it becomes a failure
+/// with the panic's words (the panic hook has written where it happened to the log); `doing`
+/// says what stopped.
+fn guarded(
+    doing: &str,
+    write: impl FnOnce() -> Result<Vec<String>, Outcome>,
+) -> Result<Vec<String>, Outcome> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(write)).unwrap_or_else(|panic| {
+        let what = panic
+            .downcast_ref::<&str>()
+            .map(|s| (*s).to_owned())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_default();
+        Err(Outcome::Failed(format!(
+            "{doing} stopped on an internal error ({what}); this is a defect of restauro: please \
+             report it with the coordinator's log"
+        )))
+    })
 }
 
 enum Outcome {
@@ -159,16 +166,9 @@ pub(super) fn assemble_frames(farm: &Arc<Farm>, id: &JobId) {
             }
             FrameStep::Frame(work) => {
                 let started = Instant::now();
-                let written = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                let written = guarded("writing the frame", || {
                     let frame = placed(farm, id, &work.plan, work.tiles.start)?;
                     write(farm, id, frame, &work.plan, &work.stem, &work.info, &work.spec)
-                }))
-                .unwrap_or_else(|_| {
-                    Err(Outcome::Failed(format!(
-                        "writing frame {} stopped on an internal error; this is a defect of \
-                         restauro: please report it with the coordinator's log",
-                        work.frame
-                    )))
                 });
                 match written {
                     Ok(files) if farm.frame_ready(id, work.frame, &files) => {

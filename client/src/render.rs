@@ -304,6 +304,7 @@ fn run_in_process(args: &RenderArgs) -> Result<String> {
                 seed: spec.retinex.seed,
                 ..RetinexParams::default()
             }),
+            eye: None,
         },
     )?;
     let mut s = String::new();

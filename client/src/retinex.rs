@@ -155,6 +155,7 @@ fn seen_params(args: &RetinexArgs, image: &XyzImage) -> Result<SeenParams> {
         },
         plane_weight: args.plane_weight,
         mesopic: !args.no_mesopic,
+        history: None,
     })
 }
 

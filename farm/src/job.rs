@@ -67,6 +67,10 @@ pub struct JobRecord {
     /// Frames whose files are written, in order: `0..frames_ready`.
     #[serde(default)]
     pub frames_ready: u32,
+    /// The eye's state after the last ready frame's seen image: the next frame's, if it follows
+    /// in time (`Frame::elapsed_s`), is seen by that eye — after a restart too.
+    #[serde(default)]
+    pub eye: Option<restauro_spectral::seen::EyeState>,
 }
 
 /// Where a tile of a job is: its frame (0 for a still), the frame's plan and the tile's number
@@ -94,6 +98,7 @@ impl JobRecord {
             frame_plans: Vec::new(),
             frame_tiles: Vec::new(),
             frames_ready: 0,
+            eye: None,
         }
     }
 

@@ -14,7 +14,7 @@ use restauro_spectral::display::{DisplayParams, Exposure, encode, to_u8};
 use restauro_spectral::grid::wavelength_nm;
 use restauro_spectral::retinex::RetinexParams;
 use restauro_spectral::rgb_space::RgbSpace;
-use restauro_spectral::seen::{Adaptation, SeenParams, seen_image};
+use restauro_spectral::seen::{Adaptation, EyeHistory, EyeState, SeenParams, seen_image};
 use std::path::Path;
 use std::time::Instant;
 
@@ -27,12 +27,18 @@ pub struct ResultOptions<'a> {
     pub exposure: Exposure,
     /// `None` skips the Retinex files.
     pub retinex: Option<RetinexParams>,
+    /// For a frame of a sequence: the eye's state after the frame before and the time since
+    /// (`restauro_spectral::seen::time_course`); `None` sees the image alone.
+    pub eye: Option<EyeHistory>,
 }
 
 /// The files written (names within `dir`) and the Retinex time.
 pub struct Written {
     pub files: Vec<String>,
     pub retinex_s: f64,
+    /// The eye's state after the seen image (when it adapted to the render's light): the next
+    /// frame's history.
+    pub eye: Option<EyeState>,
 }
 
 fn write_display_png(path: &Path, image: &XyzImage, exposure: Exposure) -> Result<(), ImageError> {
@@ -73,7 +79,7 @@ pub fn write_grid_results(
         }
         None => write_xyz_exr(&dir.join(&file), &image, &attrs)?,
     }
-    Ok(Written { files: vec![file], retinex_s: 0.0 })
+    Ok(Written { files: vec![file], retinex_s: 0.0, eye: None })
 }
 
 /// Writes a finished render's files into `dir`.
@@ -117,9 +123,11 @@ pub fn write_results(
     write_display_png(&dir.join(&files[1]), &image, options.exposure)?;
 
     let mut retinex_s = 0.0;
+    let mut eye = None;
     if let Some(params) = &options.retinex {
         let started = Instant::now();
-        let mut params = SeenParams { retinex: params.clone(), ..SeenParams::default() };
+        let mut params =
+            SeenParams { retinex: params.clone(), history: options.eye, ..SeenParams::default() };
         if params.retinex.emitters.is_none() {
             params.retinex.emitters = retinex_emitters.clone();
         }
@@ -142,6 +150,7 @@ pub fn write_results(
         )
         .map_err(ImageError::Retinex)?;
         retinex_s = started.elapsed().as_secs_f64();
+        eye = report.light.as_ref().map(|l| l.eye);
         let settings = report.settings(&params);
         let perceived = XyzImage { width, height, pixels: perceived, emitter, lit_by, white: None };
         let exr = format!("{name}-retinex.exr");
@@ -159,5 +168,5 @@ pub fn write_results(
         files.push(exr);
         files.push(png);
     }
-    Ok(Written { files, retinex_s })
+    Ok(Written { files, retinex_s, eye })
 }

@@ -185,6 +185,7 @@ impl From<&Frame> for pb::Frame {
                 vertical_fov_deg: c.vertical_fov_deg,
             }),
             variant: f.variant.clone(),
+            elapsed_s: f.elapsed_s,
         }
     }
 }
@@ -210,7 +211,13 @@ impl TryFrom<pb::Frame> for Frame {
             }),
             None => None,
         };
-        Ok(Frame { label: f.label, datetime: f.datetime, camera, variant: f.variant })
+        Ok(Frame {
+            label: f.label,
+            datetime: f.datetime,
+            camera,
+            variant: f.variant,
+            elapsed_s: f.elapsed_s,
+        })
     }
 }
 
@@ -349,8 +356,15 @@ mod tests {
                 datetime: Some("2026-07-15T06:15:00+02:00".into()),
                 camera: None,
                 variant: None,
+                elapsed_s: Some(900.0),
             },
-            Frame { label: "1.00 s".into(), datetime: None, camera: Some(pose), variant: None },
+            Frame {
+                label: "1.00 s".into(),
+                datetime: None,
+                camera: Some(pose),
+                variant: None,
+                elapsed_s: Some(901.0),
+            },
         ];
         let render = RenderOptions { grids: false, ..spec.render.clone() };
         let sequence = JobSpec { frames, render, ..spec };

@@ -176,6 +176,7 @@ impl JobSpec {
         for (index, frame) in self.frames.iter().enumerate() {
             frame.check(index)?;
         }
+        crate::sequence::check_times(&self.frames)?;
         Ok(self)
     }
 }

@@ -1,11 +1,13 @@
 //! Sequences on the cluster, as real processes on loopback: each frame is the same scene
 //! rendered alone, bit for bit; frames are ready in order while the job runs and can be
 //! fetched then; a coordinator killed mid-sequence resumes without rendering a finished tile
-//! again; and what cannot be a sequence is refused with the fix.
+//! again, and with the eye's state it had reached; and what cannot be a sequence is refused with
+//! the fix.
 
 use restauro_proto as pb;
 use restauro_scene::sequence::Frame;
 use restauro_tests::{Coordinator, Worker, aosta_scene, client, restauro, text, wire};
+use std::collections::HashMap;
 use std::path::Path;
 
 /// The scene at `scene` with its sun's date-time set to `datetime`, written beside it as `name`.
@@ -184,6 +186,9 @@ fn a_walk_through_saved_views_renders_its_frames() {
     let said = text(&o);
     assert!(said.contains("as 11 frames") && said.contains("frame 0010: 2.00 s, 2.8 m"), "{said}");
     assert!(out.join("aosta-0010.png").is_file());
+    // The walker's eye: frames 0.2 s apart, each seen by the eye the one before left.
+    let lagging = eye_follows_the_frames(&out, "aosta", 11, 0.2);
+    assert!(lagging >= 5, "only {lagging} of 10 frames were seen by an eye behind their light");
     // The first frame stands at the first view: the scene's own camera, which is there.
     let alone = d.join("alone");
     let o = restauro(&[
@@ -199,7 +204,7 @@ fn a_walk_through_saved_views_renders_its_frames() {
     assert!(bytes(&alone.join("aosta.exr")) == bytes(&out.join("aosta-0000.exr")));
 }
 
-/// Frames every hour of a day.
+/// Frames every hour of a day, as a time-lapse seen by an eye that lives them 2 s apart.
 fn morning() -> Vec<Frame> {
     (7..=14)
         .map(|h| Frame {
@@ -207,8 +212,73 @@ fn morning() -> Vec<Frame> {
             datetime: Some(format!("2026-07-15T{h:02}:00:00+02:00")),
             camera: None,
             variant: None,
+            elapsed_s: Some(f64::from(h - 7) * TIME_LAPSE_STEP_S),
         })
         .collect()
+}
+
+const TIME_LAPSE_STEP_S: f64 = 2.0;
+
+/// The words `key=value` of a seen frame's settings (its EXR's `restauroRetinex` attribute).
+fn seen_words(path: &Path) -> HashMap<String, String> {
+    let meta = exr::meta::MetaData::read_from_file(path, false).unwrap();
+    let key = exr::meta::attribute::Text::from("restauroRetinex");
+    let Some(exr::meta::attribute::AttributeValue::Text(text)) =
+        meta.headers[0].own_attributes.other.get(&key)
+    else {
+        panic!("{}: no restauroRetinex attribute", path.display());
+    };
+    text.to_string()
+        .split(' ')
+        .filter_map(|w| w.split_once('=').map(|(k, v)| (k.to_owned(), v.to_owned())))
+        .collect()
+}
+
+fn numbers(words: &HashMap<String, String>, key: &str) -> Vec<f64> {
+    words[key].split(',').map(|v| v.parse().unwrap()).collect()
+}
+
+/// `light + (before − light) · share`, or `light` once within a millionth of it.
+fn towards(light: f64, before: f64, share: f64) -> f64 {
+    let moved = light + (before - light) * share;
+    if (moved - light).abs() <= 1e-6 * light { light } else { moved }
+}
+
+/// The seen frames `<stem>-0000-retinex.exr` … of a sequence whose frames are `step_s` apart
+/// are seen by one eye: frame 0's is adapted to its light; each later frame's state is its
+/// light's, moved towards the state before by the share of the step still to go — for the
+/// level e^(−step / 80 ms) (Pattanaik et al. 2000's cones), for the slow colour state
+/// 2^(−step / 20 s) (Rinner & Gegenfurtner 2000's half-life). Returns how many frames' eyes
+/// lagged their light.
+fn eye_follows_the_frames(out: &Path, stem: &str, frames: u32, step_s: f64) -> usize {
+    let mut before: Option<(f64, Vec<f64>)> = None;
+    let mut lagging = 0;
+    for k in 0..frames {
+        let words = seen_words(&out.join(format!("{stem}-{k:04}-retinex.exr")));
+        let (light, eye) = (numbers(&words, "light-cones"), numbers(&words, "eye-slow-cones"));
+        let light_level = numbers(&words, "light-level-cd-m2")[0];
+        let eye_level = numbers(&words, "eye-level-cd-m2")[0];
+        let (level, cones) = match &before {
+            None => (light_level, light.clone()),
+            Some((l, c)) => (
+                towards(light_level, *l, (-step_s / 0.080f64).exp()),
+                (0..3).map(|i| towards(light[i], c[i], 0.5f64.powf(step_s / 20.0))).collect(),
+            ),
+        };
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs();
+        assert!(close(eye_level, level), "frame {k}: the eye's level {eye_level}, not {level}");
+        for i in 0..3 {
+            assert!(
+                close(eye[i], cones[i]),
+                "frame {k}, cone {i}: the eye is at {}, the time course puts it at {}",
+                eye[i],
+                cones[i]
+            );
+        }
+        lagging += usize::from(eye != light);
+        before = Some((eye_level, eye));
+    }
+    lagging
 }
 
 fn lines(path: &Path) -> Vec<String> {
@@ -313,6 +383,10 @@ fn frames_are_ready_in_order_and_a_restarted_coordinator_renders_no_finished_til
     }
     // The frame fetched early is the one the finished job lists.
     assert!(early == bytes(&out.join("aosta-0000.png")));
+    // One eye saw the frames, through the restart: the frame after it is seen by the eye the
+    // frame before it left.
+    let lagging = eye_follows_the_frames(&out, "aosta", 8, TIME_LAPSE_STEP_S);
+    assert!(lagging >= 6, "only {lagging} of 7 frames were seen by an eye behind their light");
 }
 
 /// A sequence from a hostile or careless client: a frame's date-time without its offset, more
@@ -338,6 +412,15 @@ fn sequences_over_the_coordinators_limits_are_refused_naming_the_flag() {
             e.message().contains("frame 1 (08:00)") && e.message().contains("UTC offset"),
             "{e}"
         );
+        let mut backwards = morning();
+        backwards[2].elapsed_s = Some(1.0);
+        let e = wire::submit(&mut client, &bundle, &with(backwards)).await.unwrap_err();
+        assert_eq!(e.code(), tonic::Code::InvalidArgument);
+        assert!(e.message().contains("frame 2 is at 1 s, before frame 1"), "{e}");
+        let mut not_a_time = morning();
+        not_a_time[3].elapsed_s = Some(f64::NAN);
+        let e = wire::submit(&mut client, &bundle, &with(not_a_time)).await.unwrap_err();
+        assert!(e.message().contains("frame 3 (10:00): elapsed_s NaN"), "{e}");
         let e = wire::submit(&mut client, &bundle, &with(morning())).await.unwrap_err();
         assert_eq!(e.code(), tonic::Code::ResourceExhausted);
         assert!(e.message().contains("--max-frames"), "{e}");

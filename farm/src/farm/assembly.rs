@@ -9,10 +9,11 @@ use crate::error::FarmError;
 use crate::ids::JobId;
 use crate::job::{IllegalTransition, JobRecord, JobState};
 use restauro_image::framebuffer::{Framebuffer, TileLayout};
-use restauro_image::results::{ResultOptions, write_grid_results, write_results};
+use restauro_image::results::{ResultOptions, Written, write_grid_results, write_results};
 use restauro_scene::job::JobSpec;
 use restauro_scene::plan::Plan;
 use restauro_spectral::retinex::RetinexParams;
+use restauro_spectral::seen::EyeHistory;
 use std::sync::Arc;
 use std::time::Instant;
 use tracing::{info, warn};
@@ -46,10 +47,7 @@ pub(super) fn assemble(farm: &Arc<Farm>, id: &JobId) {
 /// the job assembling for ever, with every client watching it waiting: it becomes a failure
 /// with the panic's words (the panic hook has written where it happened to the log); `doing`
 /// says what stopped.
-fn guarded(
-    doing: &str,
-    write: impl FnOnce() -> Result<Vec<String>, Outcome>,
-) -> Result<Vec<String>, Outcome> {
+fn guarded<T>(doing: &str, write: impl FnOnce() -> Result<T, Outcome>) -> Result<T, Outcome> {
     std::panic::catch_unwind(std::panic::AssertUnwindSafe(write)).unwrap_or_else(|panic| {
         let what = panic
             .downcast_ref::<&str>()
@@ -76,7 +74,8 @@ fn files(farm: &Arc<Farm>, record: &JobRecord) -> Result<Vec<String>, Outcome> {
     let frame = placed(farm, id, plan, 0)?;
     farm.transition(id, JobRecord::begin_post_processing).map_err(Outcome::Ended)?;
     let stem = record.spec.name.file_stem();
-    write(farm, id, frame, plan, &stem, &record.info(), &record.spec)
+    let page = Page { plan, stem: &stem, info: &record.info(), spec: &record.spec, eye: None };
+    Ok(write(farm, id, frame, &page)?.files)
 }
 
 /// The framebuffer of `plan` from its tiles in the store, the first of which is the job's tile
@@ -111,16 +110,24 @@ fn placed(
     Ok(frame)
 }
 
-/// Writes the files of `frame`, rendered by `plan`, under `stem`.
+/// What a framebuffer is written as: rendered by `plan`, under `stem` with the header `info`,
+/// for the job `spec`; a sequence's frame seen by the eye `eye` brings.
+struct Page<'a> {
+    plan: &'a Plan,
+    stem: &'a str,
+    info: &'a str,
+    spec: &'a JobSpec,
+    eye: Option<EyeHistory>,
+}
+
+/// Writes the files of `frame` as `page` says.
 fn write(
     farm: &Arc<Farm>,
     id: &JobId,
     frame: Framebuffer,
-    plan: &Plan,
-    stem: &str,
-    info: &str,
-    spec: &JobSpec,
-) -> Result<Vec<String>, Outcome> {
+    page: &Page<'_>,
+) -> Result<Written, Outcome> {
+    let Page { plan, stem, info, spec, eye } = *page;
     let dir = farm.results_dir(id);
     std::fs::create_dir_all(&dir)
         .map_err(|e| Outcome::Failed(format!("{}: {e}", dir.display())))?;
@@ -128,21 +135,21 @@ fn write(
         let written = write_grid_results(&dir, frame, stem, info)
             .map_err(|e| Outcome::Failed(e.to_string()))?;
         info!("grids written");
-        return Ok(written.files);
+        return Ok(written);
     }
     let retinex = farm.config.retinex.then(|| RetinexParams {
         paths: spec.retinex.paths,
         seed: spec.retinex.seed,
         ..RetinexParams::default()
     });
-    let options = ResultOptions { name: stem, info, exposure: spec.exposure, retinex };
+    let options = ResultOptions { name: stem, info, exposure: spec.exposure, retinex, eye };
     let written =
         write_results(&dir, frame, &options).map_err(|e| Outcome::Failed(e.to_string()))?;
     info!(retinex_s = written.retinex_s, "results written");
     if farm.config.retinex {
         farm.metrics.retinex_seconds.observe(written.retinex_s);
     }
-    Ok(written.files)
+    Ok(written)
 }
 
 /// Writes the frames of sequence `id` whose tiles are all stored, in order, and finishes the
@@ -168,10 +175,17 @@ pub(super) fn assemble_frames(farm: &Arc<Farm>, id: &JobId) {
                 let started = Instant::now();
                 let written = guarded("writing the frame", || {
                     let frame = placed(farm, id, &work.plan, work.tiles.start)?;
-                    write(farm, id, frame, &work.plan, &work.stem, &work.info, &work.spec)
+                    let page = Page {
+                        plan: &work.plan,
+                        stem: &work.stem,
+                        info: &work.info,
+                        spec: &work.spec,
+                        eye: work.eye,
+                    };
+                    write(farm, id, frame, &page)
                 });
                 match written {
-                    Ok(files) if farm.frame_ready(id, work.frame, &files) => {
+                    Ok(w) if farm.frame_ready(id, work.frame, &w.files, w.eye) => {
                         info!(
                             frame = work.frame,
                             seconds = started.elapsed().as_secs_f64(),
@@ -181,8 +195,8 @@ pub(super) fn assemble_frames(farm: &Arc<Farm>, id: &JobId) {
                             warn!(frame = work.frame, "could not drop the frame's tiles: {e}");
                         }
                     }
-                    Ok(files) => {
-                        remove_files(farm, id, &files);
+                    Ok(w) => {
+                        remove_files(farm, id, &w.files);
                         farm.next_frame_step(id);
                         return;
                     }

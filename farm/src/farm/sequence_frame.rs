@@ -20,6 +20,7 @@ use restauro_scene::plan::Plan;
 use restauro_scene::scene_file::{Light, SceneFile};
 use restauro_scene::sequence::{Frame, check_count};
 use restauro_scene::sun::{Site, sun_position};
+use restauro_spectral::seen::{EyeHistory, EyeState};
 use std::collections::HashMap;
 use std::path::Path;
 use std::sync::Arc;
@@ -148,13 +149,20 @@ impl Farm {
 
     /// Frame `frame`'s files are written: it is ready, unless the job ended meanwhile. Whether
     /// it is.
-    pub(super) fn frame_ready(&self, id: &JobId, frame: u32, files: &[String]) -> bool {
+    pub(super) fn frame_ready(
+        &self,
+        id: &JobId,
+        frame: u32,
+        files: &[String],
+        eye: Option<EyeState>,
+    ) -> bool {
         let ready = {
             let mut st = self.lock();
             match st.jobs.get_mut(id) {
                 Some(r) if !r.state().is_final() && r.frames_ready == frame => {
                     r.frames_ready += 1;
                     r.results.extend(files.iter().cloned());
+                    r.eye = eye;
                     true
                 }
                 _ => false,
@@ -186,6 +194,8 @@ pub(super) struct FrameWork {
     pub stem: String,
     pub info: String,
     pub spec: JobSpec,
+    /// The eye the frame is seen by: the one after the frame before, when both have a time.
+    pub eye: Option<EyeHistory>,
 }
 
 impl FrameWork {
@@ -199,8 +209,18 @@ impl FrameWork {
             tiles: r.frame_range(frame),
             stem: r.frame_stem(frame),
             spec: JobSpec { frames: Vec::new(), ..r.spec.clone() },
+            eye: eye_history(r, frame),
         }
     }
+}
+
+/// The eye frame `frame` of `r` is seen by: the state after the frame before and the time
+/// between them, when both frames have a time and the frame before left a state.
+fn eye_history(r: &JobRecord, frame: u32) -> Option<EyeHistory> {
+    let before = r.spec.frames.get(usize::try_from(frame).ok()?.checked_sub(1)?)?;
+    let this = r.spec.frames.get(frame as usize)?;
+    let elapsed_s = this.elapsed_s? - before.elapsed_s?;
+    Some(EyeHistory { before: r.eye?, elapsed_s })
 }
 
 /// Whether each light of `scene` with a site has the sun above the horizon at `datetime` (none

@@ -38,6 +38,35 @@ pub struct Frame {
     /// The restoration hypothesis.
     #[serde(default)]
     pub variant: Option<String>,
+    /// The time (s) at which the viewer sees the frame, from the sequence's start: frames in a
+    /// row that both have one are seen by an eye that has been adapting between them
+    /// (`restauro_spectral::seen::time_course`). A day's frames have their clock's, a walk's
+    /// its frame rate's; frames on different dates, or of different hypotheses, have none and
+    /// are each seen alone.
+    #[serde(default)]
+    pub elapsed_s: Option<f64>,
+}
+
+/// The latest time of a frame in a sequence (s): a year.
+pub const MAX_ELAPSED_S: f64 = 3.15e7;
+
+/// Refuses frames whose times go back: `frames[index]` against the frame before it.
+pub fn check_times(frames: &[Frame]) -> std::result::Result<(), JobSpecError> {
+    for (index, pair) in frames.windows(2).enumerate() {
+        if let (Some(a), Some(b)) = (pair[0].elapsed_s, pair[1].elapsed_s)
+            && b < a
+        {
+            return Err(JobSpecError {
+                field: "frames",
+                problem: format!(
+                    "frame {} is at {b} s, before frame {index} at {a} s; a sequence's times \
+                     must not go back",
+                    index + 1
+                ),
+            });
+        }
+    }
+    Ok(())
 }
 
 /// The most characters of a frame's label.
@@ -113,6 +142,13 @@ impl Frame {
                     pose.vertical_fov_deg
                 )));
             }
+        }
+        if let Some(t) = self.elapsed_s
+            && !(t.is_finite() && (0.0..=MAX_ELAPSED_S).contains(&t))
+        {
+            return Err(refuse(format!(
+                "elapsed_s {t} must be a number of seconds from 0 to {MAX_ELAPSED_S:e} (a year)"
+            )));
         }
         if self.variant.as_deref().is_some_and(str::is_empty) {
             return Err(refuse("an empty variant name; leave it out instead".into()));
@@ -198,7 +234,13 @@ fn hypotheses(scene: &SceneFile, path: &Path, variants: &[String]) -> Result<Vec
                     crate::load::unknown("variant", v, known),
                 ));
             }
-            Ok(Frame { label: v.clone(), datetime: None, camera: None, variant: Some(v.clone()) })
+            Ok(Frame {
+                label: v.clone(),
+                datetime: None,
+                camera: None,
+                variant: Some(v.clone()),
+                elapsed_s: None,
+            })
         })
         .collect()
 }

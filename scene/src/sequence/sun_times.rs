@@ -173,6 +173,7 @@ pub(super) fn day(
                 datetime: Some(at(date, time, *own.offset())),
                 camera: None,
                 variant: None,
+                elapsed_s: Some((k * u64::from(every.seconds())) as f64),
             }
         })
         .collect();
@@ -203,6 +204,7 @@ pub(super) fn dates(
             datetime: Some(at(d, time, *own.offset())),
             camera: None,
             variant: None,
+            elapsed_s: None,
         })
         .collect();
     check_sees_sun(scene, site, &frames, path)?;

@@ -75,6 +75,9 @@ fn a_day_every_quarter_hour_has_its_frames_at_the_scenes_offset() {
     assert_eq!(frames[0].datetime.as_deref(), Some("2026-07-15T06:00:00+02:00"));
     assert_eq!(frames[60].datetime.as_deref(), Some("2026-07-15T21:00:00+02:00"));
     assert_eq!(frames[1].label, "06:15");
+    // The eye's clock: a quarter of an hour a frame.
+    assert_eq!(frames[1].elapsed_s, Some(900.0));
+    assert_eq!(frames[60].elapsed_s, Some(15.0 * 3600.0));
     let on = NaiveDate::from_ymd_opt(2026, 12, 21);
     let winter = Sequence::Day { date: on, from: hm(12, 0), to: hm(12, 0), every: every("1h") };
     let frames = winter.frames(&s, Path::new("s.toml"), &Limits::default()).unwrap();
@@ -124,6 +127,7 @@ elevation_deg = 40.0
         datetime: Some("2026-07-15T12:00:00+02:00".into()),
         camera: None,
         variant: None,
+        elapsed_s: None,
     };
     assert!(frame.apply(&mut s.clone(), Path::new("s.toml")).is_err());
 }
@@ -162,6 +166,7 @@ fn a_walk_goes_through_its_views_at_walking_pace() {
     let frames = walk.frames(&s, Path::new("s.toml"), &Limits::default()).unwrap();
     let at = |f: &Frame| f.camera.as_ref().unwrap().position;
     assert_eq!(at(&frames[0]), [0.0, -10.0, 1.7]);
+    assert_eq!(frames[25].elapsed_s, Some(1.0));
     // Each step is 1.4 / 25 m along the curve (the chord is a hair shorter on the bend).
     let step = 1.4 / 25.0;
     for w in frames.windows(2) {
@@ -214,7 +219,13 @@ fn hypotheses_are_one_frame_each_and_must_exist() {
 
 #[test]
 fn a_frame_from_the_wire_is_checked() {
-    let good = Frame { label: "06:00".into(), datetime: None, camera: None, variant: None };
+    let good = Frame {
+        label: "06:00".into(),
+        datetime: None,
+        camera: None,
+        variant: None,
+        elapsed_s: None,
+    };
     assert!(good.check(0).is_ok());
     let bad_time = Frame { datetime: Some("2026-07-15 06:00".into()), ..good.clone() };
     let e = bad_time.check(3).unwrap_err();
@@ -227,8 +238,16 @@ fn a_frame_from_the_wire_is_checked() {
     };
     let bad_camera = Frame { camera: Some(pose), ..good.clone() };
     assert!(bad_camera.check(0).unwrap_err().problem.contains("finite"));
-    let bad_label = Frame { label: "a\u{1b}[2J".into(), ..good };
+    let bad_label = Frame { label: "a\u{1b}[2J".into(), ..good.clone() };
     assert!(bad_label.check(0).unwrap_err().problem.contains("control character"));
+    for t in [-1.0, f64::NAN, 1e12] {
+        let bad_time = Frame { elapsed_s: Some(t), ..good.clone() };
+        assert!(bad_time.check(0).unwrap_err().problem.contains("elapsed_s"), "{t}");
+    }
+    let at = |t: f64| Frame { elapsed_s: Some(t), ..good.clone() };
+    let e = check_times(&[at(0.0), at(2.0), at(1.0)]).unwrap_err();
+    assert!(e.problem.contains("frame 2 is at 1 s, before frame 1"), "{e}");
+    assert!(check_times(&[at(0.0), good.clone(), at(1.0)]).is_ok());
 }
 
 #[test]

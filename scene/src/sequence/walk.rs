@@ -159,6 +159,7 @@ pub(super) fn frames(
                 vertical_fov_deg: fov,
             }),
             variant: None,
+            elapsed_s: Some(k as f64 / fps),
         });
     }
     Ok(frames)

@@ -138,6 +138,12 @@ static CAT16: LazyLock<(DMat3, DMat3, DVec3)> = LazyLock::new(|| {
     (m, m.inverse(), m * DVec3::new(w.x, w.y, w.z))
 });
 
+/// The CAT16 cone matrix M16 and its inverse.
+pub(super) fn cat16_matrices() -> (DMat3, DMat3) {
+    let (m, m_inv, _) = &*CAT16;
+    (*m, *m_inv)
+}
+
 /// The corresponding-colour transform of a white: the matrix that carries XYZ seen under
 /// `white` (any luminance), divided by the white's luminance, to XYZ under D65 (Y = 1 for
 /// white), with degree of adaptation `d` on both sides (see the module comment).

@@ -50,6 +50,10 @@
 //!    mesopic coefficient m, from L_A and the scotopic luminance of the white): the seen
 //!    colour's CIELAB chroma is scaled by m, its hue and lightness kept ([`mesopic`]).
 //!
+//! 6. **Time.** The frames of a sequence are seen by one eye that has been adapting between
+//!    them: its level lags the image's by the cones' 80 ms and half its white by a 20 s
+//!    half-life ([`time_course`]); a still is seen by an eye adapted to it.
+//!
 //! Light sources in view (the sky, a lamp) are seen against the scene's overall light at the
 //! image's level. The output is XYZ relative to a D65 white of Y = 1, as the Retinex's was:
 //! a white card in full light is 1, a brick wall its own L*, not white.
@@ -65,8 +69,10 @@ mod continuity;
 pub mod degree;
 pub mod mesopic;
 mod smoothing;
+pub mod time_course;
 mod white;
 
+pub use time_course::{EyeHistory, EyeState};
 pub use white::RADIUS_OF_DIAGONAL;
 
 use crate::appearance::{ChannelSpace, d65_white};
@@ -86,6 +92,9 @@ pub struct SeenParams {
     pub plane_weight: f32,
     /// Model mesopic vision (colour weakening below 5 cd/m²).
     pub mesopic: bool,
+    /// The eye's state after the frame before and the time since, for a frame of a sequence
+    /// ([`time_course`]); `None`: the image is seen alone, by an eye adapted to it.
+    pub history: Option<EyeHistory>,
 }
 
 /// The default plane weight: a surface is seen mostly against the light on its own plane —
@@ -105,6 +114,7 @@ impl Default for SeenParams {
             retinex: RetinexParams::default(),
             plane_weight: DEFAULT_PLANE_WEIGHT,
             mesopic: true,
+            history: None,
         }
     }
 }
@@ -122,6 +132,11 @@ pub struct SeenStats {
     /// CIE 191's mesopic coefficient m over the surface pixels: least, mean, largest (1 when
     /// mesopic vision is not modelled).
     pub mesopic: [f64; 3],
+    /// The state of an eye adapted to this image's light (its level and white).
+    pub light_eye: EyeState,
+    /// The eye's state after this image: `light_eye` unless [`SeenParams::history`] brought
+    /// an eye that has not caught up; the next frame's history.
+    pub eye: EyeState,
 }
 
 /// Validate what the Retinex does not: the whites.
@@ -166,6 +181,14 @@ struct Pixel {
     level_cd_m2: f64,
     /// k = ℓ/n, the paths' change to the known lightness.
     factor: f64,
+}
+
+/// A pixel's white (X, Y, Z, scotopic) as an eye lagging by `m` adapts to it: its cones moved
+/// by the lag, its scotopic luminance in proportion to its Y.
+fn lagging_white(m: &glam::DMat3, white: [f64; 4]) -> [f64; 4] {
+    let moved = *m * DVec3::new(white[0], white[1], white[2]);
+    let scotopic = if white[1] > 0.0 { white[3] * moved.y / white[1] } else { white[3] };
+    [moved.x, moved.y, moved.z, scotopic]
 }
 
 /// The seen colour of a pixel (relative XYZ under D65), its D and its m.
@@ -229,6 +252,11 @@ pub fn seen(
     } else {
         xyz.iter().map(|p| f64::from(p[1])).fold(0.0, f64::max).max(f64::MIN_POSITIVE)
     };
+    // The eye of a sequence may lag the light: its level and white move by the lag.
+    let overall = Xyz::new(adapting.overall[0], adapting.overall[1], adapting.overall[2]);
+    let light_eye = time_course::adapted(level, overall);
+    let (eye, lag) = time_course::adapt(light_eye, params.history.as_ref())?;
+    let white_lag = (lag.cone_ratio != [1.0; 3]).then(|| lag.white_matrix());
     let (w, v) = (f64::from(rp.framework_weight), f64::from(params.plane_weight));
     // Y_r(p), each light floored a millionth below the level: a surface no light reaches is
     // dark, not divided by zero.
@@ -247,11 +275,11 @@ pub fn seen(
         .into_par_iter()
         .map(|p| {
             if emitters[p] {
-                return level;
+                return level * lag.level_ratio;
             }
             let (framework, share) = frameworks_reference[usize::from(adapting.framework[p])];
             let own = adapting.local[p][1].max(floor);
-            share * (own / framework).powf(v)
+            share * (own / framework).powf(v) * lag.level_ratio
         })
         .collect();
     let relative: Vec<[f32; 3]> = (0..n)
@@ -286,20 +314,24 @@ pub fn seen(
                 let f = usize::from(adapting.framework[p]);
                 smoother.at(&factors, f, p).map_or(1.0, |v| v[0].exp())
             };
-            let pixel =
-                Pixel { xyz: xyz[p], white: adapting.local[p], level_cd_m2: reference[p], factor };
+            let white = match &white_lag {
+                Some(m) => lagging_white(m, adapting.local[p]),
+                None => adapting.local[p],
+            };
+            let pixel = Pixel { xyz: xyz[p], white, level_cd_m2: reference[p], factor };
             seen_pixel(&pixel, params.mesopic)
         })
         .collect();
     stats.seconds.lightness += clock.elapsed().as_secs_f64() - started;
     let surfaces = || (0..n).filter(|&p| frameworks.solid[p]);
-    let overall = Xyz::new(adapting.overall[0], adapting.overall[1], adapting.overall[2]);
     let xy = overall.chromaticity().map_or((0.0, 0.0), |c| (c.x, c.y));
     let stats = SeenStats {
         white_level_cd_m2: adapting.level_cd_m2,
         white_xy: xy,
         degree: summary(surfaces().map(|p| seen[p].1)),
         mesopic: summary(surfaces().map(|p| seen[p].2)),
+        light_eye,
+        eye,
         retinex: stats,
     };
     Ok((seen.into_iter().map(|s| s.0).collect(), stats))
@@ -372,6 +404,18 @@ impl SeenReport {
                         l.mesopic[0],
                         l.mesopic[1],
                         l.mesopic[2],
+                    ),
+                );
+                let cones = |c: &[f64; 3]| format!("{:e},{:e},{:e}", c[0], c[1], c[2]);
+                let _ = std::fmt::Write::write_fmt(
+                    &mut s,
+                    format_args!(
+                        " light-level-cd-m2={:e} light-cones={} eye-level-cd-m2={:e} \
+                         eye-slow-cones={}",
+                        l.light_eye.level_cd_m2,
+                        cones(&l.light_eye.slow_cones),
+                        l.eye.level_cd_m2,
+                        cones(&l.eye.slow_cones),
                     ),
                 );
             }

@@ -15,11 +15,11 @@
 //!     L(t + Δt) = L_g + (L(t) − L_g) · e^(−Δt / t₀)
 //!   ```
 //!
-//!   Their slower terms are photopigment bleaching (cones: τ = 110 s, half bleached at
-//!   2·10⁶ cd/m²) and the rods' (τ = 400 s). At the 10⁴ cd/m² of a sunlit white facade the
-//!   cones are bleached by under 1 %, so bleaching changes nothing restauro shows and is left
-//!   out; the rods enter the seen image only through CIE 191's mesopic coefficient, which is
-//!   computed from the adapted level.
+//!   Their slower terms are photopigment bleaching (cones: τ = 110 s, a share L/(L + 2·10⁶ cd/m²)
+//!   bleached at equilibrium) and the rods' (τ = 400 s). A white in full sun, about
+//!   3·10⁴ cd/m², bleaches the cones by 1.5 %, a change of gain under the seen image's other
+//!   uncertainties, so bleaching is left out; the rods enter the seen image only through
+//!   CIE 191's mesopic coefficient, which is computed from the adapted level.
 //! - **Colour** (chromatic adaptation). Rinner & Gegenfurtner, "Time course of chromatic
 //!   adaptation for color appearance and discrimination" (Vision Research 40, 2000), measured
 //!   achromatic matches after a step of the light's colour: an instantaneous share of *more than

@@ -417,6 +417,12 @@ fn sequences_over_the_coordinators_limits_are_refused_naming_the_flag() {
         let e = wire::submit(&mut client, &bundle, &with(backwards)).await.unwrap_err();
         assert_eq!(e.code(), tonic::Code::InvalidArgument);
         assert!(e.message().contains("frame 2 is at 1 s, before frame 1"), "{e}");
+        // A hypothesis the scene does not have: its frame is planned, and refused.
+        let mut unknown = morning()[..2].to_vec();
+        unknown[1].variant = Some("gilded".into());
+        let e = wire::submit(&mut client, &bundle, &with(unknown)).await.unwrap_err();
+        assert_eq!(e.code(), tonic::Code::InvalidArgument);
+        assert!(e.message().contains("frame 1 (08:00)") && e.message().contains("gilded"), "{e}");
         let mut not_a_time = morning();
         not_a_time[3].elapsed_s = Some(f64::NAN);
         let e = wire::submit(&mut client, &bundle, &with(not_a_time)).await.unwrap_err();

@@ -27,8 +27,10 @@ export function jobGone({ id }) { jobs.delete(id); renderJobs(); }
 export function worker(w) { workers.set(w.id, { ...w, at: Date.now() }); renderWorkers(); }
 export function workerGone({ id }) { workers.delete(id); renderWorkers(); }
 export function jobById(id) { return jobs.get(id); }
-// The finished jobs, oldest first.
-export function doneJobs() { return [...jobs.values()].filter((j) => j.state === 'done'); }
+// Every job the farm holds.
+export function allJobs() { return [...jobs.values()]; }
+// The finished stills, oldest first (a sequence's frames are shown by sequence.js).
+export function doneJobs() { return [...jobs.values()].filter((j) => j.state === 'done' && !j.frames_total); }
 
 function cell(text, cls) {
   const td = document.createElement('td');

@@ -17,6 +17,7 @@ import * as panels from './panels.js';
 import * as help from './help.js';
 import * as layer from './layer.js';
 import * as strip from './strip.js';
+import * as sequence from './sequence.js';
 
 const $ = (id) => document.getElementById(id);
 let events = null;
@@ -115,6 +116,7 @@ async function open(id, revision) {
 async function present(view) {
   viewer.update(view);
   variants.show(view);
+  sequence.show(view);
   colours.show(view);
   viewer.colour(variants.chosen(), colours.look);
   const views = $('view-picker');
@@ -294,11 +296,12 @@ function follow() {
   events = new EventSource('/api/events');
   const on = (kind, handler) => events.addEventListener(kind, (e) => handler(JSON.parse(e.data)));
   events.onopen = () => status('live', true);
-  on('snapshot', (data) => { farm.snapshot(data); compare.refresh(); strip.refresh(); });
+  on('snapshot', (data) => { farm.snapshot(data); compare.refresh(); strip.refresh(); sequence.refresh(); });
   on('job', (j) => {
     const isNew = !farm.jobById(j.id);
     farm.job(j);
     painting.update(j);
+    sequence.update(j);
     if (j.state === 'done') { compare.refresh(); strip.refresh(); }
     if (layer.current() && layer.current().id === j.id) layer.show(j);
     if (awaited === j.id && j.state === 'done') { awaited = null; layer.show(j); }
@@ -359,6 +362,13 @@ document.addEventListener('DOMContentLoaded', () => {
   $('set-sun').addEventListener('click', () => viewer && viewer.view && applyEdit(light.edit()));
   light.init(showError);
   compare.init(showError);
+  sequence.init({
+    error: showError,
+    done: () => problem(''),
+    scene: () => openScene,
+    viewer: () => viewer,
+    hypothesis: () => $('snap-variant').value || null,
+  });
   upload.init({ error: showError, opened });
   $('open-demo').addEventListener('click', openDemo);
   luminaires.init({

@@ -104,6 +104,14 @@ export function refresh() {
   follow();
 }
 
+// Sequence `id` (a job of the farm's) shown as A, its panel open and in sight.
+export function choose(id) {
+  refresh();
+  $('seq-a').value = id;
+  refresh();
+  $('sequence').scrollIntoView({ block: 'nearest' });
+}
+
 // A job's status from the live events: its frames fetched again when more are ready.
 export function update(j) {
   if (isSequence(j) && [...$('seq-a').options].every((o) => o.value !== j.id)) refresh();
@@ -212,6 +220,9 @@ function showFrame() {
   place($('seq-img-a'), 'A', a);
   place($('seq-img-b'), 'B', b);
   $('seq-compare').hidden = !b;
+  // The shown frame's files of each, to download.
+  const links = [a, b].filter(Boolean).flatMap((q) => (q.frames[n] ? q.frames[n].files.map((name) => farm.resultLink(q.job, name)) : []));
+  $('seq-downloads').replaceChildren(...links.flatMap((l) => [l, ' ']));
   $('seq-missing').hidden = missing.length === 0;
   $('seq-missing').textContent = missing.join('; ');
   slide();

@@ -307,7 +307,7 @@ function follow() {
     if (awaited === j.id && j.state === 'done') { awaited = null; layer.show(j); }
     if (isNew) listScenes().catch(showError);
   });
-  on('job-gone', (g) => { farm.jobGone(g); strip.refresh(); });
+  on('job-gone', (g) => { farm.jobGone(g); strip.refresh(); sequence.refresh(); });
   on('worker', farm.worker);
   on('worker-gone', farm.workerGone);
   events.onerror = async () => {
@@ -331,7 +331,13 @@ document.addEventListener('DOMContentLoaded', () => {
   for (const kind of ['click', 'change', 'submit']) document.addEventListener(kind, noteAction, true);
   panels.init();
   help.init();
-  farm.init({ show: (j) => layer.show(j), error: showError });
+  // A sequence's frames are shown in its panel, a still over the view.
+  const showJob = (j) => {
+    if (!j.frames_total) return layer.show(j);
+    panels.open(5, true);
+    sequence.choose(j.id);
+  };
+  farm.init({ show: showJob, error: showError });
   // The snapshot layer (a later event about its job does not open it again once closed).
   layer.init(() => viewer, showError);
   strip.init({ show: (j) => layer.show(j), compare: () => compare.show(showError) });

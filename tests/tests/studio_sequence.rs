@@ -63,6 +63,12 @@ fn difference(a: &[[u8; 3]], b: &[[u8; 3]]) -> f64 {
     sum as f64 / (3 * a.len()) as f64
 }
 
+/// A coordinator serving the studio, on `d/data`, with the flags `extra` too.
+fn studio_coordinator(d: &Path, extra: &[&str]) -> Coordinator {
+    let flags = [&["--studio-listen", "127.0.0.1:0"], extra].concat();
+    Coordinator::start(d, &d.join("data"), "127.0.0.1:0", &flags)
+}
+
 /// Moves the range input `id` to `value`, as a drag does.
 fn set_range(b: &mut Browser, id: &str, value: usize) {
     b.eval(&format!(
@@ -133,12 +139,7 @@ fn a_sun_study_arrives_frame_by_frame_and_the_timeline_scrubs_it() {
     }
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let c = Coordinator::start(
-        d,
-        &d.join("data"),
-        "127.0.0.1:0",
-        &["--studio-listen", "127.0.0.1:0", "--fault-commit-delay-ms", "250"],
-    );
+    let c = studio_coordinator(d, &["--fault-commit-delay-ms", "250"]);
     let _worker = Worker::start(d, &c.url, "local-1", &[]);
     let scene = aosta_scene(d, 160, 90);
     let token = d.join("client.token");
@@ -300,6 +301,27 @@ fn two_hypotheses_of_a_day_compare_on_the_slider_at_a_frame() {
         assert!(src.contains(job.as_str()) && src.ends_with("-0001-retinex.png"), "{img}: {src}");
         assert!(difference(&pixels, want) < 0.5, "{img} is not frame 2 of its job");
     }
+    // The frame's files, of A and B, to download: the farm's four of that frame of each.
+    let links: Vec<String> = serde_json::from_value(b.eval(
+        "[...document.querySelectorAll('#seq-downloads a')].map(a => decodeURIComponent(a.getAttribute('href')))",
+    ))
+    .unwrap();
+    let mut want: Vec<String> = Vec::new();
+    for (job, files) in [(&a, &fa), (&bb, &fb)] {
+        let mut names: Vec<String> = std::fs::read_dir(files)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.contains("-0001.") || n.contains("-0001-"))
+            .collect();
+        names.sort();
+        want.extend(names.into_iter().map(|n| format!("/api/jobs/{job}/results/{n}")));
+    }
+    let mut got = links.clone();
+    got.sort();
+    want.sort();
+    assert_eq!(got, want, "the downloads of frame 2");
+    assert_eq!(want.len(), 8);
+
     // The slider: all A, then all B, then half of each.
     b.eval("document.getElementById('seq-view').scrollIntoView({ block: 'center' })");
     let rect = b.rect("#seq-view");
@@ -334,6 +356,14 @@ fn two_hypotheses_of_a_day_compare_on_the_slider_at_a_frame() {
         "at 50 %: left {left_a}/{left_b}, right {right_a}/{right_b} (A/B)"
     );
     assert_eq!(b.eval("document.getElementById('seq-slider-shown').textContent"), "50 % A");
+
+    // Shown from the farm's table, B becomes the sequence shown.
+    b.click(&format!("#jobs tr[data-job=\"{bb}\"] button"));
+    b.wait_for("B shown as A", &format!("document.getElementById('seq-a').value === '{bb}'"));
+    b.wait_for(
+        "B's frame",
+        &format!("document.getElementById('seq-img-a').getAttribute('src').includes('{bb}')"),
+    );
 }
 
 /// What the studio answers `body` on `POST /api/scenes/{scene}/sequences`.
@@ -350,12 +380,7 @@ fn start(studio: &str, scene: &str, body: &Value) -> restauro_tests::http::Respo
 fn a_sequence_request_is_refused_in_the_expansions_words() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let c = Coordinator::start(
-        d,
-        &d.join("data"),
-        "127.0.0.1:0",
-        &["--studio-listen", "127.0.0.1:0", "--max-frames", "4"],
-    );
+    let c = studio_coordinator(d, &["--max-frames", "4"]);
     let scene = aosta_scene(d, 32, 18);
     let token = d.join("client.token");
     let still = submit(&scene, &["--spp", "1"], &c.url, &token);
@@ -435,4 +460,20 @@ fn a_sequence_request_is_refused_in_the_expansions_words() {
         assert_eq!(frames["frames_ready"], 0);
         assert!(frames["frames"].as_array().unwrap().iter().all(|f| f["files"] == json!([])));
     }
+
+    // A walk through two views saved in the studio (a new revision, the latest): 3 m at
+    // 1.4 m/s and a frame a second, a frame at 0, 1.4 and 2.8 m.
+    for (name, x) in [("west", 1.0), ("east", 4.0)] {
+        let view = json!({"edit": "save-view", "view": {"name": name,
+            "position": [x, 1.6, 8.0], "target": [x, 3.0, 0.0], "up": [0.0, 1.0, 0.0]}});
+        let path = format!("/api/scenes/{id}/edits");
+        let r = request(&studio, "POST", &path, &auth, view.to_string().as_bytes());
+        assert_eq!(r.status, 200, "{}", r.text());
+    }
+    let mut walk = walk(json!(["west", "east"]));
+    walk["sequence"]["fps"] = json!(1.0);
+    let r = start(&studio, &id, &walk);
+    assert_eq!(r.status, 200, "{}", r.text());
+    assert_eq!(r.json()["labels"], json!(["0.00 s, 0.0 m", "1.00 s, 1.4 m", "2.00 s, 2.8 m"]));
+    assert_eq!(r.json()["jobs"][0]["name"], "aosta-walk");
 }

@@ -10,12 +10,12 @@
 //! A sequence's frames are fetchable as each is ready ([`frames`]), long before the job ends.
 
 use super::Studio;
-use super::api::{parse, scene_id};
+use super::api::{parse, query_value, scene_id};
 use super::snapshot::{job_spec, manifest_json, refuse, scene_name, scene_seen_from};
 use crate::error::{Result, StudioError};
 use axum::Json;
 use axum::body::Bytes;
-use axum::extract::{Path, State};
+use axum::extract::{Path, RawQuery, State};
 use restauro_farm::ids::JobId;
 use restauro_farm::job::JobStatus;
 use restauro_scene::plan::RenderOptions;
@@ -228,13 +228,22 @@ pub struct FramesView {
     pub frames: Vec<FrameView>,
 }
 
-/// `GET /api/jobs/{id}/frames`: a sequence's frames, each with its label and, once ready, its
-/// files (fetched from `/api/jobs/{id}/results/{name}` while the job runs).
+/// `GET /api/jobs/{id}/frames[?from=N]`: a sequence's frames (from frame `N`, 0 first), each
+/// with its label and, once ready, its files (fetched from `/api/jobs/{id}/results/{name}` while
+/// the job runs). A page that has the frames before `N` asks only for the rest, so that a long
+/// sequence is not sent whole again at each frame.
 pub async fn frames(
     State(studio): State<Arc<Studio>>,
     Path(id): Path<String>,
+    RawQuery(query): RawQuery,
 ) -> Result<Json<FramesView>> {
     let id = JobId::parse(&id)?;
+    let from = match query_value(query.as_deref(), "from") {
+        None => 0,
+        Some(text) => text.parse::<usize>().map_err(|_| {
+            refuse("from", format!("`{}` is not a frame number (0, 1, 2, …)", short(&text)))
+        })?,
+    };
     let record = studio
         .farm
         .jobs_record(&id)
@@ -251,6 +260,7 @@ pub async fn frames(
         .frames
         .iter()
         .enumerate()
+        .skip(from)
         .map(|(index, frame)| {
             let own = format!("{stem}-{index:04}");
             // `<own>.png`, `<own>-retinex.png`: not `<own>0…` of a longer number.

@@ -13,6 +13,8 @@ let ctx = null;
 // Each shown job's frames as last fetched, and the `frames_ready` each fetch was for.
 const frames = new Map();
 const asked = new Map();
+// The views the walk's field was last filled with (not typed).
+let filled = '';
 
 const isSequence = (j) => j.frames_total > 0;
 const seen = (files) => files.find((n) => n.endsWith('-retinex.png'));
@@ -82,7 +84,9 @@ export function show(view) {
   if ([...picker.options].some((o) => o.value === kept)) picker.value = kept;
   const names = view.views.map((v) => v.name).join(', ');
   $('seq-views').placeholder = names || 'save two views first (panel 1)';
-  if (!$('seq-views').value) $('seq-views').value = names;
+  // Every saved view, in order, until the person writes a walk of their own.
+  if (!$('seq-views').value || $('seq-views').value === filled) $('seq-views').value = names;
+  filled = names;
 }
 
 // The farm's sequences in the pickers (the choices kept while they are there): A any, B one of
@@ -118,15 +122,20 @@ export function update(j) {
   if (j.id === $('seq-a').value || j.id === $('seq-b').value) follow();
 }
 
-// Fetches the frames of A and B that became ready since the last fetch, then draws.
+// Fetches the frames of A and B that became ready since the last fetch (those from the first
+// not ready then: the ones before cannot change), then draws.
 function follow() {
   for (const id of [$('seq-a').value, $('seq-b').value]) {
     const j = id && farm.jobById(id);
     if (!j || asked.get(id) === j.frames_ready) continue;
     asked.set(id, j.frames_ready);
-    api.sequenceFrames(id).then((f) => {
-      const was = frames.get(id);
-      if (!was || f.frames_ready >= was.frames_ready) frames.set(id, f);
+    const was = frames.get(id);
+    const from = was ? was.frames_ready : 0;
+    api.sequenceFrames(id, from).then((f) => {
+      const now = frames.get(id);
+      if (now && now.frames_ready > f.frames_ready) return;
+      const before = now ? now.frames.slice(0, from) : [];
+      frames.set(id, { ...f, frames: before.concat(f.frames) });
       draw();
     }, (e) => { asked.delete(id); ctx.error(e); });
   }
@@ -151,6 +160,7 @@ function item(a, f, job) {
     const img = document.createElement('img');
     img.src = api.resultUrl(a.job, picture(f.files));
     img.alt = '';
+    img.loading = 'lazy';
     b.append(img);
   }
   const text = document.createElement('span');

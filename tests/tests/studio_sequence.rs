@@ -459,6 +459,12 @@ fn a_sequence_request_is_refused_in_the_expansions_words() {
         // No worker: nothing is ready, so no frame has files yet.
         assert_eq!(frames["frames_ready"], 0);
         assert!(frames["frames"].as_array().unwrap().iter().all(|f| f["files"] == json!([])));
+        // From a frame on: the rest only, numbered as in the whole.
+        let rest = request(&studio, "GET", &format!("{path}?from=1"), &auth, b"").json();
+        assert_eq!(rest["frames"], json!([{"index": 1, "label": "13:00", "files": []}]));
+        let r = request(&studio, "GET", &format!("{path}?from=-1"), &auth, b"");
+        assert_eq!(r.status, 400, "{}", r.text());
+        assert!(r.text().contains("from: `-1` is not a frame number"), "{}", r.text());
     }
 
     // A walk through two views saved in the studio (a new revision, the latest): 3 m at

@@ -177,6 +177,7 @@ function draw() {
   const b = $('seq-b').value ? frames.get($('seq-b').value) : null;
   $('seq-player').hidden = !a;
   if (!a) {
+    if (!$('sequence-stage').hidden) overView(false);
     $('seq-status').textContent = farm.allJobs().some(isSequence) ? '' : 'No sequence yet.';
     return;
   }
@@ -196,6 +197,7 @@ function draw() {
   const scrub = $('seq-scrub');
   scrub.max = String(Math.max(a.frames.length - 1, 0));
   $('seq-view').style.aspectRatio = jobA ? `${jobA.width} / ${jobA.height}` : '16 / 9';
+  fitOver();
   showFrame();
 }
 
@@ -247,6 +249,29 @@ function slide() {
   $('seq-slider-shown').textContent = `${v} % A`;
 }
 
+// The frame over the whole view (as large as it fits, its aspect kept), or back in the panel.
+function overView(on) {
+  $('seq-over').setAttribute('aria-pressed', String(on));
+  $('sequence-stage').hidden = !on;
+  if (on) $('sequence-stage').append($('seq-view'));
+  else $('seq-missing').before($('seq-view'));
+  fitOver();
+}
+
+function fitOver() {
+  const view = $('seq-view');
+  const j = farm.jobById($('seq-a').value);
+  if ($('sequence-stage').hidden || !j) {
+    view.style.width = '';
+    view.style.height = '';
+    return;
+  }
+  const r = $('sequence-stage').getBoundingClientRect();
+  const s = Math.min(r.width / j.width, r.height / j.height);
+  view.style.width = `${Math.floor(j.width * s)}px`;
+  view.style.height = `${Math.floor(j.height * s)}px`;
+}
+
 // `context`: { error(e), done() (clears a refusal shown), scene(), viewer(), hypothesis() }.
 export function init(context) {
   ctx = context;
@@ -258,5 +283,9 @@ export function init(context) {
   $('seq-look').addEventListener('change', draw);
   $('seq-scrub').addEventListener('input', showFrame);
   $('seq-slider').addEventListener('input', slide);
+  $('seq-over').addEventListener('click', () => overView($('seq-over').getAttribute('aria-pressed') !== 'true'));
+  // Closed by its × or Esc (panels.js): the frame goes back to the panel.
+  $('sequence-stage').addEventListener('close', () => overView(false));
+  window.addEventListener('resize', fitOver);
   draw();
 }

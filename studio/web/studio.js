@@ -420,7 +420,7 @@ document.addEventListener('DOMContentLoaded', () => {
     if (viewer && viewer.walker.active && viewer.walker.key(e, true)) { e.preventDefault(); return; }
     // The arrows and + − move the view when it (or nothing) has the focus and no snapshot lies
     // over it (over a snapshot, they zoom and pan the picture).
-    const free = $('result').hidden && $('compare-stage').hidden;
+    const free = $('result').hidden && $('compare-stage').hidden && $('sequence-stage').hidden;
     const onView = free && (document.activeElement === $('view') || document.activeElement === document.body);
     if (onView && viewer && viewer.nudge(e)) { e.preventDefault(); return; }
     if (e.key === '?') shortcuts();

@@ -357,6 +357,28 @@ fn two_hypotheses_of_a_day_compare_on_the_slider_at_a_frame() {
     );
     assert_eq!(b.eval("document.getElementById('seq-slider-shown').textContent"), "50 % A");
 
+    // Over the whole view, as large as it fits: still A's frame on the left of the slider and
+    // B's on the right; Esc puts it back in the panel.
+    b.click("#seq-over");
+    let (stage, over) = (b.rect("#stage"), b.rect("#seq-view"));
+    let fits_width = (over[2] - stage[2]).abs() <= 1.0 && over[3] <= stage[3] + 0.5;
+    let fits_height = (over[3] - stage[3]).abs() <= 1.0 && over[2] <= stage[2] + 0.5;
+    assert!(fits_width || fits_height, "over the view at {over:?}, the view at {stage:?}");
+    assert!((over[2] / over[3] - 96.0 / 54.0).abs() < 0.02, "its aspect at {over:?}");
+    set_range(&mut b, "seq-slider", 0);
+    let shot = b.screenshot(&shots().join("85-sequence-over-the-view.png"));
+    let (to_a, to_b) = (
+        shown_against(&shot, over, &want_a, 96, (0.0, 1.0)),
+        shown_against(&shot, over, &want_b, 96, (0.0, 1.0)),
+    );
+    assert!(to_b * 2.0 < to_a, "over the view at 0 % A: {to_a} against A, {to_b} against B");
+    b.eval("document.activeElement.blur()");
+    b.press("Escape");
+    b.wait_for(
+        "the frame back in the panel",
+        "document.getElementById('seq-view').parentElement.id === 'seq-player' && document.getElementById('sequence-stage').hidden",
+    );
+
     // Shown from the farm's table, B becomes the sequence shown.
     b.click(&format!("#jobs tr[data-job=\"{bb}\"] button"));
     b.wait_for("B shown as A", &format!("document.getElementById('seq-a').value === '{bb}'"));

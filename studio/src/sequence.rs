@@ -202,7 +202,9 @@ pub async fn start(
             Err(e) => {
                 // Half a comparison is not what was asked for: the first job goes too.
                 for job in &jobs {
-                    let _ = farm.cancel(&job.id);
+                    if let Err(cancel) = farm.cancel(&job.id) {
+                        tracing::warn!(job = %job.id, "the sequence's first job stays: {cancel}");
+                    }
                 }
                 return Err(e);
             }

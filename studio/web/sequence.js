@@ -75,7 +75,7 @@ async function start() {
   }
 }
 
-// The scene's hypotheses to compare with, and its saved views for a walk (filled once).
+// The scene's hypotheses to compare with, and its saved views for a walk.
 export function show(view) {
   const picker = $('seq-compare-with');
   const kept = picker.value;

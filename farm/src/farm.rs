@@ -393,6 +393,12 @@ impl Farm {
             .collect()
     }
 
+    /// The limits the coordinator keeps every job within (`--max-frames`, …): the studio
+    /// expands a sequence within them, as the command line does within its own.
+    pub fn limits(&self) -> &Limits {
+        &self.config.limits
+    }
+
     /// A copy of job `id`'s record.
     /// The record of job `id`: its spec, plan and state.
     pub fn jobs_record(&self, id: &JobId) -> Option<JobRecord> {

@@ -32,6 +32,11 @@ pub enum StudioError {
     #[error("invalid request: {0}")]
     Request(String),
 
+    /// A sequence the scene cannot make (a step of zero, an unknown view, the sun never up,
+    /// more frames than the limit), in the words of its expansion.
+    #[error("{0}")]
+    Sequence(SceneError),
+
     #[error("no such page `{0}` in the studio")]
     NoSuchPage(String),
 
@@ -95,7 +100,7 @@ impl StudioError {
             E::Farm(e) => status_of(e.code()),
             E::NotSignedIn => StatusCode::UNAUTHORIZED,
             E::CrossOrigin { .. } => StatusCode::FORBIDDEN,
-            E::Request(_) => StatusCode::BAD_REQUEST,
+            E::Request(_) | E::Sequence(_) => StatusCode::BAD_REQUEST,
             E::NoSuchPage(_) | E::NoSuchImage(_) => StatusCode::NOT_FOUND,
             E::Internal(_)
             | E::TlsChain(_)

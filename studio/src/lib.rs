@@ -20,6 +20,7 @@ pub mod page;
 pub mod painting;
 pub mod pixel;
 pub mod preview;
+pub mod sequence;
 pub mod session;
 pub mod snapshot;
 pub mod vertex_clustering;
@@ -112,6 +113,8 @@ fn router(studio: Arc<Studio>) -> Router {
         .route("/api/scenes/{id}", get(api::scene))
         .route("/api/scenes/{id}/preview.glb", get(api::scene_glb))
         .route("/api/scenes/{id}/snapshots", post(api::take_snapshot))
+        .route("/api/scenes/{id}/sequences", post(sequence::start))
+        .route("/api/jobs/{id}/frames", get(sequence::frames))
         .route("/api/scenes/{id}/edits", post(edits::edit))
         .route("/api/scenes/{id}/revert", post(edits::revert))
         .route("/api/scenes/{id}/photometry", post(edits::photometry))

@@ -41,6 +41,7 @@ const FILES: &[(&str, &str, &str)] = &[
     script!("zoom.js"),
     script!("readout.js"),
     script!("strip.js"),
+    script!("sequence.js"),
     script!("vendor/three/three.module.js"),
     script!("vendor/three/three.core.js"),
     script!("vendor/three/addons/controls/OrbitControls.js"),

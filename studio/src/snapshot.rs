@@ -10,7 +10,8 @@ use restauro_farm::job::JobStatus;
 use restauro_scene::bundle::Bundle;
 use restauro_scene::job::{JobName, JobSpec};
 use restauro_scene::plan::RenderOptions;
-use restauro_scene::scene_file::Pose;
+use restauro_scene::scene_file::{Pose, SceneFile};
+use restauro_scene::sequence::Frame;
 use serde::Deserialize;
 use std::sync::Arc;
 
@@ -29,7 +30,7 @@ pub struct SnapshotRequest {
     pub revision: Option<u32>,
 }
 
-fn refuse(field: &str, problem: impl std::fmt::Display) -> StudioError {
+pub(super) fn refuse(field: &str, problem: impl std::fmt::Display) -> StudioError {
     StudioError::Request(format!("{field}: {problem}"))
 }
 
@@ -40,9 +41,28 @@ pub async fn take(
     preview: &ScenePreview,
     request: SnapshotRequest,
 ) -> Result<JobStatus> {
+    let scene = scene_seen_from(farm, id, preview, Some(&request.camera))?;
+    let stem = scene_name(farm, id);
+    let name = request.name.unwrap_or_else(|| match &request.render.variant {
+        Some(v) => format!("{stem}-{v}"),
+        None => stem,
+    });
+    let spec = job_spec(&name, request.render, Vec::new())?;
+    Ok(farm.submit(manifest_json(&scene)?, spec).await?)
+}
+
+/// The scene of the revision `preview` shows, seen from the page's `camera` (in the preview's
+/// coordinates) when one is given.
+pub(super) fn scene_seen_from(
+    farm: &Farm,
+    id: &str,
+    preview: &ScenePreview,
+    camera: Option<&Pose>,
+) -> Result<SceneFile> {
     let mut scene =
         Bundle::parse_manifest(&farm.scene_revision(id, Some(preview.view.revision))?.1)?;
-    let c = pose_to_world(&request.camera, preview.view.offset_m);
+    let Some(camera) = camera else { return Ok(scene) };
+    let c = pose_to_world(camera, preview.view.offset_m);
     let finite = |v: &[f64; 3]| v.iter().all(|x| x.is_finite());
     if !(finite(&c.position) && finite(&c.target) && finite(&c.up)) {
         return Err(refuse("camera", "every coordinate must be a finite number"));
@@ -52,24 +72,29 @@ pub async fn take(
     scene.camera.up = c.up;
     scene.camera.vertical_fov_deg = c.vertical_fov_deg;
     scene.camera.viewpoint = None;
-    let stem = scene_name(farm, id);
-    let name = request.name.unwrap_or_else(|| match &request.render.variant {
-        Some(v) => format!("{stem}-{v}"),
-        None => stem,
-    });
-    let spec = JobSpec {
-        name: JobName::new(&name).map_err(|e| refuse("name", e.problem))?,
-        render: request.render,
+    Ok(scene)
+}
+
+/// A job named `name` of `render` (and a sequence's `frames`), checked as the gRPC door checks
+/// one, refused naming its field.
+pub(super) fn job_spec(name: &str, render: RenderOptions, frames: Vec<Frame>) -> Result<JobSpec> {
+    JobSpec {
+        name: JobName::new(name).map_err(|e| refuse("name", e.problem))?,
+        render,
+        frames,
         ..JobSpec::default()
     }
     .checked()
-    .map_err(|e| refuse(e.field, e.problem))?;
-    let manifest = serde_json::to_string(&scene)
-        .map_err(|e| StudioError::Internal(format!("the scene does not serialise: {e}")))?;
-    Ok(farm.submit(manifest, spec).await?)
+    .map_err(|e| refuse(e.field, e.problem))
+}
+
+/// The manifest the farm is sent.
+pub(super) fn manifest_json(scene: &SceneFile) -> Result<String> {
+    serde_json::to_string(scene)
+        .map_err(|e| StudioError::Internal(format!("the scene does not serialise: {e}")))
 }
 
 /// The name of the scene's latest job.
-fn scene_name(farm: &Farm, id: &str) -> String {
+pub(super) fn scene_name(farm: &Farm, id: &str) -> String {
     farm.scenes().into_iter().find(|s| s.id == id).map_or_else(|| "snapshot".into(), |s| s.name)
 }

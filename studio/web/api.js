@@ -74,6 +74,13 @@ export const spectra = () => call('GET', '/api/spectra');
 export const sunPath = (site) => call('GET', `/api/sun-path?${new URLSearchParams(site)}`);
 export const takeSnapshot = (id, request) =>
   call('POST', `/api/scenes/${encodeURIComponent(id)}/snapshots`, request);
+// A sun study or a walk (the server expands its frames), one job per hypothesis: the jobs and
+// the frames' labels.
+export const startSequence = (id, request) =>
+  call('POST', `/api/scenes/${encodeURIComponent(id)}/sequences`, request);
+// A sequence's frames from frame `from` on: each one's label, and its files once it is ready.
+export const sequenceFrames = (job, from) =>
+  call('GET', `/api/jobs/${encodeURIComponent(job)}/frames?from=${from}`);
 const pair = (a, b) => `a=${encodeURIComponent(a)}&b=${encodeURIComponent(b)}`;
 export const compare = (a, b) => call('GET', `/api/compare?${pair(a, b)}`);
 export const compareMapUrl = (a, b) => `/api/compare/delta-e.png?${pair(a, b)}`;

@@ -27,8 +27,10 @@ export function jobGone({ id }) { jobs.delete(id); renderJobs(); }
 export function worker(w) { workers.set(w.id, { ...w, at: Date.now() }); renderWorkers(); }
 export function workerGone({ id }) { workers.delete(id); renderWorkers(); }
 export function jobById(id) { return jobs.get(id); }
-// The finished jobs, oldest first.
-export function doneJobs() { return [...jobs.values()].filter((j) => j.state === 'done'); }
+// Every job the farm holds.
+export function allJobs() { return [...jobs.values()]; }
+// The finished stills, oldest first (a sequence's frames are shown by sequence.js).
+export function doneJobs() { return [...jobs.values()].filter((j) => j.state === 'done' && !j.frames_total); }
 
 function cell(text, cls) {
   const td = document.createElement('td');
@@ -73,6 +75,16 @@ const RESULT_KINDS = [
   ['.json', 'its figures'],
 ];
 
+// A link to result file `name` of job `id`, saying what it is (a PNG opens, the rest downloads).
+export function resultLink(id, name) {
+  const a = document.createElement('a');
+  a.href = resultUrl(id, name);
+  a.textContent = name;
+  a.title = `${name}: ${RESULT_KINDS.find(([end]) => name.endsWith(end))?.[1] ?? 'a result file'} (${name.endsWith('.png') ? 'opens' : 'downloads'})`;
+  if (!name.endsWith('.png')) a.download = name;
+  return a;
+}
+
 function button(text, label, onClick) {
   const b = document.createElement('button');
   b.type = 'button';
@@ -92,18 +104,13 @@ function renderJobs() {
     const state = cell(j.state, `state-${j.state}`);
     if (j.error) state.title = j.error;
     const results = document.createElement('td');
-    for (const name of j.results) {
-      const a = document.createElement('a');
-      a.href = resultUrl(j.id, name);
-      a.textContent = name;
-      a.title = `${name}: ${RESULT_KINDS.find(([end]) => name.endsWith(end))?.[1] ?? 'a result file'} (${name.endsWith('.png') ? 'opens' : 'downloads'})`;
-      if (!name.endsWith('.png')) a.download = name;
-      results.append(a, ' ');
-    }
+    // A sequence's files are its frames', four each: shown and listed by frame in its panel.
+    if (j.frames_total) results.append(`${j.frames_ready} of ${j.frames_total} frames`);
+    else for (const name of j.results) results.append(resultLink(j.id, name), ' ');
     const actions = document.createElement('td');
-    if (j.state === 'done' && j.results.some((n) => n.endsWith('.png'))) {
-      actions.append(button('Show', `Show ${j.name}`, () => onShow(j)));
-    } else if (!j.finished) {
+    const showable = j.frames_total ? j.frames_ready > 0 : j.state === 'done' && j.results.some((n) => n.endsWith('.png'));
+    if (showable) actions.append(button('Show', `Show ${j.name}`, () => onShow(j)));
+    if (!j.finished) {
       actions.append(button('Cancel', `Cancel ${j.name}`, () => cancelJob(j.id).then(job, onError)));
     }
     tr.append(cell(j.name), state, progressCell(j), cell(`${j.width} × ${j.height}`, 'number'),

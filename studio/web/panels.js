@@ -6,7 +6,7 @@
 
 const $ = (id) => document.getElementById(id);
 const KEPT = 'restauro.studio.panels';
-const OVERLAYS = ['result', 'compare-stage'];
+const OVERLAYS = ['result', 'compare-stage', 'sequence-stage'];
 
 const heads = () => [...document.querySelectorAll('.panel-head button[aria-controls]')];
 

@@ -17,6 +17,7 @@ import * as panels from './panels.js';
 import * as help from './help.js';
 import * as layer from './layer.js';
 import * as strip from './strip.js';
+import * as sequence from './sequence.js';
 
 const $ = (id) => document.getElementById(id);
 let events = null;
@@ -115,6 +116,7 @@ async function open(id, revision) {
 async function present(view) {
   viewer.update(view);
   variants.show(view);
+  sequence.show(view);
   colours.show(view);
   viewer.colour(variants.chosen(), colours.look);
   const views = $('view-picker');
@@ -294,17 +296,18 @@ function follow() {
   events = new EventSource('/api/events');
   const on = (kind, handler) => events.addEventListener(kind, (e) => handler(JSON.parse(e.data)));
   events.onopen = () => status('live', true);
-  on('snapshot', (data) => { farm.snapshot(data); compare.refresh(); strip.refresh(); });
+  on('snapshot', (data) => { farm.snapshot(data); compare.refresh(); strip.refresh(); sequence.refresh(); });
   on('job', (j) => {
     const isNew = !farm.jobById(j.id);
     farm.job(j);
     painting.update(j);
+    sequence.update(j);
     if (j.state === 'done') { compare.refresh(); strip.refresh(); }
     if (layer.current() && layer.current().id === j.id) layer.show(j);
     if (awaited === j.id && j.state === 'done') { awaited = null; layer.show(j); }
     if (isNew) listScenes().catch(showError);
   });
-  on('job-gone', (g) => { farm.jobGone(g); strip.refresh(); });
+  on('job-gone', (g) => { farm.jobGone(g); strip.refresh(); sequence.refresh(); });
   on('worker', farm.worker);
   on('worker-gone', farm.workerGone);
   events.onerror = async () => {
@@ -328,7 +331,13 @@ document.addEventListener('DOMContentLoaded', () => {
   for (const kind of ['click', 'change', 'submit']) document.addEventListener(kind, noteAction, true);
   panels.init();
   help.init();
-  farm.init({ show: (j) => layer.show(j), error: showError });
+  // A sequence's frames are shown in its panel, a still over the view.
+  const showJob = (j) => {
+    if (!j.frames_total) return layer.show(j);
+    panels.open(5, true);
+    sequence.choose(j.id);
+  };
+  farm.init({ show: showJob, error: showError });
   // The snapshot layer (a later event about its job does not open it again once closed).
   layer.init(() => viewer, showError);
   strip.init({ show: (j) => layer.show(j), compare: () => compare.show(showError) });
@@ -359,6 +368,13 @@ document.addEventListener('DOMContentLoaded', () => {
   $('set-sun').addEventListener('click', () => viewer && viewer.view && applyEdit(light.edit()));
   light.init(showError);
   compare.init(showError);
+  sequence.init({
+    error: showError,
+    done: () => problem(''),
+    scene: () => openScene,
+    viewer: () => viewer,
+    hypothesis: () => $('snap-variant').value || null,
+  });
   upload.init({ error: showError, opened });
   $('open-demo').addEventListener('click', openDemo);
   luminaires.init({
@@ -404,7 +420,7 @@ document.addEventListener('DOMContentLoaded', () => {
     if (viewer && viewer.walker.active && viewer.walker.key(e, true)) { e.preventDefault(); return; }
     // The arrows and + − move the view when it (or nothing) has the focus and no snapshot lies
     // over it (over a snapshot, they zoom and pan the picture).
-    const free = $('result').hidden && $('compare-stage').hidden;
+    const free = $('result').hidden && $('compare-stage').hidden && $('sequence-stage').hidden;
     const onView = free && (document.activeElement === $('view') || document.activeElement === document.body);
     if (onView && viewer && viewer.nudge(e)) { e.preventDefault(); return; }
     if (e.key === '?') shortcuts();

@@ -129,6 +129,23 @@ fn the_studio_passes_an_accessibility_audit_in_each_state() {
     b.click(&format!("#jobs tr[data-job=\"{id}\"] button"));
     b.wait_for("the snapshot shown", "document.getElementById('result-image').complete");
     audit(&mut b, "a snapshot shown");
+    b.click("#result-close");
+
+    // A sequence of two hypotheses: its timeline, frame and slider.
+    b.eval(
+        "(() => { for (const [id, v] of [['seq-from', '12:00'], ['seq-to', '13:00'], ['seq-every', '1h'], \
+           ['seq-width', '32'], ['seq-height', '18'], ['seq-spp', '1'], ['seq-compare-with', '\"cleaned\"']]) \
+           document.getElementById(id).value = v; })()",
+    );
+    b.click("#seq-start");
+    b.wait_for(
+        "both frames of both",
+        "document.getElementById('seq-b').value && ['seq-img-a', 'seq-img-b'].every(id => document.getElementById(id).complete) \
+         && document.getElementById('seq-status').textContent.split('2 of 2 frames ready').length === 3",
+    );
+    audit(&mut b, "a sequence compared on its slider");
+    let untitled = controls_failing(&mut b, "e => (e.title || '').trim().length > 0");
+    assert!(untitled.is_empty(), "sequence controls that say nothing on hover: {untitled:?}");
 }
 
 /// Opens the page, which asks for the token.

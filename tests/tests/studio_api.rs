@@ -72,6 +72,8 @@ fn every_route_needs_the_client_token_and_refuses_in_the_servers_words() {
         ("GET", format!("/api/jobs/{id}/luminance.png")),
         ("GET", format!("/api/compare?a={id}&b={id}")),
         ("GET", format!("/api/compare/delta-e.png?a={id}&b={id}")),
+        ("POST", format!("/api/scenes/{}/sequences", "0".repeat(64))),
+        ("GET", format!("/api/jobs/{id}/frames")),
     ];
     let worker = format!("Bearer {WORKER_TOKEN}");
     for (method, path) in &routes {

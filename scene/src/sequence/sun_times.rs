@@ -154,7 +154,10 @@ pub(super) fn day(
         return Err(SceneError::invalid(
             path,
             "sequence",
-            format!("the day runs from {from} to {to}, backwards; give --to after --sun-from"),
+            format!(
+                "the day runs from {from} to {to}, backwards; give an end after the start \
+                 (--to after --sun-from)"
+            ),
         ));
     }
     let span_s = (to - from).num_seconds().max(0) as u64;

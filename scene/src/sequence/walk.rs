@@ -59,7 +59,7 @@ fn named_views<'a>(scene: &'a SceneFile, path: &Path, names: &[String]) -> Resul
             "sequence",
             format!(
                 "a walk needs at least two saved views to walk between, and {} given; name them \
-                 as --path VIEW,VIEW,… (the scene saves {})",
+                 in order (--path VIEW,VIEW,…; the scene saves {})",
                 names.len(),
                 list(scene)
             ),
@@ -98,13 +98,13 @@ pub(super) fn frames(
     let refuse = |problem: String| SceneError::invalid(path, "sequence", problem);
     if !(fps.is_finite() && fps > 0.0 && fps <= 240.0) {
         return Err(refuse(format!(
-            "{fps} frames a second; give --fps between 0 and 240, e.g. 25"
+            "{fps} frames a second; give a frame rate between 0 and 240, e.g. 25 (--fps)"
         )));
     }
     if !(speed_m_s.is_finite() && speed_m_s > 0.0 && speed_m_s <= 100.0) {
         return Err(refuse(format!(
-            "a speed of {speed_m_s} m/s; give --speed between 0 and 100 m/s ({WALKING_SPEED_M_S} \
-             is a person walking)"
+            "a speed of {speed_m_s} m/s; give a walking speed between 0 and 100 m/s \
+             ({WALKING_SPEED_M_S} is a person walking; --speed)"
         )));
     }
     let views = named_views(scene, path, names)?;

@@ -137,6 +137,14 @@ pub fn jobs(args: &ConnectArgs) -> Result<String> {
     })
 }
 
+/// Seconds from a Unix time in milliseconds to now (0 for a time to come).
+fn seconds_since(unix_ms: u64) -> f64 {
+    let now_ms = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_millis() as u64);
+    now_ms.saturating_sub(unix_ms) as f64 / 1000.0
+}
+
 pub fn workers(args: &ConnectArgs) -> Result<String> {
     with_client(args, async |client| {
         let list = client
@@ -148,15 +156,26 @@ pub fn workers(args: &ConnectArgs) -> Result<String> {
         for w in list.workers {
             let _ = writeln!(
                 s,
-                "{:x} {:<24} capacity {:>2}  leases {:>2}  done {:>6}  failed {:>3}  seen {:.1} s ago  {}",
+                "{:x} {:<24} capacity {:>2}  leases {:>2}  done {:>6}  confirmed {:>5}  failed {:>3}  seen {:.1} s ago  {}",
                 w.worker_id,
                 shown(&w.name),
                 w.capacity,
                 w.leases,
                 w.tiles_done,
+                w.tiles_confirmed,
                 w.tiles_failed,
                 w.last_seen_s,
                 shown(&w.build)
+            );
+        }
+        for q in list.quarantined {
+            let _ = writeln!(
+                s,
+                "quarantined {:<24} identity {}  {:.0} s ago: {}",
+                shown(&q.name),
+                shown(&q.identity),
+                seconds_since(q.since_unix_ms),
+                shown(&q.reason)
             );
         }
         Ok(s)

@@ -4,7 +4,7 @@
 use anyhow::{Context, Result, bail};
 use restauro_farm::auth::{Role, Tokens};
 use restauro_farm::callers::CallerLimits;
-use restauro_farm::farm::{Config, Farm};
+use restauro_farm::farm::{CheckPolicy, Config, Farm};
 use restauro_farm::grpc::{RenderService, WorkService};
 use restauro_farm::scheduler;
 use restauro_ops::connections::{ConnectionLimits, GuardedListener, GuardedStream};
@@ -78,6 +78,18 @@ pub struct CoordinatorArgs {
     /// refused, to be tried again.
     #[arg(long, default_value_t = 32)]
     pub max_downloads: usize,
+    /// The share of a trusted worker's tile results rendered a second time on a worker of
+    /// another identity and compared byte for byte (tiles are bit-identical whichever worker
+    /// renders them). A mismatch is settled by a third worker, and the worker found wrong is
+    /// quarantined. 0 checks nothing.
+    #[arg(long, default_value_t = 0.05)]
+    pub check_rate: f64,
+    /// The share of a new worker's results checked, until --trust-after of them are confirmed.
+    #[arg(long, default_value_t = 0.5)]
+    pub check_rate_new: f64,
+    /// Results of a worker confirmed by checks before --check-rate applies to it.
+    #[arg(long, default_value_t = 4)]
+    pub trust_after: u32,
     /// Skip the Retinex stage (and its files).
     #[arg(long)]
     pub no_retinex: bool,
@@ -156,6 +168,13 @@ fn caller_limits(args: &CoordinatorArgs) -> Result<CallerLimits> {
     })
 }
 
+fn share(value: f64, flag: &str) -> Result<f64> {
+    if !(0.0..=1.0).contains(&value) {
+        bail!("{flag} {value}: use a share between 0 (no check) and 1 (every result)");
+    }
+    Ok(value)
+}
+
 fn seconds(value: f64, flag: &str) -> Result<Duration> {
     if !(value.is_finite() && value > 0.0 && value < 1e6) {
         bail!("{flag} {value}: use a number of seconds above 0");
@@ -193,6 +212,11 @@ pub fn run(args: &CoordinatorArgs) -> Result<()> {
             lease_timeout: seconds(args.lease_timeout_s, "--lease-timeout-s")?,
             heartbeat_timeout: seconds(args.heartbeat_timeout_s, "--heartbeat-timeout-s")?,
             ..scheduler::Config::default()
+        },
+        checks: CheckPolicy {
+            rate: share(args.check_rate, "--check-rate")?,
+            new_worker_rate: share(args.check_rate_new, "--check-rate-new")?,
+            trust_after: args.trust_after,
         },
         retinex: !args.no_retinex,
         commit_delay: Duration::from_millis(args.fault_commit_delay_ms),

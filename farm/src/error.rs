@@ -86,6 +86,14 @@ pub enum FarmError {
     #[error("lease of tile {tile} of job {job}: {problem}")]
     ForeignLease { job: String, tile: u32, problem: &'static str },
 
+    /// A worker whose rendering of a tile differed from two other workers' (`farm::checks`).
+    #[error(
+        "worker {name} is quarantined: {reason}. Its tiles are not taken. Find the fault on its \
+         machine (memory, a different build of restauro-worker, an altered binary); a worker \
+         process started again has a new identity and is checked closely until it is trusted"
+    )]
+    Quarantined { name: String, reason: String },
+
     /// A tile report whose pixels the job cannot use.
     #[error("tile {tile} of job {job}: {problem}")]
     TileData { job: JobId, tile: u32, problem: String },
@@ -170,7 +178,9 @@ impl FarmError {
             // "Retry at a higher level": register again, then call again.
             E::UnknownSession { .. } => Code::Aborted,
             E::NoToken { .. } | E::BadToken { .. } => Code::Unauthenticated,
-            E::WrongRole { .. } | E::ForeignLease { .. } => Code::PermissionDenied,
+            E::WrongRole { .. } | E::ForeignLease { .. } | E::Quarantined { .. } => {
+                Code::PermissionDenied
+            }
             E::Scene(SceneError::Limit { .. }) => Code::ResourceExhausted,
             E::Frame { problem, .. } if matches!(**problem, SceneError::Limit { .. }) => {
                 Code::ResourceExhausted

@@ -39,9 +39,11 @@ use tokio::sync::{Notify, mpsc, watch};
 use tracing::{debug, info, warn};
 
 mod assembly;
+mod checks;
 mod illuminance;
 mod scenes;
 mod sequence_frame;
+pub use checks::{CheckPolicy, QuarantineRecord};
 pub use scenes::{
     MAX_FOLDER_BYTES, PhotometryInfo, Revised, RevisionInfo, SceneEntry, scene_identity, sent_file,
 };
@@ -62,6 +64,8 @@ pub struct Config {
     /// its whole scene in memory while it loads; more wait their turn.
     pub max_scene_loads: usize,
     pub scheduler: scheduler::Config,
+    /// How many workers' results are rendered a second time on another worker (`checks`).
+    pub checks: CheckPolicy,
     /// Run the Retinex stage and write its files.
     pub retinex: bool,
     /// Fault injection for tests: every store commit waits this long first (a slow disk).
@@ -91,6 +95,8 @@ pub struct Farm {
     assets: AssetStore,
     commits: TileCommits,
     signer: LeaseSigner,
+    /// Draws which results are checked (`checks`); this run's own, never sent.
+    check_key: [u8; 32],
     state: Mutex<FarmState>,
     /// One record write at a time (see the module doc).
     persisting: Mutex<()>,
@@ -128,13 +134,20 @@ struct FarmState {
     frame_done: HashMap<JobId, Vec<u32>>,
     /// The sequences whose frames are being assembled now (one thread a job, frame after frame).
     assembling_frames: std::collections::HashSet<JobId>,
+    /// Workers found wrong by a check, by identity key (`checks`).
+    quarantine: HashMap<u64, QuarantineRecord>,
 }
 
 struct WorkerEntry {
     key: SessionKey,
+    name: String,
     build: String,
     /// The digest of the identity it registered with: its leases are bound to it.
     identity: [u8; 32],
+    /// Who it is across registrations (`checks::identity_key`).
+    identity_key: u64,
+    /// Its results that a check confirmed in this registration.
+    confirmed: u32,
 }
 
 /// A registered worker, as `restauro workers` shows it.
@@ -146,6 +159,8 @@ pub struct WorkerStatus {
     pub leases: u32,
     pub done: u64,
     pub failed: u64,
+    /// Its results that a check on another worker confirmed.
+    pub confirmed: u64,
     pub last_seen_s: f64,
     pub build: String,
 }
@@ -177,6 +192,21 @@ pub enum Reported {
     Stale,
     /// Stored: the tile is done.
     Accepted,
+}
+
+/// What follows tiles becoming done ([`Farm::follow`]).
+#[derive(Clone, Copy, Debug, Default)]
+struct Next {
+    /// The job's last tile: it is being assembled.
+    finished: bool,
+    /// A sequence with a frame whole (or done): its frame writer runs.
+    frames: bool,
+}
+
+impl Next {
+    fn or(self, other: Next) -> Next {
+        Next { finished: self.finished || other.finished, frames: self.frames || other.frames }
+    }
 }
 
 fn now_unix_ms() -> u64 {
@@ -229,6 +259,7 @@ impl Farm {
             assets,
             commits,
             signer: LeaseSigner::new(secret, epoch),
+            check_key: crate::ids::random_secret(),
             downloads: crate::callers::Downloads::new(config.callers),
             scene_loads: tokio::sync::Semaphore::new(config.max_scene_loads.max(1)),
             plans: crate::recent::Recent::new(KEPT_PLANS),
@@ -240,6 +271,7 @@ impl Farm {
                 scenes: scenes::Scenes::default(),
                 frame_done: HashMap::new(),
                 assembling_frames: Default::default(),
+                quarantine: HashMap::new(),
             }),
             config,
             persisting: Mutex::new(()),
@@ -250,6 +282,7 @@ impl Farm {
             changed: watch::Sender::new(0),
             metrics: Metrics::new(),
         });
+        farm.load_quarantine()?;
         let (to_assemble, sequences) = farm.resume()?;
         farm.resume_scenes()?;
         for id in to_assemble {
@@ -725,6 +758,7 @@ impl Farm {
                 leases: w.leases,
                 done: w.done,
                 failed: w.failed,
+                confirmed: st.workers.get(&w.id).map_or(0, |e| u64::from(e.confirmed)),
                 last_seen_s: now.saturating_duration_since(w.last_seen).as_secs_f64(),
                 build: st.workers.get(&w.id).map(|e| e.build.clone()).unwrap_or_default(),
             })
@@ -750,11 +784,22 @@ impl Farm {
             )
         })?;
         let key = SessionKey::random();
+        let identity = crate::lease::identity_digest(&identity);
+        let identity_key = checks::identity_key(&identity);
+        self.check_not_quarantined(identity_key)?;
         let worker = {
             let mut st = self.lock();
-            let id = st.scheduler.register_worker(name, capacity.clamp(1, 1024), Instant::now());
-            let identity = crate::lease::identity_digest(&identity);
-            st.workers.insert(id, WorkerEntry { key, build: build.to_owned(), identity });
+            let capacity = capacity.clamp(1, 1024);
+            let id = st.scheduler.register_worker(name, capacity, identity_key, Instant::now());
+            let entry = WorkerEntry {
+                key,
+                name: name.to_owned(),
+                build: build.to_owned(),
+                identity,
+                identity_key,
+                confirmed: 0,
+            };
+            st.workers.insert(id, entry);
             id
         };
         self.deadline_added();
@@ -913,64 +958,95 @@ impl Farm {
         if render_s.is_finite() && render_s >= 0.0 {
             self.metrics.tile_render_seconds.observe(render_s);
         }
-        let committed = {
+        // Either the result is to be stored (and whether to check it), or it is a check's.
+        let decided = {
             let mut st = self.lock();
             if !Self::known(&mut st, session) {
                 return Ok(Reported::UnknownSession);
             }
-            let completion = if claim.epoch == self.signer.epoch() {
+            let current = claim.epoch == self.signer.epoch();
+            let completion = if current {
                 st.scheduler.complete(&self.signer.lease(claim), Instant::now())
             } else {
                 st.scheduler.complete_inherited(&claim.job, tile)
             };
-            if completion == Completion::Stale {
-                return Ok(Reported::Stale);
+            match completion {
+                Completion::Stale => return Ok(Reported::Stale),
+                Completion::Check { renderer, disputed_by } => {
+                    let checker = st.workers.get(&session.worker).map_or(0, |w| w.identity_key);
+                    let claim = claim.clone();
+                    Err(checks::CheckReport { claim, checker, renderer, disputed_by, data })
+                }
+                Completion::Accepted => {
+                    let check = current && self.wants_check(&st, session.worker, claim);
+                    let identity = st.workers.get(&session.worker).map_or(0, |w| w.identity_key);
+                    // Queued under the lock: ordered before any later removal of the job's tiles.
+                    Ok((self.commits.put(claim.job.clone(), tile, data), check, identity))
+                }
             }
-            // Queued under the lock: ordered before any later removal of the job's tiles.
-            self.commits.put(claim.job.clone(), tile, data)
+        };
+        let (committed, check, identity) = match decided {
+            Ok(stored) => stored,
+            Err(report) => {
+                // Runs on its own for the reason given below.
+                let farm = self.clone();
+                return tokio::spawn(async move { farm.compare(report).await })
+                    .await
+                    .map_err(|e| FarmError::Internal(format!("comparing a check: {e}")))?;
+            }
         };
         // From here the tile is the scheduler's "committing" and only `settle` moves it on. The
         // caller's future may be dropped at any await (tonic drops a call whose worker hung up,
         // as a killed worker does mid-report), so the rest runs as a task of its own: otherwise
         // the tile would stay committing, never done nor requeued, and its job never end.
         let (farm, claim, worker) = (self.clone(), claim.clone(), session.worker);
-        tokio::spawn(async move { farm.settle(committed, &claim, worker, render_s).await })
+        let by = (worker, identity);
+        tokio::spawn(async move { farm.settle(committed, &claim, by, render_s, check).await })
             .await
             .map_err(|e| FarmError::Internal(format!("settling a tile: {e}")))?
     }
 
     /// The end of a report: once the store has the tile (or could not take it), the scheduler
-    /// hears of it, and the last tile of a job starts its assembly.
+    /// hears of it: the tile is done (and the last tile of a job starts its assembly), or, to be
+    /// `check`ed, waits for another worker's rendering. A result of a worker (`by`: its id and
+    /// identity key) quarantined while it was being stored is not kept.
     async fn settle(
         self: &Arc<Self>,
         committed: crate::group_commit::Committed,
         claim: &LeaseClaim,
-        worker: WorkerId,
+        (worker, identity): (WorkerId, u64),
         render_s: f64,
+        check: bool,
     ) -> Result<Reported> {
         let tile = claim.tile;
-        match committed.wait().await {
+        let stored = committed.wait().await;
+        let quarantined = self.lock().quarantine.contains_key(&identity);
+        match stored {
+            Ok(()) if quarantined => {
+                let mut st = self.lock();
+                if let Err(e) = self.store.remove_tile_list(&claim.job, &[tile]) {
+                    warn!(job = %claim.job, tile, "could not forget a quarantined worker's tile: {e}");
+                }
+                st.scheduler.commit_failed(&claim.job, tile, None, Instant::now());
+                drop(st);
+                self.work.notify_waiters();
+                Ok(Reported::Stale)
+            }
+            Ok(()) if check => {
+                self.lock().scheduler.committed_for_check(&claim.job, tile);
+                debug!(job = %claim.job, tile, %worker, render_s, "tile stored; to be checked");
+                self.work.notify_waiters();
+                self.bump();
+                Ok(Reported::Accepted)
+            }
             Ok(()) => {
-                let (finished, sequence) = {
+                let next = {
                     let mut st = self.lock();
-                    let committed = st.scheduler.committed(&claim.job, tile);
-                    let frame_whole = Self::count_frame_tile(&mut st, &claim.job, tile);
-                    let finished = committed
-                        && st.jobs.get_mut(&claim.job).is_some_and(|r| r.begin_assembly().is_ok());
-                    let sequence = st.jobs.get(&claim.job).is_some_and(JobRecord::is_sequence);
-                    (finished, sequence && (finished || frame_whole))
+                    let last = st.scheduler.committed(&claim.job, tile);
+                    Self::tile_done(&mut st, &claim.job, tile, last)
                 };
                 debug!(job = %claim.job, tile, %worker, render_s, "tile done");
-                if finished {
-                    self.persist(&claim.job);
-                }
-                if sequence {
-                    self.kick_frames(&claim.job);
-                } else if finished {
-                    let (farm, id) = (self.clone(), claim.job.clone());
-                    tokio::task::spawn_blocking(move || assembly::assemble(&farm, &id));
-                }
-                self.bump();
+                self.follow(&claim.job, next);
                 Ok(Reported::Accepted)
             }
             Err(e) => {
@@ -984,6 +1060,30 @@ impl Farm {
                 Err(e.into())
             }
         }
+    }
+
+    /// A tile of `job` is done (`last`: the job's last): counted towards its frame, and the
+    /// job's assembly begun when it was the last. What follows, for [`Farm::follow`].
+    fn tile_done(st: &mut FarmState, job: &JobId, tile: u32, last: bool) -> Next {
+        let frame_whole = Self::count_frame_tile(st, job, tile);
+        let finished = last && st.jobs.get_mut(job).is_some_and(|r| r.begin_assembly().is_ok());
+        let sequence = st.jobs.get(job).is_some_and(JobRecord::is_sequence);
+        Next { finished, frames: sequence && (finished || frame_whole) }
+    }
+
+    /// What follows tiles becoming done: the record kept, the frames written, the still
+    /// assembled.
+    fn follow(self: &Arc<Self>, job: &JobId, next: Next) {
+        if next.finished {
+            self.persist(job);
+        }
+        if next.frames {
+            self.kick_frames(job);
+        } else if next.finished {
+            let (farm, id) = (self.clone(), job.clone());
+            tokio::task::spawn_blocking(move || assembly::assemble(&farm, &id));
+        }
+        self.bump();
     }
 
     /// A worker could not render its tile. A `retryable` failure (the transport's, not the
@@ -1042,7 +1142,7 @@ impl Farm {
     /// A worker hands back leases it will not finish, and, `leaving`, every other lease it
     /// holds and its session. `None` for an unknown session; else whether any tile went back.
     pub fn return_leases(
-        &self,
+        self: &Arc<Self>,
         session: &Session,
         claims: &[LeaseClaim],
         leaving: bool,
@@ -1067,6 +1167,9 @@ impl Farm {
             }
             any
         };
+        if leaving {
+            self.waive_checks();
+        }
         if any {
             self.work.notify_waiters();
             self.bump();
@@ -1110,7 +1213,7 @@ impl Farm {
     // ------------------------------------------------------------------ time
 
     /// Expires overdue leases and silent workers.
-    pub fn expire(&self) {
+    pub fn expire(self: &Arc<Self>) {
         let mut st = self.lock();
         let before = st.scheduler.totals();
         let expired = st.scheduler.expire(Instant::now());
@@ -1121,6 +1224,9 @@ impl Farm {
             let known: std::collections::HashSet<WorkerId> =
                 st.scheduler.workers().iter().map(|w| w.id).collect();
             st.workers.retain(|id, _| known.contains(id));
+            drop(st);
+            self.waive_checks();
+            st = self.lock();
         }
         if !expired.is_empty() {
             // The first ones ran past the lease timeout; the rest were held by dropped workers.
@@ -1211,6 +1317,7 @@ mod tests {
             max_upload_bytes: 1 << 20,
             max_scene_loads: 2,
             scheduler: scheduler::Config::default(),
+            checks: CheckPolicy::default(),
             retinex: false,
             commit_delay: Duration::ZERO,
             callers: Default::default(),

@@ -4,7 +4,7 @@
 
 use crate::callers::next_within;
 use crate::error::{FarmError, Result};
-use crate::farm::{Expected, Farm, Reported, WorkerStatus};
+use crate::farm::{Expected, Farm, QuarantineRecord, Reported, WorkerStatus};
 use crate::ids::{JobId, Session};
 use crate::lease::LeaseClaim;
 use restauro_proto::convert::WireError;
@@ -35,6 +35,18 @@ impl From<WorkerStatus> for pb::WorkerStatus {
             tiles_failed: w.failed,
             last_seen_s: w.last_seen_s,
             build: w.build,
+            tiles_confirmed: w.confirmed,
+        }
+    }
+}
+
+impl From<QuarantineRecord> for pb::QuarantinedWorker {
+    fn from(q: QuarantineRecord) -> Self {
+        pb::QuarantinedWorker {
+            name: q.name,
+            identity: q.identity,
+            reason: q.reason,
+            since_unix_ms: q.since_unix_ms,
         }
     }
 }
@@ -151,7 +163,8 @@ impl pb::render_server::Render for RenderService {
         _request: Request<pb::ListWorkersRequest>,
     ) -> Result<Response<pb::WorkerList>, Status> {
         let workers = self.0.workers().into_iter().map(Into::into).collect();
-        Ok(Response::new(pb::WorkerList { workers }))
+        let quarantined = self.0.quarantined().into_iter().map(Into::into).collect();
+        Ok(Response::new(pb::WorkerList { workers, quarantined }))
     }
 }
 

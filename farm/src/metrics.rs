@@ -37,6 +37,14 @@ pub struct Metrics {
     pub asset_bytes_sent: Counter,
     /// Result files sent to clients.
     pub result_bytes_sent: Counter,
+    /// Tile checks whose second rendering agreed with the first.
+    pub tile_checks_agreed: Counter,
+    /// Tile checks whose second rendering differed (a third worker settles each).
+    pub tile_checks_disputed: Counter,
+    /// Disputes that three differing renderings left undecided.
+    pub tile_checks_undecided: Counter,
+    /// Workers quarantined for rendering a tile differently from two others.
+    pub workers_quarantined: Counter,
 }
 
 impl Default for Metrics {
@@ -95,8 +103,32 @@ impl Metrics {
         let asset_bytes_received = bytes(r, "asset_received", "Scene assets uploaded by clients");
         let asset_bytes_sent = bytes(r, "asset_sent", "Scene assets sent to workers");
         let result_bytes_sent = bytes(r, "result_sent", "Result files sent to clients");
+        let tile_checks_agreed = counter(
+            r,
+            "tile_checks_agreed",
+            "Tiles rendered a second time on another worker, with the same bytes",
+        );
+        let tile_checks_disputed = counter(
+            r,
+            "tile_checks_disputed",
+            "Tiles whose second rendering on another worker differed (a third settles it)",
+        );
+        let tile_checks_undecided = counter(
+            r,
+            "tile_checks_undecided",
+            "Disputed tiles whose third rendering matched neither of the first two",
+        );
+        let workers_quarantined = counter(
+            r,
+            "workers_quarantined",
+            "Workers quarantined for rendering a tile differently from two other workers",
+        );
         Self {
             registry,
+            tile_checks_agreed,
+            tile_checks_disputed,
+            tile_checks_undecided,
+            workers_quarantined,
             tiles_queued,
             tiles_leased,
             workers_connected,

@@ -26,6 +26,11 @@ const JOBS: TableDefinition<&str, &[u8]> = TableDefinition::new("jobs");
 const TILES: TableDefinition<(&str, u32), &[u8]> = TableDefinition::new("tiles");
 /// Asset hash → bytes: where an earlier release kept the assets (moved to files on open).
 const ASSETS: TableDefinition<&str, &[u8]> = TableDefinition::new("assets");
+/// (job id, tile index) → a check's rendering that differed from the stored tile, kept until a
+/// third rendering settles which of the two is right (`farm::checks`).
+const DISPUTED: TableDefinition<(&str, u32), &[u8]> = TableDefinition::new("disputed");
+/// A quarantined worker's identity key (16 hex digits) → why, as JSON (`farm::checks`).
+const QUARANTINE: TableDefinition<&str, &[u8]> = TableDefinition::new("quarantine");
 /// The run's identity: `secret` (32 bytes) and `epoch` (u64 little-endian).
 const META: TableDefinition<&str, &[u8]> = TableDefinition::new("meta");
 /// The studio's scene revisions: (scene id, revision number) → the revision's record.
@@ -89,6 +94,8 @@ impl Store {
             txn.open_table(ASSETS)?;
             txn.open_table(META)?;
             txn.open_table(SCENE_REVISIONS)?;
+            txn.open_table(DISPUTED)?;
+            txn.open_table(QUARANTINE)?;
             Ok(())
         })?;
         Ok(store)
@@ -209,8 +216,13 @@ impl Store {
 
     /// Every job record, by id.
     pub fn jobs(&self) -> Result<Vec<(String, Vec<u8>)>> {
+        self.entries(JOBS)
+    }
+
+    /// Every entry of a table keyed by a string.
+    fn entries(&self, def: TableDefinition<&str, &[u8]>) -> Result<Vec<(String, Vec<u8>)>> {
         self.read(|txn| {
-            let table = txn.open_table(JOBS)?;
+            let table = txn.open_table(def)?;
             let mut out = Vec::new();
             for entry in table.iter()? {
                 let (k, v) = entry?;
@@ -272,13 +284,61 @@ impl Store {
         self.read(|txn| Ok(txn.open_table(TILES)?.get((job, tile))?.map(|v| v.value().to_vec())))
     }
 
-    /// Forgets a job's tiles (its results are written; the record stays).
+    /// Forgets a job's tiles (its results are written; the record stays), and any disputed
+    /// rendering of them.
     pub fn remove_tiles(&self, job: &str) -> Result<()> {
         self.write(|txn| {
-            let mut table = txn.open_table(TILES)?;
-            table.retain_in((job, 0)..=(job, u32::MAX), |_, _| false)?;
+            for def in [TILES, DISPUTED] {
+                txn.open_table(def)?.retain_in((job, 0)..=(job, u32::MAX), |_, _| false)?;
+            }
             Ok(())
         })
+    }
+
+    /// Forgets some tiles of a job, and any disputed rendering of them (a quarantined
+    /// worker's tiles, to be rendered again).
+    pub fn remove_tile_list(&self, job: &str, tiles: &[u32]) -> Result<()> {
+        self.write(|txn| {
+            for def in [TILES, DISPUTED] {
+                let mut table = txn.open_table(def)?;
+                for &tile in tiles {
+                    table.remove((job, tile))?;
+                }
+            }
+            Ok(())
+        })
+    }
+
+    /// Keeps a check's rendering of a tile that differed from the stored one.
+    pub fn put_disputed(&self, job: &str, tile: u32, data: &[u8]) -> Result<()> {
+        self.write(|txn| {
+            txn.open_table(DISPUTED)?.insert((job, tile), data)?;
+            Ok(())
+        })
+    }
+
+    pub fn disputed(&self, job: &str, tile: u32) -> Result<Option<Vec<u8>>> {
+        self.read(|txn| Ok(txn.open_table(DISPUTED)?.get((job, tile))?.map(|v| v.value().to_vec())))
+    }
+
+    pub fn remove_disputed(&self, job: &str, tile: u32) -> Result<()> {
+        self.write(|txn| {
+            txn.open_table(DISPUTED)?.remove((job, tile))?;
+            Ok(())
+        })
+    }
+
+    /// Records a quarantined worker (`key`: its identity key in hex; `record`: why, as JSON).
+    pub fn put_quarantine(&self, key: &str, record: &[u8]) -> Result<()> {
+        self.write(|txn| {
+            txn.open_table(QUARANTINE)?.insert(key, record)?;
+            Ok(())
+        })
+    }
+
+    /// Every quarantined worker: its key and its record.
+    pub fn quarantine(&self) -> Result<Vec<(String, Vec<u8>)>> {
+        self.entries(QUARANTINE)
     }
 
     /// Forgets the tiles `tiles` of a job (a sequence's frame whose files are written).

@@ -423,6 +423,21 @@ pub fn signal(child: &Child, sig: &str) {
 
 /// The values of channel `name` of the EXR at `path` (its first layer), or `None` when it has
 /// no such channel.
+/// The XYZ pixels of an EXR the farm or the client wrote.
+pub fn exr_pixels(path: &Path) -> Vec<[f32; 3]> {
+    restauro_image::image_files::read_exr(path, 1 << 24)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .pixels
+}
+
+/// Bit-identical: compares every float's bits.
+pub fn assert_identical(a: &[[f32; 3]], b: &[[f32; 3]]) {
+    assert_eq!(a.len(), b.len());
+    let differ =
+        a.iter().zip(b).filter(|(p, q)| p.map(f32::to_bits) != q.map(f32::to_bits)).count();
+    assert_eq!(differ, 0, "{differ} of {} pixels differ", a.len());
+}
+
 pub fn exr_channel(path: &Path, name: &str) -> Option<Vec<f32>> {
     use exr::prelude::{ReadChannels as _, ReadLayers as _};
     let image = exr::prelude::read()

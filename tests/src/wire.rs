@@ -90,8 +90,11 @@ pub async fn farm(
     coordinator_args: &[&str],
 ) -> (crate::Coordinator, Render, Bundle) {
     let scene = crate::aosta_scene(dir, width, height);
-    let coordinator =
-        crate::Coordinator::start(dir, &dir.join("data"), "127.0.0.1:0", coordinator_args);
+    // The workers these tests play send made-up pixels: a check on a real worker would find
+    // them out (tests/tests/checks.rs tests that).
+    let mut args = vec!["--check-rate", "0", "--check-rate-new", "0"];
+    args.extend(coordinator_args);
+    let coordinator = crate::Coordinator::start(dir, &dir.join("data"), "127.0.0.1:0", &args);
     let mut client = render_client(&coordinator.url).await;
     let bundle = upload(&mut client, Path::new(&scene)).await;
     (coordinator, client, bundle)

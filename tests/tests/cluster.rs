@@ -1,26 +1,14 @@
 //! The cluster, as real processes on loopback: a coordinator, two workers and the client.
 
-use restauro_image::image_files::read_exr;
 use restauro_tests::{
-    CLIENT_TOKEN, Coordinator, WORKER_TOKEN, Worker, aosta_scene, restauro, text, token_files, wire,
+    CLIENT_TOKEN, Coordinator, WORKER_TOKEN, Worker, aosta_scene, assert_identical,
+    exr_pixels as pixels, restauro, text, token_files, wire,
 };
 use std::path::Path;
 use std::time::{Duration, Instant};
 
 fn aosta(dir: &Path) -> String {
     aosta_scene(dir, 96, 54)
-}
-
-fn pixels(path: &Path) -> Vec<[f32; 3]> {
-    read_exr(path, 1 << 24).unwrap_or_else(|e| panic!("{}: {e}", path.display())).pixels
-}
-
-/// Bit-identical: compares every float's bits.
-fn assert_identical(a: &[[f32; 3]], b: &[[f32; 3]]) {
-    assert_eq!(a.len(), b.len());
-    let differ =
-        a.iter().zip(b).filter(|(p, q)| p.map(f32::to_bits) != q.map(f32::to_bits)).count();
-    assert_eq!(differ, 0, "{differ} of {} pixels differ", a.len());
 }
 
 /// `restauro render` of `scene` in one process, `spp` samples a pixel in 16-px tiles, into

@@ -14,7 +14,7 @@ fn worker(dir: &Path, url: &str) -> (Worker, String) {
     Worker::start_with_metrics(dir, url, "w1", &[])
 }
 
-const COORDINATOR_METRICS: [&str; 16] = [
+const COORDINATOR_METRICS: [&str; 20] = [
     "restauro_tiles_queued",
     "restauro_tiles_leased",
     "restauro_workers_connected",
@@ -31,6 +31,10 @@ const COORDINATOR_METRICS: [&str; 16] = [
     "restauro_asset_received_bytes_total",
     "restauro_asset_sent_bytes_total",
     "restauro_result_sent_bytes_total",
+    "restauro_tile_checks_agreed_total",
+    "restauro_tile_checks_disputed_total",
+    "restauro_tile_checks_undecided_total",
+    "restauro_workers_quarantined_total",
 ];
 
 const WORKER_METRICS: [&str; 6] = [

@@ -68,6 +68,14 @@ pub struct WorkerArgs {
     /// Append `job tile attempt` for every tile rendered to this file (for tests).
     #[arg(long, hide = true)]
     pub tile_log: Option<PathBuf>,
+    /// Fault injection for tests of the coordinator's tile checks: from the tile this worker
+    /// renders with this number (1 for its first), it sends one pixel altered by the least bit
+    /// of its X. 0: never.
+    #[arg(long, hide = true, default_value_t = 0)]
+    pub fault_lie_from: u64,
+    /// With --fault-lie-from: how many tiles in a row it alters.
+    #[arg(long, hide = true, default_value_t = u64::MAX)]
+    pub fault_lie_count: u64,
     /// The operations endpoint: /metrics and health (/healthz; /readyz once registered), and
     /// who may read the metrics.
     #[command(flatten)]
@@ -469,11 +477,17 @@ impl Worker {
             white: tile.white.as_deref().filter(|_| layout.white),
             samples: tile.samples.as_deref().filter(|_| layout.counts()),
         };
-        let data = encode_tile(
+        let mut data = encode_tile(
             &tile.xyz,
             extras,
             tile.spectral.as_ref().map(|s| s.iter().map(|p| &p.0[..])),
         );
+        let (from, count) = (self.args.fault_lie_from, self.args.fault_lie_count);
+        let nth = self.metrics.tiles_rendered.get();
+        if from > 0 && nth >= from && nth - from < count {
+            warn!(nth, "fault injection: sending this tile with one pixel altered");
+            data[0] ^= 1;
+        }
         let (image_bytes, spectral_bytes) = tile_sizes(&rect, layout);
         let header = pb::TileHeader {
             session: None,

@@ -110,6 +110,15 @@ impl Farm {
         *done == whole
     }
 
+    /// A tile counted towards its frame is to be rendered again (its worker was quarantined).
+    pub(super) fn tile_undone(st: &mut FarmState, id: &JobId, tile: u32) {
+        let Some(place) = st.jobs.get(id).and_then(|r| r.place(tile)) else { return };
+        if let Some(done) = st.frame_done.get_mut(id).and_then(|d| d.get_mut(place.frame as usize))
+        {
+            *done = done.saturating_sub(1);
+        }
+    }
+
     /// Starts the thread that writes the frames of sequence `id` that are whole, in order, and
     /// ends the job after its last; nothing when one runs already (it will see them).
     pub(super) fn kick_frames(self: &Arc<Self>, id: &JobId) {

@@ -38,6 +38,30 @@
 //!   result again ([`Scheduler::commit_failed`]). A job is finished when every tile is done, so
 //!   its assembly never finds a tile missing from the store.
 //!
+//! # Checks
+//!
+//! Every tile is bit-identical whichever worker renders it, so a second rendering proves the
+//! first. The coordinator chooses which results to check (see `farm::checks`); the scheduler
+//! keeps the tiles' part of it:
+//!
+//! * **Checking.** A result chosen for a check is stored like any other, and then waits for a
+//!   rendering by a worker of another identity ([`Scheduler::committed_for_check`]); the tile is
+//!   not done meanwhile, so no job finishes and no frame is written with a check pending.
+//!   Checks go out before fresh tiles of their job, and never to a worker whose identity
+//!   rendered the tile: a worker registering again keeps its identity, so it cannot check its
+//!   own work.
+//! * **Comparing.** A check's result comes back as [`Completion::Check`]; the coordinator
+//!   compares bytes and says how it ended ([`Scheduler::check_settled`]): the two agree (done,
+//!   checked); they differ, and a third worker, of neither identity, renders it again; or the
+//!   third settles it.
+//! * **Quarantine.** A worker found wrong leaves the farm ([`Scheduler::quarantine`]): its
+//!   leases are revoked, and its tiles no check confirmed go back to the queue (except those the
+//!   coordinator says to keep: a frame already written).
+//! * **No checker left.** When the last worker that could make a check leaves (of another
+//!   identity than the renderer's, or for a dispute, than both), the check is waived and the
+//!   tile is done with its stored result ([`Scheduler::waive_checks_without_checkers`]), so a
+//!   farm that shrinks still ends its jobs.
+//!
 //! # Time
 //!
 //! A lease expires at `leased_at + lease_timeout`, a worker is lost at
@@ -68,6 +92,8 @@ use std::hash::{BuildHasherDefault, Hasher};
 use std::time::{Duration, Instant};
 
 pub use crate::ids::{JobId, WorkerId};
+
+mod checks;
 
 /// Permission for one worker to render one tile.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
@@ -118,6 +144,48 @@ pub enum Completion {
     Accepted,
     /// The result must be dropped (see the module doc on staleness).
     Stale,
+    /// The result of a check: compare it with the stored one (and, when `disputed_by` is set,
+    /// with that worker's differing result), then call [`Scheduler::check_settled`]. No other
+    /// result of the tile is accepted meanwhile.
+    Check {
+        /// The identity whose result is stored.
+        renderer: u64,
+        /// The identity of an earlier check that differed from it, if any.
+        disputed_by: Option<u64>,
+    },
+}
+
+/// How a check ended, for [`Scheduler::check_settled`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CheckOutcome {
+    /// The check's bytes are the stored ones (or the stored ones now hold the result a third
+    /// worker agreed with, from `renderer`): the tile is done, and checked.
+    Agreed { renderer: u64 },
+    /// They differ: a third worker, of neither identity, renders the tile again.
+    Disputed { by: u64 },
+    /// Three results that all differ: nothing can be settled; the stored one stands.
+    Undecided,
+    /// The comparison could not be made (the store could not be read): check it again.
+    Retry,
+}
+
+/// What [`Scheduler::quarantine`] did.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Quarantined {
+    /// The leases its registrations held, now revoked.
+    pub revoked: Vec<Lease>,
+    /// Per running job, the tiles it rendered that no check had confirmed, back in the queue.
+    pub redo: Vec<Redo>,
+}
+
+/// A running job's tiles that a quarantined worker rendered and no check confirmed.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Redo {
+    pub job: JobId,
+    /// Those that were done.
+    pub done: Vec<u32>,
+    /// Those that were waiting for a check.
+    pub checking: Vec<u32>,
 }
 
 /// Outcome of [`Scheduler::fail`].
@@ -152,6 +220,8 @@ pub struct JobProgress {
     pub leased: u32,
     /// Tiles neither done, being committed, nor leased.
     pub queued: u32,
+    /// Tiles stored and waiting for a check, or being checked.
+    pub checking: u32,
     /// Times any tile went back to the queue (expiry, worker loss, failure, give back).
     pub requeued: u32,
     pub state: Dispatch,
@@ -283,6 +353,15 @@ enum TileState {
     /// A result was accepted and is being written to the store; nothing else is accepted for
     /// the tile until the write ends.
     Committing,
+    /// Stored, and waiting for a worker of another identity to render it again.
+    Checking,
+    /// Leased for a check: holder and expiry.
+    CheckLeased {
+        worker: WorkerId,
+        deadline: Instant,
+    },
+    /// A check's result is being compared with the stored one.
+    Comparing,
     Done,
 }
 
@@ -293,6 +372,12 @@ struct Tile {
     attempt: u32,
     /// Distinct workers that explicitly failed this tile (usually empty, so no allocation).
     failed_on: Vec<WorkerId>,
+    /// The identity of the worker whose result is stored (0 before there is one).
+    renderer: u64,
+    /// The identity of a check whose result differed from the stored one (0: none).
+    disputed_by: u64,
+    /// A check confirmed the stored result.
+    checked: bool,
 }
 
 struct Job {
@@ -312,6 +397,10 @@ struct Job {
     done: u32,
     /// Tiles accepted and being committed.
     committing: u32,
+    /// Tiles waiting for a check, lowest first (served before fresh tiles).
+    checks: BTreeSet<u32>,
+    /// Tiles waiting for a check, leased for one, or being compared.
+    checking: u32,
     leased: u32,
     queued: u32,
     requeued: u32,
@@ -323,17 +412,27 @@ struct Job {
 impl Job {
     /// Key in the ready set, if the job belongs there (running with queued tiles).
     fn ready_key(&self, slot: Slot) -> Option<ReadyKey> {
-        (self.state == Dispatch::Running && self.queued > 0).then_some((
-            Reverse(self.priority),
-            self.leased,
-            self.seq,
-            slot,
-        ))
+        (self.state == Dispatch::Running && (self.queued > 0 || !self.checks.is_empty()))
+            .then_some((Reverse(self.priority), self.leased, self.seq, slot))
     }
 
     fn excludes(&self, worker: WorkerId, max_worker_failures: u32) -> bool {
         max_worker_failures != 0
             && self.worker_failures.get(&worker).is_some_and(|&n| n >= max_worker_failures)
+    }
+
+    /// Whether the job has work a worker of `identity` may take: a tile to render, or a check
+    /// of a tile no worker of that identity rendered.
+    fn offers(&self, identity: u64) -> bool {
+        self.queued > 0 || self.check_for(identity).is_some()
+    }
+
+    /// The lowest tile waiting for a check that `identity` may render.
+    fn check_for(&self, identity: u64) -> Option<u32> {
+        self.checks.iter().copied().find(|&t| {
+            let tile = &self.tiles[t as usize];
+            tile.renderer != identity && tile.disputed_by != identity
+        })
     }
 
     /// Next tile to lease: lowest requeued tile, else lowest fresh tile.
@@ -354,6 +453,9 @@ impl Job {
 
 struct Worker {
     name: String,
+    /// Who it is across registrations (from the identity it registered with): checks never
+    /// go to the identity that rendered the tile.
+    identity: u64,
     capacity: u32,
     /// Current leases as `pack(slot, tile)`.
     leases: FxSet<u64>,
@@ -463,7 +565,14 @@ impl Scheduler {
         if let Some(&tile) = done.iter().find(|&&t| t >= tiles) {
             return Err(AddJobError::TileOutOfRange { tile, tiles });
         }
-        let fresh = Tile { state: TileState::Queued, attempt: 0, failed_on: Vec::new() };
+        let fresh = Tile {
+            state: TileState::Queued,
+            attempt: 0,
+            failed_on: Vec::new(),
+            renderer: 0,
+            disputed_by: 0,
+            checked: false,
+        };
         let mut table = vec![fresh; tiles as usize];
         let mut done_count = 0;
         for &tile in done {
@@ -489,6 +598,8 @@ impl Scheduler {
             cursor: 0,
             done: done_count,
             committing: 0,
+            checks: BTreeSet::new(),
+            checking: 0,
             leased: 0,
             queued: tiles - done_count,
             requeued: 0,
@@ -504,13 +615,21 @@ impl Scheduler {
         Ok(())
     }
 
-    pub fn register_worker(&mut self, name: &str, capacity: u32, now: Instant) -> WorkerId {
+    /// Registers a worker; `identity` is who it is across registrations (see [`Worker`]).
+    pub fn register_worker(
+        &mut self,
+        name: &str,
+        capacity: u32,
+        identity: u64,
+        now: Instant,
+    ) -> WorkerId {
         let id = self.next_worker;
         self.next_worker.0 += 1;
         self.workers.insert(
             id,
             Worker {
                 name: name.to_owned(),
+                identity,
                 capacity,
                 leases: FxSet::default(),
                 done: 0,
@@ -568,6 +687,7 @@ impl Scheduler {
         let deadline = now + self.config.lease_timeout;
         let max_worker_failures = self.config.max_worker_failures;
         let holder = self.workers.get_mut(&worker).expect("touched worker exists");
+        let identity = holder.identity;
         let mut out = Vec::new();
         while (out.len() as u32) < max {
             let jobs = &self.jobs;
@@ -575,9 +695,9 @@ impl Scheduler {
                 .ready
                 .iter()
                 .find(|key| {
-                    !jobs[key.3 as usize]
-                        .as_ref()
-                        .is_some_and(|job| job.excludes(worker, max_worker_failures))
+                    jobs[key.3 as usize].as_ref().is_some_and(|job| {
+                        !job.excludes(worker, max_worker_failures) && job.offers(identity)
+                    })
                 })
                 .copied()
             else {
@@ -585,12 +705,22 @@ impl Scheduler {
             };
             let slot = key.3;
             let job = self.jobs[slot as usize].as_mut().expect("ready job is live");
-            let tile = job.pop_queued().expect("ready job has a queued tile");
+            // A check first: it holds up the end of its job, as a requeued tile does.
+            let (tile, state) = match job.check_for(identity) {
+                Some(tile) => {
+                    job.checks.remove(&tile);
+                    (tile, TileState::CheckLeased { worker, deadline })
+                }
+                None => {
+                    job.queued -= 1;
+                    let tile = job.pop_queued().expect("a job offering no check has a queued tile");
+                    (tile, TileState::Leased { worker, deadline })
+                }
+            };
             let entry = &mut job.tiles[tile as usize];
             entry.attempt += 1;
-            entry.state = TileState::Leased { worker, deadline };
+            entry.state = state;
             let attempt = entry.attempt;
-            job.queued -= 1;
             job.leased += 1;
             reindex(&mut self.ready, Some(key), job.ready_key(slot));
             self.lease_deadlines.insert((deadline, slot, tile));
@@ -610,7 +740,7 @@ impl Scheduler {
         }
         let tile = job.tiles.get(lease.tile as usize)?;
         match tile.state {
-            TileState::Leased { worker, .. }
+            TileState::Leased { worker, .. } | TileState::CheckLeased { worker, .. }
                 if worker == lease.worker && tile.attempt == lease.attempt =>
             {
                 Some(slot)
@@ -628,16 +758,30 @@ impl Scheduler {
         };
         self.touch(lease.worker, now);
         let before = self.job(slot).ready_key(slot);
+        let check = matches!(
+            self.job(slot).tiles[lease.tile as usize].state,
+            TileState::CheckLeased { .. }
+        );
         self.revoke(slot, lease.tile);
+        let identity = self.workers.get_mut(&lease.worker).map_or(0, |w| {
+            w.done += 1;
+            w.identity
+        });
         let job = self.job_mut(slot);
-        job.committing += 1;
-        job.tiles[lease.tile as usize].state = TileState::Committing;
+        let entry = &mut job.tiles[lease.tile as usize];
+        let completion = if check {
+            entry.state = TileState::Comparing;
+            let disputed_by = (entry.disputed_by != 0).then_some(entry.disputed_by);
+            Completion::Check { renderer: entry.renderer, disputed_by }
+        } else {
+            entry.state = TileState::Committing;
+            entry.renderer = identity;
+            job.committing += 1;
+            Completion::Accepted
+        };
         let after = job.ready_key(slot);
         reindex(&mut self.ready, before, after);
-        if let Some(w) = self.workers.get_mut(&lease.worker) {
-            w.done += 1;
-        }
-        Completion::Accepted
+        completion
     }
 
     /// Accepts a result whose lease a previous run of the coordinator granted (it cannot be
@@ -680,16 +824,23 @@ impl Scheduler {
         let Some(slot) = self.committing(job, tile) else {
             return false;
         };
+        self.job_mut(slot).committing -= 1;
+        self.mark_done(slot, tile)
+    }
+
+    /// The tile is done (its result stored, and checked if it was to be). True when it was the
+    /// job's last tile: the job is then `Finished` and its tile table freed.
+    fn mark_done(&mut self, slot: Slot, tile: u32) -> bool {
         self.totals.done += 1;
         let job = self.job_mut(slot);
         job.tiles[tile as usize].state = TileState::Done;
-        job.committing -= 1;
         job.done += 1;
         let finished = job.done == job.total;
         if finished {
             job.state = Dispatch::Finished;
             job.tiles = Vec::new();
             job.requeue = BTreeSet::new();
+            job.checks = BTreeSet::new();
             job.worker_failures = FxMap::default();
         }
         finished
@@ -732,10 +883,15 @@ impl Scheduler {
 
     /// The slot of a running job whose `tile` is being committed.
     fn committing(&self, job: &str, tile: u32) -> Option<Slot> {
+        self.tile_in(job, tile, TileState::Committing)
+    }
+
+    /// The slot of a running job whose `tile` is in `state`.
+    fn tile_in(&self, job: &str, tile: u32, state: TileState) -> Option<Slot> {
         let slot = *self.by_id.get(job)?;
         let entry = self.job(slot);
-        let state = entry.tiles.get(tile as usize)?.state;
-        (entry.state == Dispatch::Running && state == TileState::Committing).then_some(slot)
+        let now = entry.tiles.get(tile as usize)?.state;
+        (entry.state == Dispatch::Running && now == state).then_some(slot)
     }
 
     /// Ends the current lease of a leased tile (its deadline and its holder's record of it),
@@ -744,7 +900,9 @@ impl Scheduler {
     fn revoke(&mut self, slot: Slot, tile: u32) -> Lease {
         let job = self.jobs[slot as usize].as_mut().expect("leased job is live");
         let entry = &mut job.tiles[tile as usize];
-        let TileState::Leased { worker, deadline } = entry.state else {
+        let (TileState::Leased { worker, deadline } | TileState::CheckLeased { worker, deadline }) =
+            entry.state
+        else {
             unreachable!("only leased tiles are revoked");
         };
         let attempt = entry.attempt;
@@ -767,7 +925,16 @@ impl Scheduler {
         if let Some(w) = self.workers.get_mut(&lease.worker) {
             w.failed += 1;
         }
+        let check = matches!(
+            self.job(slot).tiles[lease.tile as usize].state,
+            TileState::CheckLeased { .. }
+        );
         self.requeue(slot, lease.tile);
+        if check {
+            // Another worker rendered the tile: the scene is not at fault, this worker may be.
+            *self.job_mut(slot).worker_failures.entry(lease.worker).or_insert(0) += 1;
+            return Failure::Requeued;
+        }
         let max_tile_failures = self.config.max_tile_failures;
         let job = self.job_mut(slot);
         *job.worker_failures.entry(lease.worker).or_insert(0) += 1;
@@ -795,12 +962,19 @@ impl Scheduler {
         true
     }
 
-    /// Takes the current lease of a tile away and puts the tile at the head of its job's queue.
-    /// Returns the revoked lease.
+    /// Takes the current lease of a tile away and puts the tile at the head of its job's queue
+    /// (a check's, back among the checks). Returns the revoked lease.
     fn requeue(&mut self, slot: Slot, tile: u32) -> Lease {
         let before = self.job(slot).ready_key(slot);
         let lease = self.revoke(slot, tile);
         let job = self.job_mut(slot);
+        if matches!(job.tiles[tile as usize].state, TileState::CheckLeased { .. }) {
+            job.tiles[tile as usize].state = TileState::Checking;
+            job.checks.insert(tile);
+            let after = job.ready_key(slot);
+            reindex(&mut self.ready, before, after);
+            return lease;
+        }
         job.tiles[tile as usize].state = TileState::Queued;
         job.requeue.insert(tile);
         job.queued += 1;
@@ -819,7 +993,9 @@ impl Scheduler {
             self.ready.remove(&key);
         }
         for (index, tile) in job.tiles.iter().enumerate() {
-            if let TileState::Leased { worker, deadline } = tile.state {
+            if let TileState::Leased { worker, deadline }
+            | TileState::CheckLeased { worker, deadline } = tile.state
+            {
                 let index = index as u32;
                 self.lease_deadlines.remove(&(deadline, slot, index));
                 if let Some(w) = self.workers.get_mut(&worker) {
@@ -829,9 +1005,11 @@ impl Scheduler {
         }
         job.leased = 0;
         job.committing = 0;
+        job.checking = 0;
         job.queued = job.total - job.done;
         job.tiles = Vec::new();
         job.requeue = BTreeSet::new();
+        job.checks = BTreeSet::new();
         job.worker_failures = FxMap::default();
         job.state = state;
     }
@@ -896,6 +1074,7 @@ impl Scheduler {
             done: job.done,
             leased: job.leased,
             queued: job.queued,
+            checking: job.checking,
             requeued: job.requeued,
             state: job.state.clone(),
         })
@@ -936,7 +1115,13 @@ impl Scheduler {
 
     /// Queued tiles over all running jobs (including tiles only excluded workers could take).
     pub fn pending_tiles(&self) -> u64 {
-        self.ready.iter().map(|key| u64::from(self.job(key.3).queued)).sum()
+        self.ready
+            .iter()
+            .map(|key| {
+                let job = self.job(key.3);
+                u64::from(job.queued) + job.checks.len() as u64
+            })
+            .sum()
     }
 
     /// The earliest instant at which [`Scheduler::expire`] would do something, if any: the
@@ -952,459 +1137,4 @@ impl Scheduler {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use std::collections::HashSet;
-
-    fn secs(n: u64) -> Duration {
-        Duration::from_secs(n)
-    }
-
-    fn setup() -> (Scheduler, Instant) {
-        (Scheduler::new(Config::default()), Instant::now())
-    }
-
-    fn add(s: &mut Scheduler, id: &str, priority: i32, tiles: u32, now: Instant) {
-        s.add_job(id.into(), priority, tiles, &[], now).unwrap();
-    }
-
-    /// Completes and commits a lease; true when it finished its job.
-    fn finish(s: &mut Scheduler, l: &Lease, now: Instant) -> bool {
-        assert_eq!(s.complete(l, now), Completion::Accepted, "{l:?}");
-        s.committed(&l.job, l.tile)
-    }
-
-    fn tiles_of(leases: &[Lease]) -> Vec<(String, u32)> {
-        leases.iter().map(|l| (l.job.to_string(), l.tile)).collect()
-    }
-
-    #[test]
-    fn every_tile_leased_once_then_finished() {
-        let (mut s, t0) = setup();
-        add(&mut s, "a", 0, 10, t0);
-        let w1 = s.register_worker("w1", 4, t0);
-        let w2 = s.register_worker("w2", 4, t0);
-        assert_eq!((w1, w2), (WorkerId(1), WorkerId(2)));
-        let mut seen = HashSet::new();
-        let mut finished = 0;
-        let mut completions = 0;
-        loop {
-            let mut batch = s.lease(w1, 3, t0);
-            batch.extend(s.lease(w2, 3, t0));
-            if batch.is_empty() {
-                break;
-            }
-            for l in &batch {
-                assert_eq!(l.attempt, 1);
-                assert!(seen.insert(l.tile), "tile {} leased twice", l.tile);
-            }
-            for l in &batch {
-                completions += 1;
-                if finish(&mut s, l, t0) {
-                    finished += 1;
-                    assert_eq!(completions, 10);
-                }
-            }
-        }
-        assert_eq!(seen, (0..10).collect());
-        assert_eq!(finished, 1);
-        let p = s.progress("a").unwrap();
-        assert_eq!((p.done, p.leased, p.queued, p.requeued), (10, 0, 0, 0));
-        assert_eq!(p.state, Dispatch::Finished);
-        assert_eq!(s.pending_tiles(), 0);
-        let done: u64 = s.workers().iter().map(|w| w.done).sum();
-        assert_eq!(done, 10);
-    }
-
-    /// The metrics' totals and gauges follow leases, completions, expiries and lost workers.
-    #[test]
-    fn totals_and_gauges_count_what_happened() {
-        let (mut s, t0) = setup();
-        add(&mut s, "a", 0, 5, t0);
-        let w1 = s.register_worker("w1", 8, t0);
-        let w2 = s.register_worker("w2", 8, t0);
-        let first = s.lease(w1, 2, t0);
-        let second = s.lease(w2, 1, t0);
-        assert_eq!(s.gauges(), Gauges { queued: 2, leased: 3, workers: 2 });
-        finish(&mut s, &first[0], t0);
-        // Past the lease timeout: w1's other lease and w2's lease expire, and w1, silent since
-        // the start, is dropped; w2 heartbeats just before.
-        let later = t0 + s.config().lease_timeout.max(s.config().heartbeat_timeout) + secs(1);
-        s.heartbeat(w2, later);
-        assert_eq!(s.expire(later).len(), 2);
-        let t = s.totals();
-        let counts = (t.leased, t.done, t.lease_expiries, t.requeued, t.workers_lost);
-        assert_eq!(counts, (3, 1, 2, 2, 1));
-        assert_eq!(s.gauges(), Gauges { queued: 4, leased: 0, workers: 1 });
-        // A late report of an expired lease is stale and not counted as done.
-        assert_eq!(s.complete(&second[0], later), Completion::Stale);
-        assert_eq!(s.totals().done, 1);
-    }
-
-    #[test]
-    fn higher_priority_first() {
-        let (mut s, t0) = setup();
-        add(&mut s, "low", 0, 3, t0);
-        add(&mut s, "high", 5, 2, t0);
-        let w = s.register_worker("w", 8, t0);
-        let got = tiles_of(&s.lease(w, 3, t0));
-        assert_eq!(got, vec![("high".into(), 0), ("high".into(), 1), ("low".into(), 0)]);
-    }
-
-    #[test]
-    fn equal_priority_jobs_interleave() {
-        let (mut s, t0) = setup();
-        add(&mut s, "a", 1, 10, t0);
-        add(&mut s, "b", 1, 10, t0);
-        let w1 = s.register_worker("w1", 8, t0);
-        let w2 = s.register_worker("w2", 8, t0);
-        let got = tiles_of(&s.lease(w1, 4, t0));
-        assert_eq!(got, vec![("a".into(), 0), ("b".into(), 0), ("a".into(), 1), ("b".into(), 1)]);
-        // Completing two of a's tiles makes it the job with fewer leased tiles.
-        let first = s.lease(w2, 1, t0);
-        assert_eq!(tiles_of(&first), vec![("a".into(), 2)]);
-        s.complete(&first[0], t0);
-        let more = s.lease(w2, 2, t0);
-        assert_eq!(tiles_of(&more), vec![("a".into(), 3), ("b".into(), 2)]);
-    }
-
-    #[test]
-    fn expired_lease_is_requeued_and_old_completion_is_stale() {
-        let (mut s, t0) = setup();
-        add(&mut s, "a", 0, 2, t0);
-        let w = s.register_worker("w", 1, t0);
-        let old = s.lease(w, 1, t0).remove(0);
-        assert_eq!((old.tile, old.attempt), (0, 1));
-        assert!(s.heartbeat(w, t0 + secs(10)));
-        assert!(s.heartbeat(w, t0 + secs(20)));
-        assert!(s.expire(t0 + secs(29)).is_empty());
-        assert_eq!(s.expire(t0 + secs(30)), vec![old.clone()]);
-        let p = s.progress("a").unwrap();
-        assert_eq!((p.leased, p.queued, p.requeued), (0, 2, 1));
-        // The requeued tile goes before the fresh tile 1.
-        let new = s.lease(w, 1, t0 + secs(30)).remove(0);
-        assert_eq!((new.tile, new.attempt), (0, 2));
-        assert_eq!(s.complete(&old, t0 + secs(31)), Completion::Stale);
-        assert_eq!(s.complete(&new, t0 + secs(31)), Completion::Accepted);
-        assert!(!s.committed(&new.job, new.tile));
-        assert_eq!(s.progress("a").unwrap().done, 1);
-    }
-
-    #[test]
-    fn heartbeat_timeout_removes_worker_and_requeues() {
-        let (mut s, t0) = setup();
-        add(&mut s, "a", 0, 1, t0);
-        let w1 = s.register_worker("w1", 1, t0);
-        let lost = s.lease(w1, 1, t0 + secs(1)).remove(0);
-        let w2 = s.register_worker("w2", 1, t0 + secs(10));
-        assert!(s.expire(t0 + secs(15)).is_empty());
-        assert_eq!(s.expire(t0 + secs(16)), vec![lost.clone()]);
-        assert!(!s.heartbeat(w1, t0 + secs(17)));
-        assert!(s.lease(w1, 1, t0 + secs(17)).is_empty());
-        assert_eq!(s.workers().iter().map(|w| w.id).collect::<Vec<_>>(), [w2]);
-        let again = s.lease(w2, 1, t0 + secs(17)).remove(0);
-        assert_eq!((again.tile, again.attempt, again.worker), (0, 2, w2));
-        assert_eq!(s.complete(&lost, t0 + secs(18)), Completion::Stale);
-        assert_eq!(s.progress("a").unwrap().requeued, 1);
-    }
-
-    #[test]
-    fn duplicate_completion_is_stale() {
-        let (mut s, t0) = setup();
-        add(&mut s, "a", 0, 2, t0);
-        let w = s.register_worker("w", 1, t0);
-        let l = s.lease(w, 1, t0).remove(0);
-        assert!(!finish(&mut s, &l, t0));
-        assert_eq!(s.complete(&l, t0), Completion::Stale);
-        assert_eq!(s.progress("a").unwrap().done, 1);
-        assert_eq!(s.workers()[0].done, 1);
-        // Someone else's lease, or an unknown job, is stale too.
-        let l2 = s.lease(w, 1, t0).remove(0);
-        let forged = Lease { worker: WorkerId(99), ..l2.clone() };
-        assert_eq!(s.complete(&forged, t0), Completion::Stale);
-        let unknown = Lease { job: "zz".into(), ..l2 };
-        assert_eq!(s.complete(&unknown, t0), Completion::Stale);
-    }
-
-    #[test]
-    fn tile_failing_on_three_distinct_workers_fails_job() {
-        let (mut s, t0) = setup();
-        add(&mut s, "a", 0, 2, t0);
-        let w1 = s.register_worker("w1", 1, t0);
-        let w2 = s.register_worker("w2", 1, t0);
-        let w3 = s.register_worker("w3", 1, t0);
-        let w4 = s.register_worker("w4", 1, t0);
-        let l = s.lease(w1, 1, t0).remove(0);
-        assert_eq!(l.tile, 0);
-        assert_eq!(s.fail(&l, "boom", t0), Failure::Requeued);
-        // Same worker, same tile again: counts once for the tile.
-        let l = s.lease(w1, 1, t0).remove(0);
-        assert_eq!((l.tile, l.attempt), (0, 2));
-        assert_eq!(s.fail(&l, "boom", t0), Failure::Requeued);
-        assert_eq!(s.fail(&l, "boom", t0), Failure::Stale);
-        let l = s.lease(w2, 1, t0).remove(0);
-        assert_eq!((l.tile, l.attempt), (0, 3));
-        assert_eq!(s.fail(&l, "bad", t0), Failure::Requeued);
-        let other = s.lease(w4, 1, t0).remove(0);
-        assert_eq!(other.tile, 0);
-        assert!(s.give_back(&other, t0));
-        let other = s.lease(w4, 2, t0);
-        assert_eq!(other.iter().map(|l| l.tile).collect::<Vec<_>>(), [0, 1]);
-        // Tile 0 has now failed on w1, w2 and w4 -> the job fails, with the last reason.
-        let reason = "tile 0 failed on 3 workers: meh".to_owned();
-        assert_eq!(s.fail(&other[0], "meh", t0), Failure::JobFailed { reason: reason.clone() });
-        let p = s.progress("a").unwrap();
-        assert_eq!(p.state, Dispatch::Failed(reason));
-        assert_eq!(s.complete(&other[1], t0), Completion::Stale);
-        assert!(s.lease(w3, 1, t0).is_empty());
-        assert_eq!(s.pending_tiles(), 0);
-        assert!(s.workers().iter().all(|w| w.leases == 0));
-        assert_eq!(s.workers()[0].failed, 2);
-    }
-
-    #[test]
-    fn failure_reason_reported_on_the_failing_call() {
-        let (mut s, t0) = setup();
-        add(&mut s, "a", 0, 1, t0);
-        let ws: Vec<_> = (0..3).map(|i| s.register_worker(&format!("w{i}"), 1, t0)).collect();
-        let mut results = Vec::new();
-        for &w in &ws {
-            let l = s.lease(w, 1, t0).remove(0);
-            results.push(s.fail(&l, &format!("err{w}"), t0));
-        }
-        assert_eq!(
-            results,
-            vec![
-                Failure::Requeued,
-                Failure::Requeued,
-                Failure::JobFailed { reason: "tile 0 failed on 3 workers: err3".into() }
-            ]
-        );
-        assert_eq!(s.next_deadline(), Some(t0 + secs(15)));
-    }
-
-    #[test]
-    fn excluded_worker_still_gets_other_jobs() {
-        let (mut s, t0) = setup();
-        add(&mut s, "a", 1, 10, t0);
-        add(&mut s, "b", 0, 10, t0);
-        let w1 = s.register_worker("w1", 4, t0);
-        let w2 = s.register_worker("w2", 4, t0);
-        let ls = s.lease(w1, 2, t0);
-        assert_eq!(tiles_of(&ls), vec![("a".into(), 0), ("a".into(), 1)]);
-        assert_eq!(s.fail(&ls[0], "missing texture", t0), Failure::Requeued);
-        assert_eq!(s.fail(&ls[1], "missing texture", t0), Failure::Requeued);
-        // w1 is excluded from a: it gets b's tiles although a has higher priority.
-        assert_eq!(tiles_of(&s.lease(w1, 2, t0)), vec![("b".into(), 0), ("b".into(), 1)]);
-        // w2 is not: it gets a's requeued tiles first.
-        assert_eq!(tiles_of(&s.lease(w2, 2, t0)), vec![("a".into(), 0), ("a".into(), 1)]);
-        s.cancel("b");
-        // Only a has queued tiles now: w1 gets nothing, and a keeps waiting, not failed.
-        assert!(s.lease(w1, 2, t0).is_empty());
-        let p = s.progress("a").unwrap();
-        assert_eq!((p.state, p.queued, p.leased), (Dispatch::Running, 8, 2));
-        assert_eq!(s.pending_tiles(), 8);
-    }
-
-    #[test]
-    fn cancel_stales_leases_and_stops_leasing() {
-        let (mut s, t0) = setup();
-        add(&mut s, "a", 0, 5, t0);
-        let w = s.register_worker("w", 2, t0);
-        let ls = s.lease(w, 2, t0);
-        assert!(s.cancel("a"));
-        assert!(!s.cancel("a"));
-        assert!(!s.cancel("nope"));
-        assert_eq!(s.complete(&ls[0], t0), Completion::Stale);
-        assert_eq!(s.fail(&ls[1], "x", t0), Failure::Stale);
-        assert!(!s.give_back(&ls[1], t0));
-        assert!(s.lease(w, 2, t0).is_empty());
-        assert_eq!(s.pending_tiles(), 0);
-        assert_eq!(s.workers()[0].leases, 0);
-        let p = s.progress("a").unwrap();
-        assert_eq!((p.state, p.done, p.leased, p.queued), (Dispatch::Cancelled, 0, 0, 5));
-        // No lease deadline is left behind; only the worker's heartbeat.
-        assert_eq!(s.next_deadline(), Some(t0 + secs(15)));
-        s.remove_job("a");
-        assert_eq!(s.progress("a"), None);
-        // The id may be used again once forgotten.
-        add(&mut s, "a", 0, 1, t0);
-        assert_eq!(s.lease(w, 2, t0).len(), 1);
-    }
-
-    #[test]
-    fn resume_leases_only_remaining_tiles() {
-        let (mut s, t0) = setup();
-        s.add_job("a".into(), 0, 5, &[0, 2, 4, 2], t0).unwrap();
-        let p = s.progress("a").unwrap();
-        assert_eq!((p.done, p.queued), (3, 2));
-        assert_eq!(s.pending_tiles(), 2);
-        let w = s.register_worker("w", 8, t0);
-        let ls = s.lease(w, 8, t0);
-        assert_eq!(ls.iter().map(|l| l.tile).collect::<Vec<_>>(), [1, 3]);
-        assert!(!finish(&mut s, &ls[0], t0));
-        assert!(finish(&mut s, &ls[1], t0));
-        s.add_job("b".into(), 0, 2, &[1, 0], t0).unwrap();
-        assert_eq!(s.progress("b").unwrap().state, Dispatch::Finished);
-        assert_eq!(
-            s.add_job("c".into(), 0, 2, &[2], t0),
-            Err(AddJobError::TileOutOfRange { tile: 2, tiles: 2 })
-        );
-        assert_eq!(s.add_job("a".into(), 0, 2, &[], t0), Err(AddJobError::Duplicate("a".into())));
-    }
-
-    #[test]
-    fn give_back_requeues_without_failure() {
-        let (mut s, t0) = setup();
-        add(&mut s, "a", 0, 5, t0);
-        let w = s.register_worker("w", 3, t0);
-        let ls = s.lease(w, 3, t0);
-        assert!(s.give_back(&ls[1], t0));
-        assert!(!s.give_back(&ls[1], t0));
-        let p = s.progress("a").unwrap();
-        assert_eq!((p.leased, p.queued, p.requeued), (2, 3, 1));
-        // The handed-back tile goes first, with the next attempt.
-        let again = s.lease(w, 2, t0);
-        assert_eq!(again.iter().map(|l| (l.tile, l.attempt)).collect::<Vec<_>>(), [(1, 2), (3, 1)]);
-        // Two more give backs by the same worker would exclude it if they counted as failures.
-        assert!(s.give_back(&again[0], t0));
-        assert!(s.give_back(&again[1], t0));
-        assert_eq!(s.lease(w, 1, t0)[0].tile, 1);
-        assert_eq!(s.workers()[0].failed, 0);
-        assert_eq!(s.progress("a").unwrap().state, Dispatch::Running);
-    }
-
-    #[test]
-    fn next_deadline_tracks_leases_and_heartbeats() {
-        let mut s = Scheduler::new(Config { heartbeat_timeout: secs(60), ..Config::default() });
-        let t0 = Instant::now();
-        assert_eq!(s.next_deadline(), None);
-        add(&mut s, "a", 0, 2, t0);
-        let w = s.register_worker("w", 2, t0);
-        assert_eq!(s.next_deadline(), Some(t0 + secs(60)));
-        let ls = s.lease(w, 2, t0 + secs(1));
-        assert_eq!(s.next_deadline(), Some(t0 + secs(31)));
-        s.complete(&ls[0], t0 + secs(2));
-        assert_eq!(s.next_deadline(), Some(t0 + secs(31)));
-        assert_eq!(s.expire(t0 + secs(31)), vec![ls[1].clone()]);
-        assert_eq!(s.next_deadline(), Some(t0 + secs(62)));
-        assert!(s.expire(t0 + secs(61)).is_empty());
-        assert!(s.expire(t0 + secs(62)).is_empty());
-        assert!(s.workers().is_empty());
-        assert_eq!(s.next_deadline(), None);
-    }
-
-    #[test]
-    fn remove_worker_returns_and_requeues_its_leases() {
-        let (mut s, t0) = setup();
-        add(&mut s, "a", 0, 4, t0);
-        let w1 = s.register_worker("w1", 2, t0);
-        let w2 = s.register_worker("w2", 2, t0);
-        let ls = s.lease(w1, 2, t0);
-        assert_eq!(s.remove_worker(w1, t0), ls);
-        assert!(s.remove_worker(w1, t0).is_empty());
-        let p = s.progress("a").unwrap();
-        assert_eq!((p.leased, p.queued, p.requeued), (0, 4, 2));
-        let again = s.lease(w2, 4, t0);
-        assert_eq!(
-            again.iter().map(|l| (l.tile, l.attempt)).collect::<Vec<_>>(),
-            [(0, 2), (1, 2), (2, 1), (3, 1)]
-        );
-        assert_eq!(s.register_worker("w3", 1, t0), WorkerId(3));
-    }
-
-    /// Between acceptance and the store's commit a tile takes no other result, expires with no
-    /// lease and is not re-leased; it is done only once committed.
-    #[test]
-    fn an_accepted_tile_is_done_only_once_committed() {
-        let (mut s, t0) = setup();
-        add(&mut s, "a", 0, 2, t0);
-        let w1 = s.register_worker("w1", 2, t0);
-        let w2 = s.register_worker("w2", 2, t0);
-        let l = s.lease(w1, 1, t0).remove(0);
-        assert_eq!(s.complete(&l, t0), Completion::Accepted);
-        assert_eq!(s.complete(&l, t0), Completion::Stale);
-        assert_eq!(s.complete_inherited("a", l.tile), Completion::Stale);
-        let p = s.progress("a").unwrap();
-        assert_eq!((p.done, p.leased, p.queued), (0, 0, 1));
-        // Past every timeout: nothing of the committing tile expires, and only tile 1 is leased.
-        let later = t0 + secs(100);
-        s.heartbeat(w2, later);
-        assert!(s.expire(later).is_empty());
-        assert_eq!(tiles_of(&s.lease(w2, 2, later)), vec![("a".into(), 1)]);
-        assert!(!s.committed("a", l.tile));
-        assert!(!s.committed("a", l.tile), "committed twice");
-        assert_eq!(s.progress("a").unwrap().done, 1);
-    }
-
-    /// A commit that fails gives the lease back to its worker (its result may be sent again),
-    /// or, for an earlier run's lease, puts the tile back at the head of the queue; against
-    /// nobody either way.
-    #[test]
-    fn a_failed_commit_gives_the_lease_back_or_requeues_the_tile() {
-        let (mut s, t0) = setup();
-        add(&mut s, "a", 0, 3, t0);
-        let w = s.register_worker("w", 3, t0);
-        let ls = s.lease(w, 2, t0);
-        assert_eq!(s.complete(&ls[1], t0), Completion::Accepted);
-        s.commit_failed("a", 1, Some(&ls[1]), t0 + secs(1));
-        let p = s.progress("a").unwrap();
-        assert_eq!((p.done, p.leased, p.queued, p.requeued), (0, 2, 1, 0));
-        assert_eq!(s.workers()[0].done, 0);
-        // The same result, sent again, is accepted; the lease has a new deadline.
-        assert!(s.heartbeat(w, t0 + secs(29)));
-        assert_eq!(s.expire(t0 + secs(30)).len(), 1, "only the other lease expired");
-        assert!(!finish(&mut s, &ls[1], t0 + secs(30)));
-        // An inherited result that fails to commit puts its tile back in the queue.
-        assert_eq!(s.complete_inherited("a", 2), Completion::Accepted);
-        s.commit_failed("a", 2, None, t0 + secs(30));
-        let p = s.progress("a").unwrap();
-        assert_eq!((p.done, p.leased, p.queued, p.requeued), (1, 0, 2, 2));
-        let again = s.lease(w, 2, t0 + secs(30));
-        assert_eq!(again.iter().map(|l| (l.tile, l.attempt)).collect::<Vec<_>>(), [(0, 2), (2, 1)]);
-        assert_eq!(s.workers()[0].failed, 0);
-    }
-
-    /// A job cancelled while a tile commits: the commit's end changes nothing.
-    #[test]
-    fn a_commit_ending_after_a_cancel_changes_nothing() {
-        let (mut s, t0) = setup();
-        add(&mut s, "a", 0, 1, t0);
-        let w = s.register_worker("w", 1, t0);
-        let l = s.lease(w, 1, t0).remove(0);
-        assert_eq!(s.complete(&l, t0), Completion::Accepted);
-        assert!(s.cancel("a"));
-        assert!(!s.committed("a", 0));
-        s.commit_failed("a", 0, Some(&l), t0);
-        let p = s.progress("a").unwrap();
-        assert_eq!((p.state, p.done), (Dispatch::Cancelled, 0));
-        assert_eq!(s.pending_tiles(), 0);
-    }
-
-    /// A result of a lease from a previous run of the coordinator takes a tile that is queued or
-    /// leased in this run (revoking that lease), never one done or committing.
-    #[test]
-    fn an_inherited_result_takes_a_tile_not_yet_done() {
-        let (mut s, t0) = setup();
-        s.add_job("a".into(), 0, 4, &[3], t0).unwrap();
-        let w = s.register_worker("w", 4, t0);
-        let leased = s.lease(w, 1, t0).remove(0);
-        assert_eq!(leased.tile, 0);
-        // Tile 0 is leased in this run, tile 1 queued, tile 3 done at resume.
-        assert_eq!(s.complete_inherited("a", 0), Completion::Accepted);
-        assert_eq!(s.complete(&leased, t0), Completion::Stale, "the revoked lease");
-        assert_eq!(s.complete_inherited("a", 1), Completion::Accepted);
-        assert_eq!(s.complete_inherited("a", 1), Completion::Stale);
-        assert_eq!(s.complete_inherited("a", 3), Completion::Stale);
-        assert_eq!(s.complete_inherited("a", 9), Completion::Stale);
-        assert_eq!(s.complete_inherited("zz", 0), Completion::Stale);
-        let p = s.progress("a").unwrap();
-        assert_eq!((p.done, p.leased, p.queued), (1, 0, 1));
-        assert_eq!(s.workers()[0].leases, 0);
-        assert_eq!(tiles_of(&s.lease(w, 4, t0)), vec![("a".into(), 2)]);
-        assert!(!s.committed("a", 0));
-        assert!(!s.committed("a", 1));
-        let last = Lease { job: "a".into(), tile: 2, attempt: 1, worker: w };
-        assert!(finish(&mut s, &last, t0));
-    }
-}
+mod tests;

@@ -1344,6 +1344,34 @@ mod tests {
         assert_eq!(farm.workers().len(), 70_000);
     }
 
+    /// A quarantined worker is refused when it registers again, also by the coordinator
+    /// restarted on the same store, and is listed with the reason; another identity is not.
+    #[test]
+    fn a_quarantine_outlives_the_coordinator() {
+        let dir = tempfile::tempdir().unwrap();
+        let (liar, honest) = ([1u8; 32], [2u8; 32]);
+        {
+            let farm = farm(dir.path());
+            let (session, _) = farm.register("liar", 1, "b", &liar).unwrap();
+            let key = checks::identity_key(&crate::lease::identity_digest(&liar));
+            farm.quarantine(key, "its rendering of tile 3 differed".into());
+            assert!(!farm.heartbeat(&session), "its session outlived the quarantine");
+            assert!(farm.workers().is_empty());
+        }
+        let farm = farm(dir.path());
+        let e = farm.register("liar", 1, "b", &liar).unwrap_err();
+        assert_eq!(tonic::Status::from(e).code(), tonic::Code::PermissionDenied);
+        let e = farm.register("renamed", 1, "b", &liar).unwrap_err().to_string();
+        assert!(e.contains("worker liar is quarantined: its rendering of tile 3 differed"), "{e}");
+        let listed = farm.quarantined();
+        assert_eq!(listed.len(), 1);
+        assert_eq!(
+            (listed[0].name.as_str(), listed[0].reason.as_str()),
+            ("liar", "its rendering of tile 3 differed")
+        );
+        assert!(farm.register("honest", 1, "b", &honest).is_ok());
+    }
+
     /// A worker's name and build are shown to others: control characters are refused.
     #[test]
     fn a_worker_named_with_control_characters_is_refused() {

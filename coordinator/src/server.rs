@@ -37,6 +37,11 @@ pub struct CoordinatorArgs {
     /// A file holding the clients' bearer token (else RESTAURO_CLIENT_TOKEN).
     #[arg(long)]
     pub client_token_file: Option<PathBuf>,
+    /// Keep the store in this PostgreSQL database (`postgres://USER[:PASSWORD]@HOST[:PORT]/DB`,
+    /// else RESTAURO_STORE) instead of the file `store.redb` in --data. Its schema is created
+    /// and migrated at start. The assets and results stay in --data.
+    #[arg(long, env = "RESTAURO_STORE", hide_env_values = true)]
+    pub store: Option<String>,
     /// A file holding the workers' bearer token (else RESTAURO_WORKER_TOKEN).
     #[arg(long)]
     pub worker_token_file: Option<PathBuf>,
@@ -202,6 +207,7 @@ pub fn run(args: &CoordinatorArgs) -> Result<()> {
         cache_dir: Some(args.data.join("downloads")),
     });
     let config = Config {
+        store: args.store.clone(),
         data_dir: args.data.clone(),
         tokens: Tokens::new(&client, &worker),
         limits: Limits::from(&args.limits),

@@ -51,8 +51,11 @@ pub use scenes::{
 /// How the coordinator runs.
 #[derive(Clone)]
 pub struct Config {
-    /// The store (`store.redb`), the assets (`assets/`) and the results (`jobs/<id>/`).
+    /// The store (`store.redb`, unless `store` names another), the assets (`assets/`) and the
+    /// results (`jobs/<id>/`).
     pub data_dir: PathBuf,
+    /// A PostgreSQL database for the store (`postgres://…`) instead of `data_dir/store.redb`.
+    pub store: Option<String>,
     pub tokens: Tokens,
     /// What a job's scene and render may ask; sent to workers with each job.
     pub limits: Limits,
@@ -194,6 +197,14 @@ pub enum Reported {
     Accepted,
 }
 
+/// The store the configuration names: a PostgreSQL database, or the file in the data folder.
+fn open_store(config: &Config) -> std::result::Result<Store, crate::store::StoreError> {
+    match &config.store {
+        Some(url) => Store::connect(url),
+        None => Store::open(&config.data_dir.join("store.redb")),
+    }
+}
+
 /// What follows tiles becoming done ([`Farm::follow`]).
 #[derive(Clone, Copy, Debug, Default)]
 struct Next {
@@ -235,9 +246,7 @@ impl Farm {
             path: jobs_dir.display().to_string(),
             source,
         })?;
-        let store = Arc::new(
-            Store::open(&config.data_dir.join("store.redb")).map_err(FarmError::StoreAtStart)?,
-        );
+        let store = Arc::new(open_store(&config).map_err(FarmError::StoreAtStart)?);
         let (secret, epoch) =
             store.begin_run(crate::ids::random_secret()).map_err(FarmError::StoreAtStart)?;
         let assets = AssetStore::open(
@@ -1311,6 +1320,7 @@ mod tests {
     fn farm(dir: &Path) -> Arc<Farm> {
         Farm::open(Config {
             data_dir: dir.to_owned(),
+            store: None,
             tokens: Tokens::new("c", "w"),
             limits: Limits::default(),
             max_jobs: 4,
@@ -1391,7 +1401,7 @@ mod tests {
             let store = Store::open(&dir.path().join("store.redb")).unwrap();
             let old = br#"{"id":"o","name":"aosta","state":"running","options":{}}"#;
             store.put_job("o", old).unwrap();
-            store.put_tiles([("o", 0, &[1u8, 2, 3][..])]).unwrap();
+            store.put_tiles(&[("o", 0, &[1u8, 2, 3][..])]).unwrap();
         }
         let farm = farm(dir.path());
         let jobs = farm.jobs();

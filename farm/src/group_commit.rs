@@ -74,10 +74,17 @@ impl TileCommits {
                 if !delay.is_zero() {
                     std::thread::sleep(delay);
                 }
-                let result = store.put_tiles(batch.iter().filter_map(|p| match p {
-                    Pending::Tile { job, tile, data, .. } => Some((&**job, *tile, data.as_slice())),
-                    Pending::RemoveJob { .. } => None,
-                }));
+                let tiles: Vec<(&str, u32, &[u8])> = batch
+                    .iter()
+                    .filter_map(|p| match p {
+                        Pending::Tile { job, tile, data, .. } => {
+                            Some((&**job, *tile, data.as_slice()))
+                        }
+                        Pending::RemoveJob { .. } => None,
+                    })
+                    .collect();
+                let result = store.put_tiles(&tiles);
+                drop(tiles);
                 tracing::trace!(tiles = batch.len(), bytes, "tiles committed");
                 for p in batch {
                     if let Pending::Tile { done, .. } = p {

@@ -5,6 +5,7 @@
 //! executables (`target/<profile>/`); this module finds them and starts processes.
 
 pub mod browser;
+pub mod fleet;
 pub mod http;
 pub mod load;
 pub mod raw;

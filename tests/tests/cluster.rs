@@ -255,10 +255,31 @@ fn only_unfinished_tiles_are_rendered_after_the_restart(
 #[test]
 fn a_restarted_coordinator_resumes_without_rendering_finished_tiles_again() {
     let dir = tempfile::tempdir().unwrap();
-    let d = dir.path();
+    let data = dir.path().join("data");
+    restart_resumes(dir.path(), &[], || {
+        restauro_farm::store::Store::open(&data.join("store.redb")).unwrap()
+    });
+}
+
+/// The same on a store in PostgreSQL (issue 40): the coordinator killed, its successor on the
+/// same database resumes the job. Skipped, saying so, without a database to test against.
+#[test]
+fn a_restarted_coordinator_on_postgres_resumes_without_rendering_finished_tiles_again() {
+    let Some(url) = restauro_tests::fleet::database("restart") else { return };
+    let dir = tempfile::tempdir().unwrap();
+    restart_resumes(dir.path(), &["--store", &url], || {
+        restauro_farm::store::Store::connect(&url).unwrap()
+    });
+    assert!(!dir.path().join("data/store.redb").exists(), "the file store was used");
+}
+
+/// A coordinator with `store_args` renders a job with two workers, is killed (SIGKILL) once
+/// some tiles are finished, and its successor on the same store (`store` opens it) resumes
+/// without rendering a finished tile again; the image is the one-process render's.
+fn restart_resumes(d: &Path, store_args: &[&str], store: impl Fn() -> restauro_farm::store::Store) {
     let scene = aosta_scene(d, 192, 108);
     let data = d.join("data");
-    let mut coordinator = Coordinator::start(d, &data, "127.0.0.1:0", &[]);
+    let mut coordinator = Coordinator::start(d, &data, "127.0.0.1:0", store_args);
     let url = coordinator.url.clone();
     let (logs, mut workers): (Vec<_>, Vec<_>) = (1..=2)
         .map(|i| {
@@ -282,10 +303,7 @@ fn a_restarted_coordinator_resumes_without_rendering_finished_tiles_again() {
     wait_for_twelve_tiles_rendered(d, &logs);
     coordinator.child.kill().unwrap();
     coordinator.child.wait().unwrap();
-    let finished = {
-        let store = restauro_farm::store::Store::open(&data.join("store.redb")).unwrap();
-        store.finished_tiles(&id).unwrap()
-    };
+    let finished = store().finished_tiles(&id).unwrap();
     assert!(
         !finished.is_empty() && finished.len() < total,
         "{} of {total} finished at the kill",
@@ -293,7 +311,7 @@ fn a_restarted_coordinator_resumes_without_rendering_finished_tiles_again() {
     );
     let offsets: Vec<usize> = logs.iter().map(|l| lines(l).len()).collect();
     let addr = url.strip_prefix("http://").unwrap();
-    let _coordinator = Coordinator::start(d, &data, addr, &[]);
+    let _coordinator = Coordinator::start(d, &data, addr, store_args);
     let o = restauro(&["watch", &id, "--coordinator", &url, "--token-file", token]);
     assert!(text(&o).contains("done"), "{}", text(&o));
     let after: Vec<u32> = logs

@@ -1,5 +1,5 @@
-//! The coordinator's embedded, crash-safe store (redb: copy-on-write B-trees, a durable commit
-//! per write transaction). It keeps what a restart needs to resume without rendering a finished
+//! The coordinator's embedded, crash-safe store in one file (redb: copy-on-write B-trees, a
+//! durable commit per write transaction); the default. It keeps what a restart needs to resume without rendering a finished
 //! tile again: every job's record, every finished tile's pixels, and the run's identity (the
 //! secret that signs leases and the count of runs, see `lease`). Scene assets are files beside
 //! it (`asset_store`).
@@ -18,7 +18,6 @@
 use redb::{Database, ReadableDatabase, ReadableTable, TableDefinition};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
-use std::time::{Duration, Instant, SystemTime};
 
 /// Job id → the job's record (JSON).
 const JOBS: TableDefinition<&str, &[u8]> = TableDefinition::new("jobs");
@@ -37,39 +36,14 @@ const META: TableDefinition<&str, &[u8]> = TableDefinition::new("meta");
 const SCENE_REVISIONS: TableDefinition<(&str, u32), &[u8]> =
     TableDefinition::new("scene_revisions");
 
-#[derive(Clone, Debug, thiserror::Error)]
-pub enum StoreError {
-    #[error("store {}: {message}", path.display())]
-    Store { path: PathBuf, message: String },
-}
+use super::problem::Problems;
+use super::{Result, StoreError};
 
-pub type Result<T> = std::result::Result<T, StoreError>;
-
-/// Why the store cannot write, since when, and when a write last failed.
-#[derive(Clone, Debug)]
-struct Problem {
-    since: SystemTime,
-    last: Instant,
-    /// When a write last succeeded after the last failure.
-    recovered: Option<Instant>,
-    message: String,
-}
-
-impl Problem {
-    fn over(&self) -> bool {
-        self.recovered.is_some() && self.last.elapsed() >= PROBLEM_QUIET
-    }
-}
-
-/// A problem is over once writes have succeeded and none has failed for this long: a nearly
-/// full disk may still take a small write between failing large ones.
-const PROBLEM_QUIET: Duration = Duration::from_secs(3);
-
-pub struct Store {
+pub struct FileStore {
     path: PathBuf,
     /// `None` after an I/O error: the next call opens the file again.
     db: Mutex<Option<Arc<Database>>>,
-    problem: Mutex<Option<Problem>>,
+    problem: Problems,
 }
 
 type Fallible<T> = std::result::Result<T, redb::Error>;
@@ -78,15 +52,15 @@ fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     m.lock().unwrap_or_else(|p| p.into_inner())
 }
 
-impl Store {
+impl FileStore {
     /// Opens the store at `path`, creating it (and its tables) when new.
-    pub fn open(path: &Path) -> Result<Store> {
+    pub fn open(path: &Path) -> Result<FileStore> {
         let db = Database::create(path)
             .map_err(|e| StoreError::Store { path: path.to_owned(), message: e.to_string() })?;
-        let store = Store {
+        let store = FileStore {
             path: path.to_owned(),
             db: Mutex::new(Some(Arc::new(db))),
-            problem: Mutex::new(None),
+            problem: Problems::default(),
         };
         store.write(|txn| {
             txn.open_table(JOBS)?;
@@ -103,19 +77,7 @@ impl Store {
 
     /// Why the store cannot write now, when it cannot.
     pub fn problem(&self) -> Option<String> {
-        let mut problem = lock(&self.problem);
-        if problem.as_ref().is_some_and(Problem::over) {
-            *problem = None;
-            tracing::info!(store = %self.path.display(), "the store can be written again");
-        }
-        problem.as_ref().map(|p| {
-            let seconds = p.since.elapsed().map_or(0, |d| d.as_secs());
-            format!(
-                "the store {} cannot be written ({seconds} s): {}",
-                self.path.display(),
-                p.message
-            )
-        })
+        self.problem.describe(&self.path.display().to_string())
     }
 
     fn error(&self, e: impl std::fmt::Display) -> StoreError {
@@ -142,22 +104,7 @@ impl Store {
             if slot.as_ref().is_some_and(|current| Arc::ptr_eq(current, db)) {
                 *slot = None;
             }
-            let mut problem = lock(&self.problem);
-            match &mut *problem {
-                Some(p) => {
-                    p.last = Instant::now();
-                    p.recovered = None;
-                }
-                None => {
-                    tracing::error!(store = %self.path.display(), "the store cannot be written: {e}; retrying");
-                    *problem = Some(Problem {
-                        since: SystemTime::now(),
-                        last: Instant::now(),
-                        recovered: None,
-                        message: e.to_string(),
-                    });
-                }
-            }
+            self.problem.failed(&self.path.display().to_string(), &e.to_string());
         }
         self.error(e)
     }
@@ -171,9 +118,7 @@ impl Store {
             Ok(value)
         };
         let value = run().map_err(|e| self.failed(&db, e))?;
-        if let Some(p) = &mut *lock(&self.problem) {
-            p.recovered = Some(Instant::now());
-        }
+        self.problem.succeeded();
         Ok(value)
     }
 
@@ -255,13 +200,10 @@ impl Store {
     }
 
     /// Several finished tiles in one durable transaction (see `group_commit`).
-    pub fn put_tiles<'a>(
-        &self,
-        tiles: impl IntoIterator<Item = (&'a str, u32, &'a [u8])>,
-    ) -> Result<()> {
+    pub fn put_tiles(&self, tiles: &[(&str, u32, &[u8])]) -> Result<()> {
         self.write(|txn| {
             let mut table = txn.open_table(TILES)?;
-            for (job, tile, data) in tiles {
+            for &(job, tile, data) in tiles {
                 table.insert((job, tile), data)?;
             }
             Ok(())
@@ -394,14 +336,14 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("store.redb");
         {
-            let s = Store::open(&path).unwrap();
+            let s = FileStore::open(&path).unwrap();
             s.put_job("a", b"{\"x\":1}").unwrap();
-            s.put_tiles([("a", 3, &[1u8, 2, 3][..])]).unwrap();
-            s.put_tiles([("a", 1, &[4u8][..]), ("b", 0, &[5u8][..])]).unwrap();
+            s.put_tiles(&[("a", 3, &[1u8, 2, 3][..])]).unwrap();
+            s.put_tiles(&[("a", 1, &[4u8][..]), ("b", 0, &[5u8][..])]).unwrap();
             s.put_legacy_asset("00", b"v 0 0 0").unwrap();
             assert_eq!(s.begin_run([7; 32]).unwrap(), ([7; 32], 1));
         }
-        let s = Store::open(&path).unwrap();
+        let s = FileStore::open(&path).unwrap();
         assert_eq!(s.jobs().unwrap(), vec![("a".to_owned(), b"{\"x\":1}".to_vec())]);
         assert_eq!(s.finished_tiles("a").unwrap(), vec![1, 3]);
         assert_eq!(s.tile("a", 3).unwrap(), Some(vec![1, 2, 3]));

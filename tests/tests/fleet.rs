@@ -72,3 +72,66 @@ fn a_database_that_is_not_there_is_refused_naming_it_without_the_password() {
     assert!(e.contains("no_such_database") && e.contains("does not exist"), "{e}");
     assert!(!e.contains(":restauro@"), "the password is shown: {e}");
 }
+
+/// Terminates every session of database `db` but the caller's, as an operator's
+/// `pg_terminate_backend` or a pooler's restart does; how many it ended.
+fn terminate_sessions(admin: &str, db: &str) -> u64 {
+    let runtime = tokio::runtime::Builder::new_current_thread().enable_all().build().unwrap();
+    runtime.block_on(async {
+        let (client, connection) =
+            tokio_postgres::connect(admin, tokio_postgres::NoTls).await.unwrap();
+        tokio::spawn(connection);
+        let sql = "SELECT count(pg_terminate_backend(pid)) FROM pg_stat_activity
+                   WHERE datname = $1 AND pid <> pg_backend_pid()";
+        client.query_one(sql, &[&db]).await.unwrap().get::<_, i64>(0) as u64
+    })
+}
+
+/// The coordinator's database sessions terminated again and again while a job runs: each
+/// write that fails is retried by its worker, the store connects again, and the image is the
+/// one process renders.
+#[test]
+fn terminated_database_sessions_lose_no_tile() {
+    let Some(url) = restauro_tests::fleet::database("terminated") else { return };
+    let admin = std::env::var("RESTAURO_TEST_POSTGRES").unwrap();
+    let db = url.rsplit('/').next().unwrap().split('?').next().unwrap().to_owned();
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = restauro_tests::aosta_scene(d, 192, 108);
+    let options = ["--spp", "16", "--tile", "16"];
+    let alone = d.join("alone");
+    let mut args = vec!["render", scene.as_str(), "--in-process", "--out", alone.to_str().unwrap()];
+    args.extend(options);
+    let o = restauro_tests::restauro(&args);
+    assert!(o.status.success(), "{}", restauro_tests::text(&o));
+    let c =
+        restauro_tests::Coordinator::start(d, &d.join("data"), "127.0.0.1:0", &["--store", &url]);
+    let _workers: Vec<restauro_tests::Worker> =
+        (1..=2).map(|i| restauro_tests::Worker::start(d, &c.url, &format!("w{i}"), &[])).collect();
+    let (token, _) = restauro_tests::token_files(d);
+    let mut submit = vec!["submit", scene.as_str()];
+    submit.extend(options);
+    let o = restauro_tests::client(&submit, &c.url, &token);
+    assert!(o.status.success(), "{}", restauro_tests::text(&o));
+    let id = String::from_utf8_lossy(&o.stdout).trim().to_owned();
+    let mut ended = 0;
+    for _ in 0..20 {
+        ended += terminate_sessions(&admin, &db);
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    assert!(ended >= 1, "no session of the coordinator's was ever open to terminate");
+    let o = restauro_tests::client(&["watch", &id], &c.url, &token);
+    assert!(restauro_tests::text(&o).contains("done"), "{}", restauro_tests::text(&o));
+    let out = d.join("farm");
+    let o = restauro_tests::client(&["fetch", &id, "--out", out.to_str().unwrap()], &c.url, &token);
+    assert!(o.status.success(), "{}", restauro_tests::text(&o));
+    restauro_tests::assert_identical(
+        &restauro_tests::exr_pixels(&out.join("aosta.exr")),
+        &restauro_tests::exr_pixels(&alone.join("aosta.exr")),
+    );
+    let log = std::fs::read_to_string(d.join("coordinator.log")).unwrap();
+    eprintln!(
+        "{ended} sessions terminated; the coordinator logged {} store errors",
+        log.matches("cannot be written").count() + log.matches("could not store").count()
+    );
+}

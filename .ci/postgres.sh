@@ -5,7 +5,7 @@
 #   .ci/postgres.sh stop DIR    stops the server started in DIR
 set -euo pipefail
 cmd=$1 dir=$2
-port=54329
+port=${RESTAURO_PG_PORT:-54329}
 sudo=""
 [ "$(id -u)" -ne 0 ] && sudo="sudo"
 bin=$(ls -d /usr/lib/postgresql/*/bin 2>/dev/null | sort -V | tail -1 || true)

@@ -87,9 +87,10 @@ fn terminate_sessions(admin: &str, db: &str) -> u64 {
     })
 }
 
-/// The coordinator's database sessions terminated again and again while a job runs: each
-/// write that fails is retried by its worker, the store connects again, and the image is the
-/// one process renders.
+/// The coordinator's database sessions terminated again and again while a job runs, until it
+/// has ended: a call that finds its connection gone connects again and runs once more, a write
+/// that still fails is retried by its worker, assembly waits for the store, and the image is
+/// the one process renders.
 #[test]
 fn terminated_database_sessions_lose_no_tile() {
     let Some(url) = restauro_tests::fleet::database("terminated") else { return };
@@ -114,14 +115,24 @@ fn terminated_database_sessions_lose_no_tile() {
     let o = restauro_tests::client(&submit, &c.url, &token);
     assert!(o.status.success(), "{}", restauro_tests::text(&o));
     let id = String::from_utf8_lossy(&o.stdout).trim().to_owned();
-    let mut ended = 0;
-    for _ in 0..20 {
-        ended += terminate_sessions(&admin, &db);
-        std::thread::sleep(std::time::Duration::from_millis(50));
-    }
-    assert!(ended >= 1, "no session of the coordinator's was ever open to terminate");
+    // Sessions are terminated every 30 ms until the job has ended, its assembly included.
+    let done = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let terminator = {
+        let (done, admin, db) = (done.clone(), admin.clone(), db.clone());
+        std::thread::spawn(move || {
+            let mut ended = 0;
+            while !done.load(std::sync::atomic::Ordering::Relaxed) {
+                ended += terminate_sessions(&admin, &db);
+                std::thread::sleep(std::time::Duration::from_millis(30));
+            }
+            ended
+        })
+    };
     let o = restauro_tests::client(&["watch", &id], &c.url, &token);
+    done.store(true, std::sync::atomic::Ordering::Relaxed);
+    let ended = terminator.join().unwrap();
     assert!(restauro_tests::text(&o).contains("done"), "{}", restauro_tests::text(&o));
+    assert!(ended >= 1, "no session of the coordinator's was ever open to terminate");
     let out = d.join("farm");
     let o = restauro_tests::client(&["fetch", &id, "--out", out.to_str().unwrap()], &c.url, &token);
     assert!(o.status.success(), "{}", restauro_tests::text(&o));

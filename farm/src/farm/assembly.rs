@@ -88,9 +88,7 @@ fn placed(
 ) -> Result<Framebuffer, Outcome> {
     let mut frame = Framebuffer::new(plan.width, plan.height, TileLayout::from(plan));
     for (index, rect) in plan.tiles().enumerate() {
-        let data = farm
-            .store
-            .tile(id, first_tile + index as u32)
+        let data = stored_tile(farm, id, first_tile + index as u32)
             .map_err(|e| Outcome::Failed(e.to_string()))?
             .ok_or_else(|| {
                 // A job cancelled meanwhile has had its tiles dropped: that is not a failure.
@@ -108,6 +106,31 @@ fn placed(
         frame.place(index as u32, &rect, &data).map_err(|e| Outcome::Failed(e.to_string()))?;
     }
     Ok(frame)
+}
+
+/// How long assembly waits for a store that cannot be read (a lost connection to PostgreSQL,
+/// its server restarting) before the job fails.
+const STORE_PATIENCE: std::time::Duration = std::time::Duration::from_secs(120);
+
+/// A stored tile, read again after a failure of the store until it answers or
+/// [`STORE_PATIENCE`] has passed: a store that recovers must not fail a finished job.
+fn stored_tile(
+    farm: &Farm,
+    id: &JobId,
+    tile: u32,
+) -> Result<Option<Vec<u8>>, crate::store::StoreError> {
+    let started = Instant::now();
+    let mut wait = std::time::Duration::from_millis(50);
+    loop {
+        match farm.store.tile(id, tile) {
+            Err(e) if started.elapsed() < STORE_PATIENCE => {
+                warn!(job = %id, tile, "reading a tile to assemble: {e}; trying again");
+                std::thread::sleep(wait);
+                wait = (wait * 2).min(std::time::Duration::from_secs(2));
+            }
+            other => return other,
+        }
+    }
 }
 
 /// What a framebuffer is written as: rendered by `plan`, under `stem` with the header `info`,

@@ -90,27 +90,39 @@ impl PgStore {
     }
 
     /// Runs `f` with the connection (opened first when there is none), on a thread of its own.
-    /// A failure that leaves the connection closed drops it: the next call connects again.
-    fn call<T: Send>(&self, f: impl AsyncFnOnce(&mut Client) -> PgResult<T> + Send) -> Result<T> {
+    /// A call that finds its connection closed under it (the session terminated, the server
+    /// restarted) connects again and runs once more: every call is idempotent (an upsert, a
+    /// delete, a read; a run begun twice only skips an epoch). A failure that leaves the
+    /// connection closed drops it: the next call connects again.
+    fn call<T: Send>(
+        &self,
+        f: impl AsyncFn(&mut Client) -> PgResult<T> + Send + Sync,
+    ) -> Result<T> {
         let outcome = std::thread::scope(|s| {
             s.spawn(|| {
                 self.runtime.block_on(async {
                     let mut slot = self.client.lock().await;
-                    if slot.as_ref().is_none_or(Client::is_closed) {
-                        let (client, connection) = self.config.connect(NoTls).await?;
-                        tokio::spawn(async move {
-                            if let Err(e) = connection.await {
-                                tracing::warn!("the PostgreSQL store's connection ended: {e}");
+                    let mut again = true;
+                    loop {
+                        if slot.as_ref().is_none_or(Client::is_closed) {
+                            let (client, connection) = self.config.connect(NoTls).await?;
+                            tokio::spawn(async move {
+                                if let Err(e) = connection.await {
+                                    tracing::warn!("the PostgreSQL store's connection ended: {e}");
+                                }
+                            });
+                            *slot = Some(client);
+                        }
+                        let client = slot.as_mut().expect("connected above");
+                        let outcome = f(client).await;
+                        if client.is_closed() {
+                            *slot = None;
+                            if outcome.is_err() && std::mem::take(&mut again) {
+                                continue;
                             }
-                        });
-                        *slot = Some(client);
+                        }
+                        return outcome;
                     }
-                    let client = slot.as_mut().expect("connected above");
-                    let outcome = f(client).await;
-                    if client.is_closed() {
-                        *slot = None;
-                    }
-                    outcome
                 })
             })
             .join()
@@ -132,9 +144,9 @@ impl PgStore {
     /// Runs `f` in one transaction, committed before it returns.
     fn transaction<T: Send>(
         &self,
-        f: impl AsyncFnOnce(&Transaction<'_>) -> PgResult<T> + Send,
+        f: impl AsyncFn(&Transaction<'_>) -> PgResult<T> + Send + Sync,
     ) -> Result<T> {
-        self.call(async move |c: &mut Client| {
+        self.call(async |c: &mut Client| {
             let tx = c.transaction().await?;
             let value = f(&tx).await?;
             tx.commit().await?;

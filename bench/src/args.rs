@@ -42,6 +42,11 @@ pub struct BenchArgs {
     /// Mesh: the sizes of the relief measured, in triangles.
     #[arg(long, value_delimiter = ',', default_value = "50000,500000,5000000")]
     pub triangles: Vec<usize>,
+    /// Scheduler: the coordinator's store, a PostgreSQL database (`postgres://…`, an empty
+    /// database: the benchmark's jobs stay in it; needs a `restauro` built with `--features
+    /// fleet`) instead of its redb file.
+    #[arg(long, value_name = "URL")]
+    pub store: Option<String>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]

@@ -28,6 +28,8 @@ use tonic::transport::Endpoint;
 #[derive(Serialize)]
 struct SchedulerBench {
     benchmark: &'static str,
+    /// The coordinator's store: "redb" (its file) or "postgres".
+    store: &'static str,
     simulated_workers: usize,
     jobs: u32,
     tiles_per_job: u32,
@@ -69,7 +71,11 @@ pub fn bench(args: &BenchArgs) -> Result<String> {
         white: true,
         ..TileLayout::default()
     };
-    let cluster = LocalCluster::start_with(0, None, &["--no-retinex"])?;
+    let mut coordinator_args = vec!["--no-retinex"];
+    if let Some(url) = &args.store {
+        coordinator_args.extend(["--store", url.as_str()]);
+    }
+    let cluster = LocalCluster::start_with(0, None, &coordinator_args)?;
     let runtime = cluster::runtime()?;
     let workers = args.workers.max(1);
     let jobs = args.jobs.max(1);
@@ -138,6 +144,7 @@ pub fn bench(args: &BenchArgs) -> Result<String> {
         let accepted = counts.accepted.load(Ordering::Relaxed);
         Ok::<_, BenchError>(SchedulerBench {
             benchmark: "scheduler",
+            store: if args.store.is_some() { "postgres" } else { "redb" },
             simulated_workers: workers,
             jobs,
             tiles_per_job,

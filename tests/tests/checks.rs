@@ -192,3 +192,27 @@ fn with_two_workers_a_dispute_is_told_and_the_job_still_ends() {
     let log = std::fs::read_to_string(d.join("coordinator.log")).unwrap();
     assert!(log.contains("no third worker is registered to settle it"), "{log}");
 }
+
+#[test]
+fn a_check_rate_that_is_not_a_share_is_refused_naming_the_flag() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (client_token, worker_token) = token_files(d);
+    for (flag, value) in [("--check-rate", "1.5"), ("--check-rate-new", "-0.1")] {
+        let o = std::process::Command::new(restauro_tests::binary("restauro-coordinator"))
+            .args(["--listen", "127.0.0.1:0", "--data"])
+            .arg(d.join("data"))
+            .arg("--client-token-file")
+            .arg(&client_token)
+            .arg("--worker-token-file")
+            .arg(&worker_token)
+            .arg(format!("{flag}={value}"))
+            .output()
+            .unwrap();
+        assert!(!o.status.success());
+        let said = text(&o);
+        let words =
+            format!("{flag} {value}: use a share between 0 (no check) and 1 (every result)");
+        assert!(said.contains(&words), "{said}");
+    }
+}

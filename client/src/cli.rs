@@ -323,7 +323,8 @@ pub struct RunArgs {
 /// embedded one.
 #[derive(Clone, Debug, Args)]
 pub struct OptionalConnectArgs {
-    /// The coordinator's URL (else RESTAURO_COORDINATOR; else an embedded local cluster).
+    /// The coordinator's URL, or several separated by commas (coordinators taking turns to
+    /// lead on one PostgreSQL store: calls go to the one leading) (else RESTAURO_COORDINATOR; else an embedded local cluster).
     #[arg(long, env = "RESTAURO_COORDINATOR")]
     pub coordinator: Option<String>,
     /// A file holding the client token (else RESTAURO_TOKEN).
@@ -337,7 +338,8 @@ pub struct OptionalConnectArgs {
 
 #[derive(Debug, Args)]
 pub struct ConnectArgs {
-    /// The coordinator's URL (else RESTAURO_COORDINATOR).
+    /// The coordinator's URL, or several separated by commas (coordinators taking turns to
+    /// lead on one PostgreSQL store: calls go to the one leading) (else RESTAURO_COORDINATOR).
     #[arg(long, env = "RESTAURO_COORDINATOR")]
     pub coordinator: String,
     /// A file holding the client token (else RESTAURO_TOKEN).

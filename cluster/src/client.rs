@@ -7,14 +7,14 @@ use crate::progress::Progress;
 use restauro_image::atomic_file;
 use restauro_proto::job_status::JobStatus;
 use restauro_proto::pb::render_client::RenderClient;
+use restauro_proto::transport::Failover;
 use restauro_proto::{self as pb, CHUNK_BYTES, Credentials, PROTOCOL_VERSION};
 use restauro_scene::bundle::Bundle;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 use tonic::service::interceptor::InterceptedService;
-use tonic::transport::Channel;
 
-pub type Client = RenderClient<InterceptedService<Channel, Credentials>>;
+pub type Client = RenderClient<InterceptedService<Failover, Credentials>>;
 
 type Result<T, E = ClusterError> = std::result::Result<T, E>;
 
@@ -48,7 +48,8 @@ pub async fn connect(url: &str, token: &str) -> Result<Client> {
 }
 
 /// A client of the coordinator at `url` (`https://` for TLS, trusting `tls_ca` besides the
-/// system's authorities).
+/// system's authorities), or of the one leading among several (`url`: their URLs separated by
+/// commas; see `restauro_proto::transport::Failover`).
 pub async fn connect_as(
     url: &str,
     token: &str,
@@ -57,13 +58,10 @@ pub async fn connect_as(
 ) -> Result<Client> {
     let credentials = Credentials::new(token, protocol_version)
         .map_err(|e| ClusterError::Token(e.to_string()))?;
-    let channel =
-        restauro_proto::transport::endpoint(url, tls_ca)?.connect().await.map_err(|e| {
-            ClusterError::Connect {
-                url: url.to_owned(),
-                chain: restauro_proto::transport::error_chain(&e),
-            }
-        })?;
+    let endpoints = restauro_proto::transport::endpoints(url, tls_ca)?;
+    let channel = restauro_proto::transport::connect(&endpoints).await.map_err(|(url, e)| {
+        ClusterError::Connect { url, chain: restauro_proto::transport::error_chain(&e) }
+    })?;
     Ok(RenderClient::with_interceptor(channel, credentials).max_decoding_message_size(8 << 20))
 }
 

@@ -4,9 +4,12 @@
 use anyhow::{Context, Result, bail};
 use restauro_farm::auth::{Role, Tokens};
 use restauro_farm::callers::CallerLimits;
-use restauro_farm::farm::{CheckPolicy, Config, Farm};
+use restauro_farm::error::FarmError;
+use restauro_farm::farm::{CheckPolicy, Config, Farm, open_store};
 use restauro_farm::grpc::{RenderService, WorkService};
+use restauro_farm::lead::{Lead, LeadConfig, StandbyProbe, StandbyState};
 use restauro_farm::scheduler;
+use restauro_farm::store::Store;
 use restauro_ops::connections::{ConnectionLimits, GuardedListener, GuardedStream};
 use restauro_ops::signal::stop_signal;
 use restauro_ops::signal::stopped;
@@ -42,6 +45,12 @@ pub struct CoordinatorArgs {
     /// and migrated at start. The assets and results stay in --data.
     #[arg(long, env = "RESTAURO_STORE", hide_env_values = true)]
     pub store: Option<String>,
+    /// With --store postgres://…: seconds the lead among coordinators on that database lives
+    /// unrenewed. One coordinator leads (it renews every third of this); the others stand by,
+    /// not ready, and one takes over once the lead lapses. A leader that cannot renew within
+    /// two thirds of it stops serving and exits.
+    #[arg(long, default_value_t = 6.0)]
+    pub lead_ttl_s: f64,
     /// A file holding the workers' bearer token (else RESTAURO_WORKER_TOKEN).
     #[arg(long)]
     pub worker_token_file: Option<PathBuf>,
@@ -237,7 +246,15 @@ pub fn run(args: &CoordinatorArgs) -> Result<()> {
     let exit_with_stdin = args.exit_with_stdin;
     let metrics = args.metrics.endpoint()?;
     let endpoints = Endpoints { grpc: args.listen, metrics, studio: args.studio_listen };
-    runtime.block_on(serve(config, endpoints, tls, stop_signal(exit_with_stdin)))
+    let lead = LeadConfig::for_process(
+        &args.listen.to_string(),
+        seconds(args.lead_ttl_s, "--lead-ttl-s")?,
+    );
+    let served =
+        runtime.block_on(serve(config, endpoints, tls, lead, stop_signal(exit_with_stdin)));
+    // A store call may hang (a database cut off); the process ends all the same.
+    runtime.shutdown_timeout(Duration::from_secs(2));
+    served
 }
 
 /// Where the coordinator serves.
@@ -251,12 +268,16 @@ pub struct Endpoints {
     pub studio: Option<SocketAddr>,
 }
 
-/// Serves until `stop` resolves: opens the farm, binds the gRPC address and the side doors
-/// (metrics, studio), prints where each listens, then serves the gRPC services until the stop.
+/// Serves until `stop` resolves: opens the store, takes the lead among the coordinators on it
+/// (standing by meanwhile, see [`stand_by`]), opens the farm, binds the gRPC address and the side
+/// doors (metrics, studio), prints where each listens, then serves the gRPC services until the
+/// stop — or until the lead is lost, which ends the process with an error (a supervisor
+/// restarts it, as a standby).
 pub async fn serve(
     config: Config,
-    endpoints: Endpoints,
+    mut endpoints: Endpoints,
     tls: Option<restauro_studio::TlsPem>,
+    lead: LeadConfig,
     stop: impl Future<Output = ()> + Send + 'static,
 ) -> Result<()> {
     let listen = endpoints.grpc;
@@ -270,7 +291,16 @@ pub async fn serve(
     let server = grpc_server(callers, tls.as_ref())?;
     let tokens = config.tokens.clone();
     let data = config.data_dir.clone();
-    let farm = tokio::task::spawn_blocking(move || Farm::open(config)).await??;
+    let opening = config.clone();
+    let store = tokio::task::spawn_blocking(move || open_store(&opening))
+        .await?
+        .map_err(FarmError::StoreAtStart)?;
+    let store = Arc::new(store);
+    let Some(lead) = stand_by(&store, &lead, &mut endpoints, callers, &stop_rx).await? else {
+        info!("stopped while standing by");
+        return Ok(());
+    };
+    let farm = tokio::task::spawn_blocking(move || Farm::open_on(config, store)).await??;
     let listener =
         TcpListener::bind(listen).await.with_context(|| format!("listening on {listen}"))?;
     let addr = listener.local_addr()?;
@@ -281,13 +311,58 @@ pub async fn serve(
     let incoming = restauro_ops::connections::incoming(listener, Connection);
     let timer = tokio::spawn(farm.clone().run_timer());
     let services = grpc_services(server, farm, &tokens).await?;
-    services.serve_with_incoming_shutdown(incoming, stopped(stop_rx)).await?;
+    tokio::select! {
+        served = services.serve_with_incoming_shutdown(incoming, stopped(stop_rx)) => served?,
+        why = lead.lost() => {
+            tracing::error!("the lead is lost: {why}; this coordinator stops serving");
+            bail!("the lead is lost: {why}");
+        }
+    }
     timer.abort();
     for (_, task) in doors.metrics.into_iter().chain(doors.studio) {
         let _ = task.await;
     }
+    lead.release();
     info!("coordinator stopped");
     Ok(())
+}
+
+/// Waits to lead on `store` (at once on a file store). Meanwhile the operations endpoint, if
+/// asked for, serves a standby's probe — alive, not ready, saying who leads — and is printed as
+/// `standby, metrics on ADDR`; it is closed before the leader's opens on the same address.
+/// `None` when a stop came first.
+async fn stand_by(
+    store: &Arc<Store>,
+    config: &LeadConfig,
+    endpoints: &mut Endpoints,
+    callers: CallerLimits,
+    stop: &tokio::sync::watch::Receiver<bool>,
+) -> Result<Option<Lead>> {
+    let state = StandbyState::default();
+    // A coordinator that leads at once never stands by.
+    if let Some(lead) = restauro_farm::lead::try_once(store, config, &state).await? {
+        return Ok(Some(lead));
+    }
+    let mut door = None;
+    if let Some((at, access)) = endpoints.metrics {
+        let (close, closed) = tokio::sync::watch::channel(false);
+        let probe: Arc<dyn restauro_ops::endpoint::Probe> =
+            Arc::new(StandbyProbe::new(state.clone()));
+        let (bound, task) =
+            restauro_ops::endpoint::serve(at, probe, access, callers.connections, stopped(closed))
+                .await?;
+        let mut out = std::io::stdout().lock();
+        writeln!(out, "standby, metrics on {bound}")?;
+        out.flush()?;
+        endpoints.metrics = Some((bound, access));
+        door = Some((close, task));
+    }
+    let lead = restauro_farm::lead::take(store, config, &state, &mut stop.clone()).await;
+    if let Some((close, task)) = door {
+        let _ = close.send(true);
+        let _ = task.await;
+    }
+    Ok(lead)
 }
 
 /// The gRPC server within the caller limits, over TLS when `tls` is given. Every call is in a

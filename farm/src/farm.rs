@@ -198,10 +198,18 @@ pub enum Reported {
 }
 
 /// The store the configuration names: a PostgreSQL database, or the file in the data folder.
-fn open_store(config: &Config) -> std::result::Result<Store, crate::store::StoreError> {
+pub fn open_store(config: &Config) -> std::result::Result<Store, crate::store::StoreError> {
     match &config.store {
         Some(url) => Store::connect(url),
-        None => Store::open(&config.data_dir.join("store.redb")),
+        None => {
+            std::fs::create_dir_all(&config.data_dir).map_err(|e| {
+                crate::store::StoreError::Store {
+                    path: config.data_dir.clone(),
+                    message: e.to_string(),
+                }
+            })?;
+            Store::open(&config.data_dir.join("store.redb"))
+        }
     }
 }
 
@@ -239,14 +247,20 @@ impl Drop for Admission<'_> {
 }
 
 impl Farm {
-    /// Opens the store in `config.data_dir` and resumes every unfinished job in it.
+    /// Opens the store the configuration names and resumes every unfinished job in it.
     pub fn open(config: Config) -> Result<Arc<Farm>> {
+        let store = Arc::new(open_store(&config).map_err(FarmError::StoreAtStart)?);
+        Farm::open_on(config, store)
+    }
+
+    /// Resumes every unfinished job in `store`, opened already (and, on PostgreSQL, led by
+    /// this coordinator: see `lead`).
+    pub fn open_on(config: Config, store: Arc<Store>) -> Result<Arc<Farm>> {
         let jobs_dir = config.data_dir.join("jobs");
         std::fs::create_dir_all(&jobs_dir).map_err(|source| FarmError::CreateDir {
             path: jobs_dir.display().to_string(),
             source,
         })?;
-        let store = Arc::new(open_store(&config).map_err(FarmError::StoreAtStart)?);
         let (secret, epoch) =
             store.begin_run(crate::ids::random_secret()).map_err(FarmError::StoreAtStart)?;
         let assets = AssetStore::open(

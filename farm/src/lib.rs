@@ -14,6 +14,7 @@ pub mod group_commit;
 pub mod grpc;
 pub mod ids;
 pub mod job;
+pub mod lead;
 pub mod lease;
 pub mod metrics;
 pub mod recent;

@@ -33,3 +33,94 @@ pub fn database(name: &str) -> Option<String> {
         None => format!("{server}/{db}"),
     })
 }
+
+/// A TCP proxy on loopback to a server, which a test can cut: from then on it forwards nothing
+/// either way, and takes new connections without answering — packets dropped, as when a network
+/// partition separates a coordinator from its database (no reset the client could notice).
+pub struct Proxy {
+    pub addr: std::net::SocketAddr,
+    cut: std::sync::Arc<std::sync::atomic::AtomicBool>,
+}
+
+impl Proxy {
+    pub fn start(target: std::net::SocketAddr) -> Proxy {
+        use std::sync::atomic::Ordering;
+        let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+        let addr = listener.local_addr().unwrap();
+        let cut = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let cutting = cut.clone();
+        std::thread::spawn(move || {
+            // Held open once cut: the far side sees silence, not a closed connection.
+            let mut held = Vec::new();
+            for client in listener.incoming().flatten() {
+                if cutting.load(Ordering::SeqCst) {
+                    held.push(client);
+                    continue;
+                }
+                let Ok(server) = std::net::TcpStream::connect(target) else { continue };
+                for (from, to) in [(&client, &server), (&server, &client)] {
+                    let (mut from, mut to) = (from.try_clone().unwrap(), to.try_clone().unwrap());
+                    let cut = cutting.clone();
+                    std::thread::spawn(move || forward(&mut from, &mut to, &cut));
+                }
+                held.push(client);
+                held.push(server);
+            }
+        });
+        Proxy { addr, cut }
+    }
+
+    /// Forwards nothing from now on.
+    pub fn cut(&self) {
+        self.cut.store(true, std::sync::atomic::Ordering::SeqCst);
+    }
+
+    /// `url` (a PostgreSQL URL) through this proxy: its host and port replaced.
+    pub fn url(&self, url: &str) -> String {
+        let (scheme, rest) = url.split_once("://").unwrap();
+        let (user, rest) = rest.split_once('@').unwrap();
+        let path = rest.split_once('/').map_or("", |(_, p)| p);
+        format!("{scheme}://{user}@{}/{path}", self.addr)
+    }
+}
+
+/// Copies `from` to `to` until either closes or the proxy is cut; once cut it reads nothing
+/// more, so the sender's data waits unacknowledged.
+fn forward(
+    from: &mut std::net::TcpStream,
+    to: &mut std::net::TcpStream,
+    cut: &std::sync::atomic::AtomicBool,
+) {
+    use std::io::{Read, Write};
+    let _ = from.set_read_timeout(Some(std::time::Duration::from_millis(50)));
+    let mut buffer = vec![0; 64 << 10];
+    while !cut.load(std::sync::atomic::Ordering::SeqCst) {
+        match from.read(&mut buffer) {
+            Ok(0) => {
+                let _ = to.shutdown(std::net::Shutdown::Write);
+                return;
+            }
+            Ok(n) => {
+                if cut.load(std::sync::atomic::Ordering::SeqCst)
+                    || to.write_all(&buffer[..n]).is_err()
+                {
+                    return;
+                }
+            }
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                ) => {}
+            Err(_) => return,
+        }
+    }
+}
+
+/// The `HOST:PORT` of a PostgreSQL URL.
+pub fn server_addr(url: &str) -> std::net::SocketAddr {
+    use std::net::ToSocketAddrs;
+    let rest = url.split_once('@').map_or(url, |(_, r)| r);
+    let host_port = rest.split(['/', '?']).next().unwrap();
+    host_port.to_socket_addrs().unwrap().next().unwrap()
+}

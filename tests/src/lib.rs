@@ -97,9 +97,8 @@ impl Coordinator {
         listen: &str,
         extra: &[&str],
     ) -> Coordinator {
-        let (c, w) = token_files(dir);
         let coordinator = binary("restauro-coordinator");
-        let mut command = match prefix.split_first() {
+        let command = match prefix.split_first() {
             Some((first, rest)) => {
                 let mut command = Command::new(first);
                 command.args(rest).arg(coordinator);
@@ -107,16 +106,8 @@ impl Coordinator {
             }
             None => Command::new(coordinator),
         };
-        let mut child = command
-            .args(["--listen", listen, "--data"])
-            .arg(data)
-            .arg("--client-token-file")
-            .arg(&c)
-            .arg("--worker-token-file")
-            .arg(&w)
+        let mut child = coordinator_command(command, dir, data, listen, "coordinator.log")
             .args(extra)
-            .stdout(Stdio::piped())
-            .stderr(Stdio::from(appending(&dir.join("coordinator.log"))))
             .spawn()
             .unwrap();
         let mut line = String::new();
@@ -181,6 +172,123 @@ impl StudioFarm {
         b.wait_for("the model", "document.getElementById('view').dataset.scene");
         b
     }
+}
+
+/// `command` (which runs the coordinator) with the arguments every test coordinator has: its
+/// address, data folder and token files (in `dir`), standard output piped, its log `log` in `dir`.
+fn coordinator_command(
+    mut command: Command,
+    dir: &Path,
+    data: &Path,
+    listen: &str,
+    log: &str,
+) -> Command {
+    let (c, w) = token_files(dir);
+    command
+        .args(["--listen", listen, "--data"])
+        .arg(data)
+        .arg("--client-token-file")
+        .arg(&c)
+        .arg("--worker-token-file")
+        .arg(&w)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::from(appending(&dir.join(log))));
+    command
+}
+
+/// A coordinator started beside a leading one on the same PostgreSQL store (`--store` in its
+/// arguments, and `--metrics-listen`): it stands by, its operations endpoint not ready, until it
+/// takes the lead. Its log is `standby.log` in its folder.
+pub struct Standby {
+    pub child: Child,
+    stdout: Option<BufReader<std::process::ChildStdout>>,
+    /// Its metrics and health address.
+    pub metrics: String,
+    pub url: String,
+    dir: PathBuf,
+}
+
+impl Standby {
+    /// Starts it on `listen` (a free port: the workers and clients are given its URL before it
+    /// listens) and waits until it says it stands by.
+    pub fn start(dir: &Path, data: &Path, listen: &str, extra: &[&str]) -> Standby {
+        let command = Command::new(binary("restauro-coordinator"));
+        let mut child = coordinator_command(command, dir, data, listen, "standby.log")
+            .args(["--metrics-listen", "127.0.0.1:0"])
+            .args(extra)
+            .spawn()
+            .unwrap();
+        let mut stdout = BufReader::new(child.stdout.take().unwrap());
+        let mut line = String::new();
+        stdout.read_line(&mut line).unwrap();
+        let metrics = line
+            .trim()
+            .strip_prefix("standby, metrics on ")
+            .unwrap_or_else(|| panic!("the standby did not stand by: {line:?}\n{}", logs(dir)));
+        let metrics = metrics.to_owned();
+        let url = format!("http://{listen}");
+        Standby { child, stdout: Some(stdout), metrics, url, dir: dir.to_owned() }
+    }
+
+    /// Waits (within [`patience`]) until it leads — it prints where it listens — and says how
+    /// long that took.
+    pub fn wait_to_lead(mut self) -> (Coordinator, Duration) {
+        let start = Instant::now();
+        let mut stdout = self.stdout.take().unwrap();
+        let (lines, said) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            for _ in 0..2 {
+                let mut line = String::new();
+                let _ = stdout.read_line(&mut line);
+                let _ = lines.send(line);
+            }
+        });
+        let next = || {
+            said.recv_timeout(patience()).unwrap_or_else(|_| {
+                panic!("the standby did not take the lead in time\n{}", logs(&self.dir))
+            })
+        };
+        let line = next();
+        let took = start.elapsed();
+        let addr = line.trim().strip_prefix("listening on ").unwrap_or_else(|| {
+            panic!("the standby did not take the lead: {line:?}\n{}", logs(&self.dir))
+        });
+        let url = format!("http://{addr}");
+        assert_eq!(url, self.url);
+        assert_eq!(next().trim(), format!("metrics on {}", self.metrics));
+        let child = std::mem::replace(&mut self.child, Command::new("true").spawn().unwrap());
+        let metrics = Some(self.metrics.clone());
+        (Coordinator { child, url, metrics, studio: None, dir: self.dir.clone() }, took)
+    }
+}
+
+/// Waits up to `limit` for `child` to exit by itself, and says how it ended; a process still
+/// running then is killed and the test fails.
+pub fn wait_for_exit(child: &mut Child, limit: Duration) -> std::process::ExitStatus {
+    let deadline = Instant::now() + limit;
+    loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            return status;
+        }
+        if Instant::now() > deadline {
+            let _ = child.kill();
+            panic!("the process did not end within {limit:?}");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+impl Drop for Standby {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// A loopback address with a free port, to give a process that binds it later.
+pub fn free_loopback_addr() -> String {
+    let socket = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    socket.local_addr().unwrap().to_string()
 }
 
 impl Drop for Coordinator {

@@ -146,3 +146,54 @@ fn terminated_database_sessions_lose_no_tile() {
         log.matches("cannot be written").count() + log.matches("could not store").count()
     );
 }
+
+/// Two coordinators on one database (issue 40, item 2): while one leads, the other cannot take
+/// the lead, and is told who holds it and for how long; once the lead lapses (by the database's
+/// clock) the other takes it under a greater epoch, which is also its run's epoch; from then on
+/// a write of the one that lost it is refused, naming both epochs, and its renewal fails, while
+/// the new leader's writes land.
+#[test]
+fn a_write_under_a_lapsed_lead_is_refused() {
+    use restauro_farm::store::{LeadAttempt, StoreError};
+    let Some(url) = restauro_tests::fleet::database("fencing") else { return };
+    let (a, b) = (Store::connect(&url).unwrap(), Store::connect(&url).unwrap());
+    let ttl = std::time::Duration::from_millis(1500);
+    let LeadAttempt::Led { epoch: first } = a.try_lead("a", ttl).unwrap() else {
+        panic!("the free lead was not taken")
+    };
+    assert_eq!(a.begin_run([1; 32]).unwrap().1, first, "the run's epoch is the lead's");
+    a.put_job("j", b"by a").unwrap();
+    match b.try_lead("b", ttl).unwrap() {
+        LeadAttempt::HeldBy { holder, for_ms } => {
+            assert_eq!(holder, "a");
+            assert!(for_ms > 0 && for_ms <= 1500, "{for_ms} ms left of a 1500 ms lead");
+        }
+        led => panic!("a held lead was taken: {led:?}"),
+    }
+    assert!(a.renew_lead("a", first, ttl).unwrap(), "the leader could not renew");
+    std::thread::sleep(ttl + std::time::Duration::from_millis(200));
+    let LeadAttempt::Led { epoch: second } = b.try_lead("b", ttl).unwrap() else {
+        panic!("a lapsed lead was not taken")
+    };
+    assert!(second > first, "epoch {second} after {first}");
+    let refused = a.put_job("j", b"stale").unwrap_err();
+    assert!(
+        matches!(refused, StoreError::Fenced { ours, current, .. } if ours == first && current == second),
+        "{refused:?}"
+    );
+    let message = refused.to_string();
+    assert!(
+        message.contains(&format!("epoch {first}")) && message.contains(&format!("epoch {second}")),
+        "{message}"
+    );
+    assert!(a.put_tiles(&[("j", 0, b"stale")]).is_err(), "a stale tile was written");
+    assert!(a.begin_run([1; 32]).is_err(), "a stale run began");
+    assert!(!a.renew_lead("a", first, ttl).unwrap(), "a lost lead was renewed");
+    b.put_job("j", b"by b").unwrap();
+    assert_eq!(b.jobs().unwrap(), vec![("j".to_owned(), b"by b".to_vec())]);
+    assert!(b.finished_tiles("j").unwrap().is_empty());
+    assert_eq!(b.begin_run([2; 32]).unwrap().1, second);
+    // Given up, the lead is free at once.
+    b.release_lead("b", second).unwrap();
+    assert!(matches!(a.try_lead("a", ttl).unwrap(), LeadAttempt::Led { epoch } if epoch > second));
+}

@@ -19,6 +19,7 @@ use restauro_image::framebuffer::{TileExtras, TileLayout, encode_tile, tile_size
 use restauro_ops::signal::stop_signal;
 use restauro_ops::token::read_token;
 use restauro_proto::pb::work_client::WorkClient;
+use restauro_proto::transport::Failover;
 use restauro_proto::{self as pb, CHUNK_BYTES, Credentials, PROTOCOL_VERSION};
 use restauro_render::prepared::PreparedScene;
 use restauro_render::tile::render_tile;
@@ -32,14 +33,14 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 use tokio::sync::{mpsc, oneshot, watch};
 use tonic::service::interceptor::InterceptedService;
-use tonic::transport::Channel;
 use tracing::{Instrument, debug, info, info_span, warn};
 
-type Client = WorkClient<InterceptedService<Channel, Credentials>>;
+type Client = WorkClient<InterceptedService<Failover, Credentials>>;
 
 #[derive(clap::Args, Clone, Debug)]
 pub struct WorkerArgs {
-    /// The coordinator's URL (else RESTAURO_COORDINATOR).
+    /// The coordinator's URL, or several separated by commas (coordinators taking turns to
+    /// lead on one PostgreSQL store: calls go to the one leading) (else RESTAURO_COORDINATOR).
     #[arg(long, env = "RESTAURO_COORDINATOR")]
     pub coordinator: String,
     /// A file holding the worker token (else RESTAURO_WORKER_TOKEN).
@@ -221,7 +222,7 @@ impl Worker {
     async fn connect(&self) -> Result<Option<Client>> {
         let credentials = Credentials::new(&self.token, self.args.protocol_version)
             .map_err(WorkerError::Token)?;
-        let endpoint = restauro_proto::transport::endpoint(
+        let endpoints = restauro_proto::transport::endpoints(
             &self.args.coordinator,
             self.args.tls_ca.as_deref(),
         )?;
@@ -231,7 +232,7 @@ impl Worker {
             // A connection attempt to a host that drops packets can take as long as TCP's own
             // timeout: the stop request must not wait for it.
             let attempt = tokio::select! {
-                attempt = endpoint.connect() => attempt,
+                attempt = restauro_proto::transport::connect(&endpoints) => attempt,
                 _ = stop.wait_for(|stopping| *stopping) => return Ok(None),
             };
             match attempt {
@@ -241,10 +242,9 @@ impl Worker {
                             .max_decoding_message_size(8 << 20),
                     ));
                 }
-                Err(e) => {
+                Err((url, e)) => {
                     warn!(
-                        "cannot reach the coordinator at {}: {}; retrying",
-                        self.args.coordinator,
+                        "cannot reach the coordinator at {url}: {}; retrying",
                         restauro_proto::transport::error_chain(&e)
                     );
                     tokio::select! {

@@ -30,9 +30,24 @@ pub enum StoreError {
     Store { path: PathBuf, message: String },
     #[error("the PostgreSQL store {url}: {message}")]
     Postgres { url: String, message: String },
+    /// A write of a coordinator whose lead another has taken (`lead`).
+    #[error(
+        "the PostgreSQL store {url}: this coordinator's lead (epoch {ours}) has passed to epoch \
+         {current}, another coordinator's; its writes are refused"
+    )]
+    Fenced { url: String, ours: u64, current: u64 },
 }
 
 pub type Result<T> = std::result::Result<T, StoreError>;
+
+/// How an attempt to take the lead ended (`lead`).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum LeadAttempt {
+    /// This coordinator leads, under this epoch.
+    Led { epoch: u64 },
+    /// Another coordinator leads, for this many more milliseconds unless it renews.
+    HeldBy { holder: String, for_ms: u64 },
+}
 
 /// The coordinator's store, on whichever backend it was opened.
 pub enum Store {
@@ -119,6 +134,49 @@ impl Store {
                       has it), or leave out --store to keep the store in --data"
                 .into(),
         })
+    }
+
+    /// Whether coordinators take turns leading on this store (PostgreSQL); a file store has
+    /// one coordinator, which always leads.
+    pub fn has_leads(&self) -> bool {
+        !matches!(self, Store::File(_))
+    }
+
+    /// Takes the lead unless another coordinator holds it (`lead`); from then on this store's
+    /// writes are fenced by its epoch.
+    pub fn try_lead(&self, holder: &str, ttl: std::time::Duration) -> Result<LeadAttempt> {
+        match self {
+            Store::File(_) => {
+                let _ = (holder, ttl);
+                Ok(LeadAttempt::Led { epoch: 0 })
+            }
+            #[cfg(feature = "fleet")]
+            Store::Postgres(s) => s.try_lead(holder, ttl),
+        }
+    }
+
+    /// Renews the lead of `epoch`: whether it was still this coordinator's.
+    pub fn renew_lead(&self, holder: &str, epoch: u64, ttl: std::time::Duration) -> Result<bool> {
+        match self {
+            Store::File(_) => {
+                let _ = (holder, epoch, ttl);
+                Ok(true)
+            }
+            #[cfg(feature = "fleet")]
+            Store::Postgres(s) => s.renew_lead(holder, epoch, ttl),
+        }
+    }
+
+    /// Gives the lead of `epoch` up.
+    pub fn release_lead(&self, holder: &str, epoch: u64) -> Result<()> {
+        match self {
+            Store::File(_) => {
+                let _ = (holder, epoch);
+                Ok(())
+            }
+            #[cfg(feature = "fleet")]
+            Store::Postgres(s) => s.release_lead(holder, epoch),
+        }
     }
 
     /// Takes the assets an earlier release kept in the file store, one at a time, for `keep`

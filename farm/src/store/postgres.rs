@@ -18,7 +18,7 @@
 //! the caller's runtime.
 
 use super::problem::Problems;
-use super::{Result, StoreError};
+use super::{LeadAttempt, Result, StoreError};
 use tokio_postgres::{Client, Config, NoTls, Transaction};
 
 /// The schema, one migration per entry; a database records the versions it has.
@@ -33,6 +33,10 @@ const MIGRATIONS: &[&str] = &[
      CREATE TABLE restauro_disputed (job text NOT NULL, tile bigint NOT NULL, data bytea NOT NULL,
                                      PRIMARY KEY (job, tile));
      CREATE TABLE restauro_quarantine (key text PRIMARY KEY, record bytea NOT NULL);",
+    // 2: the lead among several coordinators (`lead`): one row, its epoch the fencing token.
+    "CREATE TABLE restauro_leader (id smallint PRIMARY KEY CHECK (id = 1), holder text NOT NULL,
+                                   epoch bigint NOT NULL, expires_at timestamptz NOT NULL);
+     INSERT INTO restauro_leader (id, holder, epoch, expires_at) VALUES (1, '', 0, '-infinity');",
 ];
 
 type PgResult<T> = std::result::Result<T, tokio_postgres::Error>;
@@ -41,9 +45,16 @@ pub struct PgStore {
     /// The URL without its password, for messages.
     shown: String,
     config: Config,
-    runtime: tokio::runtime::Runtime,
+    /// Taken only when the store is dropped (see its `Drop`).
+    runtime: Option<tokio::runtime::Runtime>,
     /// `None` before the first call and after a connection was lost.
     client: tokio::sync::Mutex<Option<Client>>,
+    /// The lead's own connection: renewing it never waits behind a slow write.
+    lead_client: tokio::sync::Mutex<Option<Client>>,
+    /// The epoch of the lead this store writes under, once it holds one (0 before): every
+    /// write checks it against the lead row's, so a coordinator that lost the lead writes
+    /// nothing.
+    fence: std::sync::atomic::AtomicU64,
     problem: Problems,
 }
 
@@ -64,11 +75,17 @@ impl PgStore {
     pub fn connect(url: &str) -> Result<PgStore> {
         let shown = without_password(url);
         let refused = |message: String| StoreError::Postgres { url: shown.clone(), message };
-        let config: Config = url.parse().map_err(|e| {
+        let mut config: Config = url.parse().map_err(|e| {
             refused(format!(
                 "{e}; give postgres://USER[:PASSWORD]@HOST[:PORT]/DATABASE (or key=value pairs)"
             ))
         })?;
+        // A transaction left open by a coordinator cut off from the database would hold the
+        // lead row's lock, and keep a standby from taking over, until TCP gave up (hours):
+        // the server ends any transaction idle this long. The store's transactions are never
+        // idle longer than a round trip.
+        let options = config.get_options().unwrap_or_default().to_owned();
+        config.options(format!("{options} -c idle_in_transaction_session_timeout=2000").trim());
         let runtime = tokio::runtime::Builder::new_multi_thread()
             .worker_threads(1)
             .thread_name("store-postgres")
@@ -78,8 +95,10 @@ impl PgStore {
         let store = PgStore {
             shown: shown.clone(),
             config,
-            runtime,
+            runtime: Some(runtime),
             client: tokio::sync::Mutex::new(None),
+            lead_client: tokio::sync::Mutex::new(None),
+            fence: std::sync::atomic::AtomicU64::new(0),
             problem: Problems::default(),
         };
         store.call(async |c| migrate(c).await).map_err(|e| match e {
@@ -98,10 +117,35 @@ impl PgStore {
         &self,
         f: impl AsyncFn(&mut Client) -> PgResult<T> + Send + Sync,
     ) -> Result<T> {
-        let outcome = std::thread::scope(|s| {
+        let outcome = self.on(&self.client, f);
+        match outcome {
+            Ok(value) => {
+                self.problem.succeeded();
+                Ok(value)
+            }
+            Err(e) => {
+                let message = error_chain(&e);
+                self.problem.failed(&self.shown, &message);
+                Err(self.error(message))
+            }
+        }
+    }
+
+    fn error(&self, message: String) -> StoreError {
+        StoreError::Postgres { url: self.shown.clone(), message }
+    }
+
+    /// Runs `f` on the connection in `slot` (see [`PgStore::call`]).
+    fn on<T: Send>(
+        &self,
+        slot: &tokio::sync::Mutex<Option<Client>>,
+        f: impl AsyncFn(&mut Client) -> PgResult<T> + Send + Sync,
+    ) -> PgResult<T> {
+        std::thread::scope(|s| {
             s.spawn(|| {
-                self.runtime.block_on(async {
-                    let mut slot = self.client.lock().await;
+                let runtime = self.runtime.as_ref().expect("taken only when dropped");
+                runtime.block_on(async {
+                    let mut slot = slot.lock().await;
                     let mut again = true;
                     loop {
                         if slot.as_ref().is_none_or(Client::is_closed) {
@@ -127,38 +171,41 @@ impl PgStore {
             })
             .join()
             .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
-        });
-        match outcome {
-            Ok(value) => {
-                self.problem.succeeded();
-                Ok(value)
-            }
-            Err(e) => {
-                let message = error_chain(&e);
-                self.problem.failed(&self.shown, &message);
-                Err(StoreError::Postgres { url: self.shown.clone(), message })
-            }
-        }
+        })
     }
 
-    /// Runs `f` in one transaction, committed before it returns.
+    /// Runs `f` in one transaction, committed before it returns. Under a lead the
+    /// transaction first takes a share lock of the lead row and checks its epoch: a write of a
+    /// coordinator whose lead has passed is refused ([`StoreError::Fenced`]), and a standby
+    /// taking the lead waits for writes under the old epoch to end, so none lands after it.
     fn transaction<T: Send>(
         &self,
         f: impl AsyncFn(&Transaction<'_>) -> PgResult<T> + Send + Sync,
     ) -> Result<T> {
-        self.call(async |c: &mut Client| {
+        let ours = self.fence.load(std::sync::atomic::Ordering::SeqCst);
+        let outcome = self.call(async |c: &mut Client| {
             let tx = c.transaction().await?;
+            if ours != 0 {
+                let sql = "SELECT epoch FROM restauro_leader WHERE id = 1 FOR SHARE";
+                let current = tx.query_one(sql, &[]).await?.get::<_, i64>(0) as u64;
+                if current != ours {
+                    return Ok(Err(current));
+                }
+            }
             let value = f(&tx).await?;
             tx.commit().await?;
-            Ok(value)
-        })
+            Ok(Ok(value))
+        })?;
+        outcome.map_err(|current| StoreError::Fenced { url: self.shown.clone(), ours, current })
     }
 
     pub fn problem(&self) -> Option<String> {
         self.problem.describe(&self.shown)
     }
 
+    /// Under a lead, the run's epoch is the lead's (taking the lead counted it).
     pub fn begin_run(&self, new_secret: [u8; 32]) -> Result<([u8; 32], u64)> {
+        let lead = self.fence.load(std::sync::atomic::Ordering::SeqCst);
         self.transaction(async |tx| {
             tx.batch_execute("LOCK TABLE restauro_meta IN EXCLUSIVE MODE").await?;
             let value = async |key: &str| {
@@ -174,7 +221,7 @@ impl PgStore {
                 .await?
                 .and_then(|v| <[u8; 8]>::try_from(v).ok())
                 .map_or(0, u64::from_le_bytes);
-            let epoch = last + 1;
+            let epoch = if lead != 0 { lead } else { last + 1 };
             let put = "INSERT INTO restauro_meta (key, value) VALUES ($1, $2)
                        ON CONFLICT (key) DO UPDATE SET value = EXCLUDED.value";
             tx.execute(put, &[&"secret", &&secret[..]]).await?;
@@ -302,13 +349,79 @@ impl PgStore {
         self.pairs("SELECT key, record FROM restauro_quarantine ORDER BY key")
     }
 
+    /// Takes the lead for `ttl` unless another coordinator holds it: its epoch is one more
+    /// than any lead's or run's before (the runs' count is kept in step), and from now on
+    /// this store's writes are fenced by it. By the database's clock.
+    pub fn try_lead(&self, holder: &str, ttl: std::time::Duration) -> Result<LeadAttempt> {
+        let ttl_ms = ttl.as_millis() as f64;
+        let attempt = self.on(&self.lead_client, async |c: &mut Client| {
+            let tx = c.transaction().await?;
+            tx.batch_execute("SET LOCAL lock_timeout = '1s'").await?;
+            let sql = "SELECT holder, epoch, CASE WHEN expires_at <= now() THEN 0
+                              ELSE extract(epoch FROM expires_at - now()) * 1000 END::float8
+                       FROM restauro_leader WHERE id = 1 FOR UPDATE";
+            let row = tx.query_one(sql, &[]).await?;
+            let (held_by, epoch, left_ms) =
+                (row.get::<_, String>(0), row.get::<_, i64>(1), row.get::<_, f64>(2));
+            if left_ms > 0.0 && held_by != holder {
+                return Ok(LeadAttempt::HeldBy { holder: held_by, for_ms: left_ms as u64 });
+            }
+            let sql = "SELECT value FROM restauro_meta WHERE key = 'epoch'";
+            let runs = tx
+                .query_opt(sql, &[])
+                .await?
+                .and_then(|r| <[u8; 8]>::try_from(r.get::<_, Vec<u8>>(0)).ok())
+                .map_or(0, i64::from_le_bytes);
+            let next = epoch.max(runs) + 1;
+            let sql = "UPDATE restauro_leader SET holder = $1, epoch = $2,
+                              expires_at = now() + $3 * interval '1 millisecond' WHERE id = 1";
+            tx.execute(sql, &[&holder, &next, &ttl_ms]).await?;
+            let sql = "INSERT INTO restauro_meta (key, value) VALUES ('epoch', $1)
+                       ON CONFLICT (key) DO UPDATE SET value = EXCLUDED.value";
+            tx.execute(sql, &[&&next.to_le_bytes()[..]]).await?;
+            tx.commit().await?;
+            Ok(LeadAttempt::Led { epoch: next as u64 })
+        });
+        let attempt = attempt.map_err(|e| self.error(error_chain(&e)))?;
+        if let LeadAttempt::Led { epoch } = attempt {
+            self.fence.store(epoch, std::sync::atomic::Ordering::SeqCst);
+        }
+        Ok(attempt)
+    }
+
+    /// Extends the lead of `epoch` by `ttl` from now (the database's clock): whether it was
+    /// still this coordinator's.
+    pub fn renew_lead(&self, holder: &str, epoch: u64, ttl: std::time::Duration) -> Result<bool> {
+        let ttl_ms = ttl.as_millis() as f64;
+        let renewed = self.on(&self.lead_client, async |c: &mut Client| {
+            let sql =
+                "UPDATE restauro_leader SET expires_at = now() + $3 * interval '1 millisecond'
+                       WHERE id = 1 AND holder = $1 AND epoch = $2 AND expires_at > now()";
+            c.execute(sql, &[&holder, &(epoch as i64), &ttl_ms]).await
+        });
+        Ok(renewed.map_err(|e| self.error(error_chain(&e)))? == 1)
+    }
+
+    /// Gives the lead of `epoch` up at once, so a standby need not wait for it to lapse.
+    pub fn release_lead(&self, holder: &str, epoch: u64) -> Result<()> {
+        let released = self.on(&self.lead_client, async |c: &mut Client| {
+            let sql = "UPDATE restauro_leader SET expires_at = '-infinity'
+                       WHERE id = 1 AND holder = $1 AND epoch = $2";
+            c.execute(sql, &[&holder, &(epoch as i64)]).await
+        });
+        released.map(drop).map_err(|e| self.error(error_chain(&e)))
+    }
+
     /// One statement, in a transaction of its own.
     fn execute(
         &self,
         sql: &str,
         params: &[&(dyn tokio_postgres::types::ToSql + Sync)],
     ) -> Result<()> {
-        self.call(async |c| c.execute(sql, params).await.map(drop))
+        if self.fence.load(std::sync::atomic::Ordering::SeqCst) == 0 {
+            return self.call(async |c| c.execute(sql, params).await.map(drop));
+        }
+        self.transaction(async |tx| tx.execute(sql, params).await.map(drop))
     }
 
     /// Every row of two columns, text and bytes.
@@ -323,6 +436,16 @@ impl PgStore {
         self.call(async |c| {
             Ok(c.query_opt(sql, &[&job, &i64::from(tile)]).await?.map(|r| r.get(0)))
         })
+    }
+}
+
+/// The store may be dropped from async code (a coordinator's start that failed): its runtime is
+/// shut down without waiting there, which tokio forbids.
+impl Drop for PgStore {
+    fn drop(&mut self) {
+        if let Some(runtime) = self.runtime.take() {
+            runtime.shutdown_background();
+        }
     }
 }
 

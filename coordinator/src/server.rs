@@ -45,6 +45,12 @@ pub struct CoordinatorArgs {
     /// and migrated at start. The assets and results stay in --data.
     #[arg(long, env = "RESTAURO_STORE", hide_env_values = true)]
     pub store: Option<String>,
+    /// Keep the scenes' files and the results in this S3 bucket too (`s3://BUCKET[/PREFIX]`,
+    /// else RESTAURO_OBJECTS), so every coordinator of a fleet finds them; --data is then a
+    /// working copy. The endpoint and credentials come from AWS_ENDPOINT_URL, AWS_REGION,
+    /// AWS_ACCESS_KEY_ID and AWS_SECRET_ACCESS_KEY (AWS_ALLOW_HTTP=true for plain HTTP).
+    #[arg(long, env = "RESTAURO_OBJECTS")]
+    pub objects: Option<String>,
     /// With --store postgres://…: seconds the lead among coordinators on that database lives
     /// unrenewed. One coordinator leads (it renews every third of this); the others stand by,
     /// not ready, and one takes over once the lead lapses. A leader that cannot renew within
@@ -217,6 +223,7 @@ pub fn run(args: &CoordinatorArgs) -> Result<()> {
     });
     let config = Config {
         store: args.store.clone(),
+        objects: args.objects.clone(),
         data_dir: args.data.clone(),
         tokens: Tokens::new(&client, &worker),
         limits: Limits::from(&args.limits),

@@ -7,6 +7,7 @@
 //! (`--max-upload-mb`): an upload waits for room, and is refused when none comes.
 
 use crate::error::{FarmError, Result};
+use crate::objects::{Objects, asset_key};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Duration;
@@ -24,6 +25,8 @@ pub fn asset_hash(reference: &str) -> Result<&str> {
 
 pub struct AssetStore {
     dir: PathBuf,
+    /// Where every asset is kept besides `dir`, when shared (`objects`).
+    objects: Arc<Objects>,
     max_file_bytes: u64,
     /// The upload budget in MiB: one permit a MiB of a declared upload.
     budget: Arc<Semaphore>,
@@ -38,7 +41,12 @@ const PARTIAL: &str = ".partial";
 impl AssetStore {
     /// The asset folder `dir` (created when new; temporary files of interrupted uploads are
     /// removed).
-    pub fn open(dir: &Path, max_file_bytes: u64, budget_bytes: u64) -> Result<Self> {
+    pub fn open(
+        dir: &Path,
+        objects: Arc<Objects>,
+        max_file_bytes: u64,
+        budget_bytes: u64,
+    ) -> Result<Self> {
         std::fs::create_dir_all(dir).map_err(|e| FarmError::io(dir, e))?;
         for entry in std::fs::read_dir(dir).map_err(|e| FarmError::io(dir, e))? {
             let path = entry.map_err(|e| FarmError::io(dir, e))?.path();
@@ -49,6 +57,7 @@ impl AssetStore {
         let budget_mib = u32::try_from(budget_bytes.div_ceil(MIB).max(1)).unwrap_or(u32::MAX >> 3);
         Ok(Self {
             dir: dir.to_owned(),
+            objects,
             max_file_bytes,
             budget: Arc::new(Semaphore::new(budget_mib as usize)),
             budget_mib,
@@ -61,15 +70,50 @@ impl AssetStore {
         self.dir.join(hash.to_ascii_lowercase())
     }
 
+    /// Whether the asset is here, or in the object store (it is then fetched here).
     pub fn has(&self, hash: &str) -> bool {
-        self.path(hash).is_file()
+        self.path(hash).is_file() || self.fetched(hash)
+    }
+
+    /// Fetches the asset from the object store into the folder: whether it is here now. A
+    /// failure is logged and counts as missing, so the client uploads the file again.
+    fn fetched(&self, hash: &str) -> bool {
+        if !self.objects.is_shared() {
+            return false;
+        }
+        let path = self.path(hash);
+        match self.objects.fetch(&asset_key(hash), &path) {
+            Ok(false) => false,
+            Ok(true) => {
+                // Not to be trusted more than a file on disk: kept only with its hash.
+                let mut hasher = blake3::Hasher::new();
+                let intact = std::fs::File::open(&path)
+                    .and_then(|mut file| std::io::copy(&mut file, &mut hasher))
+                    .is_ok_and(|_| hasher.finalize().to_hex().eq_ignore_ascii_case(hash));
+                if !intact {
+                    tracing::warn!("asset {hash}: the object store's copy is damaged; dropped");
+                    let _ = std::fs::remove_file(&path);
+                }
+                intact
+            }
+            Err(e) => {
+                tracing::warn!("asset {hash}: {e}");
+                false
+            }
+        }
     }
 
     /// The asset's bytes, checked against its hash (a file damaged on disk is refused as
     /// missing, so it is uploaded again).
     pub fn read(&self, hash: &str) -> Result<Option<Vec<u8>>> {
         let path = self.path(hash);
-        match std::fs::read(&path) {
+        let read = match std::fs::read(&path) {
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound && self.fetched(hash) => {
+                std::fs::read(&path)
+            }
+            read => read,
+        };
+        match read {
             Ok(bytes) if blake3::hash(&bytes).to_hex().eq_ignore_ascii_case(hash) => {
                 Ok(Some(bytes))
             }
@@ -83,9 +127,15 @@ impl AssetStore {
         }
     }
 
-    /// Keeps `bytes` as the asset of `hash` (an earlier release's store moving its assets out).
+    /// Keeps `bytes` as the asset of `hash` (a file the studio was sent; an earlier release's
+    /// store moving its assets out), in the object store too when there is one.
     pub fn keep(&self, hash: &str, bytes: &[u8]) -> std::io::Result<()> {
-        restauro_image::atomic_file::write(&self.path(hash), bytes)
+        let path = self.path(hash);
+        restauro_image::atomic_file::write(&path, bytes)?;
+        self.objects.put_file(&asset_key(hash), &path).map_err(|e| {
+            let _ = std::fs::remove_file(&path);
+            std::io::Error::other(e)
+        })
     }
 
     /// Starts the upload of `reference`, announced as `declared_bytes`; waits for room in the
@@ -127,6 +177,7 @@ impl AssetStore {
         let file =
             tokio::fs::File::create(&temporary).await.map_err(|e| FarmError::io(&temporary, e))?;
         Ok(Upload {
+            objects: self.objects.clone(),
             reference: reference.to_owned(),
             target: self.path(&hash),
             hash,
@@ -142,6 +193,7 @@ impl AssetStore {
 
 /// An upload in progress: its temporary file, removed unless [`Upload::finish`] succeeds.
 pub struct Upload {
+    objects: Arc<Objects>,
     reference: String,
     hash: String,
     target: PathBuf,
@@ -193,6 +245,18 @@ impl Upload {
         tokio::fs::rename(&self.temporary, &self.target)
             .await
             .map_err(|e| FarmError::io(&self.target, e))?;
+        // In the object store before the upload is acknowledged, so a coordinator taking over
+        // has it; else it is not kept at all, and the client sends it again.
+        let (objects, key, target) =
+            (self.objects.clone(), asset_key(&self.hash), self.target.clone());
+        let put = tokio::task::spawn_blocking(move || {
+            let put = objects.put_file(&key, &target);
+            if put.is_err() {
+                let _ = std::fs::remove_file(&target);
+            }
+            put
+        });
+        put.await.map_err(|e| FarmError::Internal(e.to_string()))??;
         Ok(self.written)
     }
 }
@@ -216,7 +280,8 @@ mod tests {
     #[tokio::test]
     async fn an_upload_becomes_the_asset_only_with_its_hash_and_size() {
         let dir = tempfile::tempdir().unwrap();
-        let store = AssetStore::open(dir.path(), 1 << 20, 4 << 20).unwrap();
+        let store =
+            AssetStore::open(dir.path(), Arc::new(Objects::Local), 1 << 20, 4 << 20).unwrap();
         let bytes = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
         let good = reference(bytes);
         let mut up = store.begin(&good, bytes.len() as u64).await.unwrap();
@@ -244,7 +309,8 @@ mod tests {
     #[tokio::test]
     async fn uploads_share_a_budget_and_large_ones_are_refused() {
         let dir = tempfile::tempdir().unwrap();
-        let mut store = AssetStore::open(dir.path(), 64 << 20, 2 << 20).unwrap();
+        let mut store =
+            AssetStore::open(dir.path(), Arc::new(Objects::Local), 64 << 20, 2 << 20).unwrap();
         store.wait = Duration::from_millis(50);
         let r = reference(b"x");
         let e = store.begin(&r, 100 << 20).await.err().unwrap();
@@ -263,7 +329,8 @@ mod tests {
     #[test]
     fn a_file_damaged_on_disk_reads_as_missing() {
         let dir = tempfile::tempdir().unwrap();
-        let store = AssetStore::open(dir.path(), 1 << 20, 1 << 20).unwrap();
+        let store =
+            AssetStore::open(dir.path(), Arc::new(Objects::Local), 1 << 20, 1 << 20).unwrap();
         let hash = blake3::hash(b"abc").to_hex().to_string();
         store.keep(&hash, b"abd").unwrap();
         assert_eq!(store.read(&hash).unwrap(), None);

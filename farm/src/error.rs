@@ -106,6 +106,10 @@ pub enum FarmError {
     #[error("{path}: {source}")]
     Io { path: String, source: std::io::Error },
 
+    /// The object store cannot be reached or written (`objects`): the request may be retried.
+    #[error("{0}; try again once the object store answers")]
+    Objects(#[from] crate::objects::ObjectsError),
+
     /// A result file the farm wrote that it cannot read back or derive from.
     #[error("{0}")]
     Image(#[from] restauro_image::ImageError),
@@ -193,7 +197,7 @@ impl FarmError {
             E::NoSuchJob(_) | E::NoSuchFrame { .. } | E::NoSuchResult { .. } => Code::NotFound,
             E::Limit { .. } | E::TooManyJobs { .. } => Code::ResourceExhausted,
             E::Stalled { .. } => Code::DeadlineExceeded,
-            E::Store(_) => Code::Unavailable,
+            E::Store(_) | E::Objects(_) => Code::Unavailable,
             E::Io { .. } | E::Internal(_) | E::Image(_) => Code::Internal,
             E::Request(_) => Code::InvalidArgument,
             E::NoSuchScene(_) => Code::NotFound,

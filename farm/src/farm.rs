@@ -23,6 +23,7 @@ use crate::ids::{JobId, Session, SessionKey, WorkerId};
 use crate::job::{IllegalTransition, JobRecord, JobState, JobStatus};
 use crate::lease::{LeaseClaim, LeaseSigner};
 use crate::metrics::Metrics;
+use crate::objects::{Objects, result_key};
 use crate::scheduler::{self, Completion, Failure, Scheduler};
 use crate::store::Store;
 use restauro_image::framebuffer::{TileLayout, check_tile};
@@ -56,6 +57,9 @@ pub struct Config {
     pub data_dir: PathBuf,
     /// A PostgreSQL database for the store (`postgres://…`) instead of `data_dir/store.redb`.
     pub store: Option<String>,
+    /// An S3 bucket (`s3://BUCKET/PREFIX`) where assets and results are kept besides the data
+    /// folder (`objects`).
+    pub objects: Option<String>,
     pub tokens: Tokens,
     /// What a job's scene and render may ask; sent to workers with each job.
     pub limits: Limits,
@@ -95,6 +99,8 @@ fn plan_key(manifest_json: &str, render: &RenderOptions) -> blake3::Hash {
 pub struct Farm {
     pub(crate) config: Config,
     pub(crate) store: Arc<Store>,
+    /// Where the assets and results are kept besides the data folder (`objects`).
+    pub(crate) objects: Arc<Objects>,
     assets: AssetStore,
     commits: TileCommits,
     signer: LeaseSigner,
@@ -263,8 +269,10 @@ impl Farm {
         })?;
         let (secret, epoch) =
             store.begin_run(crate::ids::random_secret()).map_err(FarmError::StoreAtStart)?;
+        let objects = Arc::new(Objects::open(config.objects.as_deref())?);
         let assets = AssetStore::open(
             &config.data_dir.join("assets"),
+            objects.clone(),
             config.limits.max_file_bytes,
             config.max_upload_bytes,
         )?;
@@ -279,6 +287,7 @@ impl Farm {
             TileCommits::start(store.clone(), config.commit_delay).map_err(FarmError::Committer)?;
         let farm = Arc::new(Farm {
             store,
+            objects,
             assets,
             commits,
             signer: LeaseSigner::new(secret, epoch),
@@ -731,7 +740,13 @@ impl Farm {
         if !r.results.iter().any(|f| f == name) {
             return Err(FarmError::NoSuchResult { job: id.clone(), name: name.to_owned() });
         }
-        Ok(self.results_dir(id).join(name))
+        drop(st);
+        let path = self.results_dir(id).join(name);
+        // Written by another coordinator (the lead passed): fetched from the object store.
+        if self.objects.is_shared() && !path.is_file() {
+            self.objects.fetch(&result_key(id.as_str(), name), &path)?;
+        }
+        Ok(path)
     }
 
     /// Cancels a job that has not ended; an ended job is left as it is. Its status.
@@ -1335,6 +1350,7 @@ mod tests {
         Farm::open(Config {
             data_dir: dir.to_owned(),
             store: None,
+            objects: None,
             tokens: Tokens::new("c", "w"),
             limits: Limits::default(),
             max_jobs: 4,

@@ -7,6 +7,8 @@
 
 pub mod asset_store;
 pub mod auth;
+#[cfg(feature = "fleet")]
+mod blocking;
 pub mod callers;
 pub mod error;
 pub mod farm;
@@ -17,6 +19,7 @@ pub mod job;
 pub mod lead;
 pub mod lease;
 pub mod metrics;
+pub mod objects;
 pub mod recent;
 pub mod scheduler;
 pub mod store;

@@ -1,21 +1,12 @@
 //! The real servers the fleet tests run against (issue 40): a PostgreSQL server, named by
-//! `RESTAURO_TEST_POSTGRES` (a URL whose user may create databases; `.ci/run` starts one and
-//! sets it). Without it a fleet test says it is skipped and passes, unless
+//! `RESTAURO_TEST_POSTGRES` (a URL whose user may create databases), and an S3-compatible one,
+//! by `RESTAURO_TEST_S3` and the `AWS_*` variables (`.ci/run` starts both and sets them). Without it a fleet test says it is skipped and passes, unless
 //! `RESTAURO_REQUIRE_FLEET` is set (as CI sets it), when it fails.
 
 /// A fresh database for the test `name` on the test server, as a URL; `None` (the test is
 /// skipped, saying so) when there is no server to test against.
 pub fn database(name: &str) -> Option<String> {
-    let Ok(admin) = std::env::var("RESTAURO_TEST_POSTGRES") else {
-        assert!(
-            std::env::var_os("RESTAURO_REQUIRE_FLEET").is_none(),
-            "RESTAURO_REQUIRE_FLEET is set and RESTAURO_TEST_POSTGRES is not: no PostgreSQL to test {name} against"
-        );
-        eprintln!(
-            "skipped {name}: set RESTAURO_TEST_POSTGRES=postgres://… to test against PostgreSQL"
-        );
-        return None;
-    };
+    let admin = server("RESTAURO_TEST_POSTGRES", "postgres://…", name)?;
     let db = format!("restauro_{name}_{}", std::process::id());
     let runtime = tokio::runtime::Builder::new_current_thread().enable_all().build().unwrap();
     runtime.block_on(async {
@@ -123,4 +114,28 @@ pub fn server_addr(url: &str) -> std::net::SocketAddr {
     let rest = url.split_once('@').map_or(url, |(_, r)| r);
     let host_port = rest.split(['/', '?']).next().unwrap();
     host_port.to_socket_addrs().unwrap().next().unwrap()
+}
+
+/// A fresh prefix in the test bucket for the test `name`, as an `s3://` URL; `None` (the test
+/// is skipped, saying so) without an S3-compatible server to test against. The server is named
+/// by `RESTAURO_TEST_S3` (`s3://BUCKET`), its endpoint and credentials by the usual `AWS_*`
+/// variables (`.ci/run` starts SeaweedFS and sets them all); the coordinators a test starts
+/// inherit them.
+pub fn objects(name: &str) -> Option<String> {
+    let bucket = server("RESTAURO_TEST_S3", "s3://BUCKET (and AWS_*)", name)?;
+    Some(format!("{}/{name}-{}", bucket.trim_end_matches('/'), std::process::id()))
+}
+
+/// The server the variable `var` names for the test `name`; `None`, saying the test is
+/// skipped, without it — unless `RESTAURO_REQUIRE_FLEET` is set, when the test fails.
+fn server(var: &str, example: &str, name: &str) -> Option<String> {
+    let Ok(value) = std::env::var(var) else {
+        assert!(
+            std::env::var_os("RESTAURO_REQUIRE_FLEET").is_none(),
+            "RESTAURO_REQUIRE_FLEET is set and {var} is not: no server to test {name} against"
+        );
+        eprintln!("skipped {name}: set {var}={example} to test against a real server");
+        return None;
+    };
+    Some(value)
 }

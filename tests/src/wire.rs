@@ -58,6 +58,11 @@ pub async fn upload_bytes(
     client.upload_asset(tokio_stream::iter(chunks)).await.map(tonic::Response::into_inner)
 }
 
+/// The references of every file of the scene at `scene`.
+pub fn bundle_references(scene: &Path) -> Vec<String> {
+    bundle_scene(scene, &Limits::default()).unwrap().references()
+}
+
 /// The scene's bundle, every asset uploaded.
 pub async fn upload(client: &mut Render, scene: &Path) -> Bundle {
     let bundle = bundle_scene(scene, &Limits::default()).unwrap();

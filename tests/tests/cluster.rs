@@ -279,15 +279,42 @@ fn a_restarted_coordinator_on_postgres_resumes_without_rendering_finished_tiles_
 /// the workers and the client, given both addresses, follow it. No tile is lost, no finished
 /// tile rendered again, and the image is the one-process render's. The failover time — from
 /// the kill to the standby serving — is printed (`--nocapture`), never asserted.
+///
+/// The coordinators share no folder: the scenes' files and the results are in S3-compatible
+/// storage (`--objects`, item 3). Once the job is done, a third coordinator on an empty data
+/// folder takes over from the second: it holds every file of the scene without an upload, and
+/// serves the job's results, all from the object store.
 #[test]
 fn a_standby_takes_over_from_a_killed_leader_without_losing_or_rendering_a_tile_twice() {
     let Some(url) = restauro_tests::fleet::database("failover") else { return };
+    let Some(objects) = restauro_tests::fleet::objects("failover") else { return };
     let dir = tempfile::tempdir().unwrap();
-    let args = ["--store", &url, "--lead-ttl-s", "3"];
-    let successor = Successor::Standby { args: &args, cut: None };
-    restart_resumes(dir.path(), &args, successor, || {
+    let args = ["--store", &url, "--lead-ttl-s", "3", "--objects", &objects];
+    let successor = Successor::Standby { args: &args, cut: None, own_data: true };
+    let (id, scene, successor) = restart_resumes(dir.path(), &args, successor, || {
         restauro_farm::store::Store::connect(&url).unwrap()
     });
+    let d = dir.path();
+    let third_data = d.join("data-third");
+    let third = Standby::start(d, &third_data, &free_loopback_addr(), &args);
+    drop(successor);
+    let (third, _) = third.wait_to_lead();
+    let runtime = tokio::runtime::Runtime::new().unwrap();
+    let references = restauro_tests::wire::bundle_references(Path::new(&scene));
+    let missing = runtime.block_on(async {
+        let mut client = wire::render_client(&third.url).await;
+        let list = restauro_proto::pb::AssetList { references: references.clone() };
+        client.missing_assets(list).await.unwrap().into_inner().references
+    });
+    assert!(missing.is_empty(), "the third coordinator lacks {missing:?}");
+    let kept = std::fs::read_dir(third_data.join("assets")).unwrap().count();
+    assert_eq!(kept, references.len(), "the scene's files were not fetched");
+    let (client_token, _) = token_files(d);
+    let out = d.join("from-the-third");
+    let fetch = ["fetch", &id, "--out", out.to_str().unwrap(), "--coordinator", &third.url];
+    let o = restauro(&[&fetch[..], &["--token-file", client_token.to_str().unwrap()]].concat());
+    assert!(o.status.success(), "{}", text(&o));
+    assert_identical(&pixels(&out.join("aosta.exr")), &pixels(&d.join("local/aosta.exr")));
 }
 
 /// The same with the leader cut off from the database in the middle of a job (its packets
@@ -301,7 +328,7 @@ fn a_leader_cut_off_from_the_database_steps_down_and_a_standby_takes_over() {
     let through_proxy = proxy.url(&url);
     let leader = ["--store", &through_proxy, "--lead-ttl-s", "3"];
     let standby = ["--store", &url, "--lead-ttl-s", "3"];
-    let successor = Successor::Standby { args: &standby, cut: Some(&proxy) };
+    let successor = Successor::Standby { args: &standby, cut: Some(&proxy), own_data: false };
     restart_resumes(dir.path(), &leader, successor, || {
         restauro_farm::store::Store::connect(&url).unwrap()
     });
@@ -315,23 +342,26 @@ enum Successor<'a> {
     /// A coordinator with `args` standing by on the same store since before the leader's end,
     /// on its own address; the leader is killed, or, with `cut`, cut off from the database by
     /// the proxy it reaches it through.
-    Standby { args: &'a [&'a str], cut: Option<&'a restauro_tests::fleet::Proxy> },
+    /// With `own_data`, it has a data folder of its own (the files are in the object store).
+    Standby { args: &'a [&'a str], cut: Option<&'a restauro_tests::fleet::Proxy>, own_data: bool },
 }
 
 /// A coordinator with `store_args` renders a job with two workers, is killed (SIGKILL) once
 /// some tiles are finished, and its successor on the same store (`store` opens it) resumes
-/// without rendering a finished tile again; the image is the one-process render's.
+/// without rendering a finished tile again; the image is the one-process render's (in
+/// `d/local`). The job's id, the scene's path, and the successor.
 fn restart_resumes(
     d: &Path,
     store_args: &[&str],
     successor: Successor,
     store: impl Fn() -> restauro_farm::store::Store,
-) {
+) -> (String, String, Coordinator) {
     let scene = aosta_scene(d, 192, 108);
     let data = d.join("data");
     let mut coordinator = Coordinator::start(d, &data, "127.0.0.1:0", store_args);
     let standby = match successor {
-        Successor::Standby { args, .. } => {
+        Successor::Standby { args, own_data, .. } => {
+            let data = if own_data { d.join("data-standby") } else { data.clone() };
             let standby = Standby::start(d, &data, &free_loopback_addr(), args);
             let (code, body) = restauro_tests::http_get(&standby.metrics, "/readyz");
             assert!(
@@ -396,7 +426,7 @@ fn restart_resumes(
         eprintln!("the leader cut off from its database exited after {stepped_down:.2} s");
     }
     let offsets: Vec<usize> = logs.iter().map(|l| lines(l).len()).collect();
-    let _successor = match standby {
+    let successor = match standby {
         Some(standby) => {
             let (successor, _) = standby.wait_to_lead();
             eprintln!(
@@ -444,6 +474,7 @@ fn restart_resumes(
     assert!(o.status.success(), "{}", text(&o));
     assert_identical(&pixels(&out.join("aosta.exr")), &pixels(&local.join("aosta.exr")));
     workers.clear();
+    (id, scene, successor)
 }
 
 /// The `samples` channel of a render's EXR: each pixel's count under adaptive sampling.

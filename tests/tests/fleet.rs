@@ -197,3 +197,45 @@ fn a_write_under_a_lapsed_lead_is_refused() {
     b.release_lead("b", second).unwrap();
     assert!(matches!(a.try_lead("a", ttl).unwrap(), LeadAttempt::Led { epoch } if epoch > second));
 }
+
+/// The object store on a real S3-compatible server (issue 40, item 3): a file put is fetched
+/// back whole — a small one in one request, one of 40 MiB in parts — and an object never put is
+/// reported missing, leaving no file behind.
+#[test]
+fn files_put_in_the_object_store_are_fetched_back_whole() {
+    use restauro_farm::objects::Objects;
+    let Some(url) = restauro_tests::fleet::objects("objects") else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let objects = Objects::open(Some(&url)).unwrap();
+    assert!(objects.is_shared());
+    let small: Vec<u8> = (0..100_000u32).flat_map(|i| i.to_le_bytes()).collect();
+    let large: Vec<u8> = (0..10_000_000u32).flat_map(|i| (i ^ 0x5a5a).to_le_bytes()).collect();
+    for (name, bytes) in [("small", &small), ("large", &large)] {
+        let sent = dir.path().join(format!("{name}.sent"));
+        std::fs::write(&sent, bytes).unwrap();
+        objects.put_file(&format!("test/{name}"), &sent).unwrap();
+        let back = dir.path().join("back").join(name);
+        assert!(objects.fetch(&format!("test/{name}"), &back).unwrap(), "{name} not found");
+        assert!(std::fs::read(&back).unwrap() == *bytes, "{name} came back different");
+    }
+    let never = dir.path().join("never");
+    assert!(!objects.fetch("test/never-put", &never).unwrap());
+    assert!(!never.exists());
+    let leftovers: Vec<_> = std::fs::read_dir(dir.path().join("back")).unwrap().collect();
+    assert_eq!(leftovers.len(), 2, "{leftovers:?}");
+}
+
+/// A bucket that does not exist, or credentials the server refuses, stop the coordinator at
+/// its start with a message naming the URL and what to check.
+#[test]
+fn an_object_store_that_cannot_be_reached_is_refused_at_the_start() {
+    use restauro_farm::objects::Objects;
+    let Some(url) = restauro_tests::fleet::objects("unreachable") else { return };
+    let bucket = url.strip_prefix("s3://").unwrap().split('/').next().unwrap();
+    let wrong = url.replacen(bucket, "no-such-bucket-for-restauro", 1);
+    let Err(e) = Objects::open(Some(&wrong)) else { panic!("a missing bucket was taken") };
+    let message = e.to_string();
+    assert!(message.contains(&wrong) && message.contains("the bucket exists"), "{message}");
+    let Err(e) = Objects::open(Some("s3:/nothing")) else { panic!("a malformed URL was taken") };
+    assert!(e.to_string().contains("s3://BUCKET[/PREFIX]"), "{e}");
+}

@@ -150,6 +150,24 @@ fn write(
     frame: Framebuffer,
     page: &Page<'_>,
 ) -> Result<Written, Outcome> {
+    let written = write_here(farm, id, frame, page)?;
+    // In the object store before the job or frame is done, so a coordinator taking over
+    // serves them.
+    let dir = farm.results_dir(id);
+    for file in &written.files {
+        let key = crate::objects::result_key(id.as_str(), file);
+        farm.objects.put_file(&key, &dir.join(file)).map_err(|e| Outcome::Failed(e.to_string()))?;
+    }
+    Ok(written)
+}
+
+/// Writes the files of `frame` into the job's results folder.
+fn write_here(
+    farm: &Arc<Farm>,
+    id: &JobId,
+    frame: Framebuffer,
+    page: &Page<'_>,
+) -> Result<Written, Outcome> {
     let Page { plan, stem, info, spec, eye } = *page;
     let dir = farm.results_dir(id);
     std::fs::create_dir_all(&dir)

@@ -14,8 +14,7 @@
 //!   coordinator goes on meanwhile, as with a full disk.
 //!
 //! The farm calls the store from plain threads and from async tasks alike, so every call runs
-//! on a thread of its own, on this store's one-thread runtime: a blocking call never enters
-//! the caller's runtime.
+//! on a thread of its own, on this store's one-thread runtime (`blocking`).
 
 use super::problem::Problems;
 use super::{LeadAttempt, Result, StoreError};
@@ -45,8 +44,7 @@ pub struct PgStore {
     /// The URL without its password, for messages.
     shown: String,
     config: Config,
-    /// Taken only when the store is dropped (see its `Drop`).
-    runtime: Option<tokio::runtime::Runtime>,
+    runtime: crate::blocking::Blocking,
     /// `None` before the first call and after a connection was lost.
     client: tokio::sync::Mutex<Option<Client>>,
     /// The lead's own connection: renewing it never waits behind a slow write.
@@ -86,16 +84,12 @@ impl PgStore {
         // idle longer than a round trip.
         let options = config.get_options().unwrap_or_default().to_owned();
         config.options(format!("{options} -c idle_in_transaction_session_timeout=2000").trim());
-        let runtime = tokio::runtime::Builder::new_multi_thread()
-            .worker_threads(1)
-            .thread_name("store-postgres")
-            .enable_all()
-            .build()
+        let runtime = crate::blocking::Blocking::start("store-postgres")
             .map_err(|e| refused(format!("starting its runtime: {e}")))?;
         let store = PgStore {
             shown: shown.clone(),
             config,
-            runtime: Some(runtime),
+            runtime,
             client: tokio::sync::Mutex::new(None),
             lead_client: tokio::sync::Mutex::new(None),
             fence: std::sync::atomic::AtomicU64::new(0),
@@ -141,36 +135,29 @@ impl PgStore {
         slot: &tokio::sync::Mutex<Option<Client>>,
         f: impl AsyncFn(&mut Client) -> PgResult<T> + Send + Sync,
     ) -> PgResult<T> {
-        std::thread::scope(|s| {
-            s.spawn(|| {
-                let runtime = self.runtime.as_ref().expect("taken only when dropped");
-                runtime.block_on(async {
-                    let mut slot = slot.lock().await;
-                    let mut again = true;
-                    loop {
-                        if slot.as_ref().is_none_or(Client::is_closed) {
-                            let (client, connection) = self.config.connect(NoTls).await?;
-                            tokio::spawn(async move {
-                                if let Err(e) = connection.await {
-                                    tracing::warn!("the PostgreSQL store's connection ended: {e}");
-                                }
-                            });
-                            *slot = Some(client);
+        self.runtime.run(|| async {
+            let mut slot = slot.lock().await;
+            let mut again = true;
+            loop {
+                if slot.as_ref().is_none_or(Client::is_closed) {
+                    let (client, connection) = self.config.connect(NoTls).await?;
+                    tokio::spawn(async move {
+                        if let Err(e) = connection.await {
+                            tracing::warn!("the PostgreSQL store's connection ended: {e}");
                         }
-                        let client = slot.as_mut().expect("connected above");
-                        let outcome = f(client).await;
-                        if client.is_closed() {
-                            *slot = None;
-                            if outcome.is_err() && std::mem::take(&mut again) {
-                                continue;
-                            }
-                        }
-                        return outcome;
+                    });
+                    *slot = Some(client);
+                }
+                let client = slot.as_mut().expect("connected above");
+                let outcome = f(client).await;
+                if client.is_closed() {
+                    *slot = None;
+                    if outcome.is_err() && std::mem::take(&mut again) {
+                        continue;
                     }
-                })
-            })
-            .join()
-            .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+                }
+                return outcome;
+            }
         })
     }
 
@@ -436,16 +423,6 @@ impl PgStore {
         self.call(async |c| {
             Ok(c.query_opt(sql, &[&job, &i64::from(tile)]).await?.map(|r| r.get(0)))
         })
-    }
-}
-
-/// The store may be dropped from async code (a coordinator's start that failed): its runtime is
-/// shut down without waiting there, which tokio forbids.
-impl Drop for PgStore {
-    fn drop(&mut self) {
-        if let Some(runtime) = self.runtime.take() {
-            runtime.shutdown_background();
-        }
     }
 }
 

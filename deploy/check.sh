@@ -195,6 +195,56 @@ else
     skip "kubernetes-validate" "$why"
 fi
 
+# --- Kubernetes, the fleet overlay ---------------------------------------------------------
+step "Kubernetes fleet overlay (deploy/k8s-fleet)"
+fleet=deploy/k8s-fleet
+# Its own manifests, strictly; the CloudNativePG example is a custom resource with no schema
+# here: it must parse and be the operator's Cluster.
+fleet_manifests=$(find "$fleet" -maxdepth 1 -name '*.yaml' ! -name kustomization.yaml \
+    ! -name cloudnativepg.yaml | sort)
+if [ -x "$validator" ]; then
+    for version in $K8S_VERSIONS; do
+        # shellcheck disable=SC2086 # the names hold no spaces
+        if "$validator" --strict --quiet -k "$version" $fleet_manifests; then
+            pass "kubernetes-validate --strict -k $version ($(echo $fleet_manifests | wc -w) fleet files)"
+        else
+            fail "kubernetes-validate --strict -k $version (fleet)"
+        fi
+    done
+    if "$venv/bin/python" - "$fleet/cloudnativepg.yaml" <<'PY'
+import sys, yaml
+doc = yaml.safe_load(open(sys.argv[1]))
+assert doc["apiVersion"] == "postgresql.cnpg.io/v1" and doc["kind"] == "Cluster", doc
+spec = doc["spec"]
+assert spec["instances"] >= 2 and spec["postgresql"]["synchronous"]["number"] >= 1, spec
+PY
+    then
+        pass "cloudnativepg.yaml: a CloudNativePG Cluster with a synchronous standby"
+    else
+        fail "cloudnativepg.yaml"
+    fi
+    # The overlay as `kubectl apply -k` sends it: the base's single coordinator replaced by two.
+    if command -v kubectl >/dev/null && kubectl kustomize "$fleet" >"$tmp/fleet.yaml" 2>"$tmp/err"
+    then
+        kinds=$(awk '/^kind:/ { print $2 }' "$tmp/fleet.yaml" | sort | tr '\n' ' ')
+        version=${K8S_VERSIONS##* }
+        if [ "$kinds" != "Deployment Deployment HorizontalPodAutoscaler Namespace PodDisruptionBudget Service " ]; then
+            fail "kubectl kustomize $fleet renders $kinds"
+        elif "$validator" --strict --quiet -k "$version" "$tmp/fleet.yaml"; then
+            pass "kubectl kustomize $fleet, validated against $version"
+        else
+            fail "kubectl kustomize $fleet, validated against $version"
+        fi
+    elif command -v kubectl >/dev/null; then
+        cat "$tmp/err"
+        fail "kubectl kustomize $fleet"
+    else
+        skip "kubectl kustomize $fleet" "no kubectl"
+    fi
+else
+    skip "kubernetes-validate (fleet)" "$why"
+fi
+
 # --- compose -------------------------------------------------------------------------------
 step "compose file"
 composers=()

@@ -2,6 +2,7 @@
 # A PostgreSQL server for the fleet tests (issue 40): Debian's package, a cluster of its own in a
 # temporary folder on 127.0.0.1:54329, stopped by its pid.
 #   .ci/postgres.sh start DIR   installs PostgreSQL if missing, starts it, prints the test URL
+#   .ci/postgres.sh restart DIR restarts it (fast: sessions cut, as a database failover does)
 #   .ci/postgres.sh stop DIR    stops the server started in DIR
 set -euo pipefail
 cmd=$1 dir=$2
@@ -29,6 +30,11 @@ start)
     "${as[@]}" "$bin/psql" -h 127.0.0.1 -p "$port" -U postgres -qc \
         "CREATE ROLE restauro LOGIN CREATEDB PASSWORD 'restauro'" >/dev/null
     echo "postgres://restauro:restauro@127.0.0.1:$port/postgres"
+    ;;
+restart)
+    as=()
+    [ "$(id -u)" -eq 0 ] && as=(runuser -u postgres --)
+    "${as[@]}" "$bin/pg_ctl" -D "$dir/data" -l "$dir/server.log" -m fast -w restart >/dev/null
     ;;
 stop)
     pid=$(head -1 "$dir/data/postmaster.pid" 2>/dev/null || true)

@@ -139,3 +139,62 @@ fn server(var: &str, example: &str, name: &str) -> Option<String> {
     };
     Some(value)
 }
+
+/// A PostgreSQL server of a test's own (which it may restart), started by `.ci/postgres.sh`
+/// on a free port in `dir`; stopped when dropped. `None` (the test is skipped) without a
+/// PostgreSQL to test against, as [`database`] says.
+pub struct OwnPostgres {
+    dir: std::path::PathBuf,
+    /// The URL of its database `restauro`.
+    pub url: String,
+}
+
+fn postgres_script(command: &str, dir: &std::path::Path, port: Option<u16>) -> String {
+    let script = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../.ci/postgres.sh");
+    let mut run = std::process::Command::new("bash");
+    run.arg(script).arg(command).arg(dir);
+    if let Some(port) = port {
+        run.env("RESTAURO_PG_PORT", port.to_string());
+    }
+    let out = run.output().unwrap();
+    assert!(
+        out.status.success(),
+        "postgres.sh {command}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).trim().to_owned()
+}
+
+impl OwnPostgres {
+    pub fn start(name: &str, dir: &std::path::Path) -> Option<OwnPostgres> {
+        server("RESTAURO_TEST_POSTGRES", "postgres://…", name)?;
+        let port = std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
+        // The server runs as the package's user when the tests run as root: it must reach its
+        // folder.
+        use std::os::unix::fs::PermissionsExt as _;
+        std::fs::set_permissions(dir, std::fs::Permissions::from_mode(0o755)).unwrap();
+        let dir = dir.join("postgres");
+        std::fs::create_dir_all(&dir).unwrap();
+        let admin = postgres_script("start", &dir, Some(port));
+        let runtime = tokio::runtime::Builder::new_current_thread().enable_all().build().unwrap();
+        runtime.block_on(async {
+            let (client, connection) =
+                tokio_postgres::connect(&admin, tokio_postgres::NoTls).await.unwrap();
+            tokio::spawn(connection);
+            client.batch_execute("CREATE DATABASE restauro").await.unwrap();
+        });
+        let url = format!("{}/restauro", admin.rsplit_once('/').unwrap().0);
+        Some(OwnPostgres { dir, url })
+    }
+
+    /// Restarts the server (fast: every session is cut).
+    pub fn restart(&self) {
+        postgres_script("restart", &self.dir, None);
+    }
+}
+
+impl Drop for OwnPostgres {
+    fn drop(&mut self) {
+        postgres_script("stop", &self.dir, None);
+    }
+}

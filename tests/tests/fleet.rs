@@ -73,6 +73,43 @@ fn a_database_that_is_not_there_is_refused_naming_it_without_the_password() {
     assert!(!e.contains(":restauro@"), "the password is shown: {e}");
 }
 
+/// The one-process render of `scene` with `options`, in `d/alone`.
+fn render_alone(d: &std::path::Path, scene: &str, options: &[&str]) -> std::path::PathBuf {
+    let alone = d.join("alone");
+    let mut args = vec!["render", scene, "--in-process", "--out", alone.to_str().unwrap()];
+    args.extend(options);
+    let o = restauro_tests::restauro(&args);
+    assert!(o.status.success(), "{}", restauro_tests::text(&o));
+    alone
+}
+
+/// The id of a job of `scene` with `options`, submitted to the coordinator at `url`.
+fn submitted(scene: &str, options: &[&str], url: &str, token: &std::path::Path) -> String {
+    let mut submit = vec!["submit", scene];
+    submit.extend(options);
+    let o = restauro_tests::client(&submit, url, token);
+    assert!(o.status.success(), "{}", restauro_tests::text(&o));
+    String::from_utf8_lossy(&o.stdout).trim().to_owned()
+}
+
+/// The results of job `id`, fetched from the coordinator at `url`, are the one-process
+/// render's in `alone`, bit for bit.
+fn fetched_is_alone(
+    d: &std::path::Path,
+    id: &str,
+    url: &str,
+    token: &std::path::Path,
+    alone: &std::path::Path,
+) {
+    let out = d.join("farm");
+    let o = restauro_tests::client(&["fetch", id, "--out", out.to_str().unwrap()], url, token);
+    assert!(o.status.success(), "{}", restauro_tests::text(&o));
+    restauro_tests::assert_identical(
+        &restauro_tests::exr_pixels(&out.join("aosta.exr")),
+        &restauro_tests::exr_pixels(&alone.join("aosta.exr")),
+    );
+}
+
 /// Terminates every session of database `db` but the caller's, as an operator's
 /// `pg_terminate_backend` or a pooler's restart does; how many it ended.
 fn terminate_sessions(admin: &str, db: &str) -> u64 {
@@ -100,21 +137,13 @@ fn terminated_database_sessions_lose_no_tile() {
     let d = dir.path();
     let scene = restauro_tests::aosta_scene(d, 192, 108);
     let options = ["--spp", "16", "--tile", "16"];
-    let alone = d.join("alone");
-    let mut args = vec!["render", scene.as_str(), "--in-process", "--out", alone.to_str().unwrap()];
-    args.extend(options);
-    let o = restauro_tests::restauro(&args);
-    assert!(o.status.success(), "{}", restauro_tests::text(&o));
+    let alone = render_alone(d, &scene, &options);
     let c =
         restauro_tests::Coordinator::start(d, &d.join("data"), "127.0.0.1:0", &["--store", &url]);
     let _workers: Vec<restauro_tests::Worker> =
         (1..=2).map(|i| restauro_tests::Worker::start(d, &c.url, &format!("w{i}"), &[])).collect();
     let (token, _) = restauro_tests::token_files(d);
-    let mut submit = vec!["submit", scene.as_str()];
-    submit.extend(options);
-    let o = restauro_tests::client(&submit, &c.url, &token);
-    assert!(o.status.success(), "{}", restauro_tests::text(&o));
-    let id = String::from_utf8_lossy(&o.stdout).trim().to_owned();
+    let id = submitted(&scene, &options, &c.url, &token);
     // Sessions are terminated every 30 ms until the job has ended, its assembly included.
     let done = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     let terminator = {
@@ -133,13 +162,7 @@ fn terminated_database_sessions_lose_no_tile() {
     let ended = terminator.join().unwrap();
     assert!(restauro_tests::text(&o).contains("done"), "{}", restauro_tests::text(&o));
     assert!(ended >= 1, "no session of the coordinator's was ever open to terminate");
-    let out = d.join("farm");
-    let o = restauro_tests::client(&["fetch", &id, "--out", out.to_str().unwrap()], &c.url, &token);
-    assert!(o.status.success(), "{}", restauro_tests::text(&o));
-    restauro_tests::assert_identical(
-        &restauro_tests::exr_pixels(&out.join("aosta.exr")),
-        &restauro_tests::exr_pixels(&alone.join("aosta.exr")),
-    );
+    fetched_is_alone(d, &id, &c.url, &token, &alone);
     let log = std::fs::read_to_string(d.join("coordinator.log")).unwrap();
     eprintln!(
         "{ended} sessions terminated; the coordinator logged {} store errors",
@@ -238,4 +261,65 @@ fn an_object_store_that_cannot_be_reached_is_refused_at_the_start() {
     assert!(message.contains(&wrong) && message.contains("the bucket exists"), "{message}");
     let Err(e) = Objects::open(Some("s3:/nothing")) else { panic!("a malformed URL was taken") };
     assert!(e.to_string().contains("s3://BUCKET[/PREFIX]"), "{e}");
+}
+
+/// The coordinator's database restarted in the middle of a job (issue 40, item 6): every
+/// session is cut and the server refuses connections for a moment. The coordinator keeps its
+/// lead (the restart is shorter than its step-down), its writes fail and are retried, workers
+/// keep their results until acknowledged; the job ends, each tile rendered once, and the image
+/// is the one process renders.
+#[test]
+fn a_restarted_database_loses_no_tile_and_renders_none_twice() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let Some(postgres) = restauro_tests::fleet::OwnPostgres::start("pgrestart", d) else { return };
+    let scene = restauro_tests::aosta_scene(d, 192, 108);
+    let options = ["--spp", "64", "--tile", "16"];
+    let alone = render_alone(d, &scene, &options);
+    let no_checks = ["--check-rate", "0", "--check-rate-new", "0"];
+    let mut c = restauro_tests::Coordinator::start(
+        d,
+        &d.join("data"),
+        "127.0.0.1:0",
+        &[&["--store", &postgres.url][..], &no_checks].concat(),
+    );
+    let logs: Vec<_> = (1..=2).map(|i| d.join(format!("tiles-{i}.log"))).collect();
+    let _workers: Vec<restauro_tests::Worker> = logs
+        .iter()
+        .enumerate()
+        .map(|(i, log)| {
+            let name = format!("w{}", i + 1);
+            restauro_tests::Worker::start(d, &c.url, &name, &["--tile-log", log.to_str().unwrap()])
+        })
+        .collect();
+    let (token, _) = restauro_tests::token_files(d);
+    let id = submitted(&scene, &options, &c.url, &token);
+    let rendered = || -> Vec<String> {
+        logs.iter()
+            .flat_map(|l| {
+                std::fs::read_to_string(l)
+                    .unwrap_or_default()
+                    .lines()
+                    .map(str::to_owned)
+                    .collect::<Vec<_>>()
+            })
+            .filter(|line| line.starts_with(&id))
+            .collect()
+    };
+    let deadline = std::time::Instant::now() + restauro_tests::patience();
+    while rendered().len() < 12 {
+        assert!(std::time::Instant::now() < deadline, "no progress: {}", restauro_tests::logs(d));
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    let total = 12 * 7;
+    assert!(rendered().len() < total as usize, "the job ended before the restart");
+    postgres.restart();
+    let o = restauro_tests::client(&["watch", &id], &c.url, &token);
+    assert!(restauro_tests::text(&o).contains("done"), "{}", restauro_tests::text(&o));
+    assert!(c.child.try_wait().unwrap().is_none(), "the coordinator stopped");
+    let mut tiles: Vec<u32> =
+        rendered().iter().map(|line| line.split(' ').nth(1).unwrap().parse().unwrap()).collect();
+    tiles.sort_unstable();
+    assert_eq!(tiles, (0..total).collect::<Vec<u32>>(), "each tile rendered once");
+    fetched_is_alone(d, &id, &c.url, &token, &alone);
 }

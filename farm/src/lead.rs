@@ -70,7 +70,6 @@ struct Held {
     renewal: Arc<Renewal>,
     /// Why the lead was lost, once it was.
     lost: watch::Receiver<Option<String>>,
-    threads: [std::thread::JoinHandle<()>; 2],
 }
 
 /// What the lead's two threads share: the renewer, which renews the lead every third of its
@@ -156,16 +155,17 @@ impl Lead {
             stop: Default::default(),
             lost: lost_tx,
         });
-        let thread = |name: &str, run: fn(&Renewal)| {
+        // Both end by themselves once the lead is given up or lost.
+        for (name, run) in
+            [("lead-renewer", Renewal::renew as fn(&Renewal)), ("lead-watchdog", Renewal::watch)]
+        {
             let renewal = renewal.clone();
             std::thread::Builder::new()
                 .name(name.into())
                 .spawn(move || run(&renewal))
-                .expect("starting a thread of the lead")
-        };
-        let threads =
-            [thread("lead-renewer", Renewal::renew), thread("lead-watchdog", Renewal::watch)];
-        Lead { held: Some(Held { renewal, lost, threads }) }
+                .expect("starting a thread of the lead");
+        }
+        Lead { held: Some(Held { renewal, lost }) }
     }
 
     /// The lead's epoch (`None` for a file store's sole coordinator).
@@ -184,20 +184,25 @@ impl Lead {
     }
 
     /// Gives the lead up (a stop asked for): a standby takes over at once rather than when
-    /// the lead would lapse.
+    /// the lead would lapse. Waits a third of the time to live at most: a database that does
+    /// not answer (cut off) lets the lead lapse by itself, and the stop is not held up.
     pub fn release(self) {
         let Some(held) = self.held else { return };
-        let r = &held.renewal;
-        r.stop.store(true, Ordering::SeqCst);
-        for thread in held.threads {
-            let _ = thread.join();
-        }
-        if r.lost.borrow().is_some() {
+        let renewal = held.renewal;
+        renewal.stop.store(true, Ordering::SeqCst);
+        if renewal.lost.borrow().is_some() {
             return;
         }
-        match r.store.release_lead(&r.config.holder, r.epoch) {
-            Ok(()) => info!(epoch = r.epoch, "gave the lead up"),
-            Err(e) => warn!("could not give the lead up ({e}); it lapses by itself"),
+        let patience = renewal.config.ttl / 3;
+        let (said, told) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let r = &renewal;
+            let _ = said.send((r.epoch, r.store.release_lead(&r.config.holder, r.epoch)));
+        });
+        match told.recv_timeout(patience) {
+            Ok((epoch, Ok(()))) => info!(epoch, "gave the lead up"),
+            Ok((_, Err(e))) => warn!("could not give the lead up ({e}); it lapses by itself"),
+            Err(_) => warn!("the store did not answer; the lead lapses by itself"),
         }
     }
 }

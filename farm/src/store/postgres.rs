@@ -392,7 +392,8 @@ impl PgStore {
     /// Gives the lead of `epoch` up at once, so a standby need not wait for it to lapse.
     pub fn release_lead(&self, holder: &str, epoch: u64) -> Result<()> {
         let released = self.on(&self.lead_client, async |c: &mut Client| {
-            let sql = "UPDATE restauro_leader SET expires_at = '-infinity'
+            // The holder cleared too, so a renewal still in flight cannot take it back.
+            let sql = "UPDATE restauro_leader SET expires_at = '-infinity', holder = ''
                        WHERE id = 1 AND holder = $1 AND epoch = $2";
             c.execute(sql, &[&holder, &(epoch as i64)]).await
         });

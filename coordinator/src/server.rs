@@ -42,7 +42,8 @@ pub struct CoordinatorArgs {
     pub client_token_file: Option<PathBuf>,
     /// Keep the store in this PostgreSQL database (`postgres://USER[:PASSWORD]@HOST[:PORT]/DB`,
     /// else RESTAURO_STORE) instead of the file `store.redb` in --data. Its schema is created
-    /// and migrated at start. The assets and results stay in --data.
+    /// and migrated at start. Several coordinators may share it: one leads, the others stand
+    /// by (--lead-ttl-s). The assets and results stay in --data, unless --objects names a bucket.
     #[arg(long, env = "RESTAURO_STORE", hide_env_values = true)]
     pub store: Option<String>,
     /// Keep the scenes' files and the results in this S3 bucket too (`s3://BUCKET[/PREFIX]`,

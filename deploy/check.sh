@@ -165,32 +165,43 @@ setup_validator() {
         || { why="pip install $KUBERNETES_VALIDATE failed: no network?"; rm -rf "$venv"; return 1; }
     touch "$venv/.installed-$KUBERNETES_VALIDATE"
 }
+# validate_manifests WHAT FILE...: every file, strictly, against each Kubernetes version.
+validate_manifests() {
+    local what=$1 version
+    shift
+    for version in $K8S_VERSIONS; do
+        if "$validator" --strict --quiet -k "$version" "$@"; then
+            pass "kubernetes-validate --strict -k $version ($# $what)"
+        else
+            fail "kubernetes-validate --strict -k $version ($what)"
+        fi
+    done
+}
+# validate_rendered DIR [KINDS]: what `kubectl apply -k DIR` would send (the kustomization's
+# namespace and image applied), validated against the newest version; with KINDS, the sorted
+# kinds it holds (each followed by a space) must be those.
+validate_rendered() {
+    local dir=$1 kinds=${2:-} rendered version=${K8S_VERSIONS##* }
+    rendered="$tmp/$(basename "$dir").yaml"
+    if ! command -v kubectl >/dev/null; then
+        skip "kubectl kustomize $dir" "no kubectl"
+    elif ! kubectl kustomize "$dir" >"$rendered" 2>"$tmp/err"; then
+        cat "$tmp/err"
+        fail "kubectl kustomize $dir"
+    elif [ -n "$kinds" ] && [ "$(awk '/^kind:/ { print $2 }' "$rendered" | sort | tr '\n' ' ')" != "$kinds" ]; then
+        fail "kubectl kustomize $dir renders $(awk '/^kind:/ { print $2 }' "$rendered" | sort | tr '\n' ' ')"
+    elif "$validator" --strict --quiet -k "$version" "$rendered"; then
+        pass "kubectl kustomize $dir, validated against $version"
+    else
+        fail "kubectl kustomize $dir, validated against $version"
+    fi
+}
 why=
 if setup_validator; then
     manifests=$(find "$k8s" -maxdepth 1 -name '*.yaml' ! -name kustomization.yaml | sort)
-    for version in $K8S_VERSIONS; do
-        # shellcheck disable=SC2086 # the names hold no spaces
-        if "$validator" --strict --quiet -k "$version" $manifests; then
-            pass "kubernetes-validate --strict -k $version ($(echo $manifests | wc -w) files)"
-        else
-            fail "kubernetes-validate --strict -k $version"
-        fi
-    done
-    # What `kubectl apply -k` would send, with the kustomization's namespace and image applied.
-    if command -v kubectl >/dev/null && kubectl kustomize "$k8s" >"$tmp/rendered.yaml" 2>"$tmp/err"
-    then
-        version=${K8S_VERSIONS##* }
-        if "$validator" --strict --quiet -k "$version" "$tmp/rendered.yaml"; then
-            pass "kubectl kustomize $k8s, validated against $version"
-        else
-            fail "kubectl kustomize $k8s, validated against $version"
-        fi
-    elif command -v kubectl >/dev/null; then
-        cat "$tmp/err"
-        fail "kubectl kustomize $k8s"
-    else
-        skip "kubectl kustomize $k8s" "no kubectl"
-    fi
+    # shellcheck disable=SC2086 # the names hold no spaces
+    validate_manifests files $manifests
+    validate_rendered "$k8s"
 else
     skip "kubernetes-validate" "$why"
 fi
@@ -203,14 +214,8 @@ fleet=deploy/k8s-fleet
 fleet_manifests=$(find "$fleet" -maxdepth 1 -name '*.yaml' ! -name kustomization.yaml \
     ! -name cloudnativepg.yaml | sort)
 if [ -x "$validator" ]; then
-    for version in $K8S_VERSIONS; do
-        # shellcheck disable=SC2086 # the names hold no spaces
-        if "$validator" --strict --quiet -k "$version" $fleet_manifests; then
-            pass "kubernetes-validate --strict -k $version ($(echo $fleet_manifests | wc -w) fleet files)"
-        else
-            fail "kubernetes-validate --strict -k $version (fleet)"
-        fi
-    done
+    # shellcheck disable=SC2086 # the names hold no spaces
+    validate_manifests "fleet files" $fleet_manifests
     if "$venv/bin/python" - "$fleet/cloudnativepg.yaml" <<'PY'
 import sys, yaml
 doc = yaml.safe_load(open(sys.argv[1]))
@@ -224,23 +229,8 @@ PY
         fail "cloudnativepg.yaml"
     fi
     # The overlay as `kubectl apply -k` sends it: the base's single coordinator replaced by two.
-    if command -v kubectl >/dev/null && kubectl kustomize "$fleet" >"$tmp/fleet.yaml" 2>"$tmp/err"
-    then
-        kinds=$(awk '/^kind:/ { print $2 }' "$tmp/fleet.yaml" | sort | tr '\n' ' ')
-        version=${K8S_VERSIONS##* }
-        if [ "$kinds" != "Deployment Deployment HorizontalPodAutoscaler Namespace PodDisruptionBudget Service " ]; then
-            fail "kubectl kustomize $fleet renders $kinds"
-        elif "$validator" --strict --quiet -k "$version" "$tmp/fleet.yaml"; then
-            pass "kubectl kustomize $fleet, validated against $version"
-        else
-            fail "kubectl kustomize $fleet, validated against $version"
-        fi
-    elif command -v kubectl >/dev/null; then
-        cat "$tmp/err"
-        fail "kubectl kustomize $fleet"
-    else
-        skip "kubectl kustomize $fleet" "no kubectl"
-    fi
+    validate_rendered "$fleet" \
+        "Deployment Deployment HorizontalPodAutoscaler Namespace PodDisruptionBudget Service "
 else
     skip "kubernetes-validate (fleet)" "$why"
 fi

@@ -348,7 +348,7 @@ async fn stand_by(
 ) -> Result<Option<Lead>> {
     let state = StandbyState::default();
     // A coordinator that leads at once never stands by.
-    if let Some(lead) = restauro_farm::lead::try_once(store, config, &state).await? {
+    if let Some(lead) = restauro_farm::lead::try_once(store, config, &state).await {
         return Ok(Some(lead));
     }
     let mut door = None;

@@ -19,7 +19,7 @@
 //! no consensus of our own: the database's row lock and clock decide. A file store (redb) has
 //! one coordinator, which always leads: the file's lock keeps out another.
 
-use crate::store::{LeadAttempt, Store, StoreError};
+use crate::store::{LeadAttempt, Store};
 use std::sync::atomic::Ordering;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -86,15 +86,16 @@ struct Renewal {
     lost: watch::Sender<Option<String>>,
 }
 
-/// Takes the lead if it is free (at once for a file store); else says in `state` who holds it,
-/// or why it cannot be taken. A store that cannot be reached is an error.
+/// Takes the lead if it is free (at once for a file store); else says in `state` (and the log,
+/// once for each change) who holds it, or why it cannot be taken (the store unreachable: the
+/// coordinator stands by and tries again).
 pub async fn try_once(
     store: &Arc<Store>,
     config: &LeadConfig,
     state: &StandbyState,
-) -> Result<Option<Lead>, StoreError> {
+) -> Option<Lead> {
     if !store.has_leads() {
-        return Ok(Some(Lead { held: None }));
+        return Some(Lead { held: None });
     }
     let (s, c) = (store.clone(), config.clone());
     let attempt = tokio::task::spawn_blocking(move || s.try_lead(&c.holder, c.ttl))
@@ -103,7 +104,7 @@ pub async fn try_once(
     let why = match attempt {
         Ok(LeadAttempt::Led { epoch }) => {
             info!(epoch, holder = %config.holder, "this coordinator leads");
-            return Ok(Some(Lead::hold(store.clone(), config.clone(), epoch)));
+            return Some(Lead::hold(store.clone(), config.clone(), epoch));
         }
         Ok(LeadAttempt::HeldBy { holder, for_ms }) => {
             format!("standby: {holder} leads (for {:.1} s unrenewed)", for_ms as f64 / 1e3)
@@ -117,7 +118,7 @@ pub async fn try_once(
         info!("{why}");
     }
     *shown = why;
-    Ok(None)
+    None
 }
 
 /// Waits until this coordinator leads on `store` (at once for a file store): `None` when
@@ -129,13 +130,8 @@ pub async fn take(
     stop: &mut watch::Receiver<bool>,
 ) -> Option<Lead> {
     loop {
-        match try_once(store, config, state).await {
-            Ok(Some(lead)) => return Some(lead),
-            Ok(None) => {}
-            Err(e) => {
-                warn!("standing by: cannot take the lead: {e}");
-                *state.lock().unwrap_or_else(|p| p.into_inner()) = format!("standby: {e}");
-            }
+        if let Some(lead) = try_once(store, config, state).await {
+            return Some(lead);
         }
         tokio::select! {
             () = tokio::time::sleep(config.standby_poll()) => {}

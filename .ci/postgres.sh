@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # A PostgreSQL server for the fleet tests (issue 40): Debian's package, a cluster of its own in a
-# temporary folder on 127.0.0.1:54329, stopped by its pid.
+# temporary folder on 127.0.0.1:54329, stopped by its pid. It speaks TLS (and plain TCP) with a
+# certificate for 127.0.0.1 and localhost signed by a certificate authority of its own,
+# DIR/tls/ca.crt, which the TLS tests trust (RESTAURO_TEST_POSTGRES_CA).
 #   .ci/postgres.sh start DIR   installs PostgreSQL if missing, starts it, prints the test URL
 #   .ci/postgres.sh restart DIR restarts it (fast: sessions cut, as a database failover does)
 #   .ci/postgres.sh stop DIR    stops the server started in DIR
@@ -25,8 +27,21 @@ start)
         as=(runuser -u postgres --)
     fi
     "${as[@]}" "$bin/initdb" -D "$dir/data" -U postgres --auth=trust -E UTF8 >"$dir/initdb.log"
+    # The authority and the server's certificate (openssl comes with Debian's PostgreSQL).
+    tls=$dir/tls
+    mkdir -p "$tls"
+    openssl req -x509 -newkey ec -pkeyopt ec_paramgen_curve:P-256 -nodes -days 2 \
+        -subj "/CN=restauro test authority" -keyout "$tls/ca.key" -out "$tls/ca.crt" 2>/dev/null
+    openssl req -new -newkey ec -pkeyopt ec_paramgen_curve:P-256 -nodes \
+        -subj "/CN=localhost" -keyout "$tls/server.key" -out "$tls/server.csr" 2>/dev/null
+    printf 'subjectAltName=DNS:localhost,IP:127.0.0.1\n' >"$tls/server.ext"
+    openssl x509 -req -in "$tls/server.csr" -CA "$tls/ca.crt" -CAkey "$tls/ca.key" \
+        -CAcreateserial -days 2 -extfile "$tls/server.ext" -out "$tls/server.crt" 2>/dev/null
+    chmod 600 "$tls/server.key"
+    [ "$(id -u)" -eq 0 ] && chown -R postgres "$tls"
     "${as[@]}" "$bin/pg_ctl" -D "$dir/data" -l "$dir/server.log" -w \
-        -o "-p $port -k $dir -c listen_addresses=127.0.0.1 -c fsync=on" start >/dev/null
+        -o "-p $port -k $dir -c listen_addresses=127.0.0.1 -c fsync=on -c ssl=on \
+            -c ssl_cert_file=$tls/server.crt -c ssl_key_file=$tls/server.key" start >/dev/null
     "${as[@]}" "$bin/psql" -h 127.0.0.1 -p "$port" -U postgres -qc \
         "CREATE ROLE restauro LOGIN CREATEDB PASSWORD 'restauro'" >/dev/null
     echo "postgres://restauro:restauro@127.0.0.1:$port/postgres"

@@ -44,6 +44,8 @@ pub struct CoordinatorArgs {
     /// else RESTAURO_STORE) instead of the file `store.redb` in --data. Its schema is created
     /// and migrated at start. Several coordinators may share it: one leads, the others stand
     /// by (--lead-ttl-s). The assets and results stay in --data, unless --objects names a bucket.
+    /// TLS as libpq's sslmode says (`?sslmode=verify-full&sslrootcert=CA.pem` to check the
+    /// server's certificate).
     #[arg(long, env = "RESTAURO_STORE", hide_env_values = true)]
     pub store: Option<String>,
     /// Keep the scenes' files and the results in this S3 bucket too (`s3://BUCKET[/PREFIX]`,

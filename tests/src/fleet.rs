@@ -187,6 +187,12 @@ impl OwnPostgres {
         Some(OwnPostgres { dir, url })
     }
 
+    /// The certificate authority that signed the server's certificate (for 127.0.0.1 and
+    /// localhost), a PEM file.
+    pub fn authority(&self) -> std::path::PathBuf {
+        self.dir.join("tls/ca.crt")
+    }
+
     /// Restarts the server (fast: every session is cut).
     pub fn restart(&self) {
         postgres_script("restart", &self.dir, None);

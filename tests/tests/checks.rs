@@ -5,8 +5,8 @@
 //! one pixel of a tile by the least bit of its X).
 
 use restauro_tests::{
-    Coordinator, Worker, aosta_scene, assert_identical, client, exr_pixels as pixels, http_get,
-    restauro, sample, text, token_files, wait_for,
+    Coordinator, Standby, Worker, aosta_scene, assert_identical, client, exr_pixels as pixels,
+    free_loopback_addr, http_get, restauro, sample, text, token_files, wait_for,
 };
 use std::path::Path;
 use std::time::Duration;
@@ -144,6 +144,39 @@ fn a_worker_lying_in_every_tile_is_found_at_the_default_rates_and_its_tiles_redo
     let log = std::fs::read_to_string(d.join("coordinator.log")).unwrap();
     let redone = log.lines().find(|l| l.contains("worker quarantined")).unwrap_or_default();
     eprintln!("the liar rendered {rendered} tiles; {redone}");
+}
+
+/// The liar among honest workers on the fleet's store (issue 40, item 6): PostgreSQL keeps the
+/// tiles, the disputed renderings and the quarantine, so the image is right, and the
+/// coordinator that takes the lead when the leader is killed knows the liar for what it is
+/// (the refusal of a quarantined identity that registers again is `farm`'s unit test's).
+#[test]
+fn on_postgresql_a_liar_is_found_and_the_next_leader_knows_it() {
+    let Some(url) = restauro_tests::fleet::database("liar") else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = aosta_scene(d, 96, 54);
+    let alone = reference(d, &scene);
+    let fleet = ["--store", &url, "--lead-ttl-s", "3"];
+    let checks = [&fleet[..], &["--check-rate-new", "1", "--trust-after", "1000000"]].concat();
+    let lie = ["--fault-lie-from", "1", "--fault-lie-count", "1"];
+    let (c, liar, _honest) = farm(d, &checks, &lie, 3);
+    let out = d.join("farm");
+    render_on_the_farm(&c, d, &scene, &out);
+    assert!(lines(&d.join("liar-tiles.log")) >= 1, "the liar rendered no tile");
+    assert_identical(&pixels(&out.join("aosta.exr")), &alone);
+    the_liar_was_quarantined(&c, d, liar);
+    // A standby with a folder of its own takes the lead from the killed leader: what it knows
+    // of the liar it read from the database.
+    let standby = Standby::start(d, &d.join("data-standby"), &free_loopback_addr(), &fleet);
+    drop(c);
+    let (next, _) = standby.wait_to_lead();
+    let (token, _) = token_files(d);
+    let listed = text(&client(&["workers"], &next.url, &token));
+    assert!(
+        listed.lines().any(|l| l.starts_with("quarantined") && l.contains("liar")),
+        "the new leader does not list the quarantined liar:\n{listed}"
+    );
 }
 
 #[test]

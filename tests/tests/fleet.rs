@@ -323,3 +323,81 @@ fn a_restarted_database_loses_no_tile_and_renders_none_twice() {
     assert_eq!(tiles, (0..total).collect::<Vec<u32>>(), "each tile rendered once");
     fetched_is_alone(d, &id, &c.url, &token, &alone);
 }
+
+/// Whether each session of database `db` is encrypted, by its `application_name`, as the
+/// server sees it (`pg_stat_ssl`).
+fn encrypted_sessions(admin: &str, db: &str) -> std::collections::BTreeMap<String, bool> {
+    let runtime = tokio::runtime::Builder::new_current_thread().enable_all().build().unwrap();
+    runtime.block_on(async {
+        let (client, connection) =
+            tokio_postgres::connect(admin, tokio_postgres::NoTls).await.unwrap();
+        tokio::spawn(connection);
+        let sql = "SELECT a.application_name, s.ssl FROM pg_stat_ssl s
+                   JOIN pg_stat_activity a USING (pid) WHERE a.datname = $1";
+        let rows = client.query(sql, &[&db]).await.unwrap();
+        rows.iter().map(|r| (r.get(0), r.get(1))).collect()
+    })
+}
+
+/// TLS to PostgreSQL as libpq's `sslmode` says (issue 40), against a server whose certificate
+/// an authority of the test's own signed: `verify-full` with that authority connects,
+/// encrypted; against the system's authorities, or for a host name the certificate does not
+/// name, it is refused, saying what to give; `verify-ca` takes any name; `require` and the
+/// default encrypt without checking; `disable` does not encrypt.
+#[test]
+fn the_store_speaks_tls_as_sslmode_says_and_checks_the_certificate_when_asked() {
+    let dir = tempfile::tempdir().unwrap();
+    let Some(postgres) = restauro_tests::fleet::OwnPostgres::start("tls", dir.path()) else {
+        return;
+    };
+    let ca = postgres.authority();
+    let ca = ca.to_str().unwrap();
+    let port = restauro_tests::fleet::server_addr(&postgres.url).port();
+    let url = |host: &str, params: &str| {
+        format!("postgres://restauro:restauro@{host}:{port}/restauro?{params}")
+    };
+    let mut open = Vec::new();
+    for (name, host, params) in [
+        ("full", "localhost", format!("sslmode=verify-full&sslrootcert={ca}")),
+        ("full-ip", "127.0.0.1", format!("sslmode=verify-full&sslrootcert={ca}")),
+        ("ca", "wrong.invalid", format!("hostaddr=127.0.0.1&sslmode=verify-ca&sslrootcert={ca}")),
+        ("require", "127.0.0.1", "sslmode=require".to_owned()),
+        ("default", "127.0.0.1", String::new()),
+        ("disable", "127.0.0.1", "sslmode=disable".to_owned()),
+    ] {
+        let url = url(host, &format!("application_name={name}&{params}"));
+        let store = Store::connect(&url).unwrap_or_else(|e| panic!("{url}: {e}"));
+        store.put_job(name, b"kept").unwrap();
+        open.push(store);
+    }
+    let admin = postgres.url.replace("/restauro", "/postgres");
+    let seen = encrypted_sessions(&admin, "restauro");
+    let expected: std::collections::BTreeMap<String, bool> =
+        [("full", true), ("full-ip", true), ("ca", true), ("require", true), ("default", true)]
+            .into_iter()
+            .chain([("disable", false)])
+            .map(|(name, tls)| (name.to_owned(), tls))
+            .collect();
+    assert_eq!(seen, expected);
+    assert_eq!(open[0].jobs().unwrap().len(), 6);
+    for (why, url, said) in [
+        (
+            "an authority the system does not trust",
+            url("localhost", "sslmode=verify-full"),
+            ["UnknownIssuer", "sslrootcert=PATH"],
+        ),
+        (
+            "a name the certificate does not give",
+            url(
+                "wrong.invalid",
+                &format!("hostaddr=127.0.0.1&sslmode=verify-full&sslrootcert={ca}"),
+            ),
+            ["not valid for name \"wrong.invalid\"", "sslmode=verify-ca"],
+        ),
+    ] {
+        let Err(e) = Store::connect(&url) else { panic!("{why} was taken") };
+        let e = e.to_string();
+        assert!(said.iter().all(|s| e.contains(s)), "{why}: {e}");
+        assert!(!e.contains("restauro:restauro@"), "the password is shown: {e}");
+    }
+}

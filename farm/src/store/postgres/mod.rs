@@ -1,6 +1,9 @@
 //! The store in PostgreSQL (`--store postgres://USER[:PASSWORD]@HOST[:PORT]/DATABASE`): the same
 //! tables as the file store, in a database a site already runs, backs up and replicates.
 //!
+//! * **TLS** as libpq's `sslmode` and `sslrootcert` say (`tls`): encrypted whenever the server
+//!   offers it, the certificate checked with `sslmode=verify-full`.
+//!
 //! * **Schema.** Versioned migrations (`MIGRATIONS`), applied in one transaction under an
 //!   exclusive lock of `restauro_schema`, so two coordinators starting together apply each once;
 //!   a database of a newer schema than this release knows is refused, naming both versions.
@@ -16,9 +19,11 @@
 //! The farm calls the store from plain threads and from async tasks alike, so every call runs
 //! on a thread of its own, on this store's one-thread runtime (`blocking`).
 
+mod tls;
+
 use super::problem::Problems;
 use super::{LeadAttempt, Result, StoreError};
-use tokio_postgres::{Client, Config, NoTls, Transaction};
+use tokio_postgres::{Client, Config, Transaction};
 
 /// The schema, one migration per entry; a database records the versions it has.
 const MIGRATIONS: &[&str] = &[
@@ -44,6 +49,8 @@ pub struct PgStore {
     /// The URL without its password, for messages.
     shown: String,
     config: Config,
+    /// TLS as the URL's `sslmode` says (`tls`).
+    tls: tokio_postgres_rustls::MakeRustlsConnect,
     runtime: crate::blocking::Blocking,
     /// `None` before the first call and after a connection was lost.
     client: tokio::sync::Mutex<Option<Client>>,
@@ -73,6 +80,7 @@ impl PgStore {
     pub fn connect(url: &str) -> Result<PgStore> {
         let shown = without_password(url);
         let refused = |message: String| StoreError::Postgres { url: shown.clone(), message };
+        let (url, tls) = tls::settings(url).map_err(refused)?;
         let mut config: Config = url.parse().map_err(|e| {
             refused(format!(
                 "{e}; give postgres://USER[:PASSWORD]@HOST[:PORT]/DATABASE (or key=value pairs)"
@@ -89,6 +97,7 @@ impl PgStore {
         let store = PgStore {
             shown: shown.clone(),
             config,
+            tls,
             runtime,
             client: tokio::sync::Mutex::new(None),
             lead_client: tokio::sync::Mutex::new(None),
@@ -96,7 +105,10 @@ impl PgStore {
             problem: Problems::default(),
         };
         store.call(async |c| migrate(c).await).map_err(|e| match e {
-            StoreError::Postgres { message, .. } => refused(message),
+            StoreError::Postgres { message, .. } => match tls::fix(&message) {
+                Some(fix) => refused(format!("{message}; {fix}")),
+                None => refused(message),
+            },
             other => other,
         })?;
         Ok(store)
@@ -140,7 +152,7 @@ impl PgStore {
             let mut again = true;
             loop {
                 if slot.as_ref().is_none_or(Client::is_closed) {
-                    let (client, connection) = self.config.connect(NoTls).await?;
+                    let (client, connection) = self.config.connect(self.tls.clone()).await?;
                     tokio::spawn(async move {
                         if let Err(e) = connection.await {
                             tracing::warn!("the PostgreSQL store's connection ended: {e}");

@@ -107,7 +107,7 @@ pub enum FarmError {
     Io { path: String, source: std::io::Error },
 
     /// The object store cannot be reached or written (`objects`): the request may be retried.
-    #[error("{0}; try again once the object store answers")]
+    #[error("{0}; try again once the object store answers and has room")]
     Objects(#[from] crate::objects::ObjectsError),
 
     /// A result file the farm wrote that it cannot read back or derive from.

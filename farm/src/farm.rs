@@ -768,9 +768,13 @@ impl Farm {
         Ok(status)
     }
 
-    /// The coordinator's own trouble, when it has any (the store cannot be written).
+    /// The coordinator's own trouble, when it has any (the store or the object store cannot be
+    /// written).
     pub fn problem(&self) -> Option<String> {
-        self.store.problem()
+        match (self.store.problem(), self.objects.problem()) {
+            (Some(store), Some(objects)) => Some(format!("{store}; {objects}")),
+            (store, objects) => store.or(objects),
+        }
     }
 
     /// Job `id` as a client sees it.
@@ -1330,15 +1334,17 @@ impl restauro_ops::endpoint::Probe for Farm {
         let unfinished = st.jobs.values().filter(|r| !r.state().is_final()).count() as u64;
         self.metrics.update(st.scheduler.gauges(), st.scheduler.totals(), unfinished);
         self.metrics.store_failing.set(i64::from(self.store.problem().is_some()));
+        self.metrics.objects_failing.set(i64::from(self.objects.problem().is_some()));
     }
 
     fn registry(&self) -> &prometheus_client::registry::Registry {
         self.metrics.registry()
     }
 
-    /// Not ready while the store cannot be written: new work would only fail.
+    /// Not ready while the store or the object store cannot be written: new work would only
+    /// fail.
     fn ready(&self) -> std::result::Result<(), restauro_ops::endpoint::NotReady> {
-        self.store.problem().map_or(Ok(()), |why| Err(restauro_ops::endpoint::NotReady(why)))
+        self.problem().map_or(Ok(()), |why| Err(restauro_ops::endpoint::NotReady(why)))
     }
 }
 

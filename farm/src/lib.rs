@@ -20,6 +20,7 @@ pub mod lead;
 pub mod lease;
 pub mod metrics;
 pub mod objects;
+mod problem;
 pub mod recent;
 pub mod scheduler;
 pub mod store;

@@ -20,6 +20,8 @@ pub struct Metrics {
     jobs_unfinished: Gauge,
     /// 1 while the store cannot be written.
     pub store_failing: Gauge,
+    /// 1 while the object store cannot be written.
+    pub objects_failing: Gauge,
     leases_total: Counter,
     tiles_done_total: Counter,
     tiles_requeued_total: Counter,
@@ -74,6 +76,11 @@ impl Metrics {
             gauge(r, "jobs_unfinished", "Jobs queued, running or being assembled");
         let store_failing =
             gauge(r, "store_failing", "1 while the store cannot be written (a full disk)");
+        let objects_failing = gauge(
+            r,
+            "objects_failing",
+            "1 while the object store (--objects) cannot be written (a full bucket)",
+        );
         let leases_total = counter(r, "leases", "Leases granted");
         let tiles_done_total = counter(r, "tiles_done", "Tiles completed");
         let tiles_requeued_total = counter(
@@ -134,6 +141,7 @@ impl Metrics {
             workers_connected,
             jobs_unfinished,
             store_failing,
+            objects_failing,
             leases_total,
             tiles_done_total,
             tiles_requeued_total,

@@ -149,20 +149,22 @@ pub struct OwnPostgres {
     pub url: String,
 }
 
-fn postgres_script(command: &str, dir: &std::path::Path, port: Option<u16>) -> String {
-    let script = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../.ci/postgres.sh");
+/// Runs `.ci/SCRIPT COMMAND DIR` (a CI server's script), with the port in the variable `port.0`
+/// when given; what it printed.
+fn script(name: &str, command: &str, dir: &std::path::Path, port: Option<(&str, u16)>) -> String {
+    let script = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../.ci").join(name);
     let mut run = std::process::Command::new("bash");
     run.arg(script).arg(command).arg(dir);
-    if let Some(port) = port {
-        run.env("RESTAURO_PG_PORT", port.to_string());
+    if let Some((var, port)) = port {
+        run.env(var, port.to_string());
     }
     let out = run.output().unwrap();
-    assert!(
-        out.status.success(),
-        "postgres.sh {command}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.status.success(), "{name} {command}: {}", String::from_utf8_lossy(&out.stderr));
     String::from_utf8_lossy(&out.stdout).trim().to_owned()
+}
+
+fn postgres_script(command: &str, dir: &std::path::Path, port: Option<u16>) -> String {
+    script("postgres.sh", command, dir, port.map(|p| ("RESTAURO_PG_PORT", p)))
 }
 
 impl OwnPostgres {
@@ -202,5 +204,58 @@ impl OwnPostgres {
 impl Drop for OwnPostgres {
     fn drop(&mut self) {
         postgres_script("stop", &self.dir, None);
+    }
+}
+
+/// An S3-compatible server of a test's own (which it may fill up), SeaweedFS started by
+/// `.ci/seaweedfs.sh` on five free ports in `dir`, its bucket `restauro`; stopped when dropped.
+/// `None` (the test is skipped) without an S3-compatible server to test against, as
+/// [`objects`] says.
+pub struct OwnS3 {
+    dir: std::path::PathBuf,
+    /// Its S3 endpoint, for `AWS_ENDPOINT_URL`.
+    pub endpoint: String,
+}
+
+impl OwnS3 {
+    pub fn start(name: &str, dir: &std::path::Path) -> Option<OwnS3> {
+        server("RESTAURO_TEST_S3", "s3://BUCKET (and AWS_*)", name)?;
+        let dir = dir.join("s3");
+        let port = free_ports(5);
+        let endpoint = script("seaweedfs.sh", "start", &dir, Some(("RESTAURO_S3_PORT", port)));
+        Some(OwnS3 { dir, endpoint })
+    }
+
+    /// Fills its bucket: over its quota, made read-only, it refuses every put (a 500), as a
+    /// full store does, and still serves what it holds.
+    pub fn fill(&self) {
+        script("seaweedfs.sh", "fill", &self.dir, None);
+    }
+
+    /// Makes room: the bucket takes puts again.
+    pub fn free(&self) {
+        script("seaweedfs.sh", "free", &self.dir, None);
+    }
+}
+
+impl Drop for OwnS3 {
+    fn drop(&mut self) {
+        script("seaweedfs.sh", "stop", &self.dir, None);
+    }
+}
+
+/// The first of `n` consecutive ports free on loopback.
+fn free_ports(n: u16) -> u16 {
+    loop {
+        let first =
+            std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
+        let all_free = (0..n).all(|i| {
+            first
+                .checked_add(i)
+                .is_some_and(|p| std::net::TcpListener::bind(("127.0.0.1", p)).is_ok())
+        });
+        if all_free {
+            return first;
+        }
     }
 }

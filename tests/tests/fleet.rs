@@ -401,3 +401,78 @@ fn the_store_speaks_tls_as_sslmode_says_and_checks_the_certificate_when_asked() 
         assert!(!e.contains("restauro:restauro@"), "the password is shown: {e}");
     }
 }
+
+/// The object store filled up in the middle of a job (issue 40, item 6): its bucket, over its
+/// quota, refuses every put as a full store does. An upload meanwhile is refused, naming the
+/// object store, and nothing of it is kept; the job, its tiles all in, waits in assembly with
+/// the problem shown (`restauro jobs`, `/readyz`, the metric) rather than fail; once there is
+/// room it ends by itself, each tile rendered once, the image the one process renders.
+#[test]
+fn a_full_object_store_holds_the_job_until_it_has_room_and_loses_nothing() {
+    use restauro_tests::{client, http_get, patience, sample, text, wait_for, wire};
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let Some(s3) = restauro_tests::fleet::OwnS3::start("full", d) else { return };
+    let scene = restauro_tests::aosta_scene(d, 96, 54);
+    let options = ["--spp", "2", "--tile", "16"];
+    let alone = render_alone(d, &scene, &options);
+    let endpoint = format!("AWS_ENDPOINT_URL={}", s3.endpoint);
+    let c = restauro_tests::Coordinator::start_under(
+        &["env", &endpoint],
+        d,
+        &d.join("data"),
+        "127.0.0.1:0",
+        &["--objects", "s3://restauro/farm", "--metrics-listen", "127.0.0.1:0"],
+    );
+    let metrics = c.metrics.clone().unwrap();
+    let (token, _) = restauro_tests::token_files(d);
+    // Its files in the bucket, the job waits for a worker while the bucket fills.
+    let id = submitted(&scene, &options, &c.url, &token);
+    s3.fill();
+    let log = d.join("tiles.log");
+    let _worker =
+        restauro_tests::Worker::start(d, &c.url, "w", &["--tile-log", log.to_str().unwrap()]);
+    wait_for("the object store's problem to be shown", patience(), || {
+        sample(&http_get(&metrics, "/metrics").1, "restauro_objects_failing") == 1.0
+    });
+    let (status, body) = http_get(&metrics, "/readyz");
+    assert!(
+        status == 503 && body.contains("the object store s3://restauro/farm cannot be written"),
+        "{status} {body}"
+    );
+    let listed = text(&client(&["jobs"], &c.url, &token));
+    assert!(listed.contains("cannot be written"), "{listed}");
+    let line = listed.lines().find(|l| l.contains(&id)).unwrap_or_else(|| panic!("{listed}"));
+    assert!(!line.contains("failed") && !line.contains("done"), "{line}");
+    // A new file is refused while the bucket is full, and is not kept.
+    let data = vec![7u8; 1000];
+    let reference = format!("blake3:{}.bin", blake3::hash(&data).to_hex());
+    let runtime = tokio::runtime::Runtime::new().unwrap();
+    let refused = runtime.block_on(async {
+        let mut render = wire::render_client(&c.url).await;
+        wire::upload_bytes(&mut render, &reference, &data).await
+    });
+    let refused = refused.expect_err("an upload to a full bucket was acknowledged");
+    assert_eq!(refused.code(), tonic::Code::Unavailable, "{refused:?}");
+    assert!(refused.message().contains("the object store s3://restauro/farm"), "{refused:?}");
+    let hash = blake3::hash(&data).to_hex().to_string();
+    let kept: Vec<String> = std::fs::read_dir(d.join("data/assets"))
+        .unwrap()
+        .flatten()
+        .map(|f| f.file_name().to_string_lossy().into_owned())
+        .filter(|name| name.contains(&hash))
+        .collect();
+    assert!(kept.is_empty(), "the refused upload left {kept:?}");
+    // Room made: the same job ends by itself.
+    s3.free();
+    let o = client(&["watch", &id], &c.url, &token);
+    assert!(text(&o).contains("done"), "{}", text(&o));
+    let mut tiles: Vec<u32> = std::fs::read_to_string(&log)
+        .unwrap()
+        .lines()
+        .map(|line| line.split(' ').nth(1).unwrap().parse().unwrap())
+        .collect();
+    tiles.sort_unstable();
+    assert_eq!(tiles, (0..24).collect::<Vec<u32>>(), "each tile rendered once");
+    fetched_is_alone(d, &id, &c.url, &token, &alone);
+}

@@ -92,16 +92,9 @@ fn placed(
             .map_err(|e| Outcome::Failed(e.to_string()))?
             .ok_or_else(|| {
                 // A job cancelled meanwhile has had its tiles dropped: that is not a failure.
-                match farm.transition(id, |_| Ok(())) {
-                    Ok((_, r)) if r.state().is_final() => {
-                        Outcome::Ended(FarmError::from(IllegalTransition {
-                            job: id.clone(),
-                            from: r.state(),
-                            to: JobState::PostProcessing,
-                        }))
-                    }
-                    _ => Outcome::Failed(format!("tile {index} is missing from the store")),
-                }
+                ended(farm, id).unwrap_or_else(|| {
+                    Outcome::Failed(format!("tile {index} is missing from the store"))
+                })
             })?;
         frame.place(index as u32, &rect, &data).map_err(|e| Outcome::Failed(e.to_string()))?;
     }
@@ -155,10 +148,50 @@ fn write(
     // serves them.
     let dir = farm.results_dir(id);
     for file in &written.files {
-        let key = crate::objects::result_key(id.as_str(), file);
-        farm.objects.put_file(&key, &dir.join(file)).map_err(|e| Outcome::Failed(e.to_string()))?;
+        put_result(farm, id, &crate::objects::result_key(id.as_str(), file), &dir.join(file))?;
     }
     Ok(written)
+}
+
+/// The longest wait between two puts of a result the object store refused.
+const OBJECTS_RETRY_MAX: std::time::Duration = std::time::Duration::from_secs(5);
+
+/// Puts one result file in the object store, again and again while it refuses it (a full
+/// bucket, a server down: `Objects::problem` says so meanwhile, in `restauro jobs`, the
+/// metrics and `/readyz`) — the job waits in assembly, its tiles kept, rather than fail and
+/// have to be rendered again — until the file is in or the job has ended (cancelled).
+fn put_result(
+    farm: &Arc<Farm>,
+    id: &JobId,
+    key: &str,
+    path: &std::path::Path,
+) -> Result<(), Outcome> {
+    let mut wait = std::time::Duration::from_millis(100);
+    loop {
+        let Err(e) = farm.objects.put_file(key, path) else { return Ok(()) };
+        if let Some(ended) = ended(farm, id) {
+            return Err(ended);
+        }
+        if wait < OBJECTS_RETRY_MAX / 16 {
+            warn!(job = %id, "{e}; the job waits, putting its results again until they are in");
+        }
+        std::thread::sleep(wait);
+        wait = (wait * 2).min(OBJECTS_RETRY_MAX);
+    }
+}
+
+/// The outcome for a job that has ended (cancelled) while it was being assembled, if it has.
+fn ended(farm: &Arc<Farm>, id: &JobId) -> Option<Outcome> {
+    match farm.transition(id, |_| Ok(())) {
+        Ok((_, r)) if r.state().is_final() => {
+            Some(Outcome::Ended(FarmError::from(IllegalTransition {
+                job: id.clone(),
+                from: r.state(),
+                to: JobState::PostProcessing,
+            })))
+        }
+        _ => None,
+    }
 }
 
 /// Writes the files of `frame` into the job's results folder.

@@ -52,15 +52,42 @@ fn tls() -> Arc<rustls::ClientConfig> {
         .clone()
 }
 
+/// How long a connection may take to open, and a request to be answered (its body sent, the
+/// answer's head received): a server that takes a connection and never answers must not hold
+/// an upload, or an assembly, for ever. A timeout is retried as object_store retries any.
+const CONNECT_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(10);
+const ANSWER_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(120);
+
 #[async_trait::async_trait]
 impl HttpService for Service {
     async fn call(&self, request: HttpRequest) -> Result<HttpResponse, HttpError> {
+        tokio::time::timeout(ANSWER_TIMEOUT, self.answer(request)).await.map_err(|_| {
+            let limit = ANSWER_TIMEOUT.as_secs();
+            let e = std::io::Error::new(
+                std::io::ErrorKind::TimedOut,
+                format!("the object store did not answer within {limit} s"),
+            );
+            failed(HttpErrorKind::Timeout, e)
+        })?
+    }
+}
+
+impl Service {
+    async fn answer(&self, request: HttpRequest) -> Result<HttpResponse, HttpError> {
         let uri = request.uri().clone();
         let host = uri.host().ok_or_else(|| refused(format!("no host in {uri}")))?.to_owned();
         let secure = uri.scheme_str() == Some("https");
         let port = uri.port_u16().unwrap_or(if secure { 443 } else { 80 });
-        let tcp = tokio::net::TcpStream::connect((host.trim_matches(['[', ']']), port))
+        let connect = tokio::net::TcpStream::connect((host.trim_matches(['[', ']']), port));
+        let tcp = tokio::time::timeout(CONNECT_TIMEOUT, connect)
             .await
+            .map_err(|_| {
+                let e = std::io::Error::new(
+                    std::io::ErrorKind::TimedOut,
+                    format!("{host}:{port} did not take a connection within 10 s"),
+                );
+                failed(HttpErrorKind::Connect, e)
+            })?
             .map_err(|e| failed(HttpErrorKind::Connect, e))?;
         let _ = tcp.set_nodelay(true);
         let response = if secure {

@@ -69,6 +69,15 @@ impl Objects {
         }
     }
 
+    /// Why files cannot be put, while they cannot (a full bucket, a server down).
+    pub fn problem(&self) -> Option<String> {
+        match self {
+            Objects::Local => None,
+            #[cfg(feature = "fleet")]
+            Objects::S3(s3) => s3.problem(),
+        }
+    }
+
     /// Fetches the object `key` into the file `path` (written whole or not at all): whether
     /// there was one.
     pub fn fetch(&self, key: &str, path: &Path) -> Result<bool> {

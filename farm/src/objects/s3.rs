@@ -18,6 +18,19 @@ pub struct S3Objects {
     store: Box<dyn ObjectStore>,
     prefix: String,
     runtime: crate::blocking::Blocking,
+    /// Why puts fail, while they do (a full bucket, a server down).
+    problem: crate::problem::Problems,
+}
+
+/// A request the server fails (5xx, a dropped connection) is tried again within a few seconds,
+/// not object_store's default three minutes: an upload waiting on a full bucket must be
+/// refused while its client still waits, and the farm's own loops (assembly) retry for longer.
+fn retries() -> object_store::RetryConfig {
+    object_store::RetryConfig {
+        max_retries: 3,
+        retry_timeout: std::time::Duration::from_secs(8),
+        ..Default::default()
+    }
 }
 
 impl S3Objects {
@@ -32,7 +45,8 @@ impl S3Objects {
         }
         let mut builder = object_store::aws::AmazonS3Builder::from_env()
             .with_bucket_name(bucket)
-            .with_http_connector(super::http::Connector);
+            .with_http_connector(super::http::Connector)
+            .with_retry(retries());
         if let Ok(endpoint) = std::env::var("AWS_ENDPOINT_URL") {
             builder = builder.with_endpoint(endpoint);
         }
@@ -44,6 +58,7 @@ impl S3Objects {
             store: Box::new(store),
             prefix: prefix.trim_matches('/').to_owned(),
             runtime,
+            problem: crate::problem::Problems::of("object store"),
         };
         objects.check()?;
         Ok(objects)
@@ -73,7 +88,21 @@ impl S3Objects {
         })
     }
 
+    /// Puts a file; a failure is also the object store's problem until puts succeed again.
     pub fn put_file(&self, key: &str, path: &Path) -> Result<()> {
+        let put = self.put(key, path);
+        match &put {
+            Ok(()) => self.problem.succeeded(),
+            Err(ObjectsError::S3 { message, .. }) => self.problem.failed(&self.url, message),
+        }
+        put
+    }
+
+    pub fn problem(&self) -> Option<String> {
+        self.problem.describe(&self.url)
+    }
+
+    fn put(&self, key: &str, path: &Path) -> Result<()> {
         let doing = format!("putting {}", path.display());
         let mut file = std::fs::File::open(path).map_err(|e| self.error(&doing, e))?;
         let size = file.metadata().map_err(|e| self.error(&doing, e))?.len();

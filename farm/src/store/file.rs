@@ -36,8 +36,8 @@ const META: TableDefinition<&str, &[u8]> = TableDefinition::new("meta");
 const SCENE_REVISIONS: TableDefinition<(&str, u32), &[u8]> =
     TableDefinition::new("scene_revisions");
 
-use super::problem::Problems;
 use super::{Result, StoreError};
+use crate::problem::Problems;
 
 pub struct FileStore {
     path: PathBuf,
@@ -60,7 +60,7 @@ impl FileStore {
         let store = FileStore {
             path: path.to_owned(),
             db: Mutex::new(Some(Arc::new(db))),
-            problem: Problems::default(),
+            problem: Problems::of("store"),
         };
         store.write(|txn| {
             txn.open_table(JOBS)?;

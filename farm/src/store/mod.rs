@@ -17,7 +17,6 @@
 mod file;
 #[cfg(feature = "fleet")]
 mod postgres;
-mod problem;
 
 pub use file::FileStore;
 #[cfg(feature = "fleet")]

@@ -21,8 +21,8 @@
 
 mod tls;
 
-use super::problem::Problems;
 use super::{LeadAttempt, Result, StoreError};
+use crate::problem::Problems;
 use tokio_postgres::{Client, Config, Transaction};
 
 /// The schema, one migration per entry; a database records the versions it has.
@@ -102,7 +102,7 @@ impl PgStore {
             client: tokio::sync::Mutex::new(None),
             lead_client: tokio::sync::Mutex::new(None),
             fence: std::sync::atomic::AtomicU64::new(0),
-            problem: Problems::default(),
+            problem: Problems::of("store"),
         };
         store.call(async |c| migrate(c).await).map_err(|e| match e {
             StoreError::Postgres { message, .. } => match tls::fix(&message) {

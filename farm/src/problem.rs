@@ -1,5 +1,6 @@
-//! Why a store cannot write, since when: shown in `restauro jobs`, the metrics and `/readyz`
-//! until writes succeed again with no failure for a few seconds.
+//! Why a store (the coordinator's store, its object store) cannot write, since when: shown in
+//! `restauro jobs`, the metrics and `/readyz` until writes succeed again with no failure for a
+//! few seconds.
 
 use std::sync::Mutex;
 use std::time::{Duration, Instant, SystemTime};
@@ -19,12 +20,20 @@ struct Problem {
 }
 
 /// A store's current problem, if any.
-#[derive(Default)]
-pub(super) struct Problems(Mutex<Option<Problem>>);
+pub(crate) struct Problems {
+    /// What the store is, in words: "store", "object store".
+    kind: &'static str,
+    problem: Mutex<Option<Problem>>,
+}
 
 impl Problems {
+    /// The problems of a `kind` of store ("store", "object store").
+    pub fn of(kind: &'static str) -> Problems {
+        Problems { kind, problem: Mutex::new(None) }
+    }
+
     fn lock(&self) -> std::sync::MutexGuard<'_, Option<Problem>> {
-        self.0.lock().unwrap_or_else(|p| p.into_inner())
+        self.problem.lock().unwrap_or_else(|p| p.into_inner())
     }
 
     /// A write failed with `message`; `store` names the store in the log.
@@ -36,7 +45,8 @@ impl Problems {
                 p.recovered = None;
             }
             None => {
-                tracing::error!(store, "the store cannot be written: {message}; retrying");
+                let kind = self.kind;
+                tracing::error!(store, "the {kind} cannot be written: {message}; retrying");
                 *problem = Some(Problem {
                     since: SystemTime::now(),
                     last: Instant::now(),
@@ -62,11 +72,11 @@ impl Problems {
             .is_some_and(|p| p.recovered.is_some() && p.last.elapsed() >= PROBLEM_QUIET)
         {
             *problem = None;
-            tracing::info!(store, "the store can be written again");
+            tracing::info!(store, "the {} can be written again", self.kind);
         }
         problem.as_ref().map(|p| {
             let seconds = p.since.elapsed().map_or(0, |d| d.as_secs());
-            format!("the store {store} cannot be written ({seconds} s): {}", p.message)
+            format!("the {} {store} cannot be written ({seconds} s): {}", self.kind, p.message)
         })
     }
 }

@@ -57,7 +57,7 @@ pub struct CoordinatorArgs {
     /// With --store postgres://…: seconds the lead among coordinators on that database lives
     /// unrenewed. One coordinator leads (it renews every third of this); the others stand by,
     /// not ready, and one takes over once the lead lapses. A leader that cannot renew within
-    /// two thirds of it stops serving and exits.
+    /// two thirds of it stops serving and exits. From 1 to 3600.
     #[arg(long, default_value_t = 6.0)]
     pub lead_ttl_s: f64,
     /// A file holding the workers' bearer token (else RESTAURO_WORKER_TOKEN).
@@ -205,6 +205,19 @@ fn seconds(value: f64, flag: &str) -> Result<Duration> {
     Ok(Duration::from_secs_f64(value))
 }
 
+/// The lead's time to live: renewed every third of it, so shorter than a second would renew
+/// faster than a loaded database answers; longer than an hour would leave the farm without a
+/// leader that long after a crash.
+fn lead_ttl(value: f64) -> Result<Duration> {
+    if !(1.0..=3600.0).contains(&value) {
+        bail!(
+            "--lead-ttl-s {value}: give seconds from 1 to 3600 (a standby takes over within \
+             about that long after the leader is lost; 6 by default)"
+        );
+    }
+    Ok(Duration::from_secs_f64(value))
+}
+
 pub fn run(args: &CoordinatorArgs) -> Result<()> {
     let client = read_token(
         args.client_token_file.as_deref(),
@@ -256,10 +269,7 @@ pub fn run(args: &CoordinatorArgs) -> Result<()> {
     let exit_with_stdin = args.exit_with_stdin;
     let metrics = args.metrics.endpoint()?;
     let endpoints = Endpoints { grpc: args.listen, metrics, studio: args.studio_listen };
-    let lead = LeadConfig::for_process(
-        &args.listen.to_string(),
-        seconds(args.lead_ttl_s, "--lead-ttl-s")?,
-    );
+    let lead = LeadConfig::for_process(&args.listen.to_string(), lead_ttl(args.lead_ttl_s)?);
     let served =
         runtime.block_on(serve(config, endpoints, tls, lead, stop_signal(exit_with_stdin)));
     // A store call may hang (a database cut off); the process ends all the same.

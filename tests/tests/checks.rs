@@ -226,26 +226,44 @@ fn with_two_workers_a_dispute_is_told_and_the_job_still_ends() {
     assert!(log.contains("no third worker is registered to settle it"), "{log}");
 }
 
+/// What a coordinator given `flag=value` says as it refuses to start.
+fn refusal(d: &Path, flag: &str, value: &str) -> String {
+    let (client_token, worker_token) = token_files(d);
+    let o = std::process::Command::new(restauro_tests::binary("restauro-coordinator"))
+        .args(["--listen", "127.0.0.1:0", "--data"])
+        .arg(d.join("data"))
+        .arg("--client-token-file")
+        .arg(&client_token)
+        .arg("--worker-token-file")
+        .arg(&worker_token)
+        .arg(format!("{flag}={value}"))
+        .output()
+        .unwrap();
+    assert!(!o.status.success(), "{flag}={value} was taken");
+    text(&o)
+}
+
 #[test]
 fn a_check_rate_that_is_not_a_share_is_refused_naming_the_flag() {
     let dir = tempfile::tempdir().unwrap();
-    let d = dir.path();
-    let (client_token, worker_token) = token_files(d);
     for (flag, value) in [("--check-rate", "1.5"), ("--check-rate-new", "-0.1")] {
-        let o = std::process::Command::new(restauro_tests::binary("restauro-coordinator"))
-            .args(["--listen", "127.0.0.1:0", "--data"])
-            .arg(d.join("data"))
-            .arg("--client-token-file")
-            .arg(&client_token)
-            .arg("--worker-token-file")
-            .arg(&worker_token)
-            .arg(format!("{flag}={value}"))
-            .output()
-            .unwrap();
-        assert!(!o.status.success());
-        let said = text(&o);
+        let said = refusal(dir.path(), flag, value);
         let words =
             format!("{flag} {value}: use a share between 0 (no check) and 1 (every result)");
         assert!(said.contains(&words), "{said}");
+    }
+}
+
+/// The lead's time to live (issue 40): under a second it would be renewed faster than a busy
+/// database answers; over an hour the farm would wait that long for a standby.
+#[test]
+fn a_lead_time_to_live_out_of_range_is_refused_naming_the_flag() {
+    let dir = tempfile::tempdir().unwrap();
+    for value in ["0.2", "7200", "NaN"] {
+        let said = refusal(dir.path(), "--lead-ttl-s", value);
+        assert!(
+            said.contains(&format!("--lead-ttl-s {value}: give seconds from 1 to 3600")),
+            "{said}"
+        );
     }
 }

@@ -353,7 +353,7 @@ impl PgStore {
     /// this store's writes are fenced by it. By the database's clock.
     pub fn try_lead(&self, holder: &str, ttl: std::time::Duration) -> Result<LeadAttempt> {
         let ttl_ms = ttl.as_millis() as f64;
-        let attempt = self.on(&self.lead_client, async |c: &mut Client| {
+        let attempt = self.on_lead(async |c: &mut Client| {
             let tx = c.transaction().await?;
             tx.batch_execute("SET LOCAL lock_timeout = '1s'").await?;
             let sql = "SELECT holder, epoch, CASE WHEN expires_at <= now() THEN 0
@@ -380,8 +380,7 @@ impl PgStore {
             tx.execute(sql, &[&&next.to_le_bytes()[..]]).await?;
             tx.commit().await?;
             Ok(LeadAttempt::Led { epoch: next as u64 })
-        });
-        let attempt = attempt.map_err(|e| self.error(error_chain(&e)))?;
+        })?;
         if let LeadAttempt::Led { epoch } = attempt {
             self.fence.store(epoch, std::sync::atomic::Ordering::SeqCst);
         }
@@ -392,24 +391,33 @@ impl PgStore {
     /// still this coordinator's.
     pub fn renew_lead(&self, holder: &str, epoch: u64, ttl: std::time::Duration) -> Result<bool> {
         let ttl_ms = ttl.as_millis() as f64;
-        let renewed = self.on(&self.lead_client, async |c: &mut Client| {
+        let renewed = self.on_lead(async |c: &mut Client| {
             let sql =
                 "UPDATE restauro_leader SET expires_at = now() + $3 * interval '1 millisecond'
                        WHERE id = 1 AND holder = $1 AND epoch = $2 AND expires_at > now()";
             c.execute(sql, &[&holder, &(epoch as i64), &ttl_ms]).await
         });
-        Ok(renewed.map_err(|e| self.error(error_chain(&e)))? == 1)
+        Ok(renewed? == 1)
     }
 
     /// Gives the lead of `epoch` up at once, so a standby need not wait for it to lapse.
     pub fn release_lead(&self, holder: &str, epoch: u64) -> Result<()> {
-        let released = self.on(&self.lead_client, async |c: &mut Client| {
+        let released = self.on_lead(async |c: &mut Client| {
             // The holder cleared too, so a renewal still in flight cannot take it back.
             let sql = "UPDATE restauro_leader SET expires_at = '-infinity', holder = ''
                        WHERE id = 1 AND holder = $1 AND epoch = $2";
             c.execute(sql, &[&holder, &(epoch as i64)]).await
         });
-        released.map(drop).map_err(|e| self.error(error_chain(&e)))
+        released.map(drop)
+    }
+
+    /// Runs `f` on the lead's own connection. Its failures are not the store's problem (the
+    /// lead's watchdog acts on them): they are only returned.
+    fn on_lead<T: Send>(
+        &self,
+        f: impl AsyncFn(&mut Client) -> PgResult<T> + Send + Sync,
+    ) -> Result<T> {
+        self.on(&self.lead_client, f).map_err(|e| self.error(error_chain(&e)))
     }
 
     /// One statement, in a transaction of its own.

@@ -84,7 +84,10 @@ impl Service {
             .map_err(|_| {
                 let e = std::io::Error::new(
                     std::io::ErrorKind::TimedOut,
-                    format!("{host}:{port} did not take a connection within 10 s"),
+                    format!(
+                        "{host}:{port} did not take a connection within {} s",
+                        CONNECT_TIMEOUT.as_secs()
+                    ),
                 );
                 failed(HttpErrorKind::Connect, e)
             })?

@@ -195,6 +195,13 @@ impl OwnPostgres {
         self.dir.join("tls/ca.crt")
     }
 
+    /// The client certificate and key (PEM) with which the role `restauro_cert` logs in to
+    /// its database `restauro_cert` — over TLS, by certificate alone (`cert` in
+    /// `pg_hba.conf`).
+    pub fn client_certificate(&self) -> (std::path::PathBuf, std::path::PathBuf) {
+        (self.dir.join("tls/client.crt"), self.dir.join("tls/client.key"))
+    }
+
     /// Restarts the server (fast: every session is cut).
     pub fn restart(&self) {
         postgres_script("restart", &self.dir, None);

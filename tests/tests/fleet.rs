@@ -343,7 +343,8 @@ fn encrypted_sessions(admin: &str, db: &str) -> std::collections::BTreeMap<Strin
 /// an authority of the test's own signed: `verify-full` with that authority connects,
 /// encrypted; against the system's authorities, or for a host name the certificate does not
 /// name, it is refused, saying what to give; `verify-ca` takes any name; `require` and the
-/// default encrypt without checking; `disable` does not encrypt.
+/// default encrypt without checking; `disable` does not encrypt; a client certificate
+/// (`sslcert`, `sslkey`) logs in a role the server authenticates by certificate.
 #[test]
 fn the_store_speaks_tls_as_sslmode_says_and_checks_the_certificate_when_asked() {
     let dir = tempfile::tempdir().unwrap();
@@ -400,6 +401,20 @@ fn the_store_speaks_tls_as_sslmode_says_and_checks_the_certificate_when_asked() 
         assert!(said.iter().all(|s| e.contains(s)), "{why}: {e}");
         assert!(!e.contains("restauro:restauro@"), "the password is shown: {e}");
     }
+    // A role the server authenticates by client certificate alone: in with it, refused
+    // without it.
+    let (cert, key) = postgres.client_certificate();
+    let by_cert = format!(
+        "postgres://restauro_cert@localhost:{port}/restauro_cert?sslmode=verify-full&sslrootcert={ca}"
+    );
+    let with_cert = format!("{by_cert}&sslcert={}&sslkey={}", cert.display(), key.display());
+    let store = Store::connect(&with_cert).unwrap_or_else(|e| panic!("{with_cert}: {e}"));
+    store.put_job("c", b"by certificate").unwrap();
+    assert_eq!(store.jobs().unwrap().len(), 1);
+    let Err(e) = Store::connect(&by_cert) else {
+        panic!("a login without its certificate was taken")
+    };
+    assert!(e.to_string().contains("requires a valid client certificate"), "{e}");
 }
 
 /// The object store filled up in the middle of a job (issue 40, item 6): its bucket, over its

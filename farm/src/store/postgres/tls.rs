@@ -10,6 +10,8 @@
 //! | `verify-full`      | always                     | that, and issued for the host connected to |
 //!
 //! `sslrootcert` is a PEM file of authorities, or `system` (the default here) for the system's.
+//! `sslcert` and `sslkey` (PEM files, the key unencrypted) give a client certificate, for a
+//! server that authenticates by certificate (`cert` in `pg_hba.conf`).
 //! tokio-postgres knows the first three modes and no `sslrootcert`: the URL is rewritten for it
 //! (the two checking modes become `require`) and the check is made by the verifier built here.
 //! rustls with ring, as everywhere in the farm; channel binding (SCRAM-SHA-256-PLUS) comes with
@@ -20,7 +22,7 @@ use rustls::client::WebPkiServerVerifier;
 use rustls::client::danger::{HandshakeSignatureValid, ServerCertVerified, ServerCertVerifier};
 use rustls::crypto::CryptoProvider;
 use rustls::pki_types::pem::PemObject as _;
-use rustls::pki_types::{CertificateDer, ServerName, UnixTime};
+use rustls::pki_types::{CertificateDer, PrivateKeyDer, ServerName, UnixTime};
 use std::sync::Arc;
 use tokio_postgres_rustls::MakeRustlsConnect;
 
@@ -37,6 +39,7 @@ enum Check {
 pub fn settings(url: &str) -> Result<(String, MakeRustlsConnect), String> {
     let mut check = Check::Nothing;
     let mut roots = None;
+    let (mut cert, mut cert_key) = (None, None);
     let mut kept = Vec::new();
     let (head, params, separator) = match url.split_once("://") {
         Some(_) => match url.split_once('?') {
@@ -56,6 +59,8 @@ pub fn settings(url: &str) -> Result<(String, MakeRustlsConnect), String> {
                     .into());
             }
             ("sslrootcert", path) => roots = Some(path.to_owned()),
+            ("sslcert", path) => cert = Some(path.to_owned()),
+            ("sslkey", path) => cert_key = Some(path.to_owned()),
             _ => kept.push(param.to_owned()),
         }
     }
@@ -67,7 +72,31 @@ pub fn settings(url: &str) -> Result<(String, MakeRustlsConnect), String> {
         (head, true) => head.to_owned(),
         (head, false) => format!("{head}?{}", kept.join(separator)),
     };
-    Ok((rewritten, MakeRustlsConnect::new(client_config(check, roots.as_deref())?)))
+    let identity = match (cert, cert_key) {
+        (None, None) => None,
+        (Some(cert), Some(key)) => Some(client_identity(&cert, &key)?),
+        _ => {
+            return Err(
+                "give sslcert and sslkey together (a client certificate and its key)".into()
+            );
+        }
+    };
+    Ok((rewritten, MakeRustlsConnect::new(client_config(check, roots.as_deref(), identity)?)))
+}
+
+/// A client certificate's chain and key, from `sslcert` and `sslkey`.
+type Identity = (Vec<CertificateDer<'static>>, PrivateKeyDer<'static>);
+
+fn client_identity(cert: &str, key: &str) -> Result<Identity, String> {
+    let chain = CertificateDer::pem_file_iter(cert)
+        .and_then(|certs| certs.collect::<Result<Vec<_>, _>>())
+        .map_err(|e| format!("sslcert={cert}: {e}; give a PEM file of the client's certificate"))?;
+    if chain.is_empty() {
+        return Err(format!("sslcert={cert} holds no certificate: give a PEM file of it"));
+    }
+    let key = PrivateKeyDer::from_pem_file(key)
+        .map_err(|e| format!("sslkey={key}: {e}; give the certificate's key, unencrypted PEM"))?;
+    Ok((chain, key))
 }
 
 /// What to change when the server's certificate was refused, given the connection's error.
@@ -91,7 +120,11 @@ fn decoded(value: &str) -> String {
     percent_encoding::percent_decode_str(value).decode_utf8_lossy().into_owned()
 }
 
-fn client_config(check: Check, roots: Option<&str>) -> Result<rustls::ClientConfig, String> {
+fn client_config(
+    check: Check,
+    roots: Option<&str>,
+    identity: Option<Identity>,
+) -> Result<rustls::ClientConfig, String> {
     let provider = Arc::new(rustls::crypto::ring::default_provider());
     let builder = rustls::ClientConfig::builder_with_provider(provider.clone())
         .with_safe_default_protocol_versions()
@@ -108,10 +141,13 @@ fn client_config(check: Check, roots: Option<&str>) -> Result<rustls::ClientConf
         ),
     };
     let verifier = Verifier { check, authorities, provider };
-    Ok(builder
-        .dangerous()
-        .with_custom_certificate_verifier(Arc::new(verifier))
-        .with_no_client_auth())
+    let builder = builder.dangerous().with_custom_certificate_verifier(Arc::new(verifier));
+    match identity {
+        None => Ok(builder.with_no_client_auth()),
+        Some((chain, key)) => {
+            builder.with_client_auth_cert(chain, key).map_err(|e| format!("sslcert, sslkey: {e}"))
+        }
+    }
 }
 
 /// The authorities `sslrootcert` names: a PEM file, or the system's (`system`, or none given).
@@ -229,6 +265,9 @@ mod tests {
             "host=h dbname=db sslmode=require"
         );
         assert!(rewritten(&format!("{base}?sslmode=allow")).contains("not supported"));
+        assert!(
+            rewritten(&format!("{base}?sslcert=c.pem")).contains("sslcert and sslkey together")
+        );
     }
 
     #[test]

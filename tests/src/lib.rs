@@ -503,6 +503,22 @@ fn appending(path: &Path) -> std::fs::File {
     std::fs::OpenOptions::new().create(true).append(true).open(path).unwrap()
 }
 
+/// The tiles of job `job` that workers rendered, as their `--tile-log` files say (a line `job
+/// tile attempt` each), in the order of `logs` and of their lines; a log not yet written holds
+/// none.
+pub fn tiles_rendered(logs: &[PathBuf], job: &str) -> Vec<u32> {
+    logs.iter()
+        .flat_map(|log| {
+            std::fs::read_to_string(log)
+                .unwrap_or_default()
+                .lines()
+                .filter(|line| line.split(' ').next() == Some(job))
+                .map(|line| line.split(' ').nth(1).unwrap().parse().unwrap())
+                .collect::<Vec<u32>>()
+        })
+        .collect()
+}
+
 /// The last lines of every process log (`*.log`) in `dir`, for a failure's message: a test
 /// that times out waiting on processes says what they were doing.
 pub fn logs(dir: &Path) -> String {

@@ -104,23 +104,30 @@ fn the_liar_was_quarantined(c: &Coordinator, d: &Path, mut liar: Worker) {
     assert!(said.contains("is quarantined"), "{said}");
 }
 
-#[test]
-fn a_worker_lying_in_one_pixel_of_one_tile_is_found_and_the_image_is_right() {
-    let dir = tempfile::tempdir().unwrap();
-    let d = dir.path();
+/// A coordinator with `store` (its store's arguments), three honest workers and one lying in
+/// one pixel of one tile render the scene: the image is the one process renders, and the liar
+/// is quarantined. The coordinator, with its honest workers.
+fn one_pixel_liar_is_found(d: &Path, store: &[&str]) -> (Coordinator, Vec<Worker>) {
     let scene = aosta_scene(d, 96, 54);
     let alone = reference(d, &scene);
     // Every result of a worker not yet trusted is checked, and none is trusted: the one altered
     // tile is checked, wherever it falls.
-    let checks = ["--check-rate-new", "1", "--trust-after", "1000000"];
+    let checks = [store, &["--check-rate-new", "1", "--trust-after", "1000000"]].concat();
     // Its first tile, whatever it is: a tile of its own or a check of another worker's.
     let lie = ["--fault-lie-from", "1", "--fault-lie-count", "1"];
-    let (c, liar, _honest) = farm(d, &checks, &lie, 3);
+    let (c, liar, honest) = farm(d, &checks, &lie, 3);
     let out = d.join("farm");
     render_on_the_farm(&c, d, &scene, &out);
     assert!(lines(&d.join("liar-tiles.log")) >= 1, "the liar rendered no tile");
     assert_identical(&pixels(&out.join("aosta.exr")), &alone);
     the_liar_was_quarantined(&c, d, liar);
+    (c, honest)
+}
+
+#[test]
+fn a_worker_lying_in_one_pixel_of_one_tile_is_found_and_the_image_is_right() {
+    let dir = tempfile::tempdir().unwrap();
+    one_pixel_liar_is_found(dir.path(), &[]);
 }
 
 #[test]
@@ -155,17 +162,8 @@ fn on_postgresql_a_liar_is_found_and_the_next_leader_knows_it() {
     let Some(url) = restauro_tests::fleet::database("liar") else { return };
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let scene = aosta_scene(d, 96, 54);
-    let alone = reference(d, &scene);
     let fleet = ["--store", &url, "--lead-ttl-s", "3"];
-    let checks = [&fleet[..], &["--check-rate-new", "1", "--trust-after", "1000000"]].concat();
-    let lie = ["--fault-lie-from", "1", "--fault-lie-count", "1"];
-    let (c, liar, _honest) = farm(d, &checks, &lie, 3);
-    let out = d.join("farm");
-    render_on_the_farm(&c, d, &scene, &out);
-    assert!(lines(&d.join("liar-tiles.log")) >= 1, "the liar rendered no tile");
-    assert_identical(&pixels(&out.join("aosta.exr")), &alone);
-    the_liar_was_quarantined(&c, d, liar);
+    let (c, _honest) = one_pixel_liar_is_found(d, &fleet);
     // A standby with a folder of its own takes the lead from the killed leader: what it knows
     // of the liar it read from the database.
     let standby = Standby::start(d, &d.join("data-standby"), &free_loopback_addr(), &fleet);

@@ -294,18 +294,7 @@ fn a_restarted_database_loses_no_tile_and_renders_none_twice() {
         .collect();
     let (token, _) = restauro_tests::token_files(d);
     let id = submitted(&scene, &options, &c.url, &token);
-    let rendered = || -> Vec<String> {
-        logs.iter()
-            .flat_map(|l| {
-                std::fs::read_to_string(l)
-                    .unwrap_or_default()
-                    .lines()
-                    .map(str::to_owned)
-                    .collect::<Vec<_>>()
-            })
-            .filter(|line| line.starts_with(&id))
-            .collect()
-    };
+    let rendered = || restauro_tests::tiles_rendered(&logs, &id);
     let deadline = std::time::Instant::now() + restauro_tests::patience();
     while rendered().len() < 12 {
         assert!(std::time::Instant::now() < deadline, "no progress: {}", restauro_tests::logs(d));
@@ -317,8 +306,7 @@ fn a_restarted_database_loses_no_tile_and_renders_none_twice() {
     let o = restauro_tests::client(&["watch", &id], &c.url, &token);
     assert!(restauro_tests::text(&o).contains("done"), "{}", restauro_tests::text(&o));
     assert!(c.child.try_wait().unwrap().is_none(), "the coordinator stopped");
-    let mut tiles: Vec<u32> =
-        rendered().iter().map(|line| line.split(' ').nth(1).unwrap().parse().unwrap()).collect();
+    let mut tiles = rendered();
     tiles.sort_unstable();
     assert_eq!(tiles, (0..total).collect::<Vec<u32>>(), "each tile rendered once");
     fetched_is_alone(d, &id, &c.url, &token, &alone);
@@ -373,12 +361,17 @@ fn the_store_speaks_tls_as_sslmode_says_and_checks_the_certificate_when_asked() 
     }
     let admin = postgres.url.replace("/restauro", "/postgres");
     let seen = encrypted_sessions(&admin, "restauro");
-    let expected: std::collections::BTreeMap<String, bool> =
-        [("full", true), ("full-ip", true), ("ca", true), ("require", true), ("default", true)]
-            .into_iter()
-            .chain([("disable", false)])
-            .map(|(name, tls)| (name.to_owned(), tls))
-            .collect();
+    let expected: std::collections::BTreeMap<String, bool> = [
+        ("full", true),
+        ("full-ip", true),
+        ("ca", true),
+        ("require", true),
+        ("default", true),
+        ("disable", false),
+    ]
+    .into_iter()
+    .map(|(name, tls)| (name.to_owned(), tls))
+    .collect();
     assert_eq!(seen, expected);
     assert_eq!(open[0].jobs().unwrap().len(), 6);
     for (why, url, said) in [
@@ -482,11 +475,7 @@ fn a_full_object_store_holds_the_job_until_it_has_room_and_loses_nothing() {
     s3.free();
     let o = client(&["watch", &id], &c.url, &token);
     assert!(text(&o).contains("done"), "{}", text(&o));
-    let mut tiles: Vec<u32> = std::fs::read_to_string(&log)
-        .unwrap()
-        .lines()
-        .map(|line| line.split(' ').nth(1).unwrap().parse().unwrap())
-        .collect();
+    let mut tiles = restauro_tests::tiles_rendered(&[log], &id);
     tiles.sort_unstable();
     assert_eq!(tiles, (0..24).collect::<Vec<u32>>(), "each tile rendered once");
     fetched_is_alone(d, &id, &c.url, &token, &alone);

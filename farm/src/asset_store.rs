@@ -107,13 +107,7 @@ impl AssetStore {
     /// missing, so it is uploaded again).
     pub fn read(&self, hash: &str) -> Result<Option<Vec<u8>>> {
         let path = self.path(hash);
-        let read = match std::fs::read(&path) {
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound && self.fetched(hash) => {
-                std::fs::read(&path)
-            }
-            read => read,
-        };
-        match read {
+        match std::fs::read(&path) {
             Ok(bytes) if blake3::hash(&bytes).to_hex().eq_ignore_ascii_case(hash) => {
                 Ok(Some(bytes))
             }
@@ -121,6 +115,13 @@ impl AssetStore {
                 tracing::warn!(asset = %path.display(), "asset damaged on disk: removed");
                 let _ = std::fs::remove_file(&path);
                 Ok(None)
+            }
+            // Fetched from the object store, its hash checked there.
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound && self.fetched(hash) => {
+                match std::fs::read(&path) {
+                    Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+                    read => read.map(Some).map_err(|e| FarmError::io(&path, e)),
+                }
             }
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
             Err(e) => Err(FarmError::io(&path, e)),
